@@ -1,0 +1,37 @@
+"""crocopy: optimal control for robots in Python, with Crocoddyl's API.
+
+Everything public is re-exported here flat, as in Crocoddyl (``crocopy.SolverFDDP``,
+``crocopy.DifferentialActionModelFreeFwdDynamics``, ...).
+"""
+
+from importlib.metadata import PackageNotFoundError, version
+
+from .action_base import ActionDataAbstract, ActionModelAbstract
+from .actions import ActionModelLQR, ActionModelUnicycle, DifferentialActionModelLQR
+from .activations import (
+    ActivationBounds,
+    ActivationDataAbstract,
+    ActivationModel2NormBarrier,
+    ActivationModelAbstract,
+    ActivationModelQuad,
+    ActivationModelQuadraticBarrier,
+    ActivationModelSmooth1Norm,
+    ActivationModelSmooth2Norm,
+    ActivationModelWeightedQuad,
+    ActivationModelWeightedQuadraticBarrier,
+)
+from .costs import CostDataAbstract, CostDataSum, CostItem, CostModelAbstract, CostModelResidual, CostModelSum
+from .data_collector import DataCollectorAbstract
+from .diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
+from .enums import AssignmentOp, Jcomponent, RKType, VerboseLevel
+from .integrator_base import IntegratedActionModelAbstract
+from .integrator_euler import IntegratedActionDataEuler, IntegratedActionModelEuler
+from .integrator_rk import IntegratedActionDataRK, IntegratedActionModelRK
+from .residual_base import ResidualDataAbstract, ResidualModelAbstract
+from .residuals import ResidualModelControl, ResidualModelState
+from .state import StateAbstract, StateVector
+
+try:
+    __version__ = version("crocopy")
+except PackageNotFoundError:
+    __version__ = "0.0.0"

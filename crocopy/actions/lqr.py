@@ -1,0 +1,94 @@
+"""Discrete linear-quadratic action model.
+
+``xnext = A x + B u + f``; cost and constraints as in :mod:`crocopy.actions.lq_terms`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..action_base import ActionDataAbstract, ActionModelAbstract
+from ..state import StateVector
+from ..validation import as_matrix, as_vector
+from .lq_terms import LQTerms, default_input_matrix, random_psd
+
+
+class ActionModelLQR(ActionModelAbstract):
+    """Linear-quadratic regulator node (Crocoddyl's ``ActionModelLQR``).
+
+    Constructed as ``ActionModelLQR(A, B, Q, R, N[, G, H], f, q, r[, g, h])`` or
+    ``ActionModelLQR(nx, nu, driftFree=True)``.
+    """
+
+    def __init__(self, *args, **kwargs) -> None:
+        if args and np.isscalar(args[0]):
+            nx, nu = int(args[0]), int(args[1])
+            drift_free = bool(args[2]) if len(args) > 2 else kwargs.get("driftFree", True)
+            A, B = np.eye(nx), default_input_matrix(nx, nu)
+            Q, R, N = np.eye(nx), np.eye(nu), np.zeros((nx, nu))
+            f = np.zeros(nx) if drift_free else np.ones(nx)
+            q, r, G, H, g, h = np.ones(nx), np.ones(nu), None, None, None, None
+        else:
+            names = ("A", "B", "Q", "R", "N")
+            vals = dict(zip(names, args[:5]))
+            vals.update(kwargs)
+            rest = args[5:]
+            if len(rest) == 3:
+                vals.update(zip(("f", "q", "r"), rest))
+            elif len(rest) == 7:
+                vals.update(zip(("G", "H", "f", "q", "r", "g", "h"), rest))
+            elif rest:
+                raise ValueError("ActionModelLQR takes (A, B, Q, R, N[, f, q, r]) or with G, H, g, h")
+            A = np.atleast_2d(np.asarray(vals["A"], dtype=float))
+            nx = A.shape[0]
+            B = np.asarray(vals["B"], dtype=float).reshape(nx, -1)
+            nu = B.shape[1]
+            Q, R, N = vals["Q"], vals["R"], vals["N"]
+            f, q, r = vals.get("f", np.zeros(nx)), vals.get("q", np.zeros(nx)), vals.get("r", np.zeros(nu))
+            G, H, g, h = vals.get("G"), vals.get("H"), vals.get("g"), vals.get("h")
+        state = StateVector(nx)
+        self._lq = LQTerms(nx, nu, Q, R, N, q, r, G, H, g, h)
+        ng, nh = self._lq.G.shape[0], self._lq.H.shape[0]
+        super().__init__(state, nu, 0, ng, nh, ng, nh)
+        self.A = as_matrix(A, (nx, nx), "A")
+        self.B = as_matrix(B, (nx, nu), "B")
+        self.f = as_vector(f, nx, "f")
+
+    Q = property(lambda self: self._lq.Q)
+    R = property(lambda self: self._lq.R)
+    N = property(lambda self: self._lq.N)
+    q = property(lambda self: self._lq.q)
+    r = property(lambda self: self._lq.r)
+    G = property(lambda self: self._lq.G)
+    H = property(lambda self: self._lq.H)
+    g = property(lambda self: self._lq.g)
+    h = property(lambda self: self._lq.h)
+
+    @staticmethod
+    def Random(nx: int, nu: int, ng: int = 0, nh: int = 0) -> "ActionModelLQR":
+        """A random LQR model with stable-ish dynamics and positive-definite weights."""
+        rng = np.random.default_rng()
+        A = np.eye(nx) + 0.1 * rng.standard_normal((nx, nx))
+        B = rng.standard_normal((nx, nu))
+        Q, R = random_psd(nx, rng), random_psd(nu, rng)
+        N = 0.1 * rng.standard_normal((nx, nu))
+        G, H = rng.standard_normal((ng, nx + nu)), rng.standard_normal((nh, nx + nu))
+        return ActionModelLQR(
+            A, B, Q, R, N, G, H, rng.standard_normal(nx), rng.standard_normal(nx), rng.standard_normal(nu),
+            rng.standard_normal(ng), rng.standard_normal(nh),
+        )
+
+    def calc(self, data: ActionDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
+        if u is None:
+            data.xnext[:] = x
+        else:
+            data.xnext[:] = self.A @ x + self.B @ u + self.f
+        data.cost = self._lq.cost(x, u)
+        self._lq.fill_constraints(data, x, u, diff=False)
+
+    def calcDiff(self, data: ActionDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
+        if u is not None:
+            data.Fx[:] = self.A
+            data.Fu[:] = self.B
+        self._lq.fill_cost_derivatives(data, x, u)
+        self._lq.fill_constraints(data, x, u, diff=True)

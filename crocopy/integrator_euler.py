@@ -1,0 +1,84 @@
+"""Symplectic Euler integration of a differential action model.
+
+With ``x = (q, v)`` and ``a = a(x, u)``: ``dx = ((v + a dt) dt, a dt)``, ``xnext = x ⊕ dx``,
+``cost = dt l(x, u)``.  Derivatives by the chain rule through the state's ``Jintegrate``::
+
+    ∂dx/∂x = [[dt² Fx + dt [0 I]], [dt Fx]],   ∂dx/∂u = [[dt² Fu], [dt Fu]]
+    Fx = J_x + J_dx ∂dx/∂x,                  Fu = J_dx ∂dx/∂u
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .action_base import ActionDataAbstract
+from .enums import Jcomponent
+from .integrator_base import IntegratedActionModelAbstract
+
+
+class IntegratedActionModelEuler(IntegratedActionModelAbstract):
+    """Crocoddyl's ``IntegratedActionModelEuler(diffModel, timeStep=1e-3, withCostResidual=True)``."""
+
+    def createData(self) -> "IntegratedActionDataEuler":
+        return IntegratedActionDataEuler(self)
+
+    def calc(self, data: "IntegratedActionDataEuler", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        ddata = data.differential
+        if u is None:
+            self._terminal_calc(data, ddata, x)
+            return
+        self.differential.calc(ddata, x, u)
+        nv, dt = self.state.nv, self._dt
+        a = ddata.xout
+        dx = data.dx
+        np.multiply(a, dt, out=dx[nv:])
+        dx[:nv] = (x[-nv:] + dx[nv:]) * dt
+        data.xnext[:] = self.state.integrate(x, dx)
+        data.cost = dt * ddata.cost
+        if self.withCostResidual:
+            data.r[:] = ddata.r
+        self._copy_constraints(data, ddata, diff=False)
+
+    def calcDiff(self, data: "IntegratedActionDataEuler", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        ddata = data.differential
+        if u is None:
+            self._terminal_calcDiff(data, ddata, x)
+            return
+        self.differential.calcDiff(ddata, x, u)
+        nv, dt = self.state.nv, self._dt
+        dxdx, dxdu = data.ddx_dx, data.ddx_du
+        np.multiply(ddata.Fx, dt, out=dxdx[nv:])
+        np.multiply(dxdx[nv:], dt, out=dxdx[:nv])
+        dxdx[data.rows, data.vcols] += dt
+        np.multiply(ddata.Fu, dt, out=dxdu[nv:])
+        np.multiply(dxdu[nv:], dt, out=dxdu[:nv])
+        if self._euclidean:
+            np.add(data.eye, dxdx, out=data.Fx)
+            data.Fu[:] = dxdu
+        else:
+            Jx, Jdx = self.state.Jintegrate(x, data.dx, Jcomponent.both)
+            np.dot(Jdx, dxdx, out=data.Fx)
+            data.Fx += Jx
+            np.dot(Jdx, dxdu, out=data.Fu)
+        np.multiply(ddata.Lx, dt, out=data.Lx)
+        np.multiply(ddata.Lu, dt, out=data.Lu)
+        np.multiply(ddata.Lxx, dt, out=data.Lxx)
+        np.multiply(ddata.Lxu, dt, out=data.Lxu)
+        np.multiply(ddata.Luu, dt, out=data.Luu)
+        self._copy_constraints(data, ddata, diff=True)
+
+
+class IntegratedActionDataEuler(ActionDataAbstract):
+    """Data of :class:`IntegratedActionModelEuler`: ``differential`` data, ``dx`` and the chain-rule blocks."""
+
+    def __init__(self, model: IntegratedActionModelEuler) -> None:
+        super().__init__(model)
+        ndx, nv, nu = model.state.ndx, model.state.nv, model.nu
+        self.differential = model.differential.createData()
+        self.dx = np.zeros(ndx)
+        self.ddx_dx = np.zeros((ndx, ndx))
+        self.ddx_du = np.zeros((ndx, nu))
+        self.eye = np.eye(ndx)
+        self.rows = np.arange(nv)
+        self.vcols = ndx - nv + self.rows
+

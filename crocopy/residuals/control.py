@@ -1,0 +1,53 @@
+"""Control residual ``r = u - uref`` (shape ``(nu,)``), ``Rx = 0``, ``Ru = I``."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..data_collector import DataCollectorAbstract
+from ..residual_base import ResidualDataAbstract, ResidualModelAbstract
+from ..state import StateAbstract
+from ..validation import as_vector
+
+
+class ResidualModelControl(ResidualModelAbstract):
+    """``ResidualModelControl(state, uref)``, ``(state, nu)`` or ``(state)`` (``uref = 0``, ``nu = nv``)."""
+
+    def __init__(self, state: StateAbstract, uref: np.ndarray | int | None = None) -> None:
+        if uref is None or np.isscalar(uref):
+            nu = state.nv if uref is None else int(uref)
+            uref = np.zeros(nu)
+        uref = np.asarray(uref, dtype=float).reshape(-1)
+        super().__init__(state, uref.size, uref.size, False, False, True)
+        self.uref = uref
+
+    @property
+    def reference(self) -> np.ndarray:
+        """Reference control ``uref``, shape ``(nu,)``."""
+        return self._uref
+
+    @reference.setter
+    def reference(self, value: np.ndarray) -> None:
+        self.uref = value
+
+    @property
+    def uref(self) -> np.ndarray:
+        return self._uref
+
+    @uref.setter
+    def uref(self, value: np.ndarray) -> None:
+        self._uref = as_vector(value, self.nu, "uref")
+
+    def calc(self, data: ResidualDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
+        if u is None:
+            data.r[:] = 0.0
+        else:
+            np.subtract(u, self._uref, out=data.r)
+
+    def calcDiff(self, data: ResidualDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
+        """``Ru = I`` is constant and set once in :meth:`createData`."""
+
+    def createData(self, data: DataCollectorAbstract | None = None) -> ResidualDataAbstract:
+        d = ResidualDataAbstract(self, data)
+        d.Ru[:] = np.eye(self.nu)
+        return d

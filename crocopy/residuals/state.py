@@ -1,0 +1,47 @@
+"""State residual ``r = x ⊖ xref`` (shape ``(ndx,)``), ``Rx = ∂(x ⊖ xref)/∂x``, ``Ru = 0``."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..data_collector import DataCollectorAbstract
+from ..enums import Jcomponent
+from ..residual_base import ResidualDataAbstract, ResidualModelAbstract
+from ..state import StateAbstract
+from ..validation import as_vector
+
+
+class ResidualModelState(ResidualModelAbstract):
+    """``ResidualModelState(state, xref=state.zero(), nu=state.nv)``; also ``(state, nu)``."""
+
+    def __init__(self, state: StateAbstract, xref: np.ndarray | int | None = None, nu: int | None = None) -> None:
+        if xref is not None and np.isscalar(xref):
+            xref, nu = None, int(xref)
+        super().__init__(state, state.ndx, nu, True, True, False)
+        self.xref = state.zero() if xref is None else xref
+
+    @property
+    def reference(self) -> np.ndarray:
+        """Reference state ``xref``, shape ``(nx,)``."""
+        return self._xref
+
+    @reference.setter
+    def reference(self, value: np.ndarray) -> None:
+        self.xref = value
+
+    @property
+    def xref(self) -> np.ndarray:
+        return self._xref
+
+    @xref.setter
+    def xref(self, value: np.ndarray) -> None:
+        self._xref = as_vector(value, self.state.nx, "xref")
+
+    def calc(self, data: ResidualDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
+        data.r[:] = self.state.diff(self._xref, x)
+
+    def calcDiff(self, data: ResidualDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
+        data.Rx[:] = self.state.Jdiff(self._xref, x, Jcomponent.second)[0]
+
+    def createData(self, data: DataCollectorAbstract | None = None) -> ResidualDataAbstract:
+        return ResidualDataAbstract(self, data)

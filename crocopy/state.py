@@ -1,0 +1,133 @@
+"""State manifolds.
+
+A state lives on a manifold of dimension ``nx`` (its representation) whose tangent space has
+dimension ``ndx``.  ``diff(x0, x1)`` returns ``x1 ⊖ x0`` (shape ``(ndx,)``) and
+``integrate(x, dx)`` returns ``x ⊕ dx`` (shape ``(nx,)``).  Jacobians are ``(ndx, ndx)``:
+``Jdiff`` gives ∂(x1 ⊖ x0)/∂x0 and ∂(x1 ⊖ x0)/∂x1, ``Jintegrate`` gives ∂(x ⊕ dx)/∂x and
+∂(x ⊕ dx)/∂dx, all expressed in the tangent spaces.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .enums import Jcomponent
+from .validation import as_vector, check_bounds
+
+
+class StateAbstract:
+    """Abstract state manifold (Crocoddyl's ``StateAbstract``).
+
+    Parameters
+    ----------
+    nx : int
+        Dimension of the state representation.
+    ndx : int
+        Dimension of the tangent space.
+    """
+
+    def __init__(self, nx: int, ndx: int) -> None:
+        if nx < 0 or ndx < 0:
+            raise ValueError(f"nx and ndx must be non-negative, got nx={nx}, ndx={ndx}")
+        self.nx = int(nx)
+        self.ndx = int(ndx)
+        self.nv = self.ndx // 2
+        self.nq = self.nx - self.nv
+        self._lb = np.full(self.nx, -np.inf)
+        self._ub = np.full(self.nx, np.inf)
+        self.has_limits = False
+
+    @property
+    def lb(self) -> np.ndarray:
+        """Lower state limits, shape ``(nx,)``."""
+        return self._lb
+
+    @lb.setter
+    def lb(self, value: np.ndarray) -> None:
+        self._set_limits(as_vector(value, self.nx, "lb", allow_nonfinite=True), self._ub)
+
+    @property
+    def ub(self) -> np.ndarray:
+        """Upper state limits, shape ``(nx,)``."""
+        return self._ub
+
+    @ub.setter
+    def ub(self, value: np.ndarray) -> None:
+        self._set_limits(self._lb, as_vector(value, self.nx, "ub", allow_nonfinite=True))
+
+    def _set_limits(self, lb: np.ndarray, ub: np.ndarray) -> None:
+        check_bounds(lb, ub, "lb", "ub")
+        self._lb = lb
+        self._ub = ub
+        self.has_limits = bool(np.any(np.isfinite(lb)) or np.any(np.isfinite(ub)))
+
+    def zero(self) -> np.ndarray:
+        raise NotImplementedError
+
+    def rand(self) -> np.ndarray:
+        raise NotImplementedError
+
+    def diff(self, x0: np.ndarray, x1: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def integrate(self, x: np.ndarray, dx: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def Jdiff(self, x0: np.ndarray, x1: np.ndarray, firstsecond: Jcomponent = Jcomponent.both) -> list:
+        raise NotImplementedError
+
+    def Jintegrate(self, x: np.ndarray, dx: np.ndarray, firstsecond: Jcomponent = Jcomponent.both) -> list:
+        raise NotImplementedError
+
+    def JintegrateTransport(self, x: np.ndarray, dx: np.ndarray, Jin: np.ndarray, firstsecond: Jcomponent) -> None:
+        """Transport ``Jin`` (rows in the tangent space at ``x ⊕ dx``) to the tangent space at ``x``, in place."""
+        raise NotImplementedError
+
+    def safe_diff(self, x0: np.ndarray, x1: np.ndarray) -> np.ndarray:
+        """``diff`` with dimension checks."""
+        return self.diff(as_vector(x0, self.nx, "x0"), as_vector(x1, self.nx, "x1"))
+
+    def safe_integrate(self, x: np.ndarray, dx: np.ndarray) -> np.ndarray:
+        """``integrate`` with dimension checks."""
+        return self.integrate(as_vector(x, self.nx, "x"), as_vector(dx, self.ndx, "dx"))
+
+
+class StateVector(StateAbstract):
+    """Euclidean state: ``diff`` is ``x1 - x0`` and ``integrate`` is ``x + dx``.
+
+    Parameters
+    ----------
+    nx : int
+        Dimension of the state (``nv = nx // 2``, ``nq = nx - nv``).
+    """
+
+    def __init__(self, nx: int) -> None:
+        super().__init__(nx, nx)
+        self._eye = np.eye(self.nx)
+
+    def zero(self) -> np.ndarray:
+        return np.zeros(self.nx)
+
+    def rand(self) -> np.ndarray:
+        return np.random.rand(self.nx) * 2.0 - 1.0
+
+    def diff(self, x0: np.ndarray, x1: np.ndarray) -> np.ndarray:
+        return x1 - x0
+
+    def integrate(self, x: np.ndarray, dx: np.ndarray) -> np.ndarray:
+        return x + dx
+
+    def Jdiff(self, x0: np.ndarray, x1: np.ndarray, firstsecond: Jcomponent = Jcomponent.both) -> list:
+        if firstsecond == Jcomponent.first:
+            return [-self._eye.copy()]
+        if firstsecond == Jcomponent.second:
+            return [self._eye.copy()]
+        return [-self._eye.copy(), self._eye.copy()]
+
+    def Jintegrate(self, x: np.ndarray, dx: np.ndarray, firstsecond: Jcomponent = Jcomponent.both) -> list:
+        if firstsecond == Jcomponent.both:
+            return [self._eye.copy(), self._eye.copy()]
+        return [self._eye.copy()]
+
+    def JintegrateTransport(self, x: np.ndarray, dx: np.ndarray, Jin: np.ndarray, firstsecond: Jcomponent) -> None:
+        return None

@@ -1,0 +1,1 @@
+"""Pinocchio-backed models of crocopy (imported as ``crocopy.models``)."""

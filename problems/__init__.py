@@ -1,0 +1,1 @@
+"""Ready problem builders for the papers' benchmarks (imported as ``crocopy.problems``)."""
