@@ -20,6 +20,15 @@ from .activations import (
     ActivationModelWeightedQuad,
     ActivationModelWeightedQuadraticBarrier,
 )
+from .constraints import (
+    ConstraintDataAbstract,
+    ConstraintDataManager,
+    ConstraintItem,
+    ConstraintModelAbstract,
+    ConstraintModelManager,
+    ConstraintModelResidual,
+    ConstraintType,
+)
 from .costs import CostDataAbstract, CostDataSum, CostItem, CostModelAbstract, CostModelResidual, CostModelSum
 from .data_collector import DataCollectorAbstract
 from .diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
