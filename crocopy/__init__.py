@@ -20,6 +20,7 @@ from .activations import (
     ActivationModelWeightedQuad,
     ActivationModelWeightedQuadraticBarrier,
 )
+from .actuation_base import ActuationDataAbstract, ActuationModelAbstract, JointDataAbstract
 from .constraints import (
     ConstraintDataAbstract,
     ConstraintDataManager,
@@ -44,3 +45,5 @@ try:
     __version__ = version("crocopy")
 except PackageNotFoundError:
     __version__ = "0.0.0"
+
+from .models import *  # noqa: E402,F403  (Pinocchio models, re-exported flat)

@@ -1,0 +1,124 @@
+"""Multibody state ``x = (q, v)`` on Pinocchio's configuration Lie group.
+
+``nq``/``nv`` come from the Pinocchio model, ``nx = nq + nv`` and ``ndx = 2 nv``.
+``diff(x0, x1) = (q1 ⊖ q0, v1 - v0)`` and ``integrate(x, dx) = (q ⊕ dq, v + dv)`` use
+``pinocchio.difference``/``pinocchio.integrate``.  The Jacobians are block diagonal:
+
+    Jdiff   = (diag(∂(q1 ⊖ q0)/∂q0, -I), diag(∂(q1 ⊖ q0)/∂q1, I))
+    Jintegrate = (diag(∂(q ⊕ dq)/∂q, I), diag(∂(q ⊕ dq)/∂dq, I))
+
+with the configuration blocks from ``pinocchio.dDifference``/``pinocchio.dIntegrate``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from crocopy.enums import Jcomponent
+from crocopy.state import StateAbstract
+
+_HUGE = 1e300  # URDF "no limit" values (numeric_limits::max) are mapped to inf
+
+
+def _finite_or_inf(values: np.ndarray, sign: float) -> np.ndarray:
+    out = np.array(values, dtype=float)
+    out[~np.isfinite(out) | (np.abs(out) >= _HUGE)] = sign * np.inf
+    return out
+
+
+class StateMultibody(StateAbstract):
+    """Crocoddyl's ``StateMultibody(pinocchio_model)``.
+
+    Parameters
+    ----------
+    model : pinocchio.Model
+        Multibody model; stored as ``pinocchio``.
+
+    Notes
+    -----
+    ``lb``/``ub`` hold the position limits followed by ``∓velocityLimit``; entries are ``∓inf`` on
+    joints whose configuration is not a vector (``joint.nq != joint.nv``: free flyer, spherical,
+    planar, unbounded revolute) and where the URDF gives "unlimited" values.
+    """
+
+    def __init__(self, model: pin.Model) -> None:
+        if not isinstance(model, pin.Model):
+            raise ValueError(f"model must be a pinocchio.Model, got {type(model).__name__}")
+        super().__init__(model.nq + model.nv, 2 * model.nv)
+        self.pinocchio = model
+        self.nq, self.nv = model.nq, model.nv
+        lq = _finite_or_inf(model.lowerPositionLimit, -1.0)
+        uq = _finite_or_inf(model.upperPositionLimit, 1.0)
+        for joint in model.joints[1:]:
+            if joint.nq != joint.nv:
+                lq[joint.idx_q:joint.idx_q + joint.nq] = -np.inf
+                uq[joint.idx_q:joint.idx_q + joint.nq] = np.inf
+        vlim = _finite_or_inf(model.velocityLimit, 1.0)
+        self._set_limits(np.concatenate([lq, -vlim]), np.concatenate([uq, vlim]))
+        self._q0 = pin.neutral(model)
+        self._rand_lo = np.where(np.isfinite(lq), lq, -1.0)
+        self._rand_hi = np.where(np.isfinite(uq), uq, 1.0)
+        self._eye_v = np.eye(self.nv)
+
+    def zero(self) -> np.ndarray:
+        """Neutral configuration and zero velocity."""
+        return np.concatenate([self._q0, np.zeros(self.nv)])
+
+    def rand(self) -> np.ndarray:
+        """Random configuration within the finite position limits (``[-1, 1]`` elsewhere), random velocity."""
+        q = pin.randomConfiguration(self.pinocchio, self._rand_lo, self._rand_hi)
+        return np.concatenate([q, np.random.rand(self.nv) * 2.0 - 1.0])
+
+    def diff(self, x0: np.ndarray, x1: np.ndarray) -> np.ndarray:
+        nq = self.nq
+        dx = np.empty(self.ndx)
+        dx[: self.nv] = pin.difference(self.pinocchio, x0[:nq], x1[:nq])
+        np.subtract(x1[nq:], x0[nq:], out=dx[self.nv :])
+        return dx
+
+    def integrate(self, x: np.ndarray, dx: np.ndarray) -> np.ndarray:
+        nq, nv = self.nq, self.nv
+        xout = np.empty(self.nx)
+        xout[:nq] = pin.integrate(self.pinocchio, x[:nq], dx[:nv])
+        np.add(x[nq:], dx[nv:], out=xout[nq:])
+        return xout
+
+    def _block(self, Jq: np.ndarray, sign: float) -> np.ndarray:
+        nv = self.nv
+        J = np.zeros((self.ndx, self.ndx))
+        J[:nv, :nv] = Jq
+        J[nv:, nv:] = sign * self._eye_v
+        return J
+
+    def Jdiff(self, x0: np.ndarray, x1: np.ndarray, firstsecond: Jcomponent = Jcomponent.both) -> list:
+        """Jacobians of ``x1 ⊖ x0`` w.r.t. ``x0`` and/or ``x1``, each ``(ndx, ndx)``."""
+        nq, model = self.nq, self.pinocchio
+        q0, q1 = x0[:nq], x1[:nq]
+        out = []
+        if firstsecond in (Jcomponent.first, Jcomponent.both):
+            out.append(self._block(pin.dDifference(model, q0, q1, pin.ARG0), -1.0))
+        if firstsecond in (Jcomponent.second, Jcomponent.both):
+            out.append(self._block(pin.dDifference(model, q0, q1, pin.ARG1), 1.0))
+        return out
+
+    def Jintegrate(self, x: np.ndarray, dx: np.ndarray, firstsecond: Jcomponent = Jcomponent.both) -> list:
+        """Jacobians of ``x ⊕ dx`` w.r.t. ``x`` and/or ``dx``, each ``(ndx, ndx)``."""
+        q, dq, model = x[: self.nq], dx[: self.nv], self.pinocchio
+        out = []
+        if firstsecond in (Jcomponent.first, Jcomponent.both):
+            out.append(self._block(pin.dIntegrate(model, q, dq, pin.ARG0), 1.0))
+        if firstsecond in (Jcomponent.second, Jcomponent.both):
+            out.append(self._block(pin.dIntegrate(model, q, dq, pin.ARG1), 1.0))
+        return out
+
+    def JintegrateTransport(self, x: np.ndarray, dx: np.ndarray, Jin: np.ndarray, firstsecond: Jcomponent) -> None:
+        """Parallel-transport the first ``nv`` rows of ``Jin`` from ``x ⊕ dx`` to ``x``, in place."""
+        if firstsecond == Jcomponent.both:
+            raise ValueError("firstsecond must be Jcomponent.first or Jcomponent.second")
+        arg = pin.ARG0 if firstsecond == Jcomponent.first else pin.ARG1
+        nv = self.nv
+        Jin[:nv] = pin.dIntegrateTransport(self.pinocchio, x[: self.nq], dx[:nv], Jin[:nv], arg)
+
+    def __repr__(self) -> str:
+        return f"StateMultibody(nq={self.nq}, nv={self.nv})"
