@@ -30,6 +30,7 @@ from .constraints import (
     ConstraintModelResidual,
     ConstraintType,
 )
+from .callbacks import CallbackAbstract, CallbackLogger, CallbackVerbose
 from .costs import CostDataAbstract, CostDataSum, CostItem, CostModelAbstract, CostModelResidual, CostModelSum
 from .data_collector import DataCollectorAbstract
 from .diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
@@ -37,8 +38,16 @@ from .enums import AssignmentOp, Jcomponent, RKType, VerboseLevel
 from .integrator_base import IntegratedActionModelAbstract
 from .integrator_euler import IntegratedActionDataEuler, IntegratedActionModelEuler
 from .integrator_rk import IntegratedActionDataRK, IntegratedActionModelRK
+from .numdiff import (
+    ActionDataNumDiff,
+    ActionModelNumDiff,
+    DifferentialActionDataNumDiff,
+    DifferentialActionModelNumDiff,
+)
 from .residual_base import ResidualDataAbstract, ResidualModelAbstract
 from .residuals import ResidualModelControl, ResidualModelState
+from .shooting import ShootingProblem
+from .solvers import SolverAbstract, SolverDDP, SolverFDDP
 from .state import StateAbstract, StateVector
 
 try:

@@ -96,7 +96,9 @@ class ActionModelAbstract(ControlLimitsMixin):
     def calcDiff(self, data: "ActionDataAbstract", x: np.ndarray, u: np.ndarray | None = None) -> None:
         raise NotImplementedError(f"{type(self).__name__}.calcDiff is not implemented")
 
-    def quasiStatic(self, data: "ActionDataAbstract", x: np.ndarray, maxiter: int = 100, tol: float = 1e-9) -> np.ndarray:
+    def quasiStatic(
+        self, data: "ActionDataAbstract", x: np.ndarray, maxiter: int = 100, tol: float = 1e-9
+    ) -> np.ndarray:
         """Control that keeps the system at rest at ``x`` (Newton iterations on ``xnext ⊖ x = 0``).
 
         Returns

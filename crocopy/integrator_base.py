@@ -86,7 +86,10 @@ class IntegratedActionModelAbstract(ActionModelAbstract):
 
     def _terminal_calcDiff(self, data: ActionDataAbstract, ddata, x: np.ndarray) -> None:
         self.differential.calcDiff(ddata, x)
-        data.Fx[:] = np.eye(self.state.ndx) if self._euclidean else self.state.Jintegrate(x, np.zeros(self.state.ndx))[0]
+        if self._euclidean:
+            data.Fx[:] = np.eye(self.state.ndx)
+        else:
+            data.Fx[:] = self.state.Jintegrate(x, np.zeros(self.state.ndx))[0]
         data.Lx[:] = ddata.Lx
         data.Lxx[:] = ddata.Lxx
         self._copy_constraints(data, ddata, diff=True)

@@ -70,7 +70,8 @@ class DifferentialActionModelLQR(DifferentialActionModelAbstract):
         nx = 2 * nq
         return DifferentialActionModelLQR(
             -np.eye(nq) + 0.1 * rng.standard_normal((nq, nq)), -np.eye(nq) + 0.1 * rng.standard_normal((nq, nq)),
-            rng.standard_normal((nq, nu)), random_psd(nx, rng), random_psd(nu, rng), 0.1 * rng.standard_normal((nx, nu)),
+            rng.standard_normal((nq, nu)), random_psd(nx, rng), random_psd(nu, rng),
+            0.1 * rng.standard_normal((nx, nu)),
             rng.standard_normal((ng, nx + nu)), rng.standard_normal((nh, nx + nu)), rng.standard_normal(nq),
             rng.standard_normal(nx), rng.standard_normal(nu), rng.standard_normal(ng), rng.standard_normal(nh),
         )

@@ -1,0 +1,184 @@
+"""Shooting problem: running models ``0..T-1``, a terminal model, and one data per node.
+
+``calc(xs, us)`` evaluates every node (``xs``: T+1 states of shape ``(nx,)``, ``us``: T controls)
+and returns the total cost ``Σ l_t(x_t, u_t) + l_T(x_T)``; ``calcDiff`` fills the derivatives of
+every node (it assumes ``calc`` was called at the same point) and returns the cost.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from .action_base import ActionDataAbstract, ActionModelAbstract
+from .validation import as_vector
+
+
+class ShootingProblem:
+    """Crocoddyl's ``ShootingProblem(x0, runningModels, terminalModel)``.
+
+    Parameters
+    ----------
+    x0 : numpy.ndarray
+        Initial state, shape ``(nx,)`` of the first node; finite.
+    runningModels : sequence of ActionModelAbstract
+        Models of nodes ``0..T-1``.
+    terminalModel : ActionModelAbstract
+        Model of node ``T`` (called without control).
+    """
+
+    def __init__(
+        self,
+        x0: np.ndarray,
+        runningModels: Sequence[ActionModelAbstract],
+        terminalModel: ActionModelAbstract,
+        runningDatas: Sequence[ActionDataAbstract] | None = None,
+        terminalData: ActionDataAbstract | None = None,
+    ) -> None:
+        runningModels = list(runningModels)
+        for i, m in enumerate([*runningModels, terminalModel]):
+            if not isinstance(m, ActionModelAbstract):
+                raise ValueError(f"node {i} must be an ActionModelAbstract, got {type(m).__name__}")
+        self._check_chain(runningModels, terminalModel)
+        self._runningModels = runningModels
+        self._terminalModel = terminalModel
+        self.x0 = x0
+        if runningDatas is None:
+            runningDatas = [m.createData() for m in runningModels]
+        elif len(runningDatas) != len(runningModels):
+            raise ValueError(f"runningDatas has {len(runningDatas)} items, expected {len(runningModels)}")
+        self._runningDatas = list(runningDatas)
+        self._terminalData = terminalModel.createData() if terminalData is None else terminalData
+        self.cost = 0.0
+        self.nthreads = 1
+
+    @staticmethod
+    def _check_chain(runningModels: list, terminalModel: ActionModelAbstract) -> None:
+        models = [*runningModels, terminalModel]
+        for i in range(len(models) - 1):
+            a, b = models[i].state, models[i + 1].state
+            if a.nx != b.nx or a.ndx != b.ndx:
+                raise ValueError(
+                    f"node {i} has state (nx={a.nx}, ndx={a.ndx}) but node {i + 1} has (nx={b.nx}, ndx={b.ndx})"
+                )
+
+    @property
+    def T(self) -> int:
+        """Number of running nodes."""
+        return len(self._runningModels)
+
+    @property
+    def x0(self) -> np.ndarray:
+        """Initial state, shape ``(nx,)``."""
+        return self._x0
+
+    @x0.setter
+    def x0(self, value: np.ndarray) -> None:
+        first = self._runningModels[0] if self._runningModels else self._terminalModel
+        self._x0 = as_vector(value, first.state.nx, "x0").copy()
+
+    @property
+    def runningModels(self) -> list[ActionModelAbstract]:
+        return self._runningModels
+
+    @property
+    def terminalModel(self) -> ActionModelAbstract:
+        return self._terminalModel
+
+    @property
+    def runningDatas(self) -> list[ActionDataAbstract]:
+        return self._runningDatas
+
+    @property
+    def terminalData(self) -> ActionDataAbstract:
+        return self._terminalData
+
+    @property
+    def nx(self) -> int:
+        return self._terminalModel.state.nx
+
+    @property
+    def ndx(self) -> int:
+        return self._terminalModel.state.ndx
+
+    @property
+    def nu_max(self) -> int:
+        return max((m.nu for m in self._runningModels), default=0)
+
+    def check_trajectories(self, xs: Sequence[np.ndarray], us: Sequence[np.ndarray], xs_name="xs", us_name="us"):
+        """Validate and convert ``xs`` (T+1 states) and ``us`` (T controls) or raise ``ValueError``."""
+        T = self.T
+        if len(xs) != T + 1:
+            raise ValueError(f"{xs_name} has {len(xs)} items, expected T + 1 = {T + 1}")
+        if len(us) != T:
+            raise ValueError(f"{us_name} has {len(us)} items, expected T = {T}")
+        models = [*self._runningModels, self._terminalModel]
+        xs = [as_vector(x, m.state.nx, f"{xs_name}[{t}]") for t, (x, m) in enumerate(zip(xs, models))]
+        us = [as_vector(u, m.nu, f"{us_name}[{t}]") for t, (u, m) in enumerate(zip(us, self._runningModels))]
+        return xs, us
+
+    def calc(self, xs: Sequence[np.ndarray], us: Sequence[np.ndarray]) -> float:
+        """Evaluate every node at ``(xs, us)`` and return the total cost."""
+        cost = 0.0
+        for m, d, x, u in zip(self._runningModels, self._runningDatas, xs, us):
+            m.calc(d, x, u)
+            cost += d.cost
+        self._terminalModel.calc(self._terminalData, xs[-1])
+        cost += self._terminalData.cost
+        self.cost = cost
+        return cost
+
+    def calcDiff(self, xs: Sequence[np.ndarray], us: Sequence[np.ndarray]) -> float:
+        """Compute every node's derivatives at ``(xs, us)`` (after :meth:`calc`) and return the cost."""
+        cost = 0.0
+        for m, d, x, u in zip(self._runningModels, self._runningDatas, xs, us):
+            m.calcDiff(d, x, u)
+            cost += d.cost
+        self._terminalModel.calcDiff(self._terminalData, xs[-1])
+        cost += self._terminalData.cost
+        self.cost = cost
+        return cost
+
+    def rollout(self, us: Sequence[np.ndarray]) -> list[np.ndarray]:
+        """Integrate the dynamics from ``x0`` with controls ``us``; returns T+1 states."""
+        if len(us) != self.T:
+            raise ValueError(f"us has {len(us)} items, expected T = {self.T}")
+        xs = [self._x0.copy()]
+        for t, (m, d) in enumerate(zip(self._runningModels, self._runningDatas)):
+            m.calc(d, xs[-1], as_vector(us[t], m.nu, f"us[{t}]"))
+            xs.append(d.xnext.copy())
+        return xs
+
+    def quasiStatic(self, xs: Sequence[np.ndarray]) -> list[np.ndarray]:
+        """Quasi-static controls of the first T states of ``xs``."""
+        if len(xs) not in (self.T, self.T + 1):
+            raise ValueError(f"xs has {len(xs)} items, expected T = {self.T} or T + 1")
+        return [m.quasiStatic(d, x) for m, d, x in zip(self._runningModels, self._runningDatas, xs)]
+
+    def circularAppend(self, model: ActionModelAbstract, data: ActionDataAbstract | None = None) -> None:
+        """Drop node 0 and append ``model`` (with ``data``) as node T-1 (receding horizon)."""
+        self._check_chain([*self._runningModels[1:], model], self._terminalModel)
+        self._runningModels = [*self._runningModels[1:], model]
+        self._runningDatas = [*self._runningDatas[1:], model.createData() if data is None else data]
+
+    def updateNode(self, i: int, model: ActionModelAbstract, data: ActionDataAbstract) -> None:
+        """Replace node ``i`` (``i == T`` is the terminal node) by ``model`` and ``data``."""
+        if not 0 <= i <= self.T:
+            raise ValueError(f"node index i = {i} out of range [0, {self.T}]")
+        if i == self.T:
+            self._check_chain(self._runningModels, model)
+            self._terminalModel, self._terminalData = model, data
+        else:
+            models = list(self._runningModels)
+            models[i] = model
+            self._check_chain(models, self._terminalModel)
+            self._runningModels = models
+            self._runningDatas[i] = data
+
+    def updateModel(self, i: int, model: ActionModelAbstract) -> None:
+        """Replace node ``i`` by ``model`` with fresh data."""
+        self.updateNode(i, model, model.createData())
+
+    def __repr__(self) -> str:
+        return f"ShootingProblem(T={self.T}, nx={self.nx}, nu_max={self.nu_max})"

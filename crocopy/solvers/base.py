@@ -1,0 +1,167 @@
+"""What every solver shares: iterate storage, candidate setting, feasibility, callbacks, divergence.
+
+A solver owns ``xs`` (T+1 states), ``us`` (T controls) and the gaps ``fs`` (T+1 tangent
+vectors, ``fs[0] = x0 ⊖ xs[0]``, ``fs[t+1] = f(xs[t], us[t]) ⊖ xs[t+1]``).  ``solve`` returns
+True on convergence and False otherwise, with the reason in ``solver.reason``; it never leaves
+NaN in ``xs``/``us``: a divergent iterate is never accepted.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from enum import IntEnum
+
+import numpy as np
+
+from ..shooting import ShootingProblem
+
+
+class BackwardPassError(RuntimeError):
+    """Raised by a backward pass that cannot factorise ``Quu`` (the solver raises the regularisation)."""
+
+
+class ForwardPassError(RuntimeError):
+    """Raised by a forward pass that produced a non-finite state or cost."""
+
+
+class FeasibilityNorm(IntEnum):
+    """Norm used for ``ffeas``/``gfeas``/``hfeas``."""
+
+    LInf = 0
+    L1 = 1
+
+
+class SolverAbstract:
+    """Base class of the shooting-problem solvers (Crocoddyl's ``SolverAbstract``).
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+        Problem to solve.
+    """
+
+    def __init__(self, problem: ShootingProblem) -> None:
+        if not isinstance(problem, ShootingProblem):
+            raise ValueError(f"problem must be a ShootingProblem, got {type(problem).__name__}")
+        self.problem = problem
+        models = [*problem.runningModels, problem.terminalModel]
+        self.xs = [m.state.zero() for m in models]
+        self.us = [np.zeros(m.nu) for m in problem.runningModels]
+        self.fs = [np.zeros(m.state.ndx) for m in models]
+        self.isFeasible = False
+        self.cost = 0.0
+        self.merit = 0.0
+        self.stop = 0.0
+        self.d = np.zeros(2)
+        self.dV = 0.0
+        self.dVexp = 0.0
+        self.dPhi = 0.0
+        self.dPhiexp = 0.0
+        self.preg = 0.0
+        self.dreg = 0.0
+        self.stepLength = 1.0
+        self.iter = 0
+        self.th_acceptStep = 0.1
+        self.th_stop = 1e-9
+        self.th_gapTol = 1e-16
+        self.feasNorm = FeasibilityNorm.LInf
+        self.ffeas = 0.0
+        self.gfeas = 0.0
+        self.hfeas = 0.0
+        self.ffeas_try = 0.0
+        self.gfeas_try = 0.0
+        self.hfeas_try = 0.0
+        self.reason = ""
+        self._callbacks: list = []
+
+    def setCallbacks(self, callbacks: Sequence) -> None:
+        """Set the callbacks run at the end of every iteration."""
+        for c in callbacks:
+            if not callable(c):
+                raise ValueError(f"callbacks must be callable, got {type(c).__name__}")
+        self._callbacks = list(callbacks)
+
+    def getCallbacks(self) -> list:
+        return list(self._callbacks)
+
+    def _run_callbacks(self) -> None:
+        for c in self._callbacks:
+            c(self)
+
+    def setCandidate(
+        self, xs: Sequence[np.ndarray] | None = None, us: Sequence[np.ndarray] | None = None, isFeasible: bool = False
+    ) -> None:
+        """Set the warm start ``(xs, us)``; empty or ``None`` means zero controls and ``state.zero()`` states.
+
+        Raises
+        ------
+        ValueError
+            If ``xs`` does not have T+1 states of shape ``(nx,)`` or ``us`` T controls of shape ``(nu,)``,
+            or either contains NaN/inf.
+        """
+        problem = self.problem
+        models = [*problem.runningModels, problem.terminalModel]
+        xs = [] if xs is None else list(xs)
+        us = [] if us is None else list(us)
+        if not us:
+            us = [np.zeros(m.nu) for m in problem.runningModels]
+        if not xs:
+            if isFeasible:
+                xs = problem.rollout(us)
+            else:
+                xs = [m.state.zero() for m in models]
+        xs, us = problem.check_trajectories(xs, us, "init_xs", "init_us")
+        self.xs = [x.copy() for x in xs]
+        self.us = [u.copy() for u in us]
+        self.isFeasible = bool(isFeasible)
+
+    def computeDynamicFeasibility(self) -> float:
+        """Update the gaps ``fs`` from the nodes' ``xnext`` (after ``problem.calc``) and return their norm."""
+        problem = self.problem
+        xs = self.xs
+        self.fs[0][:] = problem.runningModels[0].state.diff(xs[0], problem.x0) if problem.T else 0.0
+        for t, (m, d) in enumerate(zip(problem.runningModels, problem.runningDatas)):
+            self.fs[t + 1][:] = m.state.diff(xs[t + 1], d.xnext)
+        self.ffeas = self._norm(self.fs)
+        return self.ffeas
+
+    def computeEqualityFeasibility(self) -> float:
+        """Norm of the equality-constraint values ``h`` over all nodes."""
+        datas = [*self.problem.runningDatas, self.problem.terminalData]
+        self.hfeas = self._norm([d.h for d in datas])
+        return self.hfeas
+
+    def computeInequalityFeasibility(self) -> float:
+        """Norm of the inequality-constraint violations ``max(g_lb - g, 0, g - g_ub)`` over all nodes."""
+        problem = self.problem
+        viol = []
+        for m, d in zip([*problem.runningModels, problem.terminalModel], [*problem.runningDatas, problem.terminalData]):
+            if d.g.size and m.ng:
+                g = d.g[: m.ng]
+                viol.append(np.maximum(np.maximum(m.g_lb - g, 0.0), g - m.g_ub))
+        self.gfeas = self._norm(viol)
+        return self.gfeas
+
+    def _norm(self, vectors: Sequence[np.ndarray]) -> float:
+        if self.feasNorm == FeasibilityNorm.LInf:
+            return float(max((np.max(np.abs(v)) for v in vectors if v.size), default=0.0))
+        return float(sum(np.sum(np.abs(v)) for v in vectors))
+
+    def _check_x0(self) -> None:
+        if not np.all(np.isfinite(self.problem.x0)):
+            raise ValueError("problem.x0 contains NaN or inf")
+
+    def solve(self, init_xs=None, init_us=None, maxiter: int = 100, is_feasible: bool = False, init_reg=None) -> bool:
+        raise NotImplementedError
+
+    def computeDirection(self, recalc: bool = True) -> None:
+        raise NotImplementedError
+
+    def tryStep(self, steplength: float = 1.0) -> float:
+        raise NotImplementedError
+
+    def stoppingCriteria(self) -> float:
+        raise NotImplementedError
+
+    def expectedImprovement(self) -> np.ndarray:
+        raise NotImplementedError

@@ -1,0 +1,276 @@
+"""Differential dynamic programming (Crocoddyl's ``SolverDDP``).
+
+Sign convention (Crocoddyl's): the control update is ``û = u - α k - K (x̂ ⊖ x)`` with
+``k = Quu⁻¹ Qu`` and ``K = Quu⁻¹ Qux``.  Backward pass (Gauss-Newton, t = T-1..0)::
+
+    Qx  = Lx  + Fxᵀ V'x        Qu  = Lu  + Fuᵀ V'x
+    Qxx = Lxx + Fxᵀ V'xx Fx    Qxu = Lxu + Fxᵀ V'xx Fu    Quu = Luu + Fuᵀ V'xx Fu + preg I
+    Vx  = Qx - Kᵀ Qu           Vxx = Qxx - Qxu K (+ preg I, symmetrised)
+
+With open gaps ``fs`` the stored gradient is deflected, ``Vx ← Vx + Vxx fs``.  Expected
+improvement ``dVexp(α) = α (d₀ + ½ α d₁)`` with ``d₀ = Σ Quᵀk``, ``d₁ = -Σ kᵀ Quu k``; the
+stopping test is ``stop = |d₀ + ½ d₁| < th_stop`` on a feasible iterate.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.linalg.lapack import dpotrf, dpotrs
+
+from ..shooting import ShootingProblem
+from .base import BackwardPassError, ForwardPassError, SolverAbstract
+
+
+class SolverDDP(SolverAbstract):
+    """Crocoddyl's ``SolverDDP(problem)``: regularised DDP with a backtracking line search."""
+
+    def __init__(self, problem: ShootingProblem) -> None:
+        super().__init__(problem)
+        self.reg_incFactor = 10.0
+        self.reg_decFactor = 10.0
+        self.reg_min = 1e-9
+        self.reg_max = 1e9
+        self.th_stepDec = 0.5
+        self.th_stepInc = 0.01
+        self.th_grad = 1e-12
+        self.alphas = [2.0 ** (-n) for n in range(10)]
+        self.cost_try = 0.0
+        self._allocate()
+
+    def _allocate(self) -> None:
+        problem = self.problem
+        models = [*problem.runningModels, problem.terminalModel]
+        self.Vxx = [np.zeros((m.state.ndx, m.state.ndx)) for m in models]
+        self.Vx = [np.zeros(m.state.ndx) for m in models]
+        self.Qxx = [np.zeros((m.state.ndx, m.state.ndx)) for m in problem.runningModels]
+        self.Qxu = [np.zeros((m.state.ndx, m.nu)) for m in problem.runningModels]
+        self.Quu = [np.zeros((m.nu, m.nu)) for m in problem.runningModels]
+        self.Qx = [np.zeros(m.state.ndx) for m in problem.runningModels]
+        self.Qu = [np.zeros(m.nu) for m in problem.runningModels]
+        self.K = [np.zeros((m.nu, m.state.ndx)) for m in problem.runningModels]
+        self.k = [np.zeros(m.nu) for m in problem.runningModels]
+        self.xs_try = [m.state.zero() for m in models]
+        self.us_try = [np.zeros(m.nu) for m in problem.runningModels]
+        self._rhs = [np.zeros((m.nu, 1 + m.state.ndx)) for m in problem.runningModels]
+        self._synced = False
+
+    # ------------------------------------------------------------------ regularisation
+    def increaseRegularization(self) -> None:
+        """Multiply ``preg``/``dreg`` by ``reg_incFactor`` (capped at ``reg_max``)."""
+        self.preg = min(self.preg * self.reg_incFactor, self.reg_max)
+        self.dreg = min(self.dreg * self.reg_incFactor, self.reg_max)
+
+    def decreaseRegularization(self) -> None:
+        """Divide ``preg``/``dreg`` by ``reg_decFactor`` (floored at ``reg_min``)."""
+        self.preg = max(self.preg / self.reg_decFactor, self.reg_min)
+        self.dreg = max(self.dreg / self.reg_decFactor, self.reg_min)
+
+    # ------------------------------------------------------------------ main loop
+    def _start(self, init_xs, init_us, is_feasible: bool, init_reg) -> None:
+        self._check_x0()
+        self.setCandidate(init_xs, init_us, is_feasible)
+        reg = self.reg_min if init_reg is None or np.isnan(init_reg) else float(init_reg)
+        if not np.isfinite(reg) or reg < 0:
+            raise ValueError(f"init_reg must be a non-negative number, got {init_reg}")
+        self.preg = self.dreg = reg
+        self.reason = ""
+        self.stop = 0.0
+        self.d[:] = 0.0
+        self.dV = self.dVexp = 0.0
+        self._synced = False
+
+    def _fail(self, reason: str) -> bool:
+        self.reason = reason
+        return False
+
+    def solve(self, init_xs=None, init_us=None, maxiter: int = 100, is_feasible: bool = False, init_reg=None) -> bool:
+        """Solve from the guess ``(init_xs, init_us)``; returns True on convergence (see ``reason`` otherwise)."""
+        self._start(init_xs, init_us, is_feasible, init_reg)
+        was_feasible = False
+        for self.iter in range(maxiter):
+            recalc = True
+            while True:
+                try:
+                    self.computeDirection(recalc)
+                except BackwardPassError as exc:
+                    if not np.isfinite(self.cost):
+                        return self._fail(f"the cost of the current iterate is not finite ({exc})")
+                    recalc = False
+                    self.increaseRegularization()
+                    if self.preg >= self.reg_max:
+                        return self._fail(f"regularization reached reg_max = {self.reg_max:g} in the backward pass")
+                    continue
+                break
+            self.expectedImprovement()
+            for alpha in self.alphas:
+                self.stepLength = alpha
+                try:
+                    self.dV = self.tryStep(alpha)
+                except ForwardPassError:
+                    self._synced = False
+                    continue
+                self.dVexp = alpha * (self.d[0] + 0.5 * alpha * self.d[1])
+                if self._accept(alpha):
+                    was_feasible = self.isFeasible
+                    self._accept_trial(alpha)
+                    break
+                self._synced = False
+            if self.stepLength > self.th_stepDec:
+                self.decreaseRegularization()
+            if self.stepLength <= self.th_stepInc:
+                self.increaseRegularization()
+                if self.preg >= self.reg_max:
+                    self.stoppingCriteria()
+                    self._run_callbacks()
+                    return self._fail(f"no step accepted and regularization reached reg_max = {self.reg_max:g}")
+            self.stoppingCriteria()
+            self._run_callbacks()
+            if was_feasible and self.stop < self.th_stop:
+                self.reason = "converged"
+                return True
+        self.iter = maxiter
+        return self._fail(f"maximum number of iterations ({maxiter}) reached")
+
+    def _accept(self, alpha: float) -> bool:
+        if self.dVexp >= 0:
+            return self.d[0] < self.th_grad or not self.isFeasible or self.dV > self.th_acceptStep * self.dVexp
+        return False
+
+    def _accept_trial(self, alpha: float) -> None:
+        self.xs, self.xs_try = self.xs_try, self.xs
+        self.us, self.us_try = self.us_try, self.us
+        self.isFeasible = True
+        self.cost = self.cost_try
+        self._synced = True
+
+    # ------------------------------------------------------------------ direction
+    def computeDirection(self, recalc: bool = True) -> None:
+        """Compute the derivatives (if ``recalc``) and run the backward pass."""
+        if recalc:
+            self.calcDiff()
+        self.backwardPass()
+
+    def calcDiff(self) -> float:
+        """Evaluate (if needed) and differentiate every node at the current iterate; update the gaps."""
+        problem = self.problem
+        if not self._synced:
+            problem.calc(self.xs, self.us)
+        self.cost = problem.calcDiff(self.xs, self.us)
+        self._synced = True
+        if self.isFeasible:
+            for f in self.fs:
+                f[:] = 0.0
+            self.ffeas = 0.0
+        else:
+            self.computeDynamicFeasibility()
+        self.computeInequalityFeasibility()
+        self.computeEqualityFeasibility()
+        return self.cost
+
+    def backwardPass(self) -> None:
+        """Riccati recursion over the stored derivatives (fills Q terms, gains and value function)."""
+        problem = self.problem
+        T = problem.T
+        td = problem.terminalData
+        Vxx, Vx = self.Vxx[T], self.Vx[T]
+        Vxx[:] = td.Lxx
+        Vx[:] = td.Lx
+        if self.preg:
+            Vxx.flat[:: Vxx.shape[0] + 1] += self.preg
+        if not self.isFeasible:
+            Vx += Vxx @ self.fs[T]
+        for t in range(T - 1, -1, -1):
+            model, data = problem.runningModels[t], problem.runningDatas[t]
+            self.computeActionValueFunction(t, model, data)
+            if model.nu:
+                self.computeGains(t)
+            self.computeValueFunction(t, model)
+            if not (np.isfinite(self.Vx[t]).all() and np.isfinite(self.Vxx[t]).all()):
+                raise BackwardPassError(f"non-finite value function at node {t}")
+
+    def computeActionValueFunction(self, t: int, model, data) -> None:
+        """Q terms of node ``t`` from its derivatives and the next value function."""
+        Vxx_p, Vx_p = self.Vxx[t + 1], self.Vx[t + 1]
+        FxTV = data.Fx.T @ Vxx_p
+        np.dot(FxTV, data.Fx, out=self.Qxx[t])
+        self.Qxx[t] += data.Lxx
+        np.dot(data.Fx.T, Vx_p, out=self.Qx[t])
+        self.Qx[t] += data.Lx
+        if model.nu:
+            FuTV = data.Fu.T @ Vxx_p
+            Quu = self.Quu[t]
+            np.dot(FuTV, data.Fu, out=Quu)
+            Quu += data.Luu
+            np.dot(FxTV, data.Fu, out=self.Qxu[t])
+            self.Qxu[t] += data.Lxu
+            np.dot(data.Fu.T, Vx_p, out=self.Qu[t])
+            self.Qu[t] += data.Lu
+            if self.preg:
+                Quu.flat[:: Quu.shape[0] + 1] += self.preg
+
+    def computeGains(self, t: int) -> None:
+        """``k = Quu⁻¹ Qu`` and ``K = Quu⁻¹ Qux`` by Cholesky; raises BackwardPassError if ``Quu`` is not PD."""
+        chol, info = dpotrf(self.Quu[t], lower=0, clean=0)
+        if info != 0:
+            raise BackwardPassError(f"Quu is not positive definite at node {t}")
+        rhs = self._rhs[t]
+        rhs[:, 0] = self.Qu[t]
+        rhs[:, 1:] = self.Qxu[t].T
+        sol, info = dpotrs(chol, rhs, lower=0)
+        self.k[t][:] = sol[:, 0]
+        self.K[t][:] = sol[:, 1:]
+
+    def computeValueFunction(self, t: int, model) -> None:
+        """Value function of node ``t`` from its Q terms and gains (gap-deflected when infeasible)."""
+        Vx, Vxx = self.Vx[t], self.Vxx[t]
+        Vx[:] = self.Qx[t]
+        Vxx[:] = self.Qxx[t]
+        if model.nu:
+            Vx -= self.K[t].T @ self.Qu[t]
+            Vxx -= self.Qxu[t] @ self.K[t]
+        Vxx += Vxx.T
+        Vxx *= 0.5
+        if self.preg:
+            Vxx.flat[:: Vxx.shape[0] + 1] += self.preg
+        if not self.isFeasible:
+            Vx += Vxx @ self.fs[t]
+
+    # ------------------------------------------------------------------ step
+    def expectedImprovement(self) -> np.ndarray:
+        """``d = (Σ Quᵀk, -Σ kᵀ Quu k)`` over the running nodes."""
+        d0 = d1 = 0.0
+        for Qu, Quu, k in zip(self.Qu, self.Quu, self.k):
+            if k.size:
+                d0 += Qu @ k
+                d1 -= k @ Quu @ k
+        self.d[0], self.d[1] = d0, d1
+        return self.d
+
+    def tryStep(self, steplength: float = 1.0) -> float:
+        """Roll out with step ``steplength``; returns the actual cost reduction ``cost - cost_try``."""
+        self.forwardPass(steplength)
+        return self.cost - self.cost_try
+
+    def forwardPass(self, steplength: float) -> None:
+        """Nonlinear rollout from ``x0`` with ``û = u - α k - K (x̂ ⊖ x)``; raises ForwardPassError on NaN."""
+        problem = self.problem
+        xs, us, xs_try, us_try = self.xs, self.us, self.xs_try, self.us_try
+        xs_try[0] = problem.x0.copy()
+        cost = 0.0
+        for t, (m, d) in enumerate(zip(problem.runningModels, problem.runningDatas)):
+            if m.nu:
+                dx = m.state.diff(xs[t], xs_try[t])
+                us_try[t] = us[t] - steplength * self.k[t] - self.K[t] @ dx
+            m.calc(d, xs_try[t], us_try[t])
+            xs_try[t + 1] = d.xnext.copy()
+            cost += d.cost
+        problem.terminalModel.calc(problem.terminalData, xs_try[-1])
+        cost += problem.terminalData.cost
+        if not np.isfinite(cost) or not np.isfinite(xs_try[-1]).all():
+            raise ForwardPassError("the rollout produced a non-finite state or cost")
+        self.cost_try = cost
+
+    def stoppingCriteria(self) -> float:
+        """``stop = |d₀ + ½ d₁|``: the expected reduction of a full step."""
+        self.stop = abs(self.d[0] + 0.5 * self.d[1])
+        return self.stop

@@ -1,0 +1,95 @@
+"""Feasibility-driven DDP (Crocoddyl's ``SolverFDDP``; Box-FDDP paper §III without bounds).
+
+The rollout keeps the gaps open by ``(1 - α)``: ``x̂₀ = x0 ⊕ ((α-1) f₀)``,
+``x̂_{t+1} = f(x̂_t, û_t) ⊕ ((α-1) f_{t+1})``.  The expected improvement adds the gap terms
+``d₀ = Σ Quᵀk - Σ Vxᵀf + dv`` and ``d₁ = -Σ kᵀQuu k + Σ fᵀVxx f - 2 dv`` with
+``dv = Σ fᵀ Vxx (x̂ ⊖ x)``.  A step predicted to increase the cost (``dVexp < 0``) is accepted
+when the actual change is at most ``th_acceptNegStep`` times the predicted one.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..shooting import ShootingProblem
+from .base import ForwardPassError
+from .ddp import SolverDDP
+
+
+class SolverFDDP(SolverDDP):
+    """Crocoddyl's ``SolverFDDP(problem)``."""
+
+    def __init__(self, problem: ShootingProblem) -> None:
+        super().__init__(problem)
+        self.th_acceptNegStep = 2.0
+        self._dg = 0.0
+        self._dq = 0.0
+
+    def _accept(self, alpha: float) -> bool:
+        if self.dVexp >= 0:
+            return self.d[0] < self.th_grad or self.dV > self.th_acceptStep * self.dVexp
+        return self.d[0] < self.th_grad or self.dV > self.th_acceptNegStep * self.dVexp
+
+    def _accept_trial(self, alpha: float) -> None:
+        feasible = self.isFeasible or alpha == 1.0
+        super()._accept_trial(alpha)
+        self.isFeasible = feasible
+
+    def computeDirection(self, recalc: bool = True) -> None:
+        super().computeDirection(recalc)
+        self.updateExpectedImprovement()
+
+    def updateExpectedImprovement(self) -> None:
+        """Parts of the expected improvement that do not depend on the trial step."""
+        dg = dq = 0.0
+        for Qu, Quu, k in zip(self.Qu, self.Quu, self.k):
+            if k.size:
+                dg += Qu @ k
+                dq -= k @ Quu @ k
+        if not self.isFeasible:
+            for Vx, Vxx, f in zip(self.Vx, self.Vxx, self.fs):
+                dg -= Vx @ f
+                dq += f @ Vxx @ f
+        self._dg, self._dq = dg, dq
+
+    def expectedImprovement(self) -> np.ndarray:
+        """``d`` for the last trial step (``dv`` uses the trial states ``xs_try``)."""
+        dv = 0.0
+        if not self.isFeasible:
+            problem = self.problem
+            models = [*problem.runningModels, problem.terminalModel]
+            for m, x, x_try, Vxx, f in zip(models, self.xs, self.xs_try, self.Vxx, self.fs):
+                dv += f @ Vxx @ m.state.diff(x, x_try)
+        self.d[0] = self._dg + dv
+        self.d[1] = self._dq - 2.0 * dv
+        return self.d
+
+    def tryStep(self, steplength: float = 1.0) -> float:
+        self.forwardPass(steplength)
+        self.expectedImprovement()
+        return self.cost - self.cost_try
+
+    def forwardPass(self, steplength: float) -> None:
+        """Rollout with the gaps shrunk by ``(1 - steplength)``; raises ForwardPassError on NaN."""
+        problem = self.problem
+        xs, us, xs_try, us_try, fs = self.xs, self.us, self.xs_try, self.us_try, self.fs
+        feasible = self.isFeasible
+        models = problem.runningModels
+        first = models[0] if models else problem.terminalModel
+        xs_try[0] = problem.x0.copy() if feasible else first.state.integrate(problem.x0, (steplength - 1.0) * fs[0])
+        cost = 0.0
+        for t, (m, d) in enumerate(zip(models, problem.runningDatas)):
+            if m.nu:
+                dx = m.state.diff(xs[t], xs_try[t])
+                us_try[t] = us[t] - steplength * self.k[t] - self.K[t] @ dx
+            m.calc(d, xs_try[t], us_try[t])
+            cost += d.cost
+            if feasible:
+                xs_try[t + 1] = d.xnext.copy()
+            else:
+                xs_try[t + 1] = m.state.integrate(d.xnext, (steplength - 1.0) * fs[t + 1])
+        problem.terminalModel.calc(problem.terminalData, xs_try[-1])
+        cost += problem.terminalData.cost
+        if not np.isfinite(cost) or not np.isfinite(xs_try[-1]).all():
+            raise ForwardPassError("the rollout produced a non-finite state or cost")
+        self.cost_try = cost
