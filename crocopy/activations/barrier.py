@@ -23,9 +23,9 @@ class ActivationBounds:
             raise ValueError(f"beta must be in (0, 1], got {beta}")
         if beta < 1.0:
             finite = np.isfinite(lb) & np.isfinite(ub)
-            mid, half = 0.5 * (lb + ub), 0.5 * (ub - lb)
-            lb = np.where(finite, mid - beta * half, lb)
-            ub = np.where(finite, mid + beta * half, ub)
+            mid, half = 0.5 * (lb[finite] + ub[finite]), 0.5 * (ub[finite] - lb[finite])
+            lb, ub = lb.copy(), ub.copy()
+            lb[finite], ub[finite] = mid - beta * half, mid + beta * half
         self.lb, self.ub, self.beta = lb, ub, float(beta)
 
     def __repr__(self) -> str:

@@ -1,0 +1,117 @@
+"""Every core model (× every integrator for differential models) against numerical differentiation."""
+
+import numpy as np
+import pytest
+
+import crocopy
+
+INTEGRATORS = {
+    "euler": lambda dam: crocopy.IntegratedActionModelEuler(dam, 1e-2),
+    "rk2": lambda dam: crocopy.IntegratedActionModelRK(dam, crocopy.RKType.two, 1e-2),
+    "rk3": lambda dam: crocopy.IntegratedActionModelRK(dam, crocopy.RKType.three, 1e-2),
+    "rk4": lambda dam: crocopy.IntegratedActionModelRK(dam, crocopy.RKType.four, 1e-2),
+}
+
+
+def _cost_dam(nq: int = 3, nu: int = 2) -> crocopy.DifferentialActionModelAbstract:
+    """A differential LQR whose cost is replaced by a non-quadratic cost stack (exercises activations)."""
+    return crocopy.DifferentialActionModelLQR.Random(nq, nu)
+
+
+ACTION_MODELS = {
+    "lqr": lambda: crocopy.ActionModelLQR.Random(5, 3),
+    "lqr_constrained": lambda: crocopy.ActionModelLQR.Random(4, 2, 2, 1),
+    "unicycle": crocopy.ActionModelUnicycle,
+}
+DAMS = {
+    "dlqr": lambda: crocopy.DifferentialActionModelLQR.Random(3, 2),
+    "dlqr_constrained": lambda: crocopy.DifferentialActionModelLQR.Random(2, 2, 1, 1),
+}
+
+
+def _check_action(model, terminal: bool, rng, hessians: bool = True) -> None:
+    nd = crocopy.ActionModelNumDiff(model)
+    d, dn = model.createData(), nd.createData()
+    x = model.state.rand()
+    u = None if terminal else rng.standard_normal(model.nu)
+    model.calc(d, x, u)
+    model.calcDiff(d, x, u)
+    nd.calc(dn, x, u)
+    nd.calcDiff(dn, x, u)
+    assert d.cost == pytest.approx(dn.cost, rel=1e-12, abs=1e-12)
+    np.testing.assert_allclose(d.Lx, dn.Lx, atol=1e-6, rtol=1e-6)
+    np.testing.assert_allclose(d.g, dn.g, atol=1e-12)
+    np.testing.assert_allclose(d.Gx, dn.Gx, atol=1e-6)
+    np.testing.assert_allclose(d.Hx, dn.Hx, atol=1e-6)
+    if hessians:
+        np.testing.assert_allclose(d.Lxx, dn.Lxx, atol=1e-4, rtol=1e-4)
+    if not terminal:
+        np.testing.assert_allclose(d.xnext, dn.xnext, atol=1e-14)
+        np.testing.assert_allclose(d.Fx, dn.Fx, atol=1e-6, rtol=1e-6)
+        np.testing.assert_allclose(d.Fu, dn.Fu, atol=1e-6, rtol=1e-6)
+        np.testing.assert_allclose(d.Lu, dn.Lu, atol=1e-6, rtol=1e-6)
+        np.testing.assert_allclose(d.Gu, dn.Gu, atol=1e-6)
+        np.testing.assert_allclose(d.Hu, dn.Hu, atol=1e-6)
+        if hessians:
+            np.testing.assert_allclose(d.Luu, dn.Luu, atol=1e-4, rtol=1e-4)
+            np.testing.assert_allclose(d.Lxu, dn.Lxu, atol=1e-4, rtol=1e-4)
+
+
+@pytest.mark.parametrize("terminal", [False, True])
+@pytest.mark.parametrize("name", sorted(ACTION_MODELS))
+def test_action_model_derivatives(name, terminal):
+    _check_action(ACTION_MODELS[name](), terminal, np.random.default_rng(1))
+
+
+@pytest.mark.parametrize("terminal", [False, True])
+@pytest.mark.parametrize("integrator", sorted(INTEGRATORS))
+@pytest.mark.parametrize("name", sorted(DAMS))
+def test_integrated_model_derivatives(name, integrator, terminal):
+    _check_action(INTEGRATORS[integrator](DAMS[name]()), terminal, np.random.default_rng(2))
+
+
+@pytest.mark.parametrize("name", sorted(DAMS))
+def test_differential_model_derivatives(name):
+    model = DAMS[name]()
+    nd = crocopy.DifferentialActionModelNumDiff(model)
+    d, dn = model.createData(), nd.createData()
+    x, u = model.state.rand(), np.random.default_rng(3).standard_normal(model.nu)
+    model.calc(d, x, u)
+    model.calcDiff(d, x, u)
+    nd.calc(dn, x, u)
+    nd.calcDiff(dn, x, u)
+    for f in ("Fx", "Fu", "Lx", "Lu", "Gx", "Gu", "Hx", "Hu"):
+        np.testing.assert_allclose(getattr(d, f), getattr(dn, f), atol=1e-6, rtol=1e-6, err_msg=f)
+    for f in ("Lxx", "Lxu", "Luu"):
+        np.testing.assert_allclose(getattr(d, f), getattr(dn, f), atol=1e-4, rtol=1e-4, err_msg=f)
+
+
+def test_numdiff_gauss_approximation_is_jacobian_product():
+    model = crocopy.ActionModelUnicycle()
+    nd = crocopy.ActionModelNumDiff(model, with_gauss_approx=True)
+    dn = nd.createData()
+    x, u = model.state.rand(), np.array([0.3, -0.2])
+    nd.calc(dn, x, u)
+    nd.calcDiff(dn, x, u)
+    np.testing.assert_allclose(dn.Lxx, dn.Rx.T @ dn.Rx, atol=1e-12)
+    np.testing.assert_allclose(np.diag(dn.Lxx), [100.0, 100.0, 100.0], rtol=1e-6)
+
+
+def test_integrators_reduce_to_exact_flow_for_small_steps():
+    """RK4 matches the exact exponential flow of a linear DAM better than Euler."""
+    from scipy.linalg import expm
+
+    dam = crocopy.DifferentialActionModelLQR(2, 2)
+    dt = 0.05
+    A = np.block([[np.zeros((2, 2)), np.eye(2)], [dam.Aq, dam.Av]])
+    x = np.array([0.1, -0.2, 0.3, 0.05])
+    exact = expm(A * dt) @ x
+    errors = {}
+    for name in ("euler", "rk2", "rk3", "rk4"):
+        m = INTEGRATORS[name](dam)
+        m.dt = dt
+        d = m.createData()
+        m.calc(d, x, np.zeros(2))
+        errors[name] = np.linalg.norm(d.xnext - exact)
+    assert errors["rk4"] < errors["rk3"] < errors["rk2"] < errors["euler"]
+    assert errors["rk4"] < 1e-7
