@@ -1,0 +1,300 @@
+"""Contact forward dynamics: the KKT system of a multibody in rigid contact.
+
+With ``M`` the joint-space inertia (plus armature), ``b`` the nonlinear effects, ``τ`` the
+actuation torques and the stacked contacts ``Jc a + a0 = 0``::
+
+    [M  Jcᵀ] [ a ]   [τ - b]
+    [Jc  0 ] [-λ ] = [ -a0 ],      K⁻¹ = [[A, B], [Bᵀ, C]]
+
+(``inv_damping`` regularises ``Jc M⁻¹ Jcᵀ``).  Differentiating ``M a + b - Jcᵀ λ = τ`` (RNEA with the
+contact forces as external forces, ``∂ID/∂x``) and the contact constraint (``da0_dx``)::
+
+    ∂a/∂x = A (∂τ/∂x - ∂ID/∂x) - B da0_dx,     ∂a/∂u = A ∂τ/∂u
+    ∂λ/∂x = -Bᵀ (∂τ/∂x - ∂ID/∂x) + C da0_dx,   ∂λ/∂u = -Bᵀ ∂τ/∂u
+
+The force Jacobians are written to every contact's data (``df_dx``, ``df_du``) when
+``enable_force`` is True, so that force residuals can use them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from crocopy.actuation_base import ActuationModelAbstract, JointDataAbstract
+from crocopy.constraints import ConstraintModelManager
+from crocopy.costs import CostModelSum
+from crocopy.diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
+
+from .contact_multiple import ContactModelMultiple
+from .data_collectors import DataCollectorJointActMultibodyInContact
+
+
+def check_vector_shape(value: np.ndarray, size: int, name: str) -> None:
+    """Raise ``ValueError`` unless ``value`` is a vector of shape ``(size,)``."""
+    if np.shape(value) != (size,):
+        raise ValueError(f"{name} has shape {np.shape(value)}, expected ({size},)")
+
+
+def link_cost_data(data: object, costs_data: object) -> None:
+    """Make the action data's cost derivatives the cost-sum data's arrays (no copies per call)."""
+    for name in ("Lx", "Lu", "Lxx", "Lxu", "Luu"):
+        setattr(data, name, getattr(costs_data, name))
+
+
+class DifferentialActionModelContactFwdDynamics(DifferentialActionModelAbstract):
+    """Crocoddyl's ``DifferentialActionModelContactFwdDynamics(state, actuation, contacts, costs,
+    constraints=None, inv_damping=0., enable_force=False)``.
+
+    Parameters
+    ----------
+    state : StateMultibody
+        Multibody state.
+    actuation : ActuationModelAbstract
+        Actuation model (``nu`` of the model; control limits default to its ``u_lb``/``u_ub``, i.e.
+        the URDF effort limits).
+    contacts : ContactModelMultiple
+        Rigid contacts.
+    costs : CostModelSum
+        Running or terminal cost.
+    constraints : ConstraintModelManager, optional
+        Constraints (Crocoddyl's overload without it is also accepted:
+        ``(state, actuation, contacts, costs, inv_damping, enable_force)``).
+    inv_damping : float
+        Damping of ``Jc M⁻¹ Jcᵀ`` (needed when ``Jc`` is rank deficient).
+    enable_force : bool
+        Compute the contact-force Jacobians (needed by force residuals).
+    """
+
+    def __init__(
+        self,
+        state,
+        actuation: ActuationModelAbstract,
+        contacts: ContactModelMultiple,
+        costs: CostModelSum,
+        constraints: ConstraintModelManager | float | None = None,
+        inv_damping: float | bool = 0.0,
+        enable_force: bool = False,
+    ) -> None:
+        if constraints is not None and not isinstance(constraints, ConstraintModelManager):
+            constraints, inv_damping, enable_force = None, constraints, bool(inv_damping)
+        if not isinstance(getattr(state, "pinocchio", None), pin.Model):
+            raise ValueError(f"state must be a StateMultibody, got {type(state).__name__}")
+        if not isinstance(actuation, ActuationModelAbstract):
+            raise ValueError(f"actuation must be an ActuationModelAbstract, got {type(actuation).__name__}")
+        if not isinstance(contacts, ContactModelMultiple):
+            raise ValueError(f"contacts must be a ContactModelMultiple, got {type(contacts).__name__}")
+        if not isinstance(costs, CostModelSum):
+            raise ValueError(f"costs must be a CostModelSum, got {type(costs).__name__}")
+        nu = actuation.nu
+        for name, part in (("contacts", contacts), ("costs", costs), ("constraints", constraints)):
+            if part is None:
+                continue
+            if part.nu != nu:
+                raise ValueError(f"{name}.nu = {part.nu} does not match actuation.nu = {nu}")
+            if part.state.nx != state.nx or part.state.ndx != state.ndx:
+                raise ValueError(f"{name} was built on a state of another dimension than state")
+        if actuation.state.nx != state.nx:
+            raise ValueError("actuation was built on a state of another dimension than state")
+        ng = constraints.ng if constraints is not None else 0
+        nh = constraints.nh if constraints is not None else 0
+        ng_T = constraints.ng_T if constraints is not None else 0
+        nh_T = constraints.nh_T if constraints is not None else 0
+        super().__init__(state, nu, costs.nr, ng, nh, ng_T, nh_T)
+        self.actuation = actuation
+        self.contacts = contacts
+        self.costs = costs
+        self.constraints = constraints
+        self.pinocchio = state.pinocchio
+        self.enable_force = bool(enable_force)
+        self.JMinvJt_damping = inv_damping
+        self._armature = np.zeros(state.nv)
+        self._with_armature = False
+        if constraints is not None:
+            self.g_lb = constraints.g_lb.copy()
+            self.g_ub = constraints.g_ub.copy()
+        self._set_control_limits(np.array(actuation.u_lb, dtype=float), np.array(actuation.u_ub, dtype=float))
+
+    @property
+    def JMinvJt_damping(self) -> float:
+        """Damping factor of ``Jc M⁻¹ Jcᵀ`` (non-negative)."""
+        return self._damping
+
+    @JMinvJt_damping.setter
+    def JMinvJt_damping(self, value: float) -> None:
+        value = float(value)
+        if not value >= 0.0:
+            raise ValueError(f"inv_damping must be non-negative, got {value}")
+        self._damping = value
+
+    @property
+    def armature(self) -> np.ndarray:
+        """Armature added to the diagonal of ``M``, shape ``(nv,)``."""
+        return self._armature
+
+    @armature.setter
+    def armature(self, value: np.ndarray) -> None:
+        arm = np.asarray(value, dtype=float)
+        if arm.shape != (self.state.nv,):
+            raise ValueError(f"armature has shape {arm.shape}, expected ({self.state.nv},)")
+        self._armature = arm.copy()
+        self._with_armature = bool(np.any(arm != 0.0))
+
+    def createData(self) -> "DifferentialActionDataContactFwdDynamics":
+        return DifferentialActionDataContactFwdDynamics(self)
+
+    def _kinematics(self, data: "DifferentialActionDataContactFwdDynamics", q: np.ndarray, v: np.ndarray) -> None:
+        model, pd = self.pinocchio, data.pinocchio
+        pin.computeAllTerms(model, pd, q, v)
+        pin.updateFramePlacements(model, pd)
+        if self._with_armature:
+            pd.M[data.diag, data.diag] += self._armature
+
+    def calc(
+        self, data: "DifferentialActionDataContactFwdDynamics", x: np.ndarray, u: np.ndarray | None = None
+    ) -> None:
+        """Contact dynamics ``xout`` and forces (``u`` given), costs and constraints."""
+        state = self.state
+        check_vector_shape(x, state.nx, "x")
+        q, v = x[: state.nq], x[state.nq :]
+        mb = data.multibody
+        if u is None:
+            pin.computeForwardKinematicsDerivatives(self.pinocchio, data.pinocchio, q, v, data.zero_a)
+            pin.updateFramePlacements(self.pinocchio, data.pinocchio)
+            self.costs.calc(data.costs, x)
+            data.cost = data.costs.cost
+            if self.constraints is not None:
+                self.constraints.calc(data.constraints, x)
+            return
+        check_vector_shape(u, self.nu, "u")
+        nc = self.contacts.nc
+        self._kinematics(data, q, v)
+        self.actuation.calc(mb.actuation, x, u)
+        self.contacts.calc(mb.contacts, x)
+        pd = data.pinocchio
+        if nc:
+            data.xout[:] = pin.forwardDynamics(
+                self.pinocchio, pd, mb.actuation.tau, mb.contacts.Jc[:nc], mb.contacts.a0[:nc], self._damping
+            )
+            lam = pd.lambda_c
+        else:
+            data.xout[:] = np.linalg.solve(np.triu(pd.M) + np.triu(pd.M, 1).T, mb.actuation.tau - pd.nle)
+            lam = data.no_force
+        self.contacts.updateAcceleration(mb.contacts, data.xout)
+        self.contacts.updateForce(mb.contacts, lam)
+        self.costs.calc(data.costs, x, u)
+        data.cost = data.costs.cost
+        if self.constraints is not None:
+            self.constraints.calc(data.constraints, x, u)
+
+    def calcDiff(
+        self, data: "DifferentialActionDataContactFwdDynamics", x: np.ndarray, u: np.ndarray | None = None
+    ) -> None:
+        """Dynamics Jacobians ``Fx``, ``Fu``, force Jacobians (``enable_force``), cost and constraint derivatives.
+
+        Assumes :meth:`calc` was called at the same ``(x, u)``.
+        """
+        state = self.state
+        check_vector_shape(x, state.nx, "x")
+        if u is None:
+            self.costs.calcDiff(data.costs, x)
+            if self.constraints is not None:
+                self.constraints.calcDiff(data.constraints, x)
+            return
+        check_vector_shape(u, self.nu, "u")
+        nv, nc = state.nv, self.contacts.nc
+        q, v = x[: state.nq], x[state.nq :]
+        model, pd, mb = self.pinocchio, data.pinocchio, data.multibody
+        cdata, adata = mb.contacts, mb.actuation
+        pin.computeRNEADerivatives(model, pd, q, v, data.xout, cdata.fext)
+        self.contacts.updateRneaDiff(cdata, pd)
+        self.actuation.calcDiff(adata, x, u)
+        rhs = data.rhs
+        np.subtract(adata.dtau_dx[:, :nv], pd.dtau_dq, out=rhs[:nv, :nv])
+        np.subtract(adata.dtau_dx[:, nv:], pd.dtau_dv, out=rhs[:nv, nv:])
+        if nc:
+            data.Kinv[:] = pin.getKKTContactDynamicMatrixInverse(model, pd, cdata.Jc[:nc])
+            self.contacts.calcDiff(cdata, x)
+            np.negative(cdata.da0_dx[:nc], out=rhs[nv:])
+            Kinv = data.Kinv
+            np.dot(Kinv, rhs, out=data.KinvRhs)
+            data.Fx[:] = data.KinvRhs[:nv]
+            np.dot(Kinv[:nv, :nv], adata.dtau_du, out=data.Fu)
+            if self.enable_force:
+                np.negative(data.KinvRhs[nv:], out=data.df_dx)
+                np.dot(Kinv[nv:, :nv], adata.dtau_du, out=data.df_du)
+                np.negative(data.df_du, out=data.df_du)
+        else:
+            Minv = np.linalg.inv(np.triu(pd.M) + np.triu(pd.M, 1).T)
+            np.dot(Minv, rhs, out=data.Fx)
+            np.dot(Minv, adata.dtau_du, out=data.Fu)
+        if self.enable_force:
+            self.contacts.updateAccelerationDiff(cdata, data.Fx)
+            self.contacts.updateForceDiff(cdata, data.df_dx, data.df_du)
+        self.costs.calcDiff(data.costs, x, u)
+        if self.constraints is not None:
+            self.constraints.calcDiff(data.constraints, x, u)
+
+    def quasiStatic(
+        self, data: "DifferentialActionDataContactFwdDynamics", x: np.ndarray, maxiter: int = 100, tol: float = 1e-9
+    ) -> np.ndarray:
+        """Control that keeps the robot at rest at ``q = x[:nq]`` with the active contacts.
+
+        Solves ``[∂τ/∂u  Jcᵀ] [u; λ] = g(q)`` in the least-norm sense (zero velocity and
+        acceleration); ``maxiter`` and ``tol`` are unused (kept for Crocoddyl's signature).
+
+        Returns
+        -------
+        numpy.ndarray
+            Quasi-static control, shape ``(nu,)``.
+        """
+        state = self.state
+        check_vector_shape(x, state.nx, "x")
+        xs = x.copy()
+        xs[state.nq :] = 0.0
+        q = xs[: state.nq]
+        self._kinematics(data, q, xs[state.nq :])
+        mb = data.multibody
+        nc = self.contacts.nc
+        self.contacts.calc(mb.contacts, xs)
+        u0 = np.zeros(self.nu)
+        self.actuation.calc(mb.actuation, xs, u0)
+        self.actuation.calcDiff(mb.actuation, xs, u0)
+        Jst = np.hstack([mb.actuation.dtau_du, mb.contacts.Jc[:nc].T])
+        tau_g = data.pinocchio.nle - mb.actuation.tau
+        return (np.linalg.pinv(Jst) @ tau_g)[: self.nu]
+
+    def __repr__(self) -> str:
+        return f"DifferentialActionModelContactFwdDynamics(nx={self.state.nx}, nu={self.nu}, nc={self.contacts.nc})"
+
+
+class DifferentialActionDataContactFwdDynamics(DifferentialActionDataAbstract):
+    """Data of :class:`DifferentialActionModelContactFwdDynamics`.
+
+    Fields beyond the differential data: ``pinocchio``, ``multibody``
+    (``DataCollectorJointActMultibodyInContact``), ``costs``, ``constraints``, ``Kinv (nv+nc, nv+nc)``,
+    ``df_dx (nc, ndx)``, ``df_du (nc, nu)``.
+    """
+
+    def __init__(self, model: DifferentialActionModelContactFwdDynamics) -> None:
+        super().__init__(model)
+        nv, ndx, nu, nc = model.state.nv, model.state.ndx, model.nu, model.contacts.nc
+        self.pinocchio = model.pinocchio.createData()
+        actuation = model.actuation.createData()
+        contacts = model.contacts.createData(self.pinocchio)
+        joint = JointDataAbstract(model.state, model.actuation, nu)
+        self.multibody = DataCollectorJointActMultibodyInContact(self.pinocchio, actuation, joint, contacts)
+        self.costs = model.costs.createData(self.multibody)
+        link_cost_data(self, self.costs)
+        self.constraints = None
+        if model.constraints is not None:
+            self.constraints = model.constraints.createData(self.multibody)
+            self.constraints.shareMemory(self)
+        self.Kinv = np.zeros((nv + nc, nv + nc))
+        self.df_dx = np.zeros((nc, ndx))
+        self.df_du = np.zeros((nc, nu))
+        self.rhs = np.zeros((nv + nc, ndx))
+        self.KinvRhs = np.zeros((nv + nc, ndx))
+        self.no_force = np.zeros(0)
+        self.diag = np.arange(nv)
+        self.zero_a = np.zeros(nv)

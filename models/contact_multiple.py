@@ -1,0 +1,237 @@
+"""Named sets of contacts, stacked into one constraint ``Jc a + a0 = 0``.
+
+Active contacts are stacked in name order (as Crocoddyl's ordered map does) into the first ``nc``
+rows of ``Jc (nc_total, nv)``, ``a0 (nc_total,)`` and ``da0_dx (nc_total, ndx)``; the rows of the
+force vector ``λ (nc,)`` follow the same order.  ``fext`` holds, per joint, the sum of the forces
+of the contacts attached to it, in the joint frame (the input of Pinocchio's RNEA).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from crocopy.state import StateAbstract
+
+from .contact_base import ContactDataAbstract, ContactModelAbstract
+
+
+@dataclass
+class ContactItem:
+    """Crocoddyl's ``ContactItem(name, contact, active=True)``."""
+
+    name: str
+    contact: ContactModelAbstract
+    active: bool = True
+
+    def __repr__(self) -> str:
+        return f"{{{self.name}, {self.contact!r}, active={self.active}}}"
+
+
+class ContactModelMultiple:
+    """Crocoddyl's ``ContactModelMultiple(state, nu=state.nv)``.
+
+    Parameters
+    ----------
+    state : StateMultibody
+        Multibody state.
+    nu : int, optional
+        Control dimension (default ``state.nv``).
+
+    Attributes
+    ----------
+    contacts : dict[str, ContactItem]
+        All contacts, ordered by name.
+    nc, nc_total : int
+        Dimension of the active contacts, of all contacts.
+    computeAllContacts : bool
+        Also evaluate inactive contacts in ``calc``/``calcDiff`` (default False).
+    """
+
+    def __init__(self, state: StateAbstract, nu: int | None = None) -> None:
+        if not isinstance(getattr(state, "pinocchio", None), pin.Model):
+            raise ValueError(f"state must be a StateMultibody, got {type(state).__name__}")
+        self.state = state
+        self.nu = state.nv if nu is None else int(nu)
+        if self.nu < 0:
+            raise ValueError(f"nu must be non-negative, got {self.nu}")
+        self.computeAllContacts = False
+        self._items: dict[str, ContactItem] = {}
+        self._recount()
+
+    @property
+    def contacts(self) -> dict[str, ContactItem]:
+        return self._items
+
+    @property
+    def active_set(self) -> set[str]:
+        """Names of the active contacts."""
+        return {n for n, c in self._items.items() if c.active}
+
+    @property
+    def inactive_set(self) -> set[str]:
+        """Names of the inactive contacts."""
+        return {n for n, c in self._items.items() if not c.active}
+
+    def _recount(self) -> None:
+        self._items = dict(sorted(self._items.items()))
+        self.nc = sum(c.contact.nc for c in self._items.values() if c.active)
+        self.nc_total = sum(c.contact.nc for c in self._items.values())
+        self._active = [(n, c.contact) for n, c in self._items.items() if c.active]
+        self._inactive = [(n, c.contact) for n, c in self._items.items() if not c.active]
+        self._lwa = [(n, c) for n, c in self._active if c.type != pin.LOCAL]
+
+    def addContact(self, name: str, contact: ContactModelAbstract, active: bool = True) -> None:
+        """Add ``contact`` under ``name``.
+
+        Raises
+        ------
+        ValueError
+            If ``name`` is already used, or ``contact`` has another ``nu`` or another robot.
+        """
+        if not isinstance(contact, ContactModelAbstract):
+            raise ValueError(f"contact must be a ContactModelAbstract, got {type(contact).__name__}")
+        if name in self._items:
+            raise ValueError(f"a contact named {name!r} already exists")
+        if contact.nu != self.nu:
+            raise ValueError(f"contact {name!r} has nu = {contact.nu}, expected nu = {self.nu}")
+        if contact.state.pinocchio is not self.state.pinocchio and (
+            contact.state.nx != self.state.nx or contact.state.pinocchio.nframes != self.state.pinocchio.nframes
+        ):
+            raise ValueError(f"contact {name!r} was built on the model of another robot")
+        self._items[name] = ContactItem(name, contact, bool(active))
+        self._recount()
+
+    def removeContact(self, name: str) -> None:
+        """Remove the contact ``name`` (``KeyError`` if unknown)."""
+        if name not in self._items:
+            raise KeyError(f"no contact named {name!r}")
+        del self._items[name]
+        self._recount()
+
+    def changeContactStatus(self, name: str, active: bool) -> None:
+        """Activate or deactivate the contact ``name`` (``KeyError`` if unknown)."""
+        if name not in self._items:
+            raise KeyError(f"no contact named {name!r}")
+        self._items[name].active = bool(active)
+        self._recount()
+
+    def getContactStatus(self, name: str) -> bool:
+        """True if the contact ``name`` is active (``KeyError`` if unknown)."""
+        if name not in self._items:
+            raise KeyError(f"no contact named {name!r}")
+        return self._items[name].active
+
+    def createData(self, data: pin.Data) -> "ContactDataMultiple":
+        """Allocate the data of every contact (on the node's ``pinocchio.Data``) and the stacked arrays."""
+        return ContactDataMultiple(self, data)
+
+    def calc(self, data: "ContactDataMultiple", x: np.ndarray) -> None:
+        """Evaluate the active contacts and stack ``Jc``/``a0`` (inactive rows are zero)."""
+        i = 0
+        for name, c in self._active:
+            cd = data.contacts[name]
+            c.calc(cd, x)
+            data.Jc[i:i + c.nc] = cd.Jc
+            data.a0[i:i + c.nc] = cd.a0
+            i += c.nc
+        if self.computeAllContacts:
+            for name, c in self._inactive:
+                c.calc(data.contacts[name], x)
+
+    def calcDiff(self, data: "ContactDataMultiple", x: np.ndarray) -> None:
+        """Evaluate the drift Jacobians of the active contacts and stack ``da0_dx``."""
+        i = 0
+        for name, c in self._active:
+            cd = data.contacts[name]
+            c.calcDiff(cd, x)
+            data.da0_dx[i:i + c.nc] = cd.da0_dx
+            i += c.nc
+        if self.computeAllContacts:
+            for name, c in self._inactive:
+                c.calcDiff(data.contacts[name], x)
+
+    def updateAcceleration(self, data: "ContactDataMultiple", dv: np.ndarray) -> None:
+        """Store the constrained acceleration ``dv (nv,)``."""
+        data.dv[:] = dv
+
+    def updateAccelerationDiff(self, data: "ContactDataMultiple", ddv_dx: np.ndarray) -> None:
+        """Store the Jacobian of the constrained acceleration ``ddv_dx (nv, ndx)``."""
+        data.ddv_dx[:] = ddv_dx
+
+    def updateForce(self, data: "ContactDataMultiple", force: np.ndarray) -> None:
+        """Split ``force (nc,)`` into the active contacts and sum their joint forces into ``fext``.
+
+        Raises
+        ------
+        ValueError
+            If ``force`` does not have shape ``(nc,)``.
+        """
+        if np.shape(force) != (self.nc,):
+            raise ValueError(f"force has shape {np.shape(force)}, expected ({self.nc},)")
+        fext = data.fext
+        for j in data.touched:
+            fext[j] = data.zero_force
+        i = 0
+        for name, c in self._active:
+            cd = data.contacts[name]
+            c.updateForce(cd, force[i:i + c.nc])
+            j = cd.joint
+            fext[j] = fext[j] + cd.fext
+            i += c.nc
+        for name, c in self._inactive:
+            c.setZeroForce(data.contacts[name])
+
+    def updateForceDiff(self, data: "ContactDataMultiple", df_dx: np.ndarray, df_du: np.ndarray) -> None:
+        """Split the force Jacobians ``df_dx (nc, ndx)`` and ``df_du (nc, nu)`` into the active contacts.
+
+        Raises
+        ------
+        ValueError
+            If the shapes are not ``(nc, ndx)`` and ``(nc, nu)``.
+        """
+        if np.shape(df_dx) != (self.nc, self.state.ndx) or np.shape(df_du) != (self.nc, self.nu):
+            raise ValueError(
+                f"df_dx, df_du have shapes {np.shape(df_dx)}, {np.shape(df_du)}, "
+                f"expected ({self.nc}, {self.state.ndx}), ({self.nc}, {self.nu})"
+            )
+        i = 0
+        for name, c in self._active:
+            c.updateForceDiff(data.contacts[name], df_dx[i:i + c.nc], df_du[i:i + c.nc])
+            i += c.nc
+        for name, c in self._inactive:
+            c.setZeroForceDiff(data.contacts[name])
+
+    def updateRneaDiff(self, data: "ContactDataMultiple", pinocchio: pin.Data) -> None:
+        """Add to ``pinocchio.dtau_dq`` the terms of the contacts whose forces are not in local coordinates."""
+        if self._lwa:
+            dtau_dq = pinocchio.dtau_dq
+            for name, c in self._lwa:
+                c.addRneaDiff(data.contacts[name], dtau_dq)
+
+    def __repr__(self) -> str:
+        return "ContactModelMultiple(" + ", ".join(f"{n}: {c.contact!r}" for n, c in self._items.items()) + ")"
+
+
+class ContactDataMultiple:
+    """Data of :class:`ContactModelMultiple`: ``contacts`` (name → data), ``Jc (nc_total, nv)``,
+    ``a0 (nc_total,)``, ``da0_dx (nc_total, ndx)``, ``dv (nv,)``, ``ddv_dx (nv, ndx)`` and ``fext``
+    (one ``pinocchio.Force`` per joint)."""
+
+    def __init__(self, model: ContactModelMultiple, data: pin.Data) -> None:
+        nv, ndx, nct = model.state.nv, model.state.ndx, model.nc_total
+        self.contacts: dict[str, ContactDataAbstract] = {
+            name: item.contact.createData(data) for name, item in model.contacts.items()
+        }
+        self.Jc = np.zeros((nct, nv))
+        self.a0 = np.zeros(nct)
+        self.da0_dx = np.zeros((nct, ndx))
+        self.dv = np.zeros(nv)
+        self.ddv_dx = np.zeros((nv, ndx))
+        self.fext = pin.StdVec_Force()
+        for _ in range(model.state.pinocchio.njoints):
+            self.fext.append(pin.Force.Zero())
+        self.zero_force = pin.Force.Zero()
+        self.touched = sorted({cd.joint for cd in self.contacts.values()})

@@ -1,0 +1,323 @@
+"""Point (3D) and rigid-frame (6D) contacts with Baumgarte stabilisation.
+
+With ``J = (Jl; Ja)`` the LOCAL frame Jacobian, ``v = (vl, w)`` and ``a`` the LOCAL frame velocity
+and spatial acceleration at zero joint acceleration, ``R`` the frame orientation, ``(kp, kd)`` the
+gains:
+
+- 3D, LOCAL: ``Jc = Jl``, ``a0 = al + w × vl + kp Rᵀ(p - xref) + kd vl`` (classical acceleration).
+- 6D, LOCAL: ``Jc = J``, ``a0 = a + kp log6(prefᵀ oMf) + kd v``.
+- LOCAL_WORLD_ALIGNED: the same quantities rotated by ``R`` (each 3-block), so that
+  ``a0 = R a0_local`` and ``da0/dq = R da0_local/dq - R [a0_local]× Ja``.
+
+The LOCAL-WORLD-ALIGNED force ``f`` maps to the local force ``Rᵀ f``; as that rotates with ``q``,
+``addRneaDiff`` adds ``-Jlᵀ [Rᵀ f_l]× Ja (- Jaᵀ [Rᵀ f_a]× Ja for 6D)`` to the RNEA derivative.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from crocopy.state import StateAbstract
+
+from .contact_base import ContactDataAbstract, ContactModelAbstract, check_gains, frame_id
+
+_LOCAL = pin.LOCAL
+_skew = pin.skew
+
+
+def _split_nu_gains(nu, gains):
+    """Crocoddyl accepts ``(..., type, nu, gains)`` and ``(..., type, gains)``."""
+    if nu is not None and not np.isscalar(nu):
+        return None, nu
+    return nu, gains
+
+
+class ContactModel3D(ContactModelAbstract):
+    """Crocoddyl's ``ContactModel3D(state, id, xref, type, nu=state.nv, gains=[0, 0])``.
+
+    Parameters
+    ----------
+    state : StateMultibody
+        Multibody state.
+    id : int or str
+        Contact frame (index or name).
+    xref : array_like, shape (3,)
+        Contact position in the world, used by the Baumgarte position term.
+    type : pinocchio.ReferenceFrame
+        ``pinocchio.LOCAL`` or ``pinocchio.LOCAL_WORLD_ALIGNED``.
+    nu : int, optional
+        Control dimension (default ``state.nv``).
+    gains : array_like, shape (2,)
+        Baumgarte gains ``(kp, kd)`` (default zeros).
+    """
+
+    def __init__(
+        self,
+        state: StateAbstract,
+        id: int | str,
+        xref: np.ndarray,
+        type: pin.ReferenceFrame,
+        nu: int | None = None,
+        gains: np.ndarray | None = None,
+    ) -> None:
+        nu, gains = _split_nu_gains(nu, gains)
+        fid = frame_id(state, id)
+        super().__init__(state, type, 3, nu)
+        self.id = fid
+        self.reference = xref
+        self.gains = gains
+
+    @property
+    def reference(self) -> np.ndarray:
+        """Contact position ``xref``, shape ``(3,)``."""
+        return self._xref
+
+    @reference.setter
+    def reference(self, value: np.ndarray) -> None:
+        ref = np.asarray(value, dtype=float).reshape(-1) if np.ndim(value) == 2 else np.asarray(value, dtype=float)
+        if ref.shape != (3,) or not np.all(np.isfinite(ref)):
+            raise ValueError(f"xref must be a finite vector of shape (3,), got shape {np.shape(value)}")
+        self._xref = ref.copy()
+
+    @property
+    def gains(self) -> np.ndarray:
+        """Baumgarte gains ``(kp, kd)``."""
+        return self._gains
+
+    @gains.setter
+    def gains(self, value: np.ndarray | None) -> None:
+        self._gains = check_gains(value)
+
+    def createData(self, data: pin.Data) -> "ContactData3D":
+        return ContactData3D(self, data)
+
+    def calc(self, data: "ContactData3D", x: np.ndarray) -> None:
+        model, pd, fid = self.state.pinocchio, data.pinocchio, self.id
+        data.fJf[:] = pin.getFrameJacobian(model, pd, fid, _LOCAL)
+        v = data.v = pin.getFrameVelocity(model, pd, fid, _LOCAL)
+        a0l = data.a0_local
+        a0l[:] = pin.getFrameClassicalAcceleration(model, pd, fid, _LOCAL).linear
+        data.drift_local[:] = a0l
+        kp, kd = self._gains
+        oMf = pd.oMf[fid]
+        R = oMf.rotation
+        if kp != 0.0:
+            np.subtract(oMf.translation, self._xref, out=data.dp)
+            np.dot(R.T, data.dp, out=data.dp_local)
+            a0l += kp * data.dp_local
+        if kd != 0.0:
+            a0l += kd * v.linear
+        if self.type == _LOCAL:
+            data.Jc[:] = data.fJf[:3]
+            data.a0[:] = a0l
+        else:
+            np.dot(R, data.fJf[:3], out=data.Jc)
+            np.dot(R, a0l, out=data.a0)
+
+    def calcDiff(self, data: "ContactData3D", x: np.ndarray) -> None:
+        model, pd, fid, nv = self.state.pinocchio, data.pinocchio, self.id, self.state.nv
+        vdq, adq, adv, ada = pin.getFrameAccelerationDerivatives(model, pd, fid, _LOCAL)
+        data.v_partial_dq[:], data.a_partial_dq[:], data.a_partial_dv[:], data.a_partial_da[:] = vdq, adq, adv, ada
+        v = data.v
+        Jl, Ja = data.fJf[:3], data.fJf[3:]
+        vw, vl = _skew(v.angular), _skew(v.linear)
+        dq, dv = data.da0_local_dx[:, :nv], data.da0_local_dx[:, nv:]
+        np.matmul(vw, vdq[:3], out=dq)
+        dq -= vl @ vdq[3:]
+        dq += adq[:3]
+        np.matmul(vw, Jl, out=dv)
+        dv -= vl @ Ja
+        dv += adv[:3]
+        kp, kd = self._gains
+        if kp != 0.0:
+            dq += kp * (_skew(data.dp_local) @ Ja + Jl)
+        if kd != 0.0:
+            dq += kd * vdq[:3]
+            dv += kd * Jl
+        if self.type == _LOCAL:
+            data.da0_dx[:] = data.da0_local_dx
+        else:
+            R = pd.oMf[fid].rotation
+            acc = pin.getFrameClassicalAcceleration(model, pd, fid, _LOCAL).linear
+            acc += data.a0_local - data.drift_local
+            np.dot(R, data.da0_local_dx, out=data.da0_dx)
+            data.da0_dx[:, :nv] -= (R @ _skew(acc)) @ Ja
+
+    def updateForce(self, data: "ContactData3D", force: np.ndarray) -> None:
+        if np.shape(force) != (3,):
+            raise ValueError(f"force has shape {np.shape(force)}, expected (3,)")
+        data.f.linear = force
+        data.f.angular = np.zeros(3)
+        if self.type == _LOCAL:
+            data.f_local.linear = force
+        else:
+            data.f_local.linear = data.pinocchio.oMf[self.id].rotation.T @ force
+        data.fext = data.jMf.act(data.f_local)
+
+    def addRneaDiff(self, data: "ContactData3D", dtau_dq: np.ndarray) -> None:
+        if self.type == _LOCAL:
+            return
+        Jl, Ja = data.fJf[:3], data.fJf[3:]
+        np.dot(Jl.T, _skew(data.f_local.linear) @ Ja, out=data.dtau_dq)
+        dtau_dq -= data.dtau_dq
+
+    def __repr__(self) -> str:
+        return f"ContactModel3D(id={self.id}, type={self.type}, xref={self._xref}, gains={self._gains})"
+
+
+class ContactData3D(ContactDataAbstract):
+    """Data of :class:`ContactModel3D`; adds ``a0_local``, ``da0_local_dx``, ``dp``, ``dp_local`` and ``f_local``."""
+
+    def __init__(self, model: ContactModel3D, data: pin.Data) -> None:
+        super().__init__(model, data)
+        self.a0_local = np.zeros(3)
+        self.drift_local = np.zeros(3)
+        self.da0_local_dx = np.zeros((3, model.state.ndx))
+        self.dp = np.zeros(3)
+        self.dp_local = np.zeros(3)
+        self.f_local = pin.Force.Zero()
+
+
+class ContactModel6D(ContactModelAbstract):
+    """Crocoddyl's ``ContactModel6D(state, id, pref, type, nu=state.nv, gains=[0, 0])``.
+
+    Parameters
+    ----------
+    state : StateMultibody
+        Multibody state.
+    id : int or str
+        Contact frame (index or name).
+    pref : pinocchio.SE3
+        Contact placement used by the Baumgarte position term.
+    type : pinocchio.ReferenceFrame
+        ``pinocchio.LOCAL`` or ``pinocchio.LOCAL_WORLD_ALIGNED``.
+    nu : int, optional
+        Control dimension (default ``state.nv``).
+    gains : array_like, shape (2,)
+        Baumgarte gains ``(kp, kd)`` (default zeros).
+    """
+
+    def __init__(
+        self,
+        state: StateAbstract,
+        id: int | str,
+        pref: pin.SE3,
+        type: pin.ReferenceFrame,
+        nu: int | None = None,
+        gains: np.ndarray | None = None,
+    ) -> None:
+        nu, gains = _split_nu_gains(nu, gains)
+        fid = frame_id(state, id)
+        super().__init__(state, type, 6, nu)
+        self.id = fid
+        self.reference = pref
+        self.gains = gains
+
+    @property
+    def reference(self) -> pin.SE3:
+        """Contact placement ``pref``."""
+        return self._pref
+
+    @reference.setter
+    def reference(self, value: pin.SE3) -> None:
+        if not isinstance(value, pin.SE3):
+            raise ValueError(f"pref must be a pinocchio.SE3, got {type(value).__name__}")
+        self._pref = value.copy()
+        self._prefinv = value.inverse()
+
+    @property
+    def gains(self) -> np.ndarray:
+        """Baumgarte gains ``(kp, kd)``."""
+        return self._gains
+
+    @gains.setter
+    def gains(self, value: np.ndarray | None) -> None:
+        self._gains = check_gains(value)
+
+    def createData(self, data: pin.Data) -> "ContactData6D":
+        return ContactData6D(self, data)
+
+    def calc(self, data: "ContactData6D", x: np.ndarray) -> None:
+        model, pd, fid = self.state.pinocchio, data.pinocchio, self.id
+        data.fJf[:] = pin.getFrameJacobian(model, pd, fid, _LOCAL)
+        v = data.v = pin.getFrameVelocity(model, pd, fid, _LOCAL)
+        a0l = data.a0_local
+        a0l[:] = pin.getFrameAcceleration(model, pd, fid, _LOCAL).vector
+        data.drift_local[:] = a0l
+        kp, kd = self._gains
+        oMf = pd.oMf[fid]
+        if kp != 0.0:
+            data.rMf = self._prefinv * oMf
+            a0l += kp * pin.log6(data.rMf).vector
+        if kd != 0.0:
+            a0l += kd * v.vector
+        if self.type == _LOCAL:
+            data.Jc[:] = data.fJf
+            data.a0[:] = a0l
+        else:
+            R = oMf.rotation
+            np.dot(R, data.fJf[:3], out=data.Jc[:3])
+            np.dot(R, data.fJf[3:], out=data.Jc[3:])
+            np.dot(R, a0l[:3], out=data.a0[:3])
+            np.dot(R, a0l[3:], out=data.a0[3:])
+
+    def calcDiff(self, data: "ContactData6D", x: np.ndarray) -> None:
+        model, pd, fid, nv = self.state.pinocchio, data.pinocchio, self.id, self.state.nv
+        vdq, adq, adv, ada = pin.getFrameAccelerationDerivatives(model, pd, fid, _LOCAL)
+        data.v_partial_dq[:], data.a_partial_dq[:], data.a_partial_dv[:], data.a_partial_da[:] = vdq, adq, adv, ada
+        dq, dv = data.da0_local_dx[:, :nv], data.da0_local_dx[:, nv:]
+        dq[:] = adq
+        dv[:] = adv
+        kp, kd = self._gains
+        if kp != 0.0:
+            dq += kp * (pin.Jlog6(data.rMf) @ data.fJf)
+        if kd != 0.0:
+            dq += kd * vdq
+            dv += kd * data.fJf
+        if self.type == _LOCAL:
+            data.da0_dx[:] = data.da0_local_dx
+        else:
+            R = pd.oMf[fid].rotation
+            Ja = data.fJf[3:]
+            acc = pin.getFrameAcceleration(model, pd, fid, _LOCAL).vector
+            acc += data.a0_local - data.drift_local
+            np.dot(R, data.da0_local_dx[:3], out=data.da0_dx[:3])
+            np.dot(R, data.da0_local_dx[3:], out=data.da0_dx[3:])
+            data.da0_dx[:3, :nv] -= (R @ _skew(acc[:3])) @ Ja
+            data.da0_dx[3:, :nv] -= (R @ _skew(acc[3:])) @ Ja
+
+    def updateForce(self, data: "ContactData6D", force: np.ndarray) -> None:
+        if np.shape(force) != (6,):
+            raise ValueError(f"force has shape {np.shape(force)}, expected (6,)")
+        data.f.vector = force
+        if self.type == _LOCAL:
+            data.f_local.vector = force
+        else:
+            Rt = data.pinocchio.oMf[self.id].rotation.T
+            data.f_local.linear = Rt @ force[:3]
+            data.f_local.angular = Rt @ force[3:]
+        data.fext = data.jMf.act(data.f_local)
+
+    def addRneaDiff(self, data: "ContactData6D", dtau_dq: np.ndarray) -> None:
+        if self.type == _LOCAL:
+            return
+        Jl, Ja = data.fJf[:3], data.fJf[3:]
+        fl = data.f_local
+        np.dot(Jl.T @ _skew(fl.linear) + Ja.T @ _skew(fl.angular), Ja, out=data.dtau_dq)
+        dtau_dq -= data.dtau_dq
+
+    def __repr__(self) -> str:
+        return f"ContactModel6D(id={self.id}, type={self.type}, gains={self._gains})"
+
+
+class ContactData6D(ContactDataAbstract):
+    """Data of :class:`ContactModel6D`; adds ``a0_local``, ``da0_local_dx``, ``rMf`` and ``f_local``."""
+
+    def __init__(self, model: ContactModel6D, data: pin.Data) -> None:
+        super().__init__(model, data)
+        self.a0_local = np.zeros(6)
+        self.drift_local = np.zeros(6)
+        self.da0_local_dx = np.zeros((6, model.state.ndx))
+        self.rMf = pin.SE3.Identity()
+        self.f_local = pin.Force.Zero()
