@@ -116,7 +116,8 @@ def test_verbose_table_format():
     assert rows[0].startswith("   0  2.864e+02  0.000e+00")
     assert all(len(r.split()) == 15 for r in rows)
     lvl0 = crocopy.CallbackVerbose(crocopy.VerboseLevel._0, 6)
-    assert lvl0.header() == "iter      cost          stop         |grad|         preg       step      dV-exp          dV"
+    expected = "iter      cost          stop         |grad|         preg       step      dV-exp          dV"
+    assert lvl0.header() == expected
 
 
 def test_bad_inputs_raise_value_errors():
@@ -181,3 +182,22 @@ def test_problem_api_rollout_quasistatic_circular_append():
     assert problem.runningModels[-1] is new and problem.T == 4
     with pytest.raises(ValueError, match="node index"):
         problem.updateModel(9, new)
+
+
+@pytest.mark.parametrize("feasible", [True, False])
+def test_compiled_riccati_kernel_equals_numpy_path(feasible):
+    assert crocopy.solvers.riccati_kernel.available
+    problem, _ = _lqr_problem(nx=8, nu=3, T=15, seed=3)
+    rng = np.random.default_rng(1)
+    xs = [rng.standard_normal(8) for _ in range(16)]
+    us = [rng.standard_normal(3) for _ in range(15)]
+    results = []
+    for use_kernel in (True, False):
+        s = crocopy.SolverFDDP(problem)
+        s.use_kernel = use_kernel
+        s.setCandidate(xs, us, feasible)
+        s.preg = s.dreg = 1e-3
+        s.computeDirection(True)
+        results.append((np.array(s.K), np.array(s.k), np.array(s.Vxx), np.array(s.Vx), np.array(s.Quu)))
+    for a, b in zip(*results):
+        np.testing.assert_allclose(a, b, atol=1e-10, rtol=1e-10)

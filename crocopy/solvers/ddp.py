@@ -18,6 +18,7 @@ import numpy as np
 from scipy.linalg.lapack import dpotrf, dpotrs
 
 from ..shooting import ShootingProblem
+from . import riccati_kernel
 from .base import BackwardPassError, ForwardPassError, SolverAbstract
 
 
@@ -35,6 +36,7 @@ class SolverDDP(SolverAbstract):
         self.th_grad = 1e-12
         self.alphas = [2.0 ** (-n) for n in range(10)]
         self.cost_try = 0.0
+        self.use_kernel = riccati_kernel.available
         self._allocate()
 
     def _allocate(self) -> None:
@@ -167,8 +169,24 @@ class SolverDDP(SolverAbstract):
         self.computeEqualityFeasibility()
         return self.cost
 
+    def _uses_plain_riccati(self) -> bool:
+        """True when no subclass replaces a step of the recursion, so the compiled kernel applies."""
+        cls = type(self)
+        return (
+            cls.computeActionValueFunction is SolverDDP.computeActionValueFunction
+            and cls.computeGains is SolverDDP.computeGains
+            and cls.computeValueFunction is SolverDDP.computeValueFunction
+        )
+
     def backwardPass(self) -> None:
-        """Riccati recursion over the stored derivatives (fills Q terms, gains and value function)."""
+        """Riccati recursion over the stored derivatives (fills Q terms, gains and value function).
+
+        Uses the compiled step of :mod:`.riccati_kernel` when ``use_kernel`` is set and no subclass
+        overrides a step; otherwise the numpy steps below (same numbers to round-off).
+        """
+        if self.use_kernel and self._uses_plain_riccati():
+            self._backward_pass_kernel()
+            return
         problem = self.problem
         T = problem.T
         td = problem.terminalData
@@ -187,6 +205,32 @@ class SolverDDP(SolverAbstract):
             self.computeValueFunction(t, model)
             if not (np.isfinite(self.Vx[t]).all() and np.isfinite(self.Vxx[t]).all()):
                 raise BackwardPassError(f"non-finite value function at node {t}")
+
+    def _backward_pass_kernel(self) -> None:
+        problem = self.problem
+        T = problem.T
+        td = problem.terminalData
+        Vxx, Vx = self.Vxx[T], self.Vx[T]
+        Vxx[:] = td.Lxx
+        Vx[:] = td.Lx
+        if self.preg:
+            Vxx.flat[:: Vxx.shape[0] + 1] += self.preg
+        gaps = not self.isFeasible
+        if gaps:
+            Vx += Vxx @ self.fs[T]
+        step = riccati_kernel.riccati_step
+        preg = float(self.preg)
+        for t in range(T - 1, -1, -1):
+            d = problem.runningDatas[t]
+            ok = step(
+                d.Fx, d.Fu, d.Lxx, d.Lxu, d.Luu, d.Lx, d.Lu, self.Vxx[t + 1], self.Vx[t + 1], preg, self.fs[t], gaps,
+                self.Qxx[t], self.Qxu[t], self.Quu[t], self.Qx[t], self.Qu[t], self.K[t], self.k[t],
+                self.Vxx[t], self.Vx[t],
+            )
+            if not ok:
+                raise BackwardPassError(f"Quu is not positive definite at node {t}")
+        if not (np.isfinite(self.Vx[0]).all() and np.isfinite(self.Vxx[0]).all()):
+            raise BackwardPassError("non-finite value function in the backward pass")
 
     def computeActionValueFunction(self, t: int, model, data) -> None:
         """Q terms of node ``t`` from its derivatives and the next value function."""

@@ -1,0 +1,86 @@
+"""Compiled Riccati step of one node (numba), twin of the pure-numpy step in :mod:`.ddp`.
+
+Computes, for node t with next value function ``(V'x, V'xx)`` (Crocoddyl signs)::
+
+    Qx = Lx + Fxᵀ V'x,  Qu = Lu + Fuᵀ V'x,  Qxx = Lxx + Fxᵀ V'xx Fx,
+    Qxu = Lxu + Fxᵀ V'xx Fu,  Quu = Luu + Fuᵀ V'xx Fu + preg I,
+    [k K] = Quu⁻¹ [Qu Qux]  (Cholesky),
+    Vx = Qx - Qxu k,  Vxx = sym(Qxx - Qxu K) + preg I,  Vx += Vxx f  (if gaps are open)
+
+``riccati_step`` returns False when ``Quu`` is not positive definite (the caller raises the
+regularisation).  ``available`` is False when numba cannot be imported; the solvers then use the
+numpy path, which gives the same numbers to round-off (tested to 1e-10).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+try:
+    from numba import njit
+except ImportError:  # pragma: no cover - exercised only without numba
+    njit = None
+
+available = njit is not None
+
+
+def _riccati_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx):
+    nu = Fu.shape[1]
+    ndx = Fx.shape[1]
+    FxTV = Fx.T @ Vxx_n
+    Qxx[:, :] = Lxx + FxTV @ Fx
+    Qx[:] = Lx + Fx.T @ Vx_n
+    if nu > 0:
+        FuTV = Fu.T @ Vxx_n
+        Quu[:, :] = Luu + FuTV @ Fu
+        Qxu[:, :] = Lxu + FxTV @ Fu
+        Qu[:] = Lu + Fu.T @ Vx_n
+        for i in range(nu):
+            Quu[i, i] += preg
+        L = np.zeros((nu, nu))
+        for j in range(nu):
+            s = Quu[j, j]
+            for p in range(j):
+                s -= L[j, p] * L[j, p]
+            if not s > 0.0:
+                return False
+            L[j, j] = np.sqrt(s)
+            for i in range(j + 1, nu):
+                s = Quu[i, j]
+                for p in range(j):
+                    s -= L[i, p] * L[j, p]
+                L[i, j] = s / L[j, j]
+        rhs = np.empty((nu, ndx + 1))
+        rhs[:, :ndx] = Qxu.T
+        rhs[:, ndx] = Qu
+        for i in range(nu):
+            for c in range(ndx + 1):
+                s = rhs[i, c]
+                for p in range(i):
+                    s -= L[i, p] * rhs[p, c]
+                rhs[i, c] = s / L[i, i]
+        for i in range(nu - 1, -1, -1):
+            for c in range(ndx + 1):
+                s = rhs[i, c]
+                for p in range(i + 1, nu):
+                    s -= L[p, i] * rhs[p, c]
+                rhs[i, c] = s / L[i, i]
+        K[:, :] = rhs[:, :ndx]
+        k[:] = rhs[:, ndx]
+        Vxx[:, :] = Qxx - Qxu @ K
+        Vx[:] = Qx - K.T @ Qu
+    else:
+        Vxx[:, :] = Qxx
+        Vx[:] = Qx
+    for i in range(ndx):
+        for j in range(i + 1, ndx):
+            m = 0.5 * (Vxx[i, j] + Vxx[j, i])
+            Vxx[i, j] = m
+            Vxx[j, i] = m
+        Vxx[i, i] += preg
+    if gaps:
+        Vx[:] += Vxx @ fs
+    return True
+
+
+riccati_step = njit(cache=True)(_riccati_step) if available else _riccati_step
