@@ -1,0 +1,224 @@
+"""Impulse dynamics: the velocity jump of a multibody at an impact (an action model with ``nu = 0``).
+
+With ``M`` the inertia (plus armature), ``e`` the restitution coefficient ``r_coeff`` and the
+stacked impulses ``Jc``::
+
+    [M  Jcᵀ] [ v⁺]   [  M v⁻  ]
+    [Jc  0 ] [-Λ ] = [-e Jc v⁻],     xnext = (q, v⁺)
+
+(``inv_damping`` regularises ``Jc M⁻¹ Jcᵀ``).  Differentiating ``M(q)(v⁺ - v⁻) - Jcᵀ Λ = 0``
+(``∂ID/∂q``: RNEA derivatives at zero velocity and gravity with acceleration ``v⁺ - v⁻`` and the
+impulses as external forces) and ``Jc(q)(v⁺ + e v⁻) = 0`` (``dv0_dq`` at velocity ``v⁺ + e v⁻``)::
+
+    K [∂v⁺/∂q; -∂Λ/∂q] = [-∂ID/∂q; -dv0_dq],    K [∂v⁺/∂v⁻; -∂Λ/∂v⁻] = [M; -e Jc]
+
+and ``Fx = [[I, 0], [∂v⁺/∂q, ∂v⁺/∂v⁻]]``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from crocopy.action_base import ActionDataAbstract, ActionModelAbstract
+from crocopy.constraints import ConstraintModelManager
+from crocopy.costs import CostModelSum
+
+from .contact_fwd_dynamics import check_vector_shape, link_cost_data
+from .data_collectors import DataCollectorMultibodyInImpulse
+from .impulse_multiple import ImpulseModelMultiple
+
+
+class ActionModelImpulseFwdDynamics(ActionModelAbstract):
+    """Crocoddyl's ``ActionModelImpulseFwdDynamics(state, impulses, costs, constraints=None, r_coeff=0.,
+    inv_damping=0., enable_force=False)``.
+
+    Parameters
+    ----------
+    state : StateMultibody
+        Multibody state.
+    impulses : ImpulseModelMultiple
+        Impulses of the impact.
+    costs : CostModelSum
+        Cost of the impact node (``nu = 0``).
+    constraints : ConstraintModelManager, optional
+        Constraints (the overload ``(state, impulses, costs, r_coeff, inv_damping, enable_force)`` is
+        also accepted).
+    r_coeff : float
+        Restitution coefficient ``e >= 0``.
+    inv_damping : float
+        Damping of ``Jc M⁻¹ Jcᵀ``.
+    enable_force : bool
+        Compute the impulse Jacobians (written to every impulse's ``df_dx``).
+    """
+
+    def __init__(
+        self,
+        state,
+        impulses: ImpulseModelMultiple,
+        costs: CostModelSum,
+        constraints: ConstraintModelManager | float | None = None,
+        r_coeff: float = 0.0,
+        inv_damping: float | bool = 0.0,
+        enable_force: bool = False,
+    ) -> None:
+        if constraints is not None and not isinstance(constraints, ConstraintModelManager):
+            constraints, r_coeff, inv_damping, enable_force = None, constraints, r_coeff, inv_damping
+        if not isinstance(getattr(state, "pinocchio", None), pin.Model):
+            raise ValueError(f"state must be a StateMultibody, got {type(state).__name__}")
+        if not isinstance(impulses, ImpulseModelMultiple):
+            raise ValueError(f"impulses must be an ImpulseModelMultiple, got {type(impulses).__name__}")
+        if not isinstance(costs, CostModelSum):
+            raise ValueError(f"costs must be a CostModelSum, got {type(costs).__name__}")
+        for name, part in (("impulses", impulses), ("costs", costs), ("constraints", constraints)):
+            if part is None:
+                continue
+            if part.state.nx != state.nx or part.state.ndx != state.ndx:
+                raise ValueError(f"{name} was built on a state of another dimension than state")
+        if costs.nu != 0 or (constraints is not None and constraints.nu != 0):
+            raise ValueError("costs and constraints of an impulse model must have nu = 0")
+        c = constraints
+        dims = (c.ng, c.nh, c.ng_T, c.nh_T) if c is not None else (0, 0, 0, 0)
+        super().__init__(state, 0, costs.nr, *dims)
+        self.impulses = impulses
+        self.costs = costs
+        self.constraints = constraints
+        self.pinocchio = state.pinocchio
+        self.r_coeff = r_coeff
+        self.JMinvJt_damping = inv_damping
+        self.enable_force = bool(enable_force)
+        self._armature = np.zeros(state.nv)
+        self._with_armature = False
+        self._model_nograv = state.pinocchio.copy()
+        self._model_nograv.gravity.setZero()
+        if constraints is not None:
+            self.g_lb = constraints.g_lb.copy()
+            self.g_ub = constraints.g_ub.copy()
+
+    @property
+    def r_coeff(self) -> float:
+        """Restitution coefficient (non-negative)."""
+        return self._r_coeff
+
+    @r_coeff.setter
+    def r_coeff(self, value: float) -> None:
+        value = float(value)
+        if not value >= 0.0:
+            raise ValueError(f"r_coeff must be non-negative, got {value}")
+        self._r_coeff = value
+
+    @property
+    def JMinvJt_damping(self) -> float:
+        """Damping factor of ``Jc M⁻¹ Jcᵀ`` (non-negative)."""
+        return self._damping
+
+    @JMinvJt_damping.setter
+    def JMinvJt_damping(self, value: float) -> None:
+        value = float(value)
+        if not value >= 0.0:
+            raise ValueError(f"inv_damping must be non-negative, got {value}")
+        self._damping = value
+
+    @property
+    def armature(self) -> np.ndarray:
+        """Armature added to the diagonal of ``M``, shape ``(nv,)``."""
+        return self._armature
+
+    @armature.setter
+    def armature(self, value: np.ndarray) -> None:
+        arm = np.asarray(value, dtype=float)
+        if arm.shape != (self.state.nv,):
+            raise ValueError(f"armature has shape {arm.shape}, expected ({self.state.nv},)")
+        self._armature = arm.copy()
+        self._with_armature = bool(np.any(arm != 0.0))
+
+    def createData(self) -> "ActionDataImpulseFwdDynamics":
+        return ActionDataImpulseFwdDynamics(self)
+
+    def calc(self, data: "ActionDataImpulseFwdDynamics", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        """Velocity after impact ``xnext = (q, v⁺)``, impulses, costs and constraints."""
+        state = self.state
+        check_vector_shape(x, state.nx, "x")
+        nq, nc = state.nq, self.impulses.nc
+        q, v = x[:nq], x[nq:]
+        model, pd, idata = self.pinocchio, data.pinocchio, data.multibody.impulses
+        pin.computeAllTerms(model, pd, q, v)
+        pin.updateFramePlacements(model, pd)
+        if self._with_armature:
+            pd.M[data.diag, data.diag] += self._armature
+        self.impulses.calc(idata, x)
+        data.xnext[:nq] = q
+        if nc:
+            data.xnext[nq:] = pin.impulseDynamics(model, pd, v, idata.Jc[:nc], self._r_coeff, self._damping)
+            lam = pd.impulse_c
+        else:
+            data.xnext[nq:] = v
+            lam = data.no_force
+        self.impulses.updateVelocity(idata, data.xnext[nq:])
+        self.impulses.updateForce(idata, lam)
+        self.costs.calc(data.costs, x, u)
+        data.cost = data.costs.cost
+        if self.constraints is not None:
+            self.constraints.calc(data.constraints, x, u)
+
+    def calcDiff(self, data: "ActionDataImpulseFwdDynamics", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        """``Fx``, impulse Jacobians (``enable_force``), cost and constraint derivatives (after :meth:`calc`)."""
+        state = self.state
+        check_vector_shape(x, state.nx, "x")
+        nq, nv, nc = state.nq, state.nv, self.impulses.nc
+        q, v = x[:nq], x[nq:]
+        model, pd, idata = self.pinocchio, data.pinocchio, data.multibody.impulses
+        vnext = data.xnext[nq:]
+        if nc:
+            rhs = data.rhs
+            M = pd.M
+            np.add(np.triu(M), np.triu(M, 1).T, out=rhs[:nv, nv:])
+            pin.computeForwardKinematicsDerivatives(model, pd, q, vnext + self._r_coeff * v, data.zero_v)
+            self.impulses.calcDiff(idata, x)
+            pin.computeRNEADerivatives(self._model_nograv, pd, q, data.zero_v, vnext - v, idata.fext)
+            self.impulses.updateRneaDiff(idata, pd)
+            data.Kinv[:] = pin.getKKTContactDynamicMatrixInverse(model, pd, idata.Jc[:nc])
+            np.negative(pd.dtau_dq, out=rhs[:nv, :nv])
+            np.negative(idata.dv0_dq[:nc], out=rhs[nv:, :nv])
+            np.multiply(idata.Jc[:nc], -self._r_coeff, out=rhs[nv:, nv:])
+            np.dot(data.Kinv, rhs, out=data.KinvRhs)
+            data.Fx[nv:] = data.KinvRhs[:nv]
+            if self.enable_force:
+                np.negative(data.KinvRhs[nv:], out=data.df_dx)
+                self.impulses.updateVelocityDiff(idata, data.Fx[nv:])
+                self.impulses.updateForceDiff(idata, data.df_dx)
+            pin.computeForwardKinematicsDerivatives(model, pd, q, v, data.zero_v)
+        self.costs.calcDiff(data.costs, x, u)
+        if self.constraints is not None:
+            self.constraints.calcDiff(data.constraints, x, u)
+
+    def __repr__(self) -> str:
+        return f"ActionModelImpulseFwdDynamics(nx={self.state.nx}, nc={self.impulses.nc}, r_coeff={self._r_coeff})"
+
+
+class ActionDataImpulseFwdDynamics(ActionDataAbstract):
+    """Data of :class:`ActionModelImpulseFwdDynamics`: ``pinocchio``, ``multibody``
+    (``DataCollectorMultibodyInImpulse``), ``costs``, ``constraints``, ``Kinv (nv+nc, nv+nc)`` and
+    ``df_dx (nc, ndx)``."""
+
+    def __init__(self, model: ActionModelImpulseFwdDynamics) -> None:
+        super().__init__(model)
+        nv, ndx, nc = model.state.nv, model.state.ndx, model.impulses.nc
+        self.pinocchio = model.pinocchio.createData()
+        impulses = model.impulses.createData(self.pinocchio)
+        self.multibody = DataCollectorMultibodyInImpulse(self.pinocchio, impulses)
+        self.costs = model.costs.createData(self.multibody)
+        link_cost_data(self, self.costs)
+        self.constraints = None
+        if model.constraints is not None:
+            self.constraints = model.constraints.createData(self.multibody)
+            self.constraints.shareMemory(self)
+        self.Kinv = np.zeros((nv + nc, nv + nc))
+        self.df_dx = np.zeros((nc, ndx))
+        self.rhs = np.zeros((nv + nc, ndx))
+        self.KinvRhs = np.zeros((nv + nc, ndx))
+        self.no_force = np.zeros(0)
+        self.zero_v = np.zeros(nv)
+        self.diag = np.arange(nv)
+        np.fill_diagonal(self.Fx[:nv, :nv], 1.0)
+

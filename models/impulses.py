@@ -1,0 +1,94 @@
+"""Point (3D) and rigid-frame (6D) impulses.
+
+With ``J = (Jl; Ja)`` the LOCAL frame Jacobian and ``R`` the frame orientation:
+
+- 3D: ``Jc = Jl`` (LOCAL) or ``R Jl`` (LOCAL_WORLD_ALIGNED);
+- 6D: ``Jc = J`` (LOCAL) or ``(R Jl; R Ja)`` (LOCAL_WORLD_ALIGNED).
+
+``dv0_local_dq`` is the derivative of the LOCAL frame velocity ``J(q) w`` (``getFrameVelocityDerivatives``);
+in LOCAL_WORLD_ALIGNED, ``dv0_dq = R dv0_local_dq - R [J w]× Ja`` (per 3-block).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from crocopy.state import StateAbstract
+
+from .contact_base import frame_id
+from .impulse_base import ImpulseDataAbstract, ImpulseModelAbstract
+
+_LOCAL = pin.LOCAL
+_skew = pin.skew
+
+
+class _ImpulseFrame(ImpulseModelAbstract):
+    def __init__(self, state: StateAbstract, id: int | str, type: pin.ReferenceFrame, nc: int) -> None:
+        fid = frame_id(state, id)
+        super().__init__(state, type, nc)
+        self.id = fid
+
+    def createData(self, data: pin.Data) -> ImpulseDataAbstract:
+        return ImpulseDataAbstract(self, data)
+
+    def calc(self, data: ImpulseDataAbstract, x: np.ndarray) -> None:
+        model, pd, fid = self.state.pinocchio, data.pinocchio, self.id
+        data.fJf[:] = pin.getFrameJacobian(model, pd, fid, _LOCAL)
+        nc = self.nc
+        if self.type == _LOCAL:
+            data.Jc[:] = data.fJf[:nc]
+        else:
+            R = pd.oMf[fid].rotation
+            for k in range(0, nc, 3):
+                np.dot(R, data.fJf[k:k + 3], out=data.Jc[k:k + 3])
+
+    def calcDiff(self, data: ImpulseDataAbstract, x: np.ndarray) -> None:
+        model, pd, fid, nc = self.state.pinocchio, data.pinocchio, self.id, self.nc
+        vdq, vdv = pin.getFrameVelocityDerivatives(model, pd, fid, _LOCAL)
+        data.v_partial_dq[:] = vdq
+        data.v_partial_dv[:] = vdv
+        data.dv0_local_dq[:] = vdq[:nc]
+        if self.type == _LOCAL:
+            data.dv0_dq[:] = data.dv0_local_dq
+            return
+        R = pd.oMf[fid].rotation
+        Ja = data.fJf[3:]
+        w = pin.getFrameVelocity(model, pd, fid, _LOCAL).vector
+        for k in range(0, nc, 3):
+            np.dot(R, vdq[k:k + 3], out=data.dv0_dq[k:k + 3])
+            data.dv0_dq[k:k + 3] -= (R @ _skew(w[k:k + 3])) @ Ja
+
+
+class ImpulseModel3D(_ImpulseFrame):
+    """Crocoddyl's ``ImpulseModel3D(state, frame, type=pinocchio.LOCAL)``.
+
+    Parameters
+    ----------
+    state : StateMultibody
+        Multibody state.
+    id : int or str
+        Impulse frame (index or name).
+    type : pinocchio.ReferenceFrame
+        ``pinocchio.LOCAL`` (default) or ``pinocchio.LOCAL_WORLD_ALIGNED``.
+    """
+
+    def __init__(self, state: StateAbstract, id: int | str, type: pin.ReferenceFrame = pin.LOCAL) -> None:
+        super().__init__(state, id, type, 3)
+
+
+class ImpulseModel6D(_ImpulseFrame):
+    """Crocoddyl's ``ImpulseModel6D(state, frame, type=pinocchio.LOCAL)``.
+
+    Parameters
+    ----------
+    state : StateMultibody
+        Multibody state.
+    id : int or str
+        Impulse frame (index or name).
+    type : pinocchio.ReferenceFrame
+        ``pinocchio.LOCAL`` (default) or ``pinocchio.LOCAL_WORLD_ALIGNED``.
+    """
+
+    def __init__(self, state: StateAbstract, id: int | str, type: pin.ReferenceFrame = pin.LOCAL) -> None:
+        super().__init__(state, id, type, 6)
