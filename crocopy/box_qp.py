@@ -11,15 +11,16 @@ Bertsekas' projected Newton method with the exact Hessian:
 
 1. start from the projection of the warm start, ``x = clamp(xinit, lb, ub)``;
 2. gradient ``g = q + H x``; clamped set ``c = {j : x_j = lb_j and g_j > 0  or  x_j = ub_j and g_j < 0}``,
-   free set ``f`` its complement;
+   free set ``f`` its complement (stop if every variable is clamped);
 3. Cholesky factorization of ``H_ff + reg I``, redone only when the free set changes (each one is
    counted in :attr:`BoxQP.nfactorizations`);
-4. stop when ``||g_f||^2 <= th_grad`` (or when every variable is clamped);
-5. Newton step on the free set, ``dx_f = -(H_ff + reg I)^{-1} g_f``, ``dx_c = 0``;
-6. projected backtracking line search over :attr:`BoxQP.alphas` (``1, 1/2, ..., 1/512``): accept the
+4. Newton step on the free set, ``dx_f = -(H_ff + reg I)^{-1} g_f``, ``dx_c = 0``;
+5. projected backtracking line search over :attr:`BoxQP.alphas` (``1, 1/2, ..., 1/512``): accept the
    first ``x_a = clamp(x + a dx)`` with ``(f(x) - f(x_a)) >= th_acceptStep * g^T (x - x_a)`` (Armijo);
-   if no step length is accepted the solver stops.
+   if no step length is accepted the solver stops;
+6. at the new point, update the sets (step 2-3) and stop when ``||g_f||^2 <= th_grad``, else go to 4.
 
+At least one Newton step is taken (as Crocoddyl does), so a converged warm start costs one step.
 The returned :class:`BoxQPSolution` holds ``x``, the free/clamped index lists of the final point and
 ``Hff_inv = (H_ff + reg I)^{-1}`` for that final free set (refactorized if it changed on the last
 step); the DDP solvers build their feedback gains from it.  If the warm start has the optimal
@@ -172,47 +173,41 @@ class BoxQP:
             raise BoxQPError("BoxQP: the free block of the Hessian is singular")
         return inv
 
+    def _free_set(self, H, x, g, lb, ub, mask, f_idx, Hinv):
+        """Free mask (``None`` = all free), free indices and ``Hff_inv`` at ``x``; refactorizes on change."""
+        at_lb = x <= lb
+        at_ub = x >= ub
+        new = ~((at_lb & (g > 0.0)) | (at_ub & (g < 0.0))) if (at_lb.any() or at_ub.any()) else None
+        if new is not None and new.all():
+            new = None
+        if Hinv is not None and _same_mask(new, mask):
+            return mask, f_idx, Hinv
+        if new is None:
+            return None, None, self._factorize(H)
+        f_idx = np.flatnonzero(new)
+        return new, f_idx, (self._factorize(H[np.ix_(f_idx, f_idx)]) if f_idx.size else np.zeros((0, 0)))
+
     def _solve(self, H: np.ndarray, q: np.ndarray, lb: np.ndarray, ub: np.ndarray, xinit: np.ndarray) -> BoxQPSolution:
         """Unchecked solve (arguments already validated); the hot path of the box solvers."""
         n = self.nx
         x = np.minimum(np.maximum(xinit, lb), ub)
-        at_lb = x <= lb
-        at_ub = x >= ub
-        bounded = bool(at_lb.any() or at_ub.any())
-        free_mask = None
-        Hinv = None
-        f_idx = None
-        self.iter = 0
         g = q + H @ x
-        for it in range(self.maxiter + 1):
-            if bounded:
-                new_free = ~((at_lb & (g > 0.0)) | (at_ub & (g < 0.0)))
-            else:
-                new_free = None
-            if Hinv is None or not _same_mask(new_free, free_mask):
-                free_mask = new_free
-                if free_mask is None or free_mask.all():
-                    free_mask = None
-                    f_idx = None
-                    Hinv = self._factorize(H)
-                else:
-                    f_idx = np.flatnonzero(free_mask)
-                    Hinv = self._factorize(H[np.ix_(f_idx, f_idx)]) if f_idx.size else np.zeros((0, 0))
-            gf = g if f_idx is None else g[f_idx]
-            if gf.size == 0 or gf @ gf <= self.th_grad or it == self.maxiter:
+        free_mask, f_idx, Hinv = self._free_set(H, x, g, lb, ub, None, None, None)
+        self.iter = 0
+        for _ in range(self.maxiter):
+            if f_idx is not None and f_idx.size == 0:
                 break
             if f_idx is None:
-                dx = -(Hinv @ gf)
+                dx = -(Hinv @ g)
             else:
                 dx = np.zeros(n)
-                dx[f_idx] = -(Hinv @ gf)
+                dx[f_idx] = -(Hinv @ g[f_idx])
             fold = 0.5 * (x @ (g + q))
             accepted = False
             for a in self.alphas:
                 xa = x + a * dx
-                if bounded or _leaves_box(xa, lb, ub):
-                    np.maximum(xa, lb, out=xa)
-                    np.minimum(xa, ub, out=xa)
+                np.maximum(xa, lb, out=xa)
+                np.minimum(xa, ub, out=xa)
                 ga = q + H @ xa
                 fnew = 0.5 * (xa @ (ga + q))
                 if fold - fnew >= self.th_acceptStep * (g @ (x - xa)):
@@ -222,9 +217,10 @@ class BoxQP:
                 break
             x, g = xa, ga
             self.iter += 1
-            at_lb = x <= lb
-            at_ub = x >= ub
-            bounded = bool(at_lb.any() or at_ub.any())
+            free_mask, f_idx, Hinv = self._free_set(H, x, g, lb, ub, free_mask, f_idx, Hinv)
+            gf = g if f_idx is None else g[f_idx]
+            if gf @ gf <= self.th_grad:
+                break
         sol = self.solution
         sol.x = x
         sol.Hff_inv = Hinv
@@ -243,8 +239,3 @@ def _same_mask(a: np.ndarray | None, b: np.ndarray | None) -> bool:
     if a is None or b is None:
         return (a is None or a.all()) and (b is None or b.all())
     return bool(np.array_equal(a, b))
-
-
-def _leaves_box(x: np.ndarray, lb: np.ndarray, ub: np.ndarray) -> bool:
-    """True if ``x`` has an entry outside ``[lb, ub]``."""
-    return bool((x < lb).any() or (x > ub).any())

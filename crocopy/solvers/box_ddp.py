@@ -1,0 +1,181 @@
+"""Control-limited DDP (Tassa, Mansard, Todorov, ICRA 2014; Crocoddyl's ``SolverBoxDDP``).
+
+On a feasible iterate, every running node with control bounds ``u_lb <= u <= u_ub`` (shape
+``(nu,)``) replaces the unconstrained minimisation of the Q-function by the box QP (Crocoddyl's
+sign, ``δu = -k - K δx``)::
+
+    k = -argmin_δu ½ δuᵀ Quu δu + Quᵀ δu   s.t.  u_lb - u <= δu <= u_ub - u,
+
+solved by :class:`crocopy.box_qp.BoxQP` warm-started from the previous iteration's ``-k``.  The
+feedback acts on the free subspace only: ``K = Quu_inv Qux`` with ``Quu_inv`` the inverse of the
+free block ``Quu_ff`` zero-padded to ``(nu, nu)`` (rows of clamped controls are zero).  The
+forward pass clamps the applied controls, ``û = clamp(u - α k - K (x̂ ⊖ x), u_lb, u_ub)``, so the
+returned ``us`` never leave the box (Tassa's reference code does the same; the paper leaves it
+implicit).  Nodes without finite bounds use the plain Cholesky gains.
+
+Two value-function variants (attribute ``general_value_update``):
+
+* ``False`` (default, reproduces Crocoddyl 3.2 iterate for iterate): the DDP update
+  ``Vx = Qx - Kᵀ Qu``, ``Vxx = Qxx - Qxu K``, and the ``Qu`` entries of clamped controls are zeroed
+  after the QP, so the expected improvement ``d₀ = Σ Quᵀ k`` and the stopping test only see the
+  free controls;
+* ``True`` (Tassa's reference code, DIGEST §1.5): the exact update for a box-QP ``k``,
+  ``Vx = Qx - Kᵀ Qu - Qxu k + Kᵀ Quu k``, and the full ``Qu`` in the expected improvement.
+
+Both have the same fixed points.  A warm start declared feasible is used as given: its controls
+must already respect the box (a rollout of clamped controls).  An infeasible iterate (a warm
+start that is not a rollout) gets unconstrained gains, as in Box-FDDP and Crocoddyl; Tassa's
+Box-DDP always starts from a rollout.
+
+Settings the paper leaves open are Crocoddyl's documented defaults: ``th_stop = 5e-5``,
+regularisation ``reg_min = 1e-9`` (also the initial value), factors 10, step lengths ``2^-n``,
+``n = 0..9``; the box QP runs with ``maxiter = 100``, ``th_acceptStep = 0.1``, ``th_grad = 1e-9``
+and no extra regularisation (``preg`` is already on ``Quu``).  Crocopy extensions:
+``nfactorizations`` and ``nqp`` count box-QP Cholesky factorizations and QP solves since the last
+``solve``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..box_qp import BoxQP, BoxQPError
+from ..shooting import ShootingProblem
+from ..validation import check_bounds
+from .base import BackwardPassError, ForwardPassError
+from .ddp import SolverDDP
+
+__all__ = ["SolverBoxDDP"]
+
+
+class BoxSolverMixin:
+    """Box-QP gains, the general value update and the clamped rollout shared by Box-DDP/Box-FDDP."""
+
+    def _init_box(self) -> None:
+        problem = self.problem
+        self.th_stop = 5e-5
+        self.Quu_inv = [np.zeros((m.nu, m.nu)) for m in problem.runningModels]
+        self._qps: dict[int, BoxQP] = {}
+        for m in problem.runningModels:
+            if m.nu and m.nu not in self._qps:
+                self._qps[m.nu] = BoxQP(m.nu, maxiter=100, th_acceptStep=0.1, th_grad=1e-9, reg=0.0)
+        self._lb: list[np.ndarray | None] = []
+        self._ub: list[np.ndarray | None] = []
+        self._clamped = [False] * problem.T
+        self.nqp = 0
+        self.general_value_update = False
+        self._read_bounds()
+
+    def _read_bounds(self) -> None:
+        """Fetch and check every running model's control bounds (called at each ``solve``)."""
+        self._lb, self._ub = [], []
+        for t, m in enumerate(self.problem.runningModels):
+            lb, ub = np.asarray(m.u_lb, dtype=float), np.asarray(m.u_ub, dtype=float)
+            if lb.shape != (m.nu,) or ub.shape != (m.nu,):
+                raise ValueError(f"running model {t}: u_lb/u_ub must have shape ({m.nu},)")
+            if np.isnan(lb).any() or np.isnan(ub).any():
+                raise ValueError(f"running model {t}: u_lb/u_ub contain NaN")
+            check_bounds(lb, ub, f"runningModels[{t}].u_lb", f"runningModels[{t}].u_ub")
+            bounded = m.nu > 0 and bool(np.isfinite(lb).any() or np.isfinite(ub).any())
+            self._lb.append(lb if bounded else None)
+            self._ub.append(ub if bounded else None)
+
+    def _start(self, init_xs, init_us, is_feasible: bool, init_reg) -> None:
+        self._read_bounds()
+        for qp in self._qps.values():
+            qp.nfactorizations = 0
+        self.nqp = 0
+        super()._start(init_xs, init_us, is_feasible, init_reg)
+
+    @property
+    def nfactorizations(self) -> int:
+        """Box-QP factorizations since the last ``solve`` (all nodes, all iterations)."""
+        return sum(qp.nfactorizations for qp in self._qps.values())
+
+    def _box_mode(self) -> bool:
+        return self.isFeasible
+
+    def computeGains(self, t: int) -> None:
+        """Box-QP feed-forward and free-subspace feedback at node ``t`` (Cholesky gains if unbounded)."""
+        lb = self._lb[t]
+        if lb is None or not self._box_mode():
+            self._clamped[t] = False
+            super().computeGains(t)
+            return
+        u = self.us[t]
+        k = self.k[t]
+        qp = self._qps[u.size]
+        try:
+            sol = qp._solve(self.Quu[t], self.Qu[t], lb - u, self._ub[t] - u, -k)
+        except BoxQPError as exc:
+            raise BackwardPassError(f"box QP failed at node {t}: {exc}") from exc
+        self.nqp += 1
+        np.negative(sol.x, out=k)
+        Quu_inv = self.Quu_inv[t]
+        mask = sol._free_mask
+        if mask is None:
+            Quu_inv[:] = sol.Hff_inv
+            self._clamped[t] = False
+        else:
+            Quu_inv.fill(0.0)
+            f = sol.free_idx
+            if f:
+                Quu_inv[np.ix_(f, f)] = sol.Hff_inv
+            self._clamped[t] = True
+        np.dot(Quu_inv, self.Qxu[t].T, out=self.K[t])
+        if mask is not None and not self.general_value_update:
+            self.Qu[t][~mask] = 0.0
+
+    def computeValueFunction(self, t: int, model) -> None:
+        """Value function; with ``general_value_update``, the exact gradient update where controls are clamped."""
+        super().computeValueFunction(t, model)
+        if self._clamped[t] and self.general_value_update:
+            k, K = self.k[t], self.K[t]
+            self.Vx[t] += K.T @ (self.Quu[t] @ k) - self.Qxu[t] @ k
+
+    def _box_rollout(self, steplength: float, gaps: bool) -> None:
+        """Rollout with clamped controls; ``gaps`` keeps them open by ``(1 - steplength)`` (FDDP)."""
+        problem = self.problem
+        xs, us, xs_try, us_try, fs = self.xs, self.us, self.xs_try, self.us_try, self.fs
+        models = problem.runningModels
+        first = models[0] if models else problem.terminalModel
+        xs_try[0] = first.state.integrate(problem.x0, (steplength - 1.0) * fs[0]) if gaps else problem.x0.copy()
+        cost = 0.0
+        for t, (m, d) in enumerate(zip(models, problem.runningDatas)):
+            if m.nu:
+                dx = m.state.diff(xs[t], xs_try[t])
+                ut = us[t] - steplength * self.k[t] - self.K[t] @ dx
+                lb = self._lb[t]
+                if lb is not None:
+                    np.maximum(ut, lb, out=ut)
+                    np.minimum(ut, self._ub[t], out=ut)
+                us_try[t] = ut
+            m.calc(d, xs_try[t], us_try[t])
+            cost += d.cost
+            if gaps:
+                xs_try[t + 1] = m.state.integrate(d.xnext, (steplength - 1.0) * fs[t + 1])
+            else:
+                xs_try[t + 1] = d.xnext.copy()
+        problem.terminalModel.calc(problem.terminalData, xs_try[-1])
+        cost += problem.terminalData.cost
+        if not np.isfinite(cost) or not np.isfinite(xs_try[-1]).all():
+            raise ForwardPassError("the rollout produced a non-finite state or cost")
+        self.cost_try = cost
+
+
+class SolverBoxDDP(BoxSolverMixin, SolverDDP):
+    """Crocoddyl's ``SolverBoxDDP(problem)``: DDP with a box QP per node and a clamped rollout.
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+        Problem whose running models carry the control bounds ``u_lb``/``u_ub``.
+    """
+
+    def __init__(self, problem: ShootingProblem) -> None:
+        super().__init__(problem)
+        self._init_box()
+
+    def forwardPass(self, steplength: float) -> None:
+        """Rollout from ``x0`` with ``û = clamp(u - α k - K (x̂ ⊖ x))``; raises ForwardPassError on NaN."""
+        self._box_rollout(steplength, gaps=False)
