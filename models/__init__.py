@@ -7,6 +7,14 @@ from .actuations import (
     Thruster,
     ThrusterType,
 )
+from .cones import CoPSupport, FrictionCone, WrenchCone
+from .contact_base import ContactDataAbstract, ContactModelAbstract
+from .contact_fwd_dynamics import (
+    DifferentialActionDataContactFwdDynamics,
+    DifferentialActionModelContactFwdDynamics,
+)
+from .contact_multiple import ContactDataMultiple, ContactItem, ContactModelMultiple
+from .contacts import ContactData3D, ContactData6D, ContactModel3D, ContactModel6D
 from .data_collectors import (
     DataCollectorActMultibody,
     DataCollectorActMultibodyInContact,
@@ -21,9 +29,56 @@ from .data_collectors import (
     DataCollectorMultibodyInContact,
     DataCollectorMultibodyInImpulse,
 )
+from .impulse_base import ImpulseDataAbstract, ImpulseModelAbstract
+from .impulse_fwd_dynamics import ActionDataImpulseFwdDynamics, ActionModelImpulseFwdDynamics
+from .impulse_multiple import ImpulseDataMultiple, ImpulseItem, ImpulseModelMultiple
+from .impulses import ImpulseModel3D, ImpulseModel6D
+from .residuals_contact import (
+    ResidualDataContactControlGrav,
+    ResidualDataContactForce,
+    ResidualDataImpulseCoM,
+    ResidualModelContactControlGrav,
+    ResidualModelContactCoPPosition,
+    ResidualModelContactForce,
+    ResidualModelContactFrictionCone,
+    ResidualModelContactWrenchCone,
+    ResidualModelImpulseCoM,
+)
 from .state_multibody import StateMultibody
 
 __all__ = [
+    "CoPSupport",
+    "FrictionCone",
+    "WrenchCone",
+    "ContactDataAbstract",
+    "ContactModelAbstract",
+    "DifferentialActionDataContactFwdDynamics",
+    "DifferentialActionModelContactFwdDynamics",
+    "ContactDataMultiple",
+    "ContactItem",
+    "ContactModelMultiple",
+    "ContactData3D",
+    "ContactData6D",
+    "ContactModel3D",
+    "ContactModel6D",
+    "ImpulseDataAbstract",
+    "ImpulseModelAbstract",
+    "ActionDataImpulseFwdDynamics",
+    "ActionModelImpulseFwdDynamics",
+    "ImpulseDataMultiple",
+    "ImpulseItem",
+    "ImpulseModelMultiple",
+    "ImpulseModel3D",
+    "ImpulseModel6D",
+    "ResidualDataContactControlGrav",
+    "ResidualDataContactForce",
+    "ResidualDataImpulseCoM",
+    "ResidualModelContactControlGrav",
+    "ResidualModelContactCoPPosition",
+    "ResidualModelContactForce",
+    "ResidualModelContactFrictionCone",
+    "ResidualModelContactWrenchCone",
+    "ResidualModelImpulseCoM",
     "ActuationModelFloatingBase",
     "ActuationModelFloatingBaseThrusters",
     "ActuationModelFull",

@@ -183,11 +183,16 @@ class ActionModelImpulseFwdDynamics(ActionModelAbstract):
             np.multiply(idata.Jc[:nc], -self._r_coeff, out=rhs[nv:, nv:])
             np.dot(data.Kinv, rhs, out=data.KinvRhs)
             data.Fx[nv:] = data.KinvRhs[:nv]
+            self.impulses.updateVelocityDiff(idata, data.Fx[nv:])
             if self.enable_force:
                 np.negative(data.KinvRhs[nv:], out=data.df_dx)
-                self.impulses.updateVelocityDiff(idata, data.Fx[nv:])
                 self.impulses.updateForceDiff(idata, data.df_dx)
             pin.computeForwardKinematicsDerivatives(model, pd, q, v, data.zero_v)
+        else:
+            data.Fx[nv:] = 0.0
+            data.Fx[nv:, nv:][data.diag, data.diag] = 1.0
+            pin.computeForwardKinematicsDerivatives(model, pd, q, v, data.zero_v)
+            self.impulses.updateVelocityDiff(idata, data.Fx[nv:])
         self.costs.calcDiff(data.costs, x, u)
         if self.constraints is not None:
             self.constraints.calcDiff(data.constraints, x, u)
