@@ -48,6 +48,7 @@ from .residual_base import ResidualDataAbstract, ResidualModelAbstract
 from .residuals import ResidualModelControl, ResidualModelState
 from .shooting import ShootingProblem
 from .solvers import SolverAbstract, SolverDDP, SolverFDDP
+from .solvers.hddp import CallbackHDDPVerbose, SolverHDDP
 from .solvers.projection import ConstraintRankError, SolverProjection
 from .state import StateAbstract, StateVector
 

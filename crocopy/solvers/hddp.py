@@ -1,0 +1,333 @@
+"""Hierarchical DDP (Romano, Del Prete, Mansard, Nori), ``SolverHDDP(problem, levels)``.
+
+The priorities are given on the cost items of the nodes' :class:`~crocopy.costs.CostModelSum`:
+``levels=[["task1"], ["task2"], ["effort"]]`` makes level ``k``'s cost
+``G⁽ᵏ⁾ = Σₜ Σ_{i ∈ level k} wᵢ lᵢ(xₜ, uₜ)`` (with the integrator's ``dt``), and one
+:class:`~crocopy.shooting.ShootingProblem` holds them all.  Every active item must belong to
+exactly one level.  Per-level costs and derivatives are read from the items' data for Euler
+nodes and terminal nodes; any other node is re-evaluated once per level with the other items'
+weights set to zero.
+
+Iteration (paper D, Alg. 2 and §IV): per-level derivatives; the prioritised backward pass of
+:mod:`crocopy.solvers.hddp_lq` with per-level regularisation ``λ⁽ᵏ⁾`` (on ``Vxx``) and damping
+``μ⁽ᵏ⁾``; a lexicographic line search with one step ``ν⁽ᵏ⁾ ∈ alphas ∪ {0}`` per level, from the top
+level down, accepting a step for level ``k`` only if level ``k`` improves and no higher level gets
+worse than ``th_worse`` (relative) allows; the iterate is accepted if some level improved, the
+improved levels' ``λ, μ`` decrease, and if none improved all increase and the backward pass is
+redone.  Convergence: in two successive iterations every level has cost below ``th_abs[k]`` or
+relative change below ``th_rel[k]`` (paper: 1e-8 and 1e-4, one iteration), or no level improves
+after ``max_reg_increases`` regularisation increases (a lexicographically stationary point,
+reported in ``reason``).
+``level_costs`` holds the per-level costs of the iterate.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..costs import CostModelSum
+from ..integrator_base import IntegratedActionModelAbstract
+from ..integrator_euler import IntegratedActionModelEuler
+from ..shooting import ShootingProblem
+from .base import ForwardPassError
+from .ddp import SolverDDP
+from .hddp_lq import LevelDerivatives, hierarchical_backward_pass
+
+__all__ = ["CallbackHDDPVerbose", "SolverHDDP"]
+
+
+def _cost_sum(model) -> CostModelSum | None:
+    owner = model.differential if isinstance(model, IntegratedActionModelAbstract) else model
+    costs = getattr(owner, "costs", None)
+    return costs if isinstance(costs, CostModelSum) else None
+
+
+class _LevelReader:
+    """Per-node access to the per-level costs and derivatives of a problem's cost items."""
+
+    def __init__(self, problem: ShootingProblem, levels: Sequence[Sequence[str]]) -> None:
+        self.problem = problem
+        self.levels = [list(lv) for lv in levels]
+        owner = {}
+        for k, lv in enumerate(self.levels):
+            for name in lv:
+                if name in owner:
+                    raise ValueError(f"cost {name!r} is in levels {owner[name]} and {k}")
+                owner[name] = k
+        models = [*problem.runningModels, problem.terminalModel]
+        self.sums, self.fast, self.scale = [], [], []
+        seen = set()
+        for t, m in enumerate(models):
+            cs = _cost_sum(m)
+            if cs is None:
+                raise ValueError(f"node {t} ({type(m).__name__}) has no CostModelSum: levels need named cost items")
+            for name, item in cs.costs.items():
+                if item.active and name not in owner:
+                    raise ValueError(f"active cost {name!r} of node {t} is in no level; levels={self.levels}")
+            seen.update(cs.costs)
+            terminal = t == len(models) - 1
+            integrated = isinstance(m, IntegratedActionModelAbstract)
+            self.sums.append(cs)
+            self.fast.append(terminal or isinstance(m, IntegratedActionModelEuler) or not integrated)
+            self.scale.append(m.dt if integrated and not terminal else 1.0)
+        missing = [n for n in owner if n not in seen]
+        if missing:
+            raise KeyError(f"levels name costs that no node has: {missing}")
+        self.owner = owner
+
+    @staticmethod
+    def _cost_data(model, data):
+        if not isinstance(model, IntegratedActionModelAbstract):
+            return data.costs
+        d = data.differential
+        return (d[0] if isinstance(d, list) else d).costs
+
+    def _set_weights(self, cs: CostModelSum, k: int | None, saved: dict) -> None:
+        for name, item in cs.costs.items():
+            if k is None:
+                item.weight = saved[name]
+            else:
+                saved.setdefault(name, item.weight)
+                item.weight = saved[name] if self.owner.get(name) == k else 0.0
+
+    def costs(self, xs, us) -> np.ndarray:
+        """Per-level total costs after ``problem.calc(xs, us)``; shape ``(K,)``."""
+        p, K = self.problem, len(self.levels)
+        G = np.zeros(K)
+        models, datas = [*p.runningModels, p.terminalModel], [*p.runningDatas, p.terminalData]
+        for t, (m, d) in enumerate(zip(models, datas)):
+            cs = self.sums[t]
+            if self.fast[t]:
+                cdata = self._cost_data(m, d).costs
+                for name, item in cs.costs.items():
+                    if item.active:
+                        G[self.owner[name]] += self.scale[t] * item.weight * cdata[name].cost
+                continue
+            saved: dict = {}
+            u = us[t] if t < p.T else None
+            for k in range(K):
+                self._set_weights(cs, k, saved)
+                m.calc(d, xs[t], u)
+                G[k] += d.cost
+            self._set_weights(cs, None, saved)
+            m.calc(d, xs[t], u)
+        return G
+
+    def derivatives(self, xs, us) -> list[LevelDerivatives]:
+        """Per-level cost derivatives after ``problem.calcDiff(xs, us)``."""
+        p, K = self.problem, len(self.levels)
+        T = p.T
+        out = []
+        for _ in range(K):
+            out.append(LevelDerivatives(
+                [np.zeros(p.ndx) for _ in range(T + 1)], [np.zeros(m.nu) for m in p.runningModels],
+                [np.zeros((p.ndx, p.ndx)) for _ in range(T + 1)],
+                [np.zeros((p.ndx, m.nu)) for m in p.runningModels], [np.zeros((m.nu, m.nu)) for m in p.runningModels],
+            ))
+        models, datas = [*p.runningModels, p.terminalModel], [*p.runningDatas, p.terminalData]
+        for t, (m, d) in enumerate(zip(models, datas)):
+            cs, running = self.sums[t], t < T
+            if self.fast[t]:
+                cdata = self._cost_data(m, d).costs
+                for name, item in cs.costs.items():
+                    if not item.active:
+                        continue
+                    lv, cd, w = out[self.owner[name]], cdata[name], self.scale[t] * item.weight
+                    lv.Lx[t] += w * cd.Lx
+                    lv.Lxx[t] += w * cd.Lxx
+                    if running and item.cost.residual.u_dependent:
+                        lv.Lu[t] += w * cd.Lu
+                        lv.Lxu[t] += w * cd.Lxu
+                        lv.Luu[t] += w * cd.Luu
+                continue
+            saved: dict = {}
+            u = us[t] if running else None
+            for k in range(K):
+                self._set_weights(cs, k, saved)
+                m.calc(d, xs[t], u)
+                m.calcDiff(d, xs[t], u)
+                lv = out[k]
+                lv.Lx[t][:], lv.Lxx[t][:] = d.Lx, d.Lxx
+                if running:
+                    lv.Lu[t][:], lv.Lxu[t][:], lv.Luu[t][:] = d.Lu, d.Lxu, d.Luu
+            self._set_weights(cs, None, saved)
+            m.calc(d, xs[t], u)
+            m.calcDiff(d, xs[t], u)
+        return out
+
+
+class SolverHDDP(SolverDDP):
+    """Hierarchical DDP over prioritised levels of named cost items.
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+        Problem whose nodes carry a ``CostModelSum`` (directly or in their differential model).
+    levels : sequence of sequences of str
+        Cost item names per level, highest priority first.  ``[[all names]]`` is plain DDP with
+        the HDDP line search (the weighted-sum baseline).
+
+    Attributes
+    ----------
+    th_abs, th_rel : list of float
+        Per-level absolute cost and relative change tolerances (default 1e-8, 1e-4).
+    lambdas, mus : list of float
+        Per-level regularisation and damping (start ``lambda0``/``mu0``; factor ``reg_incFactor``).
+    th_worse : float
+        Relative increase of a higher level tolerated by the line search (default 1e-10).
+    max_reg_increases : int
+        Regularisation increases without any improving level before the iterate is declared
+        stationary (default 6).
+    level_costs, level_steps : numpy.ndarray
+        Per-level costs of the current iterate and the step ``ν`` of the last accepted iteration.
+    """
+
+    def __init__(self, problem: ShootingProblem, levels: Sequence[Sequence[str]]) -> None:
+        super().__init__(problem)
+        if not levels or any(not lv for lv in levels):
+            raise ValueError(f"levels must be a non-empty list of non-empty lists of cost names, got {levels!r}")
+        self._reader = _LevelReader(problem, levels)
+        self.levels = self._reader.levels
+        K = len(self.levels)
+        self.th_abs = [1e-8] * K
+        self.th_rel = [1e-4] * K
+        self.th_rank = 1e-9
+        self.th_worse = 1e-10
+        self.max_reg_increases = 6
+        self.lambda0 = 1e-9
+        self.mu0 = 0.0
+        self.lambdas = [self.lambda0] * K
+        self.mus = [self.mu0] * K
+        self.alphas = [2.0 ** (-n) for n in range(8)]
+        self.level_costs = np.zeros(K)
+        self.level_steps = np.zeros(K)
+        self._ff: list[list[np.ndarray]] = []
+
+    def solve(self, init_xs=None, init_us=None, maxiter: int = 100, is_feasible: bool = False, init_reg=None) -> bool:
+        """Run HDDP from the rolled-out guess; True when every level meets its tolerance."""
+        self._start(init_xs, init_us, is_feasible, init_reg)
+        p, K = self.problem, len(self.levels)
+        self.lambdas = [self.preg if init_reg is not None else self.lambda0] * K
+        self.mus = [self.mu0] * K
+        self.xs = [x.copy() for x in p.rollout(self.us)]
+        self.isFeasible = True
+        self.cost = p.calc(self.xs, self.us)
+        self.level_costs = self._reader.costs(self.xs, self.us)
+        if not np.all(np.isfinite(self.level_costs)):
+            return self._fail("the cost of the initial guess is not finite")
+        was_small = False
+        for self.iter in range(maxiter):
+            p.calcDiff(self.xs, self.us)
+            derivs = self._reader.derivatives(self.xs, self.us)
+            for _ in range(self.max_reg_increases + 1):
+                try:
+                    self._backward(derivs)
+                except np.linalg.LinAlgError:
+                    improved = np.zeros(K, dtype=bool)
+                else:
+                    improved = self._line_search()
+                if improved.any():
+                    break
+                self.lambdas = [min(lam * self.reg_incFactor, self.reg_max) for lam in self.lambdas]
+                self.mus = [min(max(mu, self.lambda0) * self.reg_incFactor, self.reg_max) for mu in self.mus]
+            else:
+                p.calc(self.xs, self.us)
+                self.reason = "converged: no level improves (lexicographically stationary)"
+                self._run_callbacks()
+                return True
+            old = self.level_costs.copy()
+            self.xs, self.xs_try = self.xs_try, self.xs
+            self.us, self.us_try = self.us_try, self.us
+            self.level_costs = self._G_try_best
+            self.cost = float(np.sum(self.level_costs))
+            p.calc(self.xs, self.us)
+            for k in np.nonzero(improved)[0]:
+                self.lambdas[k] = max(self.lambdas[k] / self.reg_decFactor, self.reg_min)
+                self.mus[k] = self.mus[k] / self.reg_decFactor if self.mus[k] > self.reg_min else 0.0
+            self.preg = self.lambdas[0]
+            self.stepLength = float(self.level_steps[0])
+            self.stop = float(np.max((old - self.level_costs) / np.maximum(np.abs(old), 1e-300)))
+            self.computeEqualityFeasibility()
+            self._run_callbacks()
+            small = self._converged(old)
+            if small and was_small:
+                self.reason = "converged"
+                return True
+            was_small = small
+        self.iter = maxiter
+        return self._fail(f"maximum number of iterations ({maxiter}) reached")
+
+    def _converged(self, old: np.ndarray) -> bool:
+        G = self.level_costs
+        for k in range(len(G)):
+            if G[k] >= self.th_abs[k] and abs(old[k] - G[k]) > self.th_rel[k] * abs(old[k]):
+                return False
+        return True
+
+    def _backward(self, derivs: list[LevelDerivatives]) -> None:
+        p = self.problem
+        res = hierarchical_backward_pass(
+            [d.Fx for d in p.runningDatas], [d.Fu for d in p.runningDatas], derivs,
+            self.lambdas, self.mus, self.th_rank,
+        )
+        self._ff = res.ff
+        for t in range(p.T):
+            self.K[t][:] = -res.K[t]
+        self.rank, self.free = res.rank, res.free
+
+    def _rollout(self, steps: np.ndarray) -> np.ndarray:
+        """Rollout with ``u = ū + Σₖ νₖ ffₖ - K (x̂ ⊖ x)``; returns the per-level costs (inf on NaN)."""
+        p = self.problem
+        for t in range(p.T):
+            self.k[t][:] = -sum(steps[k] * self._ff[k][t] for k in range(len(steps)))
+        try:
+            self.forwardPass(1.0)
+        except ForwardPassError:
+            return np.full(len(steps), np.inf)
+        return self._reader.costs(self.xs_try, self.us_try)
+
+    def _line_search(self) -> np.ndarray:
+        """Lexicographic per-level step search; returns which levels improved."""
+        K = len(self.levels)
+        G0 = self.level_costs
+        steps, best = np.zeros(K), G0.copy()
+        best_xs = best_us = None
+        for k in range(K):
+            for a in self.alphas:
+                steps[k] = a
+                Gt = self._rollout(steps)
+                no_worse = all(Gt[j] <= best[j] + self.th_worse * abs(best[j]) for j in range(k))
+                if no_worse and Gt[k] < best[k]:
+                    best = Gt
+                    best_xs = [x.copy() for x in self.xs_try]
+                    best_us = [u.copy() for u in self.us_try]
+                    break
+            else:
+                steps[k] = 0.0
+        self.level_steps = steps.copy()
+        if best_xs is None:
+            return np.zeros(K, dtype=bool)
+        self.xs_try, self.us_try = best_xs, best_us
+        self._G_try_best = best
+        return best < G0
+
+
+class CallbackHDDPVerbose:
+    """Print one line per HDDP iteration: per-level costs, steps ``ν`` and regularisations ``λ``."""
+
+    def __init__(self, precision: int = 3) -> None:
+        self.precision = int(precision)
+        self._header_done = False
+
+    def __call__(self, solver: SolverHDDP) -> None:
+        p = self.precision
+        if not self._header_done:
+            cols = [f"G{k + 1}" for k in range(len(solver.levels))]
+            print("iter  " + "  ".join(f"{c:>{p + 7}}" for c in cols) + "  steps  lambdas")
+            self._header_done = True
+        costs = "  ".join(f"{g:{p + 7}.{p}e}" for g in solver.level_costs)
+        steps = ",".join(f"{s:g}" for s in solver.level_steps)
+        lams = ",".join(f"{lam:.0e}" for lam in solver.lambdas)
+        print(f"{solver.iter:4d}  {costs}  [{steps}]  [{lams}]")

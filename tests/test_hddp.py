@@ -1,0 +1,232 @@
+"""Hierarchical DDP: LQ recursion vs a dense lexicographic QP, strict priorities, single level = DDP."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import crocopy
+from crocopy.residual_base import ResidualDataAbstract, ResidualModelAbstract
+from crocopy import SolverHDDP
+from crocopy.solvers.hddp_lq import LevelDerivatives, hierarchical_backward_pass
+from crocopy.solvers.projection_lq import projected_backward_pass
+
+
+def random_levels(rng, T, ndx, nu, ranks):
+    """Low-rank PSD task costs ``½‖Cᵢ z + cᵢ‖²`` per level; the last level is a full-rank effort."""
+    levels = []
+    for rank in ranks:
+        Lx, Lu, Lxx, Lxu, Luu = [], [], [], [], []
+        for t in range(T + 1):
+            Cx = rng.standard_normal((rank, ndx)) if t == T else np.zeros((rank, ndx))
+            c = rng.standard_normal(rank)
+            Lx.append(Cx.T @ c)
+            Lxx.append(Cx.T @ Cx)
+            if t < T:
+                Lu.append(np.zeros(nu))
+                Lxu.append(np.zeros((ndx, nu)))
+                Luu.append(np.zeros((nu, nu)))
+        levels.append(LevelDerivatives(Lx, Lu, Lxx, Lxu, Luu))
+    eff = LevelDerivatives([np.zeros(ndx) for _ in range(T + 1)], [0.1 * rng.standard_normal(nu) for _ in range(T)],
+                           [np.zeros((ndx, ndx)) for _ in range(T + 1)], [np.zeros((ndx, nu)) for _ in range(T)],
+                           [np.eye(nu) for _ in range(T)])
+    return [*levels, eff]
+
+
+def dense_lexicographic(Fx, Fu, levels):
+    """Lexicographic minimisation over the stacked controls by nested nullspaces (δx₀ = 0)."""
+    T, nu, ndx = len(Fx), Fu[0].shape[1], Fx[0].shape[0]
+    Sx = [np.zeros((ndx, T * nu))]
+    for t in range(T):
+        S = Fx[t] @ Sx[-1]
+        S[:, t * nu:(t + 1) * nu] += Fu[t]
+        Sx.append(S)
+    z, N = np.zeros(T * nu), np.eye(T * nu)
+    for lv in levels:
+        H, g = np.zeros((T * nu, T * nu)), np.zeros(T * nu)
+        for t in range(T + 1):
+            H += Sx[t].T @ lv.Lxx[t] @ Sx[t]
+            g += Sx[t].T @ lv.Lx[t]
+            if t < T:
+                E = np.zeros((nu, T * nu))
+                E[:, t * nu:(t + 1) * nu] = np.eye(nu)
+                H += E.T @ lv.Luu[t] @ E + Sx[t].T @ lv.Lxu[t] @ E + E.T @ lv.Lxu[t].T @ Sx[t]
+                g += E.T @ lv.Lu[t]
+        Hw, gw = N.T @ H @ N, N.T @ (H @ z + g)
+        z = z - N @ np.linalg.pinv(Hw, rcond=1e-10, hermitian=True) @ gw
+        w, V = np.linalg.eigh(Hw)
+        N = N @ V[:, w <= 1e-10 * max(w[-1], 1e-300)]
+    return [z[t * nu:(t + 1) * nu] for t in range(T)]
+
+
+def test_hierarchical_lq_matches_dense_lexicographic_qp():
+    rng = np.random.default_rng(0)
+    T, ndx, nu = 5, 4, 3
+    Fx = [np.eye(ndx) + 0.1 * rng.standard_normal((ndx, ndx)) for _ in range(T)]
+    Fu = [rng.standard_normal((ndx, nu)) for _ in range(T)]
+    levels = random_levels(rng, T, ndx, nu, ranks=[1, 1])
+    res = hierarchical_backward_pass(Fx, Fu, levels)
+    dx, us = np.zeros(ndx), []
+    for t in range(T):
+        du = sum(res.ff[k][t] for k in range(len(levels))) + res.K[t] @ dx
+        us.append(du)
+        dx = Fx[t] @ dx + Fu[t] @ du
+    for a, b in zip(us, dense_lexicographic(Fx, Fu, levels)):
+        np.testing.assert_allclose(a, b, atol=1e-8)
+    assert res.rank[0][T - 1] == 1 and res.free[0] == 0
+
+
+def test_single_level_is_the_ddp_riccati_recursion():
+    rng = np.random.default_rng(1)
+    T, ndx, nu = 6, 4, 2
+    Fx = [np.eye(ndx) + 0.1 * rng.standard_normal((ndx, ndx)) for _ in range(T)]
+    Fu = [rng.standard_normal((ndx, nu)) for _ in range(T)]
+    lv = LevelDerivatives(
+        [rng.standard_normal(ndx) for _ in range(T + 1)], [rng.standard_normal(nu) for _ in range(T)],
+        [np.eye(ndx) for _ in range(T + 1)], [0.1 * rng.standard_normal((ndx, nu)) for _ in range(T)],
+        [2.0 * np.eye(nu) for _ in range(T)],
+    )
+    res = hierarchical_backward_pass(Fx, Fu, [lv])
+    empty_x, empty_u = [np.zeros((0, ndx))] * (T + 1), [np.zeros((0, nu))] * T
+    ref = projected_backward_pass(Fx, Fu, lv.Lx, lv.Lu, lv.Lxx, lv.Lxu, lv.Luu, empty_x, empty_u,
+                                  [np.zeros(0)] * (T + 1))
+    for t in range(T):
+        np.testing.assert_allclose(res.ff[0][t], -ref.k[t], atol=1e-10)
+        np.testing.assert_allclose(res.K[t], -ref.K[t], atol=1e-10)
+        np.testing.assert_allclose(res.Vxx[0][t], ref.Vxx[t], atol=1e-9)
+
+
+class ResidualPlanarEE(ResidualModelAbstract):
+    """Planar 3-link arm (unit links), ``r = sel · (x_ee, y_ee, φ) - ref`` with ``φ = q₀ + q₁ + q₂``."""
+
+    def __init__(self, state, sel, ref):
+        self.sel, self.ref = np.atleast_2d(sel), np.asarray(ref, dtype=float)
+        super().__init__(state, self.sel.shape[0], 3, True, False, False)
+
+    @staticmethod
+    def fk(q):
+        a = np.cumsum(q)
+        p = np.array([np.cos(a).sum(), np.sin(a).sum(), a[-1]])
+        J = np.ones((3, 3))
+        for j in range(3):
+            J[0, j] = -np.sin(a[j:]).sum()
+            J[1, j] = np.cos(a[j:]).sum()
+        return p, J
+
+    def calc(self, data, x, u=None):
+        data.r[:] = self.sel @ self.fk(x[:3])[0] - self.ref
+
+    def calcDiff(self, data, x, u=None):
+        data.Rx[:, :3] = self.sel @ self.fk(x[:3])[1]
+
+    def createData(self, data=None):
+        return ResidualDataAbstract(self, data)
+
+
+class DAMJointIntegrator(crocopy.DifferentialActionModelAbstract):
+    """``q̈ = u`` with a cost stack (a stand-in for a fixed-base robot)."""
+
+    def __init__(self, costs):
+        super().__init__(costs.state, 3, 1)
+        self.costs = costs
+
+    def createData(self):
+        data = crocopy.DifferentialActionDataAbstract(self)
+        data.costs = self.costs.createData(crocopy.DataCollectorAbstract())
+        return data
+
+    def calc(self, data, x, u=None):
+        data.xout[:] = 0.0 if u is None else u
+        self.costs.calc(data.costs, x, u)
+        data.cost = data.costs.cost
+
+    def calcDiff(self, data, x, u=None):
+        data.Fx[:] = 0.0
+        data.Fu[:] = np.eye(3)
+        self.costs.calcDiff(data.costs, x, u)
+        for name in ("Lx", "Lxx") if u is None else ("Lx", "Lu", "Lxx", "Lxu", "Luu"):
+            getattr(data, name)[:] = getattr(data.costs, name)
+
+
+def arm_problem(tasks=("t1", "t2"), T=20, dt=0.05, effort_w=1e-3):
+    state = crocopy.StateVector(6)
+    specs = {
+        "t1": ResidualPlanarEE(state, [[0.0, 0.0, 1.0], [0.0, 0.0, 1.0]], [0.9, 1.1]),
+        "x1": ResidualPlanarEE(state, [[1.0, 0.0, 0.0], [1.0, 0.0, 0.0]], [0.9, 1.1]),
+        "t2": ResidualPlanarEE(state, [[0.0, 1.0, 0.0]], [2.9]),
+        "t3": ResidualPlanarEE(state, [[1.0, 1.0, 0.0]], [3.5]),
+    }
+    running, terminal = crocopy.CostModelSum(state, 3), crocopy.CostModelSum(state, 3)
+    running.addCost("effort", crocopy.CostModelResidual(state, crocopy.ResidualModelControl(state, 3)), effort_w)
+    terminal.addCost("velocity", crocopy.CostModelResidual(
+        state, crocopy.ActivationModelWeightedQuad(np.r_[np.zeros(3), np.ones(3)]),
+        crocopy.ResidualModelState(state, np.zeros(6), 3)), 1e-3)
+    for name in tasks:
+        terminal.addCost(name, crocopy.CostModelResidual(state, specs[name]), 1.0)
+    rm = crocopy.IntegratedActionModelEuler(DAMJointIntegrator(running), dt)
+    tm = crocopy.IntegratedActionModelEuler(DAMJointIntegrator(terminal), 0.0)
+    return crocopy.ShootingProblem(np.array([0.3, 0.4, 0.5, 0, 0, 0]), [rm] * T, tm)
+
+
+def solve_hddp(levels, tasks, maxiter=100, th_last=1e-6, **kw):
+    problem = arm_problem(tasks, **kw)
+    solver = SolverHDDP(problem, levels)
+    solver.th_rel = [1e-10] * (len(levels) - 1) + [th_last]
+    solver.th_abs = [0.0] * len(levels)
+    solver.solve([], [], maxiter=maxiter)
+    return solver
+
+
+def test_lower_priority_task_never_changes_the_top_task():
+    """Top task: end-effector angle (its optimal set is flat); lower tasks: end-effector position."""
+    base = solve_hddp([["t1"], ["velocity", "effort"]], ("t1",))
+    full = solve_hddp([["t1"], ["t2"], ["velocity", "effort"]], ("t1", "t2"))
+    three = solve_hddp([["t1"], ["t2"], ["t3"], ["velocity", "effort"]], ("t1", "t2", "t3"))
+    g1 = base.level_costs[0]
+    assert g1 == pytest.approx(0.01, rel=1e-8)
+    for s in (full, three):
+        assert s.reason.startswith("converged")
+        assert abs(s.level_costs[0] - g1) <= 1e-8 * g1
+    p = arm_problem(("t1", "t2"))
+    p.calc(base.xs, base.us)
+    t2_unserved = p.terminalData.differential.costs.costs["t2"].cost
+    assert full.level_costs[1] < 1e-2 * t2_unserved
+    assert three.level_costs[1] == pytest.approx(full.level_costs[1], rel=1e-2)
+
+
+def test_curved_top_task_is_never_traded_for_a_lower_one():
+    """Top task: end-effector x (curved optimal set); the line search keeps it at its optimum."""
+    base = solve_hddp([["x1"], ["velocity", "effort"]], ("x1",), maxiter=30)
+    full = solve_hddp([["x1"], ["t2"], ["velocity", "effort"]], ("x1", "t2"), maxiter=30)
+    g1 = base.level_costs[0]
+    assert g1 == pytest.approx(0.01, rel=1e-8)
+    assert abs(full.level_costs[0] - g1) <= 1e-8 * g1
+
+
+def test_single_level_hierarchy_equals_ddp():
+    names = ["t1", "t2", "velocity", "effort"]
+    hddp = solve_hddp([names], ("t1", "t2"), th_last=1e-12)
+    assert hddp.reason.startswith("converged")
+    ddp = crocopy.SolverDDP(arm_problem(("t1", "t2")))
+    assert ddp.solve([], [], maxiter=300)
+    assert hddp.cost == pytest.approx(ddp.cost, rel=1e-6)
+    np.testing.assert_allclose(np.array(hddp.us), np.array(ddp.us), atol=1e-3)
+
+
+def test_lq_hierarchy_converges_in_one_step():
+    problem = arm_problem(("t1",), T=5)
+    solver = SolverHDDP(problem, [["t1", "velocity", "effort"]])
+    solver.solve([], [], maxiter=1)
+    assert solver.level_steps[0] == 1.0
+
+
+def test_bad_levels_are_rejected():
+    problem = arm_problem(("t1", "t2"))
+    with pytest.raises(KeyError, match="nope"):
+        SolverHDDP(problem, [["t1", "t2", "velocity", "effort", "nope"]])
+    with pytest.raises(ValueError, match="in no level"):
+        SolverHDDP(problem, [["t1"], ["velocity", "effort"]])
+    with pytest.raises(ValueError, match="levels 0 and 1"):
+        SolverHDDP(problem, [["t1", "t2"], ["t2", "velocity", "effort"]])
+    with pytest.raises(ValueError, match="non-empty"):
+        SolverHDDP(problem, [])
