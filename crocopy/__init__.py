@@ -21,6 +21,8 @@ from .activations import (
     ActivationModelWeightedQuadraticBarrier,
 )
 from .actuation_base import ActuationDataAbstract, ActuationModelAbstract, JointDataAbstract
+from .callback_display import CallbackDisplay
+from .callbacks import CallbackAbstract, CallbackLogger, CallbackVerbose
 from .constraints import (
     ConstraintDataAbstract,
     ConstraintDataManager,
@@ -30,7 +32,6 @@ from .constraints import (
     ConstraintModelResidual,
     ConstraintType,
 )
-from .callbacks import CallbackAbstract, CallbackLogger, CallbackVerbose
 from .costs import CostDataAbstract, CostDataSum, CostItem, CostModelAbstract, CostModelResidual, CostModelSum
 from .data_collector import DataCollectorAbstract
 from .diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
@@ -58,3 +59,10 @@ except PackageNotFoundError:
     __version__ = "0.0.0"
 
 from .models import *  # noqa: E402,F403  (Pinocchio models, re-exported flat)
+
+
+def __getattr__(name: str):
+    """``crocopy.MeshcatDisplay`` and the HTML export helpers load lazily from ``crocopy.models``."""
+    from . import models
+
+    return getattr(models, name)

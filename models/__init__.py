@@ -98,3 +98,14 @@ __all__ = [
     "Thruster",
     "ThrusterType",
 ]
+
+_LAZY_DISPLAY = {"MeshcatDisplay": "display", "export_html": "html_export", "export_html_from_solver": "html_export"}
+
+
+def __getattr__(name: str):
+    """Import the meshcat display and HTML export lazily (meshcat is only needed to display)."""
+    if name in _LAZY_DISPLAY:
+        import importlib
+
+        return getattr(importlib.import_module(f".{_LAZY_DISPLAY[name]}", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

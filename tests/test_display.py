@@ -1,0 +1,277 @@
+"""MeshcatDisplay, static HTML export and CallbackDisplay (headless: no browser is opened)."""
+
+from __future__ import annotations
+
+import re
+import time
+import webbrowser
+from types import SimpleNamespace
+
+import example_robot_data as erd
+import numpy as np
+import pinocchio as pin
+import pytest
+from crocopy.models import display as display_module
+from crocopy.models.display import MeshcatDisplay, start_meshcat_server
+from crocopy.models.html_export import _key_frames, export_html, static_html_commands
+
+import crocopy
+
+LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+
+@pytest.fixture(scope="module")
+def anymal():
+    return erd.load("anymal")
+
+
+@pytest.fixture(scope="module")
+def anymal_display(anymal):
+    with MeshcatDisplay(anymal, openDisplay=False) as d:
+        yield d
+
+
+def _x0(robot):
+    return np.concatenate([robot.q0, np.zeros(robot.model.nv)])
+
+
+def _bobbing(robot, n=12, height=0.1):
+    xs = []
+    for i in range(n):
+        x = _x0(robot)
+        x[2] += height * np.sin(np.pi * i / (n - 1))
+        xs.append(x)
+    return xs
+
+
+def _animation(commands):
+    anims = [c for c in commands if c["type"] == "set_animation"]
+    assert len(anims) == 1
+    return {a["path"]: {t["name"]: t for t in a["clip"]["tracks"]} for a in anims[0]["animations"]}
+
+
+def _self_contained(path):
+    with open(path, encoding="utf-8") as f:
+        html = f.read()
+    assert not re.search(r"<script[^>]*\bsrc\s*=", html, re.I)
+    assert not re.search(r"<link[^>]*\bhref\s*=\s*[\"']?https?:", html, re.I)
+    assert not re.search(r"\bsrc\s*=\s*[\"']https?://", html, re.I)
+    assert "viewer.handle_command_bytearray" in html  # the inlined viewer replays the scene
+    return html
+
+
+def test_display_without_browser_and_server_cleanup(anymal, monkeypatch):
+    opened = []
+    monkeypatch.setattr(webbrowser, "open", lambda *a, **k: opened.append(a) or True)
+    d = MeshcatDisplay(anymal, openDisplay=False)
+    proc = d.viewer.window.server_proc
+    assert proc.poll() is None
+    assert d.url().startswith("http://127.0.0.1:")
+    d.close()
+    assert proc.poll() is not None
+    assert opened == []
+    d2 = MeshcatDisplay(anymal, openDisplay=True)
+    try:
+        assert len(opened) == 1 and opened[0][0] == d2.url()
+    finally:
+        d2.close()
+
+
+def test_dead_server_raises_timeout_instead_of_hanging():
+    start = time.time()
+    with pytest.raises(TimeoutError, match="no meshcat server"):
+        start_meshcat_server(zmq_url="tcp://127.0.0.1:5999", timeout=0.3)
+    assert time.time() - start < 5.0
+    with pytest.raises(ValueError, match="timeout"):
+        start_meshcat_server(timeout=0.0)
+
+
+def test_bad_arguments(anymal, anymal_display):
+    with pytest.raises(ValueError, match="freq"):
+        MeshcatDisplay(anymal, freq=0, openDisplay=False)
+    with pytest.raises(ValueError, match="xs\\[1\\]"):
+        anymal_display.display([_x0(anymal), np.zeros(3)])
+    with pytest.raises(ValueError, match="xs must contain"):
+        anymal_display.display([])
+    with pytest.raises(ValueError, match="cameraTF"):
+        anymal_display._camera_matrix(np.zeros(5))
+    with pytest.raises(ValueError, match="position"):
+        anymal_display.setCameraPosition([1.0, 2.0])
+    with pytest.raises(ValueError, match="dts"):
+        _key_frames(5, [0.1, 0.1], 1.0, 30)
+    assert _key_frames(4, [0.01, 0.02, 0.0], 1.0, 30) == [(0, 0), (2, 1)]  # closest node per frame
+
+
+def test_display_rate_freq_and_dts(anymal, monkeypatch):
+    with MeshcatDisplay(anymal, openDisplay=False, freq=3) as d:
+        calls = []
+        original = d._set_robot
+        monkeypatch.setattr(d, "_set_robot", lambda target, q: calls.append(q.copy()) or original(target, q))
+        xs = _bobbing(anymal, n=10)
+        start = time.time()
+        d.display(xs, dts=[0.02] * 9)
+        elapsed = time.time() - start
+        assert len(calls) == 4  # nodes 0, 3, 6, 9
+        np.testing.assert_allclose(calls[1], xs[3][: anymal.model.nq])
+        assert elapsed >= 0.15  # 3 windows of 3 x 0.02 s, plus the last node's 0 s
+        d.rate = 50.0
+        calls.clear()
+        start = time.time()
+        d.display(xs, factor=2.0)
+        assert len(calls) == 4 and time.time() - start >= 4 * 2.0 / 50.0 - 1e-3
+
+
+def test_anymal_export_animation_and_plain_trunk(anymal, tmp_path):
+    xs = _bobbing(anymal)
+    path = export_html(anymal, xs, tmp_path / "anymal.html", dts=[0.05] * 11, fps=20)
+    _self_contained(path)
+    cmds = static_html_commands(path)
+    objects = {c["path"]: c for c in cmds if c["type"] == "set_object"}
+    trunk = objects["/meshcat/pinocchio/visuals/base_0/shape"]
+    assert trunk["object"]["geometries"][0]["type"] == "BufferGeometry"  # plain triangles, not the .dae
+    leg = objects["/meshcat/pinocchio/visuals/LF_HIP_0/shape"]
+    assert leg["object"]["object"]["type"] == "_meshfile_object" and leg["object"]["object"]["format"] == "dae"
+    assert "/meshcat/floor" in objects
+    tracks = _animation(cmds)["/meshcat/pinocchio/visuals/base_0"]
+    times = [k["time"] for k in tracks[".position"]["keys"]]
+    assert times == [int(round(0.05 * i * 20)) for i in range(12)]
+    z = np.array([k["value"][2] for k in tracks[".position"]["keys"]])
+    np.testing.assert_allclose(z - z[0], [x[2] - xs[0][2] for x in xs], atol=1e-9)
+    quats = np.array([k["value"] for k in tracks[".quaternion"]["keys"]])
+    np.testing.assert_allclose(np.linalg.norm(quats, axis=1), 1.0, atol=1e-12)
+
+
+def test_iris_export(tmp_path):
+    iris = erd.load("iris")
+    xs = _bobbing(iris, n=6, height=0.5)
+    path = export_html(iris, xs, tmp_path / "iris.html", dts=[0.1] * 5)
+    _self_contained(path)
+    tracks = _animation(static_html_commands(path))
+    assert len(tracks) == len(iris.visual_model.geometryObjects)
+    rotor = tracks["/meshcat/pinocchio/visuals/iris__rotor_0_0"][".position"]["keys"]
+    assert rotor[-1]["value"][2] == pytest.approx(rotor[0]["value"][2] + 0.5 * np.sin(np.pi * 5 / 5), abs=1e-9)
+
+
+def test_talos_mirrored_meshes_keep_scale_out_of_the_animation(tmp_path):
+    talos = erd.load("talos")
+    xs = _bobbing(talos, n=4)
+    path = export_html(talos, xs, tmp_path / "talos.html", dts=[0.1] * 3)
+    cmds = static_html_commands(path)
+    transforms = {c["path"]: np.array(c["matrix"]).reshape(4, 4).T for c in cmds if c["type"] == "set_transform"}
+    gm = talos.visual_model
+    go = gm.geometryObjects[gm.getGeometryId("arm_right_1_link_0")]
+    node = "/meshcat/pinocchio/visuals/arm_right_1_link_0"
+    assert np.linalg.det(transforms[node + "/shape"][:3, :3]) < 0  # the reflection lives on the static child
+    np.testing.assert_allclose(np.diag(transforms[node + "/shape"])[:3], go.meshScale)
+    rigid = transforms[node][:3, :3]
+    np.testing.assert_allclose(rigid.T @ rigid, np.eye(3), atol=1e-12)
+    assert np.linalg.det(rigid) == pytest.approx(1.0)
+    data, gdata = talos.model.createData(), pin.GeometryData(gm)
+    pin.forwardKinematics(talos.model, data, xs[-1][: talos.model.nq])
+    pin.updateGeometryPlacements(talos.model, data, gm, gdata)
+    keys = _animation(cmds)[node]
+    last = gdata.oMg[gm.getGeometryId(go.name)]
+    np.testing.assert_allclose(keys[".position"]["keys"][-1]["value"], last.translation, atol=1e-9)
+    qx, qy, qz, qw = keys[".quaternion"]["keys"][-1]["value"]
+    R = pin.Quaternion(qw, qx, qy, qz).toRotationMatrix()
+    np.testing.assert_allclose(R, last.rotation, atol=1e-9)
+
+
+def _fake_contact_solver(robot, force_node0):
+    """A solver-shaped object: 2 running nodes in contact on LF_FOOT, a free-dynamics terminal node."""
+    fid = robot.model.getFrameId("LF_FOOT")
+    xs = [_x0(robot)] * 3
+
+    def contact_node(f, active=True):
+        item = SimpleNamespace(active=active, contact=SimpleNamespace(id=fid, type=LWA))
+        cone = SimpleNamespace(id=fid, reference=SimpleNamespace(mu=0.5, R=np.eye(3)))
+        cost = SimpleNamespace(cost=SimpleNamespace(residual=cone))
+        costs = SimpleNamespace(costs={"c": cost})
+        diff = SimpleNamespace(contacts=SimpleNamespace(contacts={"LF": item}), costs=costs)
+        model = SimpleNamespace(dt=0.01, differential=diff)
+        cdata = SimpleNamespace(f=pin.Force(np.asarray(f, dtype=float), np.zeros(3)), frame=fid)
+        contacts = SimpleNamespace(contacts={"LF": cdata})
+        data = SimpleNamespace(differential=SimpleNamespace(multibody=SimpleNamespace(contacts=contacts)))
+        return model, data
+
+    (m0, d0), (m1, d1) = contact_node(force_node0), contact_node([0.0, 0.0, 50.0], active=False)
+    free = SimpleNamespace(differential=SimpleNamespace(costs=SimpleNamespace(costs={})))
+    free_data = SimpleNamespace(differential=SimpleNamespace(multibody=SimpleNamespace()))
+    problem = SimpleNamespace(runningModels=[m0, m1], runningDatas=[d0, d1], terminalModel=free, terminalData=free_data)
+    return SimpleNamespace(xs=xs, us=[np.zeros(12)] * 2, problem=problem, iter=0), fid
+
+
+def test_forces_and_cones_from_solver_data(anymal, anymal_display, tmp_path):
+    f0 = [30.0, 0.0, 40.0]
+    solver, fid = _fake_contact_solver(anymal, f0)
+    d = anymal_display
+    assert d.getDurationSequenceFromSolver(solver) == [0.01, 0.01]
+    assert d.getTimeSequenceFromSolver(solver) == pytest.approx([0.0, 0.01, 0.02])
+    fs = d.getForceTrajectoryFromSolver(solver)
+    assert [len(node) for node in fs] == [1, 0, 0]  # inactive contact and free terminal node: no force
+    rec = fs[0][0]
+    assert rec["key"] == "LF_FOOT" and rec["mu"] == 0.5
+    ps = d.getFrameTrajectoryFromSolver(solver)
+    assert list(ps) == ["LF_FOOT"] and len(ps["LF_FOOT"]) == 3
+    np.testing.assert_allclose(ps["LF_FOOT"][0], rec["oMf"].translation)
+    d.displayFromSolver(solver)
+    path = d.exportHTMLFromSolver(solver, str(tmp_path / "contact.html"))
+    cmds = static_html_commands(path)
+    arrow = [c for c in cmds if c["type"] == "set_transform" and c["path"] == "/meshcat/forces/LF_FOOT"][-1]
+    T = np.array(arrow["matrix"]).reshape(4, 4).T
+    np.testing.assert_allclose(T[:3, 3], rec["oMf"].translation, atol=1e-12)
+    np.testing.assert_allclose(T[:3, 1], np.array(f0) * d.forceScale, atol=1e-12)  # +y along f, length |f| scale
+    assert any(c["type"] == "set_object" and c["path"].startswith("/meshcat/cones/LF_FOOT") for c in cmds)
+    assert any(c["type"] == "set_object" and c["path"] == "/meshcat/trajectories/LF_FOOT" for c in cmds)
+    scale = _animation(cmds)["/meshcat/forces/LF_FOOT"][".scale"]["keys"]
+    assert scale[0]["value"][1] == pytest.approx(50.0 * d.forceScale) and scale[-1]["value"][1] < 1e-5
+
+
+def test_local_force_is_rotated_to_world(anymal_display):
+    R = pin.utils.rotate("z", 0.5)
+    item = {"key": "k", "oMf": pin.SE3(R, np.ones(3)), "f": pin.Force(np.array([1.0, 0, 0]), np.zeros(3))}
+    p, f = anymal_display._force_world(dict(item, type=pin.ReferenceFrame.LOCAL))
+    np.testing.assert_allclose(f, R[:, 0])
+    np.testing.assert_allclose(anymal_display._force_world(item)[1], [1.0, 0, 0])
+
+
+def test_free_dynamics_solver_has_no_forces(anymal_display):
+    x = np.concatenate([erd.load("anymal").q0, np.zeros(18)])
+    model = SimpleNamespace(dt=0.02, differential=SimpleNamespace(costs=SimpleNamespace(costs={})))
+    data = SimpleNamespace(differential=SimpleNamespace(multibody=SimpleNamespace(pinocchio=None)))
+    problem = SimpleNamespace(runningModels=[model], runningDatas=[data], terminalModel=model, terminalData=data)
+    solver = SimpleNamespace(xs=[x, x], us=[np.zeros(12)], problem=problem)
+    assert anymal_display.getForceTrajectoryFromSolver(solver) == [[], []]
+    anymal_display.frameNames = []
+    del anymal_display.frameTrajNames
+    assert anymal_display.getFrameTrajectoryFromSolver(solver) == {}
+    anymal_display.displayFromSolver(solver)
+
+
+class _RecordingDisplay:
+    def __init__(self):
+        self.seen = []
+
+    def displayFromSolver(self, solver, factor=1.0):
+        self.seen.append((solver.iter, [x.copy() for x in solver.xs]))
+
+
+def test_callback_display_is_called_every_iteration():
+    with pytest.raises(ValueError, match="displayFromSolver"):
+        crocopy.CallbackDisplay(object())
+    rec = _RecordingDisplay()
+    model = crocopy.ActionModelUnicycle()
+    problem = crocopy.ShootingProblem(np.array([1.0, 0.5, 0.2]), [model] * 10, model)
+    solver = crocopy.SolverFDDP(problem)
+    logger = crocopy.CallbackLogger()
+    solver.setCallbacks([crocopy.CallbackDisplay(rec), logger])
+    solver.solve([], [], 20)
+    assert len(rec.seen) == len(logger.iters) >= 1
+    assert [it for it, _ in rec.seen] == logger.iters
+    np.testing.assert_allclose(rec.seen[-1][1][-1], solver.xs[-1])
+
+
+def test_lazy_public_names():
+    assert crocopy.MeshcatDisplay is MeshcatDisplay
+    assert crocopy.models.export_html is export_html
+    assert display_module.MeshcatDisplay is MeshcatDisplay
