@@ -29,6 +29,7 @@ from .data_collectors import (
     DataCollectorMultibodyInContact,
     DataCollectorMultibodyInImpulse,
 )
+from .free_fwd_dynamics import DifferentialActionDataFreeFwdDynamics, DifferentialActionModelFreeFwdDynamics
 from .impulse_base import ImpulseDataAbstract, ImpulseModelAbstract
 from .impulse_fwd_dynamics import ActionDataImpulseFwdDynamics, ActionModelImpulseFwdDynamics
 from .impulse_multiple import ImpulseDataMultiple, ImpulseItem, ImpulseModelMultiple
@@ -43,6 +44,25 @@ from .residuals_contact import (
     ResidualModelContactFrictionCone,
     ResidualModelContactWrenchCone,
     ResidualModelImpulseCoM,
+)
+from .residuals_dynamics import (
+    ResidualModelCentroidalMomentum,
+    ResidualModelCoMPosition,
+    ResidualModelControlGrav,
+    ResidualModelJointAcceleration,
+    ResidualModelJointEffort,
+)
+from .residuals_frame import (
+    ResidualModelFramePlacement,
+    ResidualModelFrameRotation,
+    ResidualModelFrameTranslation,
+    ResidualModelFrameVelocity,
+)
+from .squashing import (
+    ActuationSquashingModel,
+    SquashingDataAbstract,
+    SquashingModelAbstract,
+    SquashingModelSmoothSat,
 )
 from .state_multibody import StateMultibody
 
@@ -82,6 +102,7 @@ __all__ = [
     "ActuationModelFloatingBase",
     "ActuationModelFloatingBaseThrusters",
     "ActuationModelFull",
+    "ActuationSquashingModel",
     "DataCollectorActMultibody",
     "DataCollectorActMultibodyInContact",
     "DataCollectorActuation",
@@ -94,6 +115,20 @@ __all__ = [
     "DataCollectorMultibody",
     "DataCollectorMultibodyInContact",
     "DataCollectorMultibodyInImpulse",
+    "DifferentialActionDataFreeFwdDynamics",
+    "DifferentialActionModelFreeFwdDynamics",
+    "ResidualModelCentroidalMomentum",
+    "ResidualModelCoMPosition",
+    "ResidualModelControlGrav",
+    "ResidualModelFramePlacement",
+    "ResidualModelFrameRotation",
+    "ResidualModelFrameTranslation",
+    "ResidualModelFrameVelocity",
+    "ResidualModelJointAcceleration",
+    "ResidualModelJointEffort",
+    "SquashingDataAbstract",
+    "SquashingModelAbstract",
+    "SquashingModelSmoothSat",
     "StateMultibody",
     "Thruster",
     "ThrusterType",

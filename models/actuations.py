@@ -110,7 +110,7 @@ class ActuationModelFloatingBase(ActuationModelAbstract):
 
 
 class ThrusterType(enum.IntEnum):
-    """Spin direction of a thruster: the reaction torque is ``-ctorque * thrust`` (CW) or ``+`` (CCW)."""
+    """Spin direction of a thruster: its reaction torque is ``+ctorque * thrust`` (CW) or ``-`` (CCW) about its axis."""
 
     CW = 0
     CCW = 1
@@ -171,7 +171,7 @@ class ActuationModelFloatingBaseThrusters(ActuationModelAbstract):
 
     ``tau = Wthrust u`` with ``u = (thrusts, joint torques)``: the column of thruster ``i`` is the
     base-frame wrench ``(f_i, M_i.translation × f_i + s_i ctorque_i z_i)`` with ``f_i = R_i z`` and
-    ``s_i = -1`` for CW, ``+1`` for CCW.  ``S`` flags the driven rows of ``tau``.
+    ``s_i = +1`` for CW, ``-1`` for CCW.  ``Mtau = Wthrust⁺`` (pseudo-inverse).
     """
 
     def __init__(self, state: StateMultibody, thrusters: Sequence[Thruster]) -> None:
@@ -210,7 +210,7 @@ class ActuationModelFloatingBaseThrusters(ActuationModelAbstract):
 
     @property
     def S(self) -> np.ndarray:
-        """Rows of ``tau`` that the actuation drives (1.0) or not (0.0), shape ``(nv,)``."""
+        """Projector ``Wthrust Wthrust⁺`` on the generalized torques the actuation can produce, ``(nv, nv)``."""
         return self._S
 
     def _update(self) -> None:
@@ -218,13 +218,13 @@ class ActuationModelFloatingBaseThrusters(ActuationModelAbstract):
         W = np.zeros((nv, self.nu))
         for i, t in enumerate(self._thrusters):
             z = t.pose.rotation[:, 2]
-            sign = -1.0 if t.type == ThrusterType.CW else 1.0
+            sign = 1.0 if t.type == ThrusterType.CW else -1.0
             W[:3, i] = z
             W[3:6, i] = np.cross(t.pose.translation, z) + sign * t.ctorque * z
         np.fill_diagonal(W[nfb:, n:], 1.0)
         self._W = W
-        self._S = (np.abs(W).sum(axis=1) > 1e-12).astype(float)
         self._Mtau = np.linalg.pinv(W)
+        self._S = W @ self._Mtau
         lim = _effort_limit(self.state.pinocchio, nfb)
         self._u_lb = np.concatenate([[t.min_thrust for t in self._thrusters], -lim])
         self._u_ub = np.concatenate([[t.max_thrust for t in self._thrusters], lim])
@@ -246,5 +246,5 @@ class ActuationModelFloatingBaseThrusters(ActuationModelAbstract):
         data = ActuationDataAbstract(self)
         data.dtau_du[:] = self._W
         data.Mtau[:] = self._Mtau
-        data.tau_set[:] = self._S > 0.0
+        data.tau_set[:] = np.abs(self._W).sum(axis=1) > 1e-12
         return data

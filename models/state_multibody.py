@@ -66,8 +66,10 @@ class StateMultibody(StateAbstract):
         return np.concatenate([self._q0, np.zeros(self.nv)])
 
     def rand(self) -> np.ndarray:
-        """Random configuration within the finite position limits (``[-1, 1]`` elsewhere), random velocity."""
-        q = pin.randomConfiguration(self.pinocchio, self._rand_lo, self._rand_hi)
+        """Random configuration within the finite position limits (``[-1, 1]`` elsewhere, then normalized
+        onto the joint manifolds), random velocity in ``[-1, 1]``; drawn from NumPy's global generator."""
+        q = self._rand_lo + np.random.rand(self.nq) * (self._rand_hi - self._rand_lo)
+        q = pin.normalize(self.pinocchio, q)
         return np.concatenate([q, np.random.rand(self.nv) * 2.0 - 1.0])
 
     def diff(self, x0: np.ndarray, x1: np.ndarray) -> np.ndarray:

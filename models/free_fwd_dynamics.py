@@ -1,0 +1,215 @@
+"""Free forward dynamics ``a = M(q)⁻¹ (τ(x, u) - b(q, v))`` of a multibody system (no contacts).
+
+Without armature the acceleration comes from Pinocchio's ABA (LOCAL convention, followed by
+``updateGlobalPlacements`` so that the joint placements are available to the residuals) and its derivatives from
+``computeABADerivatives``:
+
+    Fx = (∂ABA/∂q, ∂ABA/∂v) + M⁻¹ ∂τ/∂x,   Fu = M⁻¹ ∂τ/∂u.
+
+With an armature ``ε`` (shape ``(nv,)``) the mass matrix is ``M + diag(ε)``; the acceleration is a
+Cholesky solve and ``Fx = M⁻¹ (∂τ/∂x - ∂RNEA/∂x)`` from ``computeRNEADerivatives`` at that
+acceleration.
+
+Kinematics contract with the residuals: after ``calc`` the node's ``pinocchio.Data`` (shared as
+``data.multibody.pinocchio``) holds the joint placements and velocities at ``x``; after
+``calcDiff`` it also holds the joint Jacobians ``J`` and the kinematic quantities that
+``getFrameVelocityDerivatives`` reads (terminal nodes: ``computeForwardKinematicsDerivatives`` in
+``calc``).  Residuals update the frames, centre of mass or momentum they need from those.
+Pinocchio's Python bindings return ``M`` and ``Minv`` fully symmetric.  The joint data collector
+(``data.multibody.joint``) exposes ``tau = u``, ``a = xout`` and their derivatives for the
+joint-effort/acceleration residuals.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+from scipy.linalg import cho_factor, cho_solve
+
+from crocopy.actuation_base import ActuationModelAbstract, JointDataAbstract
+from crocopy.costs import CostModelSum
+from crocopy.diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
+from crocopy.validation import as_vector
+
+from .actuations import ActuationModelFloatingBase, ActuationModelFloatingBaseThrusters, ActuationModelFull
+from .data_collectors import DataCollectorJointActMultibody
+from .residuals_frame import check_same_robot
+from .state_multibody import StateMultibody
+
+
+class DifferentialActionModelFreeFwdDynamics(DifferentialActionModelAbstract):
+    """Crocoddyl's ``DifferentialActionModelFreeFwdDynamics(state, actuation, costs, constraints=None)``.
+
+    Parameters
+    ----------
+    state : StateMultibody
+        Multibody state.
+    actuation : ActuationModelAbstract
+        Actuation model (its ``nu`` is the control dimension).
+    costs : CostModelSum
+        Cost stack (``costs.nu`` must equal ``actuation.nu``).
+    constraints : ConstraintModelManager, optional
+        Constraint stack filling ``g``/``h`` and their Jacobians.
+
+    Notes
+    -----
+    ``u_lb``/``u_ub`` default to the actuation's bounds (the URDF effort limits of the actuated
+    joints); ``has_control_limits`` stays False until they are assigned, as in Crocoddyl.
+    """
+
+    def __init__(
+        self,
+        state: StateMultibody,
+        actuation: ActuationModelAbstract,
+        costs: CostModelSum,
+        constraints: object | None = None,
+    ) -> None:
+        if not isinstance(state, StateMultibody):
+            raise ValueError(f"state must be a StateMultibody, got {type(state).__name__}")
+        if not isinstance(actuation, ActuationModelAbstract):
+            raise ValueError(f"actuation must be an ActuationModelAbstract, got {type(actuation).__name__}")
+        check_same_robot(state, actuation, "actuation")
+        if not isinstance(costs, CostModelSum):
+            raise ValueError(f"costs must be a CostModelSum, got {type(costs).__name__}")
+        if costs.nu != actuation.nu:
+            raise ValueError(f"costs.nu = {costs.nu} does not match actuation.nu = {actuation.nu}")
+        if constraints is not None and constraints.nu != actuation.nu:
+            raise ValueError(f"constraints.nu = {constraints.nu} does not match actuation.nu = {actuation.nu}")
+        ng = nh = ng_T = nh_T = 0
+        if constraints is not None:
+            ng, nh, ng_T, nh_T = constraints.ng, constraints.nh, constraints.ng_T, constraints.nh_T
+        super().__init__(state, actuation.nu, costs.nr, ng, nh, ng_T, nh_T)
+        if constraints is not None:
+            self.g_lb = np.array(constraints.g_lb, dtype=float)
+            self.g_ub = np.array(constraints.g_ub, dtype=float)
+        self.actuation = actuation
+        self.costs = costs
+        self.constraints = constraints
+        self.pinocchio = state.pinocchio
+        self._u_lb = np.array(actuation.u_lb, dtype=float)
+        self._u_ub = np.array(actuation.u_ub, dtype=float)
+        self._armature = np.zeros(state.nv)
+        self._with_armature = False
+        self._dtau_dx_nonzero = not isinstance(
+            actuation, ActuationModelFull | ActuationModelFloatingBase | ActuationModelFloatingBaseThrusters
+        )
+
+    @property
+    def armature(self) -> np.ndarray:
+        """Armature added to the diagonal of the mass matrix, shape ``(nv,)``."""
+        return self._armature
+
+    @armature.setter
+    def armature(self, value: np.ndarray) -> None:
+        arm = as_vector(value, self.state.nv, "armature")
+        self._armature = arm
+        self._with_armature = bool(np.any(arm != 0.0))
+
+    def createData(self) -> "DifferentialActionDataFreeFwdDynamics":
+        return DifferentialActionDataFreeFwdDynamics(self)
+
+    def calc(self, data: "DifferentialActionDataFreeFwdDynamics", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        nq = self.state.nq
+        q, v = x[:nq], x[nq:]
+        model, pd = self.pinocchio, data.pinocchio
+        if u is None:
+            pin.computeForwardKinematicsDerivatives(model, pd, q, v, data.zero_a)
+        else:
+            self.actuation.calc(data.multibody.actuation, x, u)
+            data.multibody.joint.tau[:] = u
+            tau = data.multibody.actuation.tau
+            if self._with_armature:
+                pin.computeAllTerms(model, pd, q, v)
+                M = data.M
+                M[:] = pd.M
+                M[data.diag] += self._armature
+                data.chol = cho_factor(M, lower=False, check_finite=False)
+                np.subtract(tau, pd.nle, out=data.u_drift)
+                data.xout[:] = cho_solve(data.chol, data.u_drift, check_finite=False)
+            else:
+                data.xout[:] = pin.aba(model, pd, q, v, tau, pin.Convention.LOCAL)
+                pin.updateGlobalPlacements(model, pd)
+        self.costs.calc(data.costs, x, u)
+        data.cost = data.costs.cost
+        if self.constraints is not None:
+            self.constraints.calc(data.constraints, x, u)
+
+    def calcDiff(
+        self, data: "DifferentialActionDataFreeFwdDynamics", x: np.ndarray, u: np.ndarray | None = None
+    ) -> None:
+        if u is not None:
+            nq, nv = self.state.nq, self.state.nv
+            q, v = x[:nq], x[nq:]
+            model, pd = self.pinocchio, data.pinocchio
+            act = data.multibody.actuation
+            self.actuation.calcDiff(act, x, u)
+            if self._with_armature:
+                pin.computeRNEADerivatives(model, pd, q, v, data.xout)
+                data.Minv[:] = cho_solve(data.chol, data.eye, check_finite=False)
+                data.dtau[:, :nv] = pd.dtau_dq
+                data.dtau[:, nv:] = pd.dtau_dv
+                np.subtract(act.dtau_dx, data.dtau, out=data.dtau)
+                np.dot(data.Minv, data.dtau, out=data.Fx)
+            else:
+                pin.computeABADerivatives(model, pd, q, v, act.tau)
+                Minv = data.Minv
+                Minv[:] = pd.Minv
+                data.Fx[:, :nv] = pd.ddq_dq
+                data.Fx[:, nv:] = pd.ddq_dv
+                if self._dtau_dx_nonzero:
+                    data.Fx += Minv @ act.dtau_dx
+            np.dot(data.Minv, act.dtau_du, out=data.Fu)
+        self.costs.calcDiff(data.costs, x, u)
+        data.Lx[:] = data.costs.Lx
+        data.Lxx[:] = data.costs.Lxx
+        if u is not None:
+            data.Lu[:] = data.costs.Lu
+            data.Lxu[:] = data.costs.Lxu
+            data.Luu[:] = data.costs.Luu
+        if self.constraints is not None:
+            self.constraints.calcDiff(data.constraints, x, u)
+
+    def quasiStatic(
+        self, data: "DifferentialActionDataFreeFwdDynamics", x: np.ndarray, maxiter: int = 100, tol: float = 1e-9
+    ) -> np.ndarray:
+        """Controls that cancel gravity at ``x`` with zero velocity: ``commands(x, rnea(q, 0, 0))``."""
+        x = as_vector(x, self.state.nx, "x")
+        nq = self.state.nq
+        tau = pin.rnea(self.pinocchio, data.pinocchio, x[:nq], np.zeros(self.state.nv), np.zeros(self.state.nv))
+        act = data.multibody.actuation
+        self.actuation.commands(act, x, tau)
+        return act.u.copy()
+
+
+class DifferentialActionDataFreeFwdDynamics(DifferentialActionDataAbstract):
+    """Data of :class:`DifferentialActionModelFreeFwdDynamics`.
+
+    Fields besides the differential-action ones: ``pinocchio`` (the node's ``pinocchio.Data``),
+    ``multibody`` (``DataCollectorJointActMultibody``), ``costs``, ``constraints``, ``Minv (nv, nv)``
+    and ``u_drift = τ - b (nv,)`` (armature case).
+    """
+
+    def __init__(self, model: DifferentialActionModelFreeFwdDynamics) -> None:
+        super().__init__(model)
+        nv, ndx = model.state.nv, model.state.ndx
+        self.pinocchio = model.pinocchio.createData()
+        actuation = model.actuation.createData()
+        joint = JointDataAbstract(model.state, model.actuation, model.nu)
+        joint.a = self.xout
+        joint.da_dx = self.Fx
+        joint.da_du = self.Fu
+        np.fill_diagonal(joint.dtau_du, 1.0)
+        self.multibody = DataCollectorJointActMultibody(self.pinocchio, actuation, joint)
+        self.costs = model.costs.createData(self.multibody)
+        self.constraints = None
+        if model.constraints is not None:
+            self.constraints = model.constraints.createData(self.multibody)
+            self.constraints.shareMemory(self)
+        self.Minv = np.zeros((nv, nv))
+        self.u_drift = np.zeros(nv)
+        self.M = np.zeros((nv, nv))
+        self.dtau = np.zeros((nv, ndx))
+        self.eye = np.eye(nv)
+        self.zero_a = np.zeros(nv)
+        self.diag = np.diag_indices(nv)
+        self.chol = None
