@@ -65,11 +65,8 @@ def time_phases(lib, problem, repeats: int = 20) -> dict[str, float]:
         "forward": _median_ms(lambda: solver.forwardPass(1.0), repeats),
     }
 
-    def one_iteration():
-        s = lib.SolverDDP(problem)
-        s.solve(xs, us, 1, False)
-
-    out["iteration"] = _median_ms(one_iteration, repeats)
+    fresh = lib.SolverDDP(problem)
+    out["iteration"] = _median_ms(lambda: fresh.solve(xs, us, 1, False), repeats)
     return out
 
 
