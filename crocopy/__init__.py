@@ -45,6 +45,7 @@ from .numdiff import (
     DifferentialActionDataNumDiff,
     DifferentialActionModelNumDiff,
 )
+from .plotting import plotConvergence, plotFeasibility, plotOCSolution
 from .residual_base import ResidualDataAbstract, ResidualModelAbstract
 from .residuals import ResidualModelControl, ResidualModelState
 from .shooting import ShootingProblem
