@@ -275,3 +275,59 @@ def test_lazy_public_names():
     assert crocopy.MeshcatDisplay is MeshcatDisplay
     assert crocopy.models.export_html is export_html
     assert display_module.MeshcatDisplay is MeshcatDisplay
+
+
+def _standing_anymal_solver(robot, mu=0.6, T=5):
+    """ANYmal standing on four 3D contacts (crocopy's API), with friction-cone costs of coefficient ``mu``."""
+    model = robot.model
+    state = crocopy.StateMultibody(model)
+    actuation = crocopy.ActuationModelFloatingBase(state)
+    x0 = _x0(robot)
+    feet = ["LF_FOOT", "RF_FOOT", "LH_FOOT", "RH_FOOT"]
+
+    def node(dt):
+        contacts = crocopy.ContactModelMultiple(state, actuation.nu)
+        costs = crocopy.CostModelSum(state, actuation.nu)
+        xres = crocopy.ResidualModelState(state, x0, actuation.nu)
+        costs.addCost("x", crocopy.CostModelResidual(state, xres), 1e-1)
+        costs.addCost("u", crocopy.CostModelResidual(state, crocopy.ResidualModelControl(state, actuation.nu)), 1e-3)
+        for foot in feet:
+            fid = model.getFrameId(foot)
+            contact = crocopy.ContactModel3D(state, fid, np.zeros(3), LWA, actuation.nu, np.array([0.0, 50.0]))
+            contacts.addContact(foot + "_contact", contact)
+            cone = crocopy.FrictionCone(np.eye(3), mu, 4, False)
+            residual = crocopy.ResidualModelContactFrictionCone(state, fid, cone, actuation.nu)
+            activation = crocopy.ActivationModelQuadraticBarrier(crocopy.ActivationBounds(cone.lb, cone.ub))
+            costs.addCost(foot + "_cone", crocopy.CostModelResidual(state, activation, residual), 1e1)
+        dam = crocopy.DifferentialActionModelContactFwdDynamics(state, actuation, contacts, costs)
+        return crocopy.IntegratedActionModelEuler(dam, dt)
+
+    problem = crocopy.ShootingProblem(x0, [node(1e-2) for _ in range(T)], node(0.0))
+    solver = crocopy.SolverFDDP(problem)
+    solver.solve([], [], 5)
+    return solver, feet
+
+
+def test_forces_from_a_real_contact_problem(anymal, tmp_path, monkeypatch):
+    solver, feet = _standing_anymal_solver(anymal)
+    with MeshcatDisplay(anymal, openDisplay=False, rate=1000.0) as d:
+        fs = d.getForceTrajectoryFromSolver(solver)
+        assert [len(n) for n in fs] == [4] * (solver.problem.T + 1)
+        data = solver.problem.runningDatas[2].differential.multibody.contacts.contacts["RH_FOOT_contact"]
+        rec = {r["key"]: r for r in fs[2]}["RH_FOOT"]
+        np.testing.assert_allclose(rec["f"].vector, data.f.vector)
+        assert rec["mu"] == pytest.approx(0.6) and rec["type"] == LWA
+        assert sum(r["f"].linear[2] for r in fs[0]) > 100.0  # the ground pushes the feet up: they carry the robot
+        path = d.exportHTMLFromSolver(solver, str(tmp_path / "standing.html"))
+        cmds = static_html_commands(path)
+        objects = {c["path"] for c in cmds if c["type"] == "set_object"}
+        for foot in feet:
+            assert f"/meshcat/forces/{foot}/head" in objects and f"/meshcat/cones/{foot}/shape" in objects
+            assert f"/meshcat/trajectories/{foot}" in objects
+        calls = []
+        original = d.display
+        monkeypatch.setattr(d, "display", lambda xs, **kw: calls.append(len(kw["fs"])) or original(xs, **kw))
+        logger = crocopy.CallbackLogger()
+        solver.setCallbacks([crocopy.CallbackDisplay(d), logger])
+        solver.solve([], [], 2)
+        assert calls == [solver.problem.T + 1] * len(logger.iters) and calls
