@@ -21,6 +21,7 @@ from .activations import (
     ActivationModelWeightedQuadraticBarrier,
 )
 from .actuation_base import ActuationDataAbstract, ActuationModelAbstract, JointDataAbstract
+from .box_qp import BoxQP, BoxQPSolution
 from .callback_display import CallbackDisplay
 from .callbacks import CallbackAbstract, CallbackLogger, CallbackVerbose
 from .constraints import (
@@ -45,13 +46,18 @@ from .numdiff import (
     DifferentialActionDataNumDiff,
     DifferentialActionModelNumDiff,
 )
+from .penalty import ActionModelControlPenalty
 from .plotting import plotConvergence, plotFeasibility, plotOCSolution
 from .residual_base import ResidualDataAbstract, ResidualModelAbstract
 from .residuals import ResidualModelControl, ResidualModelState
 from .shooting import ShootingProblem
 from .solvers import SolverAbstract, SolverDDP, SolverFDDP
+from .solvers.box_ddp import SolverBoxDDP
+from .solvers.box_fddp import SolverBoxFDDP
+from .solvers.clamping import SolverClampedDDP
 from .solvers.hddp import CallbackHDDPVerbose, SolverHDDP
 from .solvers.projection import ConstraintRankError, SolverProjection
+from .squashing_action import ActionModelSquashed
 from .state import StateAbstract, StateVector
 
 try:

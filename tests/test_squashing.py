@@ -4,6 +4,9 @@ import numpy as np
 import pytest
 
 from crocopy import ActionModelLQR, ActionModelUnicycle
+from crocopy.penalty import ActionModelControlPenalty
+from crocopy.shooting import ShootingProblem
+from crocopy.solvers import SolverDDP
 from crocopy.squashing_action import (
     ActionModelSquashed,
     smooth_sat,
@@ -152,3 +155,32 @@ def test_bad_arguments():
         ActionModelSquashed(ActionModelUnicycle(), s_lb=np.array([np.nan, 1.0]), s_ub=np.array([2.0, 2.0]))
     with pytest.raises(ValueError, match="squashing"):
         ActionModelSquashed(limited_unicycle(), "sigmoid")
+
+
+def test_control_penalty_derivatives_and_effect():
+    inner = limited_unicycle()
+    model = ActionModelControlPenalty(inner, weight=50.0)
+    data = model.createData()
+    x = np.array([0.2, -0.4, 0.9])
+    for u in (np.array([2.7, -0.9]), np.array([0.5, 0.1])):  # outside, inside the box
+        Fx, Fu, Lx, Lu, Lxu, Luu = finite_differences(model, data, x, u)
+        model.calc(data, x, u)
+        model.calcDiff(data, x, u)
+        assert np.allclose(data.Lu, Lu, atol=1e-5) and np.allclose(data.Luu, Luu, atol=1e-4)
+        assert np.allclose(data.Fu, Fu, atol=1e-6) and np.allclose(data.Lx, Lx, atol=1e-5)
+        ref = inner.createData()
+        inner.calc(ref, x, u)
+        r = np.minimum(u - inner.u_lb, 0.0) + np.maximum(u - inner.u_ub, 0.0)
+        assert np.isclose(data.cost, ref.cost + 25.0 * r @ r)
+    # a heavier penalty pushes a DDP solution closer to the box
+    violations = []
+    for weight in (1.0, 1e4):
+        m = ActionModelControlPenalty(ActionModelUnicycle(), weight, lb=[-0.3, -0.2], ub=[0.3, 0.2])
+        problem = ShootingProblem(np.array([1.0, 2.0, 0.5]), [m] * 20, ActionModelUnicycle())
+        solver = SolverDDP(problem)
+        solver.solve(None, None, 100)
+        us = np.array(solver.us)
+        violations.append(np.max(np.maximum(us - [0.3, 0.2], 0.0) + np.maximum([-0.3, -0.2] - us, 0.0)))
+    assert violations[0] > 0.1 and violations[1] < 1e-2 * violations[0]
+    with pytest.raises(ValueError, match="lb"):
+        ActionModelControlPenalty(ActionModelUnicycle(), 1.0, lb=[1.0, 1.0], ub=[0.0, 2.0])
