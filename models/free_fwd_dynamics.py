@@ -93,6 +93,12 @@ class DifferentialActionModelFreeFwdDynamics(DifferentialActionModelAbstract):
         self._dtau_dx_nonzero = not isinstance(
             actuation, ActuationModelFull | ActuationModelFloatingBase | ActuationModelFloatingBaseThrusters
         )
+        # Fu = Minv dtau_du is a column block of Minv for the selection actuations
+        self._Fu_cols = None
+        if type(actuation) is ActuationModelFull:
+            self._Fu_cols = slice(0, state.nv)
+        elif type(actuation) is ActuationModelFloatingBase:
+            self._Fu_cols = slice(state.nv - actuation.nu, state.nv)
 
     @property
     def armature(self) -> np.ndarray:
@@ -158,14 +164,11 @@ class DifferentialActionModelFreeFwdDynamics(DifferentialActionModelAbstract):
                 data.Fx[:, nv:] = pd.ddq_dv
                 if self._dtau_dx_nonzero:
                     data.Fx += Minv @ act.dtau_dx
-            np.dot(data.Minv, act.dtau_du, out=data.Fu)
+            if self._Fu_cols is not None:
+                data.Fu[:] = data.Minv[:, self._Fu_cols]
+            else:
+                np.dot(data.Minv, act.dtau_du, out=data.Fu)
         self.costs.calcDiff(data.costs, x, u)
-        data.Lx[:] = data.costs.Lx
-        data.Lxx[:] = data.costs.Lxx
-        if u is not None:
-            data.Lu[:] = data.costs.Lu
-            data.Lxu[:] = data.costs.Lxu
-            data.Luu[:] = data.costs.Luu
         if self.constraints is not None:
             self.constraints.calcDiff(data.constraints, x, u)
 
@@ -201,6 +204,8 @@ class DifferentialActionDataFreeFwdDynamics(DifferentialActionDataAbstract):
         np.fill_diagonal(joint.dtau_du, 1.0)
         self.multibody = DataCollectorJointActMultibody(self.pinocchio, actuation, joint)
         self.costs = model.costs.createData(self.multibody)
+        for name in ("Lx", "Lu", "Lxx", "Lxu", "Luu"):  # the cost sum writes the derivatives in place
+            setattr(self.costs, name, getattr(self, name))
         self.constraints = None
         if model.constraints is not None:
             self.constraints = model.constraints.createData(self.multibody)

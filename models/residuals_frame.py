@@ -139,14 +139,19 @@ class ResidualModelFrameTranslation(_FrameResidual):
     def reference(self, value: np.ndarray) -> None:
         self._xref = as_vector(value, 3, "xref").copy()
 
+    def createData(self, data: DataCollectorAbstract | None = None) -> ResidualDataAbstract:
+        d = ResidualDataAbstract(self, data)
+        d.pinocchio = shared_pinocchio(data, self.state, type(self).__name__)
+        return d
+
     def calc(self, data: ResidualDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
         oMf = pin.updateFramePlacement(self.state.pinocchio, data.pinocchio, self._id)
         np.subtract(oMf.translation, self._xref, out=data.r)
 
     def calcDiff(self, data: ResidualDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
-        nv = self.state.nv
-        data.fJf[:] = pin.getFrameJacobian(self.state.pinocchio, data.pinocchio, self._id, pin.LOCAL)
-        data.Rx[:, :nv] = data.pinocchio.oMf[self._id].rotation @ data.fJf[:3]
+        """``∂r/∂q`` is the linear part of the LOCAL_WORLD_ALIGNED frame Jacobian (``oMf.R fJf[:3]``)."""
+        J = pin.getFrameJacobian(self.state.pinocchio, data.pinocchio, self._id, pin.LOCAL_WORLD_ALIGNED)
+        data.Rx[:, : self.state.nv] = J[:3]
 
 
 class ResidualModelFrameRotation(_FrameResidual):

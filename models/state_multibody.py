@@ -59,7 +59,10 @@ class StateMultibody(StateAbstract):
         self._q0 = pin.neutral(model)
         self._rand_lo = np.where(np.isfinite(lq), lq, -1.0)
         self._rand_hi = np.where(np.isfinite(uq), uq, 1.0)
-        self._eye_v = np.eye(self.nv)
+        nv, ndx = self.nv, self.ndx
+        self._Jpos = np.zeros((ndx, ndx))  # templates with ±I in the velocity block
+        self._Jpos[nv:, nv:] = np.eye(nv)
+        self._Jneg = -self._Jpos
 
     def zero(self) -> np.ndarray:
         """Neutral configuration and zero velocity."""
@@ -87,10 +90,8 @@ class StateMultibody(StateAbstract):
         return xout
 
     def _block(self, Jq: np.ndarray, sign: float) -> np.ndarray:
-        nv = self.nv
-        J = np.zeros((self.ndx, self.ndx))
-        J[:nv, :nv] = Jq
-        J[nv:, nv:] = sign * self._eye_v
+        J = (self._Jpos if sign > 0.0 else self._Jneg).copy()
+        J[: self.nv, : self.nv] = Jq
         return J
 
     def Jdiff(self, x0: np.ndarray, x1: np.ndarray, firstsecond: Jcomponent = Jcomponent.both) -> list:
