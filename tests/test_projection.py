@@ -262,3 +262,37 @@ def test_solver_reports_infeasible_x0_and_relative_degree():
     problem = lqr_problem(rng, nu=1, nh=1)
     with pytest.raises(ConstraintRankError, match="over-constrained"):
         SolverProjection(problem).solve([], [], maxiter=5)
+
+
+def test_arm_experiment_path_residual_and_short_solve():
+    from crocopy.paper_projection import build_arm_problem, constraint_ise
+
+    problem, us0, info = build_arm_problem(dt=0.05, horizon=1.0)
+    assert info["N"] == 20
+    model, data = problem.runningModels[0], problem.runningDatas[0]
+    rng = np.random.default_rng(0)
+    x = problem.x0 + 0.1 * rng.standard_normal(problem.x0.size)
+    u = us0[0] + rng.standard_normal(6)
+    dam, ddata = model.differential, data.differential[0]
+    item = dam.constraints.constraints["ee_path"].constraint
+    cdata = ddata.constraints.constraints["ee_path"]
+    dam.calc(ddata, x, u)
+    dam.calcDiff(ddata, x, u)
+    Hx = cdata.Hx.copy()
+    eps = 1e-7
+    for i in range(6):
+        xp = x.copy()
+        xp[i] += eps
+        dam.calc(ddata, xp, u)
+        h1 = cdata.h.copy()
+        dam.calc(ddata, x, u)
+        assert (h1[0] - cdata.h[0]) / eps == pytest.approx(Hx[0, i], abs=1e-5)
+    assert item.nh == 1 and item.T_constraint
+    solver = SolverProjection(problem)
+    xs0 = problem.rollout(us0)
+    problem.calc(xs0, us0)
+    assert constraint_ise(problem, 0.05) < 1e-20
+    assert solver.solve(xs0, us0, maxiter=40, is_feasible=True), solver.reason
+    problem.calc(solver.xs, solver.us)
+    assert constraint_ise(problem, 0.05) < 1e-12
+    assert solver.cost < problem.calc(xs0, us0)
