@@ -14,6 +14,8 @@ Typical use, headless (no browser is opened; the local meshcat server is ended a
 from __future__ import annotations
 
 import base64
+import contextlib
+import io
 import os
 import re
 from collections.abc import Sequence
@@ -127,6 +129,13 @@ def export_animation(
     return path
 
 
+def _quiet_display(robot: Any, display_kwargs: dict) -> MeshcatDisplay:
+    """A display without browser whose short-lived server's URL is not printed."""
+    display_kwargs.setdefault("openDisplay", False)
+    with contextlib.redirect_stdout(io.StringIO()):
+        return MeshcatDisplay(robot, **display_kwargs)
+
+
 def export_html(
     robot: Any,
     xs: Sequence[np.ndarray],
@@ -143,8 +152,7 @@ def export_html(
     A temporary local meshcat server is started and always ended. ``display_kwargs`` go to
     :class:`MeshcatDisplay` (``floor``, ``cameraTF``, ``visibility``, ``timeout``, ...).
     """
-    display_kwargs.setdefault("openDisplay", False)
-    with MeshcatDisplay(robot, **display_kwargs) as display:
+    with _quiet_display(robot, display_kwargs) as display:
         return export_animation(display, xs, path, fs=fs, ps=ps, dts=dts, factor=factor, fps=fps)
 
 
@@ -152,8 +160,7 @@ def export_html_from_solver(
     robot: Any, solver: Any, path: str | os.PathLike, factor: float = 1.0, fps: int = 30, **display_kwargs: Any
 ) -> str:
     """Export a solver's trajectory (with contact forces, cones and frame trajectories) to HTML."""
-    display_kwargs.setdefault("openDisplay", False)
-    with MeshcatDisplay(robot, **display_kwargs) as display:
+    with _quiet_display(robot, display_kwargs) as display:
         return display.exportHTMLFromSolver(solver, os.fspath(path), factor=factor, fps=fps)
 
 

@@ -141,10 +141,11 @@ def test_anymal_export_animation_and_plain_trunk(anymal, tmp_path):
     np.testing.assert_allclose(np.linalg.norm(quats, axis=1), 1.0, atol=1e-12)
 
 
-def test_iris_export(tmp_path):
+def test_iris_export(tmp_path, capsys):
     iris = erd.load("iris")
     xs = _bobbing(iris, n=6, height=0.5)
     path = export_html(iris, xs, tmp_path / "iris.html", dts=[0.1] * 5)
+    assert "127.0.0.1" not in capsys.readouterr().out  # the temporary server's URL is not advertised
     _self_contained(path)
     tracks = _animation(static_html_commands(path))
     assert len(tracks) == len(iris.visual_model.geometryObjects)
