@@ -94,72 +94,83 @@ class ContactModel3D(ContactModelAbstract):
 
     def calc(self, data: "ContactData3D", x: np.ndarray) -> None:
         model, pd, fid = self.state.pinocchio, data.pinocchio, self.id
-        data.fJf[:] = pin.getFrameJacobian(model, pd, fid, _LOCAL)
+        J = data.fJf = pin.getFrameJacobian(model, pd, fid, _LOCAL)
         v = data.v = pin.getFrameVelocity(model, pd, fid, _LOCAL)
-        a0l = data.a0_local
-        a0l[:] = pin.getFrameClassicalAcceleration(model, pd, fid, _LOCAL).linear
-        data.drift_local[:] = a0l
+        data.vl, data.w = v.linear, v.angular
+        a0l = pin.getFrameClassicalAcceleration(model, pd, fid, _LOCAL).linear
         kp, kd = self._gains
         oMf = pd.oMf[fid]
-        R = oMf.rotation
-        if kp != 0.0:
-            np.subtract(oMf.translation, self._xref, out=data.dp)
-            np.dot(R.T, data.dp, out=data.dp_local)
-            a0l += kp * data.dp_local
-        if kd != 0.0:
-            a0l += kd * v.linear
+        R = data.R = oMf.rotation
+        if kp != 0.0 or kd != 0.0:
+            baum = data.baumgarte
+            if kp != 0.0:
+                np.subtract(oMf.translation, self._xref, out=data.dp)
+                np.dot(data.dp, R, out=data.dp_local)
+                np.multiply(data.dp_local, kp, out=baum)
+                if kd != 0.0:
+                    baum += kd * data.vl
+            else:
+                np.multiply(data.vl, kd, out=baum)
+            a0l += baum
+        data.a0_local = a0l
         if self.type == _LOCAL:
-            data.Jc[:] = data.fJf[:3]
+            data.Jc[:] = J[:3]
             data.a0[:] = a0l
         else:
-            np.dot(R, data.fJf[:3], out=data.Jc)
+            np.dot(R, J[:3], out=data.Jc)
             np.dot(R, a0l, out=data.a0)
 
     def calcDiff(self, data: "ContactData3D", x: np.ndarray) -> None:
         model, pd, fid, nv = self.state.pinocchio, data.pinocchio, self.id, self.state.nv
         vdq, adq, adv, ada = pin.getFrameAccelerationDerivatives(model, pd, fid, _LOCAL)
-        data.v_partial_dq[:], data.a_partial_dq[:], data.a_partial_dv[:], data.a_partial_da[:] = vdq, adq, adv, ada
-        v = data.v
-        Jl, Ja = data.fJf[:3], data.fJf[3:]
-        vw, vl = _skew(v.angular), _skew(v.linear)
-        dq, dv = data.da0_local_dx[:, :nv], data.da0_local_dx[:, nv:]
-        np.matmul(vw, vdq[:3], out=dq)
-        dq -= vl @ vdq[3:]
-        dq += adq[:3]
-        np.matmul(vw, Jl, out=dv)
-        dv -= vl @ Ja
-        dv += adv[:3]
+        data.v_partial_dq, data.a_partial_dq, data.a_partial_dv, data.a_partial_da = vdq, adq, adv, ada
+        J = data.fJf
         kp, kd = self._gains
-        if kp != 0.0:
-            dq += kp * (_skew(data.dp_local) @ Ja + Jl)
+        # d(a + w × vl)/dx = a_partial + [[w]×, -[vl]×] dv/dx (+ kd dvl/dx)
+        S = data.S
+        S[:, :3] = _skew(data.w)
+        S[:, 3:] = _skew(-data.vl)
         if kd != 0.0:
-            dq += kd * vdq[:3]
-            dv += kd * Jl
-        if self.type == _LOCAL:
-            data.da0_dx[:] = data.da0_local_dx
-        else:
-            R = pd.oMf[fid].rotation
-            acc = pin.getFrameClassicalAcceleration(model, pd, fid, _LOCAL).linear
-            acc += data.a0_local - data.drift_local
-            np.dot(R, data.da0_local_dx, out=data.da0_dx)
-            data.da0_dx[:, :nv] -= (R @ _skew(acc)) @ Ja
+            S[data.d3, data.d3] += kd
+        dq, dv = data.da0_local_dx[:, :nv], data.da0_local_dx[:, nv:]
+        np.matmul(S, vdq, out=dq)
+        dq += adq[:3]
+        np.matmul(S, J, out=dv)
+        dv += adv[:3]
+        lwa = self.type != _LOCAL
+        if kp != 0.0 or lwa:
+            # kp d(Rᵀ(p - xref))/dq = kp [I, [dp_local]×] J;  LWA: -[acc]× Ja from the rotation R(q)
+            K = data.K
+            if kp != 0.0:
+                K[data.d3, data.d3] = kp
+                K[:, 3:] = _skew(kp * data.dp_local)
+            else:
+                K[:] = 0.0
+            if lwa:
+                acc = pin.getFrameClassicalAcceleration(model, pd, fid, _LOCAL).linear
+                if kp != 0.0 or kd != 0.0:
+                    acc += data.baumgarte
+                K[:, 3:] -= _skew(acc)
+                np.matmul(K, J, out=data.tmp)
+                data.tmp += dq
+                np.matmul(data.R, data.tmp, out=data.da0_dx[:, :nv])
+                np.matmul(data.R, dv, out=data.da0_dx[:, nv:])
+                return
+            dq += K @ J
+        data.da0_dx[:] = data.da0_local_dx
 
     def updateForce(self, data: "ContactData3D", force: np.ndarray) -> None:
-        if np.shape(force) != (3,):
+        if force.shape != (3,):
             raise ValueError(f"force has shape {np.shape(force)}, expected (3,)")
         data.f.linear = force
-        data.f.angular = np.zeros(3)
-        if self.type == _LOCAL:
-            data.f_local.linear = force
-        else:
-            data.f_local.linear = data.pinocchio.oMf[self.id].rotation.T @ force
+        data.f_local.linear = force if self.type == _LOCAL else force @ data.R
         data.fext = data.jMf.act(data.f_local)
 
     def addRneaDiff(self, data: "ContactData3D", dtau_dq: np.ndarray) -> None:
         if self.type == _LOCAL:
             return
-        Jl, Ja = data.fJf[:3], data.fJf[3:]
-        np.dot(Jl.T, _skew(data.f_local.linear) @ Ja, out=data.dtau_dq)
+        J = data.fJf
+        np.dot(J[:3].T, _skew(data.f_local.linear) @ J[3:], out=data.dtau_dq)
         dtau_dq -= data.dtau_dq
 
     def __repr__(self) -> str:
@@ -172,7 +183,14 @@ class ContactData3D(ContactDataAbstract):
     def __init__(self, model: ContactModel3D, data: pin.Data) -> None:
         super().__init__(model, data)
         self.a0_local = np.zeros(3)
-        self.drift_local = np.zeros(3)
+        self.baumgarte = np.zeros(3)
+        self.R = np.eye(3)
+        self.vl = np.zeros(3)
+        self.w = np.zeros(3)
+        self.S = np.zeros((3, 6))
+        self.K = np.zeros((3, 6))
+        self.tmp = np.zeros((3, model.state.nv))
+        self.d3 = np.arange(3)
         self.da0_local_dx = np.zeros((3, model.state.ndx))
         self.dp = np.zeros(3)
         self.dp_local = np.zeros(3)
