@@ -52,9 +52,9 @@ def _png_ok(path) -> np.ndarray:
     return img
 
 
-def test_plotting_does_not_load_matplotlib_with_crocopy():
+def test_plotting_does_not_load_matplotlib_with_crocopy(tmp_path):
     code = "import sys, crocopy, crocopy.plotting; print('matplotlib' in sys.modules)"
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=tmp_path)
     assert out.stdout.strip() == "False"
     assert crocopy.plotOCSolution is plotOCSolution and crocopy.plotConvergence is plotConvergence
 
