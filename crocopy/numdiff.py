@@ -63,7 +63,7 @@ class _NumDiffMixin:
         h = self.disturbance
         inner = data.data_0
         n = ndx + nu
-        nout = self._dynamics_output(inner).size
+        nout = data.Fx.shape[0]
         J_dyn = np.zeros((nout, n))
         grad = np.zeros(n)
         Jr = np.zeros((model.nr, n))

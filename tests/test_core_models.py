@@ -115,3 +115,29 @@ def test_integrators_reduce_to_exact_flow_for_small_steps():
         errors[name] = np.linalg.norm(d.xnext - exact)
     assert errors["rk4"] < errors["rk3"] < errors["rk2"] < errors["euler"]
     assert errors["rk4"] < 1e-7
+
+
+def test_numdiff_on_lie_group_state_matches_analytic_free_dynamics():
+    """ActionModelNumDiff differentiates in the tangent space (nx = 37 ≠ ndx = 36 for ANYmal)."""
+    import example_robot_data
+
+    model = example_robot_data.load("anymal").model
+    state = crocopy.StateMultibody(model)
+    actuation = crocopy.ActuationModelFloatingBase(state)
+    costs = crocopy.CostModelSum(state, actuation.nu)
+    costs.addCost("x", crocopy.CostModelResidual(state, crocopy.ResidualModelState(state, actuation.nu)), 1.0)
+    dam = crocopy.DifferentialActionModelFreeFwdDynamics(state, actuation, costs)
+    iam = crocopy.IntegratedActionModelEuler(dam, 1e-2)
+    nd = crocopy.ActionModelNumDiff(iam, with_gauss_approx=True)
+    d, dn = iam.createData(), nd.createData()
+    rng = np.random.default_rng(0)
+    x, u = state.rand(), rng.standard_normal(actuation.nu)
+    iam.calc(d, x, u)
+    iam.calcDiff(d, x, u)
+    nd.calc(dn, x, u)
+    nd.calcDiff(dn, x, u)
+    assert dn.Fx.shape == (36, 36)
+    scale = max(1.0, np.abs(d.Fx).max())
+    np.testing.assert_allclose(d.Fx, dn.Fx, atol=1e-5 * scale)
+    np.testing.assert_allclose(d.Fu, dn.Fu, atol=1e-5 * max(1.0, np.abs(d.Fu).max()))
+    np.testing.assert_allclose(d.Lx, dn.Lx, atol=1e-5 * max(1.0, np.abs(d.Lx).max()))
