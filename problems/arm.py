@@ -20,8 +20,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from types import ModuleType
 
-import example_robot_data
 import numpy as np
+
+from .common import load_model
 
 ARMS: dict[str, tuple[str, str | None]] = {
     "kinova": ("j2s6s200_end_effector", "arm_up"),
@@ -52,7 +53,7 @@ def build_arm_reaching(
     if nodes < 1 or horizon <= 0:
         raise ValueError(f"need nodes >= 1 and horizon > 0, got nodes={nodes}, horizon={horizon}")
     frame, ref = ARMS[robot]
-    model = example_robot_data.load(robot).model
+    model = load_model(robot)
     q0 = np.array(model.referenceConfigurations[ref]) if ref else np.array([0.0, -1.0, 1.5, -0.5, 1.0, 0.0])
     x0 = np.concatenate([q0, np.zeros(model.nv)])
     state = lib.StateMultibody(model)

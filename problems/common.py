@@ -28,8 +28,10 @@ squared-residual activation ``0.5 * ||r||^2_W``):
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from functools import cache
 from types import ModuleType
 
+import example_robot_data
 import numpy as np
 import pinocchio as pin
 
@@ -44,6 +46,16 @@ DEFAULT_WEIGHTS: dict[str, float] = {
     "impulse_foot": 1e7,
     "terminal_state": 1e3,
 }
+
+
+@cache
+def _load(name: str) -> pin.Model:
+    return example_robot_data.load(name).model
+
+
+def load_model(name: str) -> pin.Model:
+    """A fresh copy of example-robot-data's model ``name`` (the URDF is parsed once per process)."""
+    return pin.Model(_load(name))
 
 
 def set_control_bounds(model: object, lb: np.ndarray, ub: np.ndarray) -> None:
@@ -64,7 +76,8 @@ class LeggedSetup:
     x0 : numpy.ndarray
         Reference state ``(nq + nv,)``: posture used for regularisation and quasi-static torques.
     contact_frames : sequence of str
-        Names of the frames that can make contact (feet, soles, hands).
+        Names of the frames that can make contact (feet, soles, hands).  The floating base's
+        ``root_joint`` frame is registered too (for base tasks).
     contact_dim : int
         3 for point contacts, 6 for surface (sole/hand) contacts.
     torque_limit, velocity_limit : numpy.ndarray, optional
@@ -132,6 +145,8 @@ class LeggedSetup:
         for arg, val in (("torque_limit", self.torque_limit), ("velocity_limit", self.velocity_limit)):
             if val.shape != (nv - 6,):
                 raise ValueError(f"{arg} must have shape ({nv - 6},), got {val.shape}")
+        if model.existFrame("root_joint"):
+            self.ids.setdefault("root_joint", model.getFrameId("root_joint"))
         q0 = self.x0[: model.nq]
         pin.forwardKinematics(model, self.data, q0)
         pin.updateFramePlacements(model, self.data)

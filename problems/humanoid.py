@@ -17,11 +17,10 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from types import ModuleType
 
-import example_robot_data
 import numpy as np
 import pinocchio as pin
 
-from .common import LeggedSetup
+from .common import LeggedSetup, load_model
 
 FEET = ("left_sole_link", "right_sole_link")
 HANDS = ("gripper_left_joint", "gripper_right_joint")
@@ -39,7 +38,7 @@ def _setup(
     weights: Mapping[str, float] | None = None,
     with_hands: bool = True,
 ) -> LeggedSetup:
-    model = example_robot_data.load(robot).model
+    model = load_model(robot)
     if arm_torque_scale != 1.0:
         scale = np.ones(model.nv)
         for j in range(1, model.njoints):

@@ -17,8 +17,9 @@ from __future__ import annotations
 
 from types import ModuleType
 
-import example_robot_data
 import numpy as np
+
+from .common import load_model
 
 
 def _actuation_class(lib: ModuleType) -> type:
@@ -84,7 +85,7 @@ def build_pendulum(
         raise ValueError(f"actuated_joint must be 0 or 1, got {actuated_joint}")
     if nodes < 1 or horizon <= 0:
         raise ValueError(f"need nodes >= 1 and horizon > 0, got nodes={nodes}, horizon={horizon}")
-    model = example_robot_data.load("double_pendulum").model
+    model = load_model("double_pendulum")
     state = lib.StateMultibody(model)
     actuation = _actuation_class(lib)(state, actuated_joint)
     x0 = np.array([np.pi, 0.0, 0.0, 0.0])

@@ -15,10 +15,9 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from types import ModuleType
 
-import example_robot_data
 import numpy as np
 
-from .common import LeggedSetup, swing_point
+from .common import LeggedSetup, load_model, swing_point
 
 FEET: dict[str, tuple[str, str, str, str]] = {
     "anymal": ("LF_FOOT", "RF_FOOT", "LH_FOOT", "RH_FOOT"),
@@ -49,7 +48,7 @@ def load_quadruped(robot: str = "anymal", limited: bool = True) -> tuple[object,
     """
     if robot not in FEET:
         raise KeyError(f"robot must be one of {sorted(FEET)}, got {robot!r}")
-    model = example_robot_data.load(robot).model
+    model = load_model(robot)
     if limited:
         model.effortLimit = model.effortLimit * np.r_[np.ones(6), np.full(model.nv - 6, TORQUE_SCALE)]
         model.velocityLimit = model.velocityLimit * np.r_[np.ones(6), np.full(model.nv - 6, VELOCITY_SCALE)]
@@ -144,8 +143,10 @@ def build_jump(
     """The Box-FDDP paper's aggressive jump: 30 cm, jumping / flying / landing.
 
     Phases (default ``dt`` 10 ms): jumping 0–300 ms (30 nodes, four-foot support with friction
-    cones), flying 300–700 ms (40 free-dynamics nodes; the CoM must be ``jump_height`` above its
-    standing height at the middle of the flight, weight ``com`` 1e5), an impulse node at 700 ms
+    cones), flying 300–700 ms (40 free-dynamics nodes; the base must be ``jump_height`` above its
+    standing height at the middle of the flight, weight ``com`` 1e5; a base-frame task rather
+    than a CoM task because Crocoddyl 3.2.1's free dynamics leave the CoM uncomputed in ``calc``),
+    an impulse node at 700 ms
     where the four feet land on their initial positions moved by ``jump_length`` (weight 1e7),
     then landing 700–1000 ms (30 support nodes) and a terminal node regularised towards the
     standing posture at the landing spot (weight 1e3).  With ``limited`` (default) torques are
@@ -168,9 +169,10 @@ def build_jump(
     start = {f: setup.placements0[f].translation.copy() for f in feet}
     land = {f: start[f] + shift for f in feet}
     running = [setup.contact_node(dt, dict(start)) for _ in range(n_jump)]
-    apex = setup.com0 + 0.5 * shift + np.array([0.0, 0.0, jump_height])
+    apex = setup.placements0["root_joint"].translation + 0.5 * shift + np.array([0.0, 0.0, jump_height])
     for k in range(n_fly):
-        running.append(setup.contact_node(dt, {}, com_ref=apex if k == n_fly // 2 else None))
+        task = {"apex": (setup._frame_cost("root_joint", apex, setup.nu), setup.weights["com"])}
+        running.append(setup.contact_node(dt, {}, extra=task if k == n_fly // 2 else None))
     running.append(setup.impulse_node(land))
     running += [setup.contact_node(dt, dict(land)) for _ in range(n_land)]
     terminal = setup.contact_node(0.0, dict(land), terminal=True, xref=_shifted_state(setup, shift))
@@ -181,11 +183,11 @@ def build_hop(
     lib: ModuleType,
     robot: str = "anymal",
     hops: int = 10,
-    hop_height: float = 0.05,
+    hop_height: float = 0.03,
     lift_height: float = 0.1,
     dt: float = 1e-2,
-    stance_knots: int = 20,
-    flight_knots: int = 20,
+    stance_knots: int = 30,
+    flight_knots: int = 10,
     limited: bool = True,
     weights: Mapping[str, float] | None = None,
 ) -> tuple[object, list, list]:
@@ -194,10 +196,12 @@ def build_hop(
     Hops alternate stance (``stance_knots``) on a diagonal pair with flight (``flight_knots``,
     hopping feet track a parabola of apex ``hop_height``, then an impulse where they land back).
     The other pair is held ``lift_height`` above the ground.  Timeline with the defaults
-    (10 ms nodes): 30 support nodes; ``hops/2`` hops on LF+RH (RF+LH lift during the first stance);
-    leg switch: 20 nodes where RF+LH come down, their impulse, 40 support nodes; ``hops/2`` hops on
-    RF+LH; 20 nodes where LF+RH come down, their impulse; support nodes up to 580 nodes with
-    dt > 0 (5.8 s).  Swing/landing weights as in :mod:`crocopy.problems.common`.
+    (10 ms nodes): 30 support nodes; 5 hops of 300 ms stance + 100 ms flight on LF+RH (RF+LH lift
+    during the first stance); leg switch: 30 nodes where RF+LH come down, their impulse, 40
+    support nodes; 5 hops on RF+LH; 30 nodes where LF+RH come down, their impulse; 50 support
+    nodes: 580 nodes with dt > 0 (5.8 s) plus 12 impulse nodes (T = 592).  With ``hops`` other
+    than 10 the horizon ends with 30 support nodes.  Swing/landing weights as in
+    :mod:`crocopy.problems.common`; ANYmal limits 32 N m and 7.5 rad/s by default.
 
     Returns
     -------

@@ -1,0 +1,177 @@
+"""Table of the bundled problems: name → builder, description and documented reference results.
+
+Used by the ``crocopy list / solve / table1`` commands and by the tests.  Every builder takes the
+library module first (``crocopy`` by default, ``crocoddyl`` for side-by-side runs) and returns
+``(problem, xs, us)``.
+
+The reference figures were measured with **Crocoddyl 3.2.1** run as a black box on the very same
+problems (same builder, ``lib=crocoddyl``), warm-started with the builder's guess, ``maxiter``
+as in :attr:`ProblemSpec.maxiter`, ``isFeasible=False``, default solver settings, one thread.
+``iters`` is ``solver.iter`` and ``cost`` is ``solver.cost`` at return; ``converged`` is the
+return value of ``solve``.  crocopy reproduces Crocoddyl's iterates, so its costs must match
+within :attr:`ProblemSpec.rtol`.
+
+``TABLE1`` lists the rows of the Box-FDDP paper's Table I (its own figures are in
+:data:`PAPER_TABLE1`); the paper used different robots' tunings, weights and horizons, so only
+the trend compares: Box-FDDP solves every row, Box-DDP fails on pend, jump, hop and bar.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from types import ModuleType
+
+from . import arm, humanoid, pendulum, quadruped
+
+
+@dataclass(frozen=True)
+class Reference:
+    """Result of one solver on one problem (Crocoddyl 3.2.1, black box)."""
+
+    iters: int
+    cost: float
+    converged: bool = True
+
+
+@dataclass(frozen=True)
+class ProblemSpec:
+    """A bundled problem.
+
+    Attributes
+    ----------
+    name : str
+        Registry key (Table I names where the paper has the problem).
+    builder : callable
+        ``builder(lib, **kwargs) -> (problem, xs, us)``.
+    kwargs : dict
+        Arguments passed to the builder by :meth:`build`.
+    description : str
+        One line for ``crocopy list``.
+    dims : tuple of int
+        ``(T, nx, nu)`` of the built problem (nu of the first running node).
+    reference : dict
+        Solver name (``"fddp"``, ``"boxfddp"``, ``"boxddp"``) → :class:`Reference`.
+    maxiter : int
+        Iteration budget used for the references.
+    rtol : float
+        Relative tolerance on the final cost when comparing with the reference.
+    slow : bool
+        Solving takes more than a few seconds with crocopy.
+    """
+
+    name: str
+    builder: Callable[..., tuple]
+    kwargs: dict = field(default_factory=dict)
+    description: str = ""
+    dims: tuple[int, int, int] = (0, 0, 0)
+    reference: dict[str, Reference] = field(default_factory=dict)
+    maxiter: int = 500
+    rtol: float = 1e-3
+    slow: bool = True
+
+    def build(self, lib: ModuleType | None = None, **overrides: object) -> tuple:
+        """Build the problem with ``lib`` (default ``crocopy``); ``overrides`` update ``kwargs``."""
+        if lib is None:
+            lib = importlib.import_module("crocopy")
+        return self.builder(lib, **{**self.kwargs, **overrides})
+
+
+def _spec(name: str, builder: Callable[..., tuple], description: str, dims: tuple[int, int, int],
+          reference: dict[str, Reference], slow: bool = True, maxiter: int = 500, **kwargs: object) -> ProblemSpec:
+    return ProblemSpec(name, builder, dict(kwargs), description, dims, reference, maxiter, 1e-3, slow)
+
+
+R = Reference
+_SPECS = [
+    _spec("pend", pendulum.build_pendulum, "double pendulum swing-up, elbow actuated, ±5 N m, 1 s / 100 nodes",
+          (100, 4, 1), {"fddp": R(110, 0.111367), "boxfddp": R(92, 0.111455), "boxddp": R(500, 3.5608, False)},
+          slow=False),
+    _spec("arm", arm.build_arm_reaching, "Kinova arm reaching a point in 1 s (100 nodes)",
+          (100, 15, 6), {"fddp": R(13, 5.74301), "boxfddp": R(14, 5.74302), "boxddp": R(46, 7.87886)}, slow=False),
+    _spec("man", humanoid.build_manipulation, "Talos whole-body manipulation, right hand to a target",
+          (60, 77, 32), {"fddp": R(11, 1319.3416), "boxfddp": R(9, 1319.3416), "boxddp": R(7, 1319.3416)}),
+    _spec("taichi", humanoid.build_taichi, "Talos taichi: manipulation, one foot, balance (3 phases)",
+          (120, 77, 32), {"fddp": R(9, 1912.0193), "boxfddp": R(6, 1912.0193), "boxddp": R(7, 1912.0193)}),
+    _spec("jump", quadruped.build_jump, "ANYmal 30 cm jump, 32 N m / 7.5 rad/s, 0-300/300-700/700-1000 ms",
+          (101, 37, 12),
+          {"fddp": R(77, 7655.03), "boxfddp": R(242, 11150.7), "boxddp": R(800, 2.97471e6, False)}, maxiter=800),
+    _spec("hop", quadruped.build_hop, "ANYmal two-leg hopping, 10 hops with a leg switch, 5.8 s / 580 nodes",
+          (592, 37, 12), {}, maxiter=1000),
+    _spec("bar", humanoid.build_monkey_bar, "Talos monkey bar: grasp, climb, land (arm torques x10)",
+          (112, 77, 32),
+          {"fddp": R(69, 31556.814), "boxfddp": R(123, 25977.513), "boxddp": R(17, 9.63142e6, False)}),
+    _spec("walk", quadruped.build_gait, "ANYmal walking, 2 cycles", (226, 37, 12),
+          {"fddp": R(18, 1213.4269), "boxfddp": R(12, 1215.3013), "boxddp": R(12, 1215.3013)}, gait="walk"),
+    _spec("trot", quadruped.build_gait, "ANYmal trotting, 2 cycles", (114, 37, 12),
+          {"fddp": R(11, 1232.2010), "boxfddp": R(15, 1234.2793), "boxddp": R(15, 1234.2793)}, gait="trot"),
+    _spec("pace", quadruped.build_gait, "ANYmal pacing, 2 cycles", (114, 37, 12),
+          {"fddp": R(13, 1581.5243), "boxfddp": R(14, 1599.9556), "boxddp": R(14, 1599.9556)}, gait="pace"),
+    _spec("bound", quadruped.build_gait, "ANYmal bounding, 2 cycles", (114, 37, 12),
+          {"fddp": R(25, 2844.8753), "boxfddp": R(64, 2912.0540), "boxddp": R(64, 2912.0540)}, gait="bound"),
+    _spec("biped-walk", humanoid.build_biped_walk, "Talos legs walking, 4 steps", (129, 37, 12),
+          {"fddp": R(17, 3316.3936), "boxfddp": R(11, 3316.3936), "boxddp": R(11, 3316.3936)}),
+    _spec("trot-short", quadruped.build_gait, "ANYmal trotting, 1 short cycle (quick test problem)", (28, 37, 12),
+          {"fddp": R(16, 1385.7154), "boxfddp": R(22, 1437.6938), "boxddp": R(22, 1437.6938)},
+          slow=False, gait="trot", cycles=1, step_knots=10, support_knots=2),
+]
+
+PROBLEMS: dict[str, ProblemSpec] = {s.name: s for s in _SPECS}
+"""Every bundled problem by name (quadrotor problems are added when :mod:`.quadrotor` exists)."""
+
+_QUADROTOR = {
+    "quad-goal": ("goal", 50, "iris quadrotor to the goal (3, 0, 1), thrusts 0.1-10.3 N, cold start"),
+    "quad-loop": ("loop", 100, "iris quadrotor vertical loop, thrusts 0.1-10.3 N, cold start"),
+    "quad-narrow": ("narrow", 60, "iris quadrotor through a narrow passage, thrusts 0.1-10.3 N, cold start"),
+}
+
+
+def _register_quadrotor() -> None:
+    """Add the quadrotor problems of :mod:`.quadrotor` (``build_quadrotor(lib, task=...)``)."""
+    try:
+        module = importlib.import_module(".quadrotor", __package__)
+    except ImportError:
+        return
+    builder = getattr(module, "build_quadrotor", None)
+    if builder is None:
+        return
+    for name, (task, T, description) in _QUADROTOR.items():
+        PROBLEMS[name] = ProblemSpec(name, builder, {"task": task}, description, (T, 13, 4), {}, 500, 1e-3, False)
+
+
+_register_quadrotor()
+
+TABLE1 = ("pend", "quad-goal", "quad-loop", "quad-narrow", "man", "taichi", "jump", "hop", "bar")
+"""Rows of the Box-FDDP paper's Table I, in its order."""
+
+PAPER_TABLE1: dict[str, dict[str, tuple[int, float, bool]]] = {
+    "pend": {"boxddp": (424, 0.223, False), "boxfddp": (31, 0.0273, True)},
+    "quad-goal": {"boxddp": (23, 0.0764, True), "boxfddp": (18, 0.0072, True)},
+    "quad-loop": {"boxddp": (133, 6.7211, True), "boxfddp": (56, 0.6444, True)},
+    "quad-narrow": {"boxddp": (70, 1.9492, True), "boxfddp": (35, 0.4577, True)},
+    "man": {"boxddp": (88, 4.6193, True), "boxfddp": (80, 4.6193, True)},
+    "taichi": {"boxddp": (148, 6.8184, True), "boxfddp": (141, 6.8184, True)},
+    "jump": {"boxddp": (646, 7.21e4, False), "boxfddp": (454, 1.81e4, True)},
+    "hop": {"boxddp": (18, 1.13e6, False), "boxfddp": (205, 2.23e4, True)},
+    "bar": {"boxddp": (27, 927.7, False), "boxfddp": (358, 23.316, True)},
+}
+"""Box-FDDP paper, Table I: ``(iterations, cost, solved)`` per solver."""
+
+
+def names() -> list[str]:
+    """Registered problem names."""
+    return list(PROBLEMS)
+
+
+def get(name: str) -> ProblemSpec:
+    """The :class:`ProblemSpec` called ``name`` (``KeyError`` lists the known names)."""
+    try:
+        return PROBLEMS[name]
+    except KeyError:
+        raise KeyError(f"unknown problem {name!r}; known problems: {', '.join(PROBLEMS)}") from None
+
+
+def build(name: str, lib: ModuleType | None = None, **overrides: object) -> tuple:
+    """Build problem ``name`` with ``lib`` (default ``crocopy``): ``(problem, xs, us)``."""
+    return get(name).build(lib, **overrides)
