@@ -64,6 +64,15 @@ class DifferentialActionModelContactFwdDynamics(DifferentialActionModelAbstract)
         Damping of ``Jc M⁻¹ Jcᵀ`` (needed when ``Jc`` is rank deficient).
     enable_force : bool
         Compute the contact-force Jacobians (needed by force residuals).
+
+    Notes
+    -----
+    When every active contact has an exact Pinocchio counterpart (3D contacts, LOCAL 6D contacts,
+    6D contacts without position gain), ``inv_damping`` is 0 and there is no armature, the
+    dynamics and their derivatives come from ``pinocchio.constraintDynamics`` and
+    ``computeConstraintDynamicsDerivatives`` (same numbers, one C++ call each).  On that path the
+    per-contact ``Jc``, ``a0``, ``da0_dx`` and ``Kinv`` are not refreshed; set the crocopy-specific
+    attribute ``use_pinocchio_constraints = False`` to always use the explicit KKT path.
     """
 
     def __init__(
@@ -107,6 +116,7 @@ class DifferentialActionModelContactFwdDynamics(DifferentialActionModelAbstract)
         self.constraints = constraints
         self.pinocchio = state.pinocchio
         self.enable_force = bool(enable_force)
+        self.use_pinocchio_constraints = True
         self.JMinvJt_damping = inv_damping
         self._armature = np.zeros(state.nv)
         self._with_armature = False
@@ -168,16 +178,26 @@ class DifferentialActionModelContactFwdDynamics(DifferentialActionModelAbstract)
             return
         check_vector_shape(u, self.nu, "u")
         nc = self.contacts.nc
-        self._kinematics(data, q, v)
-        self.actuation.calc(mb.actuation, x, u)
-        self.contacts.calc(mb.contacts, x)
         pd = data.pinocchio
-        if nc:
+        self.actuation.calc(mb.actuation, x, u)
+        data.rigid = None
+        if nc and self.use_pinocchio_constraints and not self._with_armature and self._damping == 0.0:
+            data.rigid = self.contacts.rigidConstraints(mb.contacts, pd)
+        if data.rigid is not None:
+            cms, cds = data.rigid
+            data.xout[:] = pin.constraintDynamics(self.pinocchio, pd, q, v, mb.actuation.tau, cms, cds, data.prox)
+            pin.forwardKinematics(self.pinocchio, pd, q, v, data.zero_a)
+            pin.updateFramePlacements(self.pinocchio, pd)
+            lam = pd.lambda_c
+        elif nc:
+            self._kinematics(data, q, v)
+            self.contacts.calc(mb.contacts, x)
             data.xout[:] = pin.forwardDynamics(
                 self.pinocchio, pd, mb.actuation.tau, mb.contacts.Jc[:nc], mb.contacts.a0[:nc], self._damping
             )
             lam = pd.lambda_c
         else:
+            self._kinematics(data, q, v)
             data.xout[:] = np.linalg.solve(np.triu(pd.M) + np.triu(pd.M, 1).T, mb.actuation.tau - pd.nle)
             lam = data.no_force
         self.contacts.updateAcceleration(mb.contacts, data.xout)
@@ -206,6 +226,9 @@ class DifferentialActionModelContactFwdDynamics(DifferentialActionModelAbstract)
         q, v = x[: state.nq], x[state.nq :]
         model, pd, mb = self.pinocchio, data.pinocchio, data.multibody
         cdata, adata = mb.contacts, mb.actuation
+        if data.rigid is not None:
+            self._calcDiff_rigid(data, x, u)
+            return
         pin.computeRNEADerivatives(model, pd, q, v, data.xout, cdata.fext)
         self.contacts.updateRneaDiff(cdata, pd)
         self.actuation.calcDiff(adata, x, u)
@@ -229,6 +252,32 @@ class DifferentialActionModelContactFwdDynamics(DifferentialActionModelAbstract)
             np.dot(Minv, rhs, out=data.Fx)
             np.dot(Minv, adata.dtau_du, out=data.Fu)
         if self.enable_force:
+            self.contacts.updateAccelerationDiff(cdata, data.Fx)
+            self.contacts.updateForceDiff(cdata, data.df_dx, data.df_du)
+        self.costs.calcDiff(data.costs, x, u)
+        if self.constraints is not None:
+            self.constraints.calcDiff(data.constraints, x, u)
+
+    def _calcDiff_rigid(self, data: "DifferentialActionDataContactFwdDynamics", x: np.ndarray, u: np.ndarray) -> None:
+        """Derivatives from Pinocchio's constraint-dynamics derivatives (same maths as the KKT path)."""
+        nv, pd, mb = self.state.nv, data.pinocchio, data.multibody
+        adata, cdata = mb.actuation, mb.contacts
+        cms, cds = data.rigid
+        pin.computeConstraintDynamicsDerivatives(self.pinocchio, pd, cms, cds, data.prox)
+        nq = self.state.nq
+        pin.computeForwardKinematicsDerivatives(self.pinocchio, pd, x[:nq], x[nq:], data.xout)
+        self.actuation.calcDiff(adata, x, u)
+        ddq_dtau = pd.ddq_dtau
+        np.dot(ddq_dtau, adata.dtau_dx, out=data.Fx)
+        data.Fx[:, :nv] += pd.ddq_dq
+        data.Fx[:, nv:] += pd.ddq_dv
+        np.dot(ddq_dtau, adata.dtau_du, out=data.Fu)
+        if self.enable_force:
+            dl_dtau = pd.dlambda_dtau
+            np.dot(dl_dtau, adata.dtau_dx, out=data.df_dx)
+            data.df_dx[:, :nv] += pd.dlambda_dq
+            data.df_dx[:, nv:] += pd.dlambda_dv
+            np.dot(dl_dtau, adata.dtau_du, out=data.df_du)
             self.contacts.updateAccelerationDiff(cdata, data.Fx)
             self.contacts.updateForceDiff(cdata, data.df_dx, data.df_du)
         self.costs.calcDiff(data.costs, x, u)
@@ -298,3 +347,5 @@ class DifferentialActionDataContactFwdDynamics(DifferentialActionDataAbstract):
         self.no_force = np.zeros(0)
         self.diag = np.arange(nv)
         self.zero_a = np.zeros(nv)
+        self.rigid = None
+        self.prox = pin.ProximalSettings(1e-12, 0.0, 1)

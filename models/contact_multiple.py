@@ -153,6 +153,31 @@ class ContactModelMultiple:
             for name, c in self._inactive:
                 c.calcDiff(data.contacts[name], x)
 
+    def rigidConstraints(self, data: "ContactDataMultiple", pinocchio: pin.Data):
+        """Pinocchio ``RigidConstraintModel``/``Data`` vectors of the active contacts, or ``None``.
+
+        They reproduce these contacts exactly (same drift, Baumgarte terms and coordinates) when every
+        active contact is a 3D contact, a LOCAL 6D contact or a 6D contact without position gain;
+        ``None`` otherwise.  They are rebuilt (and ``initConstraintDynamics`` called) only when the
+        active set, a reference or a gain changed.
+        """
+        key = []
+        for name, c in self._active:
+            rigid = getattr(c, "rigidConstraintModel", None)
+            if rigid is None or (c.nc == 6 and c.type != pin.LOCAL and c.gains[0] != 0.0):
+                return None
+            key.append((name, c._version))
+        key = tuple(key)
+        if data.rigid_key != key:
+            cms, cds = pin.StdVec_RigidConstraintModel(), pin.StdVec_RigidConstraintData()
+            for _, c in self._active:
+                rigid = c.rigidConstraintModel()
+                cms.append(rigid)
+                cds.append(rigid.createData())
+            pin.initConstraintDynamics(self.state.pinocchio, pinocchio, cms, cds)
+            data.rigid, data.rigid_key = (cms, cds), key
+        return data.rigid
+
     def updateAcceleration(self, data: "ContactDataMultiple", dv: np.ndarray) -> None:
         """Store the constrained acceleration ``dv (nv,)``."""
         data.dv[:] = dv
@@ -235,3 +260,5 @@ class ContactDataMultiple:
             self.fext.append(pin.Force.Zero())
         self.zero_force = pin.Force.Zero()
         self.touched = sorted({cd.joint for cd in self.contacts.values()})
+        self.rigid = None
+        self.rigid_key = None

@@ -33,6 +33,18 @@ def _split_nu_gains(nu, gains):
     return nu, gains
 
 
+def _rigid(contact: ContactModelAbstract, kind: pin.ContactType, placement: pin.SE3) -> pin.RigidConstraintModel:
+    """Pinocchio constraint of ``contact``: same frame, reference placement, coordinates and Baumgarte gains."""
+    model = contact.state.pinocchio
+    frame = model.frames[contact.id]
+    rigid = pin.RigidConstraintModel(kind, model, frame.parentJoint, frame.placement, 0, placement, contact.type)
+    params = rigid.m_baumgarte_parameters
+    params.Kp = params.Kp * 0.0 + contact.gains[0]
+    params.Kd = params.Kd * 0.0 + contact.gains[1]
+    rigid.m_baumgarte_parameters = params
+    return rigid
+
+
 class ContactModel3D(ContactModelAbstract):
     """Crocoddyl's ``ContactModel3D(state, id, xref, type, nu=state.nv, gains=[0, 0])``.
 
@@ -79,6 +91,7 @@ class ContactModel3D(ContactModelAbstract):
         if ref.shape != (3,) or not np.all(np.isfinite(ref)):
             raise ValueError(f"xref must be a finite vector of shape (3,), got shape {np.shape(value)}")
         self._xref = ref.copy()
+        self._version = getattr(self, "_version", 0) + 1
 
     @property
     def gains(self) -> np.ndarray:
@@ -88,6 +101,11 @@ class ContactModel3D(ContactModelAbstract):
     @gains.setter
     def gains(self, value: np.ndarray | None) -> None:
         self._gains = check_gains(value)
+        self._version = getattr(self, "_version", 0) + 1
+
+    def rigidConstraintModel(self) -> pin.RigidConstraintModel:
+        """The same contact as a Pinocchio ``RigidConstraintModel`` (used by the fast contact dynamics)."""
+        return _rigid(self, pin.ContactType.CONTACT_3D, pin.SE3(np.eye(3), self._xref))
 
     def createData(self, data: pin.Data) -> "ContactData3D":
         return ContactData3D(self, data)
@@ -163,7 +181,7 @@ class ContactModel3D(ContactModelAbstract):
         if force.shape != (3,):
             raise ValueError(f"force has shape {np.shape(force)}, expected (3,)")
         data.f.linear = force
-        data.f_local.linear = force if self.type == _LOCAL else force @ data.R
+        data.f_local.linear = force if self.type == _LOCAL else force @ data.pinocchio.oMf[self.id].rotation
         data.fext = data.jMf.act(data.f_local)
 
     def addRneaDiff(self, data: "ContactData3D", dtau_dq: np.ndarray) -> None:
@@ -242,6 +260,7 @@ class ContactModel6D(ContactModelAbstract):
         if not isinstance(value, pin.SE3):
             raise ValueError(f"pref must be a pinocchio.SE3, got {type(value).__name__}")
         self._pref = value.copy()
+        self._version = getattr(self, "_version", 0) + 1
         self._prefinv = value.inverse()
 
     @property
@@ -252,6 +271,11 @@ class ContactModel6D(ContactModelAbstract):
     @gains.setter
     def gains(self, value: np.ndarray | None) -> None:
         self._gains = check_gains(value)
+        self._version = getattr(self, "_version", 0) + 1
+
+    def rigidConstraintModel(self) -> pin.RigidConstraintModel:
+        """The same contact as a Pinocchio ``RigidConstraintModel`` (used by the fast contact dynamics)."""
+        return _rigid(self, pin.ContactType.CONTACT_6D, self._pref)
 
     def createData(self, data: pin.Data) -> "ContactData6D":
         return ContactData6D(self, data)

@@ -105,8 +105,12 @@ def test_contact_control_grav(case):
     res, rd = dam.costs.costs["grav"].cost.residual, d.costs.costs["grav"].residual
     model, nq = st.pinocchio, st.nq
     cd = d.multibody.contacts.contacts["c"]
-    g = pin.computeGeneralizedGravity(model, model.createData(), x[:nq])
-    expected = d.multibody.actuation.tau - g + cd.Jc.T @ cd.f.vector[: cd.Jc.shape[0]]
+    pdata = model.createData()
+    g = pin.computeGeneralizedGravity(model, pdata, x[:nq])
+    pin.computeJointJacobians(model, pdata, x[:nq])
+    pin.updateFramePlacements(model, pdata)
+    Jc = pin.getFrameJacobian(model, pdata, cd.frame, case[3])[: case[2]]
+    expected = d.multibody.actuation.tau - g + Jc.T @ cd.f.vector[: case[2]]
     np.testing.assert_allclose(rd.r, expected, atol=1e-9 * max(1.0, np.abs(expected).max()))
     frozen = res.createData(d.multibody)
     J = np.zeros((st.nv, st.ndx))

@@ -36,8 +36,11 @@ CASES = [
 IDS = [f"{r}-{k}-{'LWA' if t == LWA else 'LOCAL'}-{'gains' if any(g) else 'nogains'}" for r, k, t, g in CASES]
 
 
-def make_dam(robot, kinds, typ, gains, force_cost=True, seed=0):
-    """A contact DAM with state, control and contact-force costs (forces enter the cost)."""
+def make_dam(robot, kinds, typ, gains, force_cost=True, seed=0, kkt=False):
+    """A contact DAM with state, control, frame and contact-force costs (forces enter the cost).
+
+    ``kkt`` forces the explicit KKT path instead of Pinocchio's constraint dynamics.
+    """
     rng = np.random.default_rng(seed)
     model = load(robot)
     state = crocopy.StateMultibody(model)
@@ -54,12 +57,19 @@ def make_dam(robot, kinds, typ, gains, force_cost=True, seed=0):
     costs = crocopy.CostModelSum(state, nu)
     costs.addCost("x", crocopy.CostModelResidual(state, crocopy.ResidualModelState(state, state.zero(), nu)), 0.1)
     costs.addCost("u", crocopy.CostModelResidual(state, crocopy.ResidualModelControl(state, nu)), 0.01)
+    base = model.getFrameId("root_joint")
+    place = crocopy.ResidualModelFramePlacement(state, base, pin.SE3.Random(), nu)
+    costs.addCost("place", crocopy.CostModelResidual(state, place), 0.1)
+    vel = crocopy.ResidualModelFrameVelocity(state, base, pin.Motion.Random(), LWA, nu)
+    costs.addCost("vel", crocopy.CostModelResidual(state, vel), 0.1)
     if force_cost:
         fid = model.getFrameId(FEET[robot][0])
         nc = 3 if kinds[0] == "3" else 6
         force = crocopy.ResidualModelContactForce(state, fid, pin.Force(np.arange(6.0)), nc, nu)
         costs.addCost("f", crocopy.CostModelResidual(state, force), 1e-3)
-    return crocopy.DifferentialActionModelContactFwdDynamics(state, act, contacts, costs, 0.0, True)
+    dam = crocopy.DifferentialActionModelContactFwdDynamics(state, act, contacts, costs, 0.0, True)
+    dam.use_pinocchio_constraints = not kkt
+    return dam
 
 
 def random_point(model, seed=1):
@@ -91,13 +101,15 @@ def assert_close(A, B, name):
     assert err <= RTOL * scale, f"{name}: max error {err:.3e} (scale {scale:.3e})"
 
 
+@pytest.mark.parametrize("kkt", [False, True], ids=["pinocchio", "kkt"])
 @pytest.mark.parametrize("case", CASES, ids=IDS)
-def test_dam_derivatives(case):
-    dam = make_dam(*case)
+def test_dam_derivatives(case, kkt):
+    dam = make_dam(*case, kkt=kkt)
     x, u = random_point(dam)
     d = dam.createData()
     dam.calc(d, x, u)
     dam.calcDiff(d, x, u)
+    assert (d.rigid is None) == (kkt or (case[2] == LWA and "6" in case[1] and case[3][0] != 0.0))
     J = fd_dam(dam, x, u)
     nv, ndx = dam.state.nv, dam.state.ndx
     assert_close(d.Fx, J[:nv, :ndx], "Fx")
@@ -128,7 +140,7 @@ def integrate(dam, kind):
 
 @pytest.mark.parametrize("case,kind", INTEGRATED, ids=[f"{IDS[CASES.index(c)]}-{k}" for c, k in INTEGRATED])
 def test_integrated_derivatives(case, kind):
-    model = integrate(make_dam(*case), kind)
+    model = integrate(make_dam(*case, kkt=kind == "rk2"), kind)
     x, u = random_point(model, seed=3)
     st, d = model.state, model.createData()
     model.calc(d, x, u)
@@ -151,10 +163,11 @@ def test_integrated_derivatives(case, kind):
     assert_close(d.Lu, J[st.ndx, st.ndx:], "Lu")
 
 
+@pytest.mark.parametrize("kkt", [False, True], ids=["pinocchio", "kkt"])
 @pytest.mark.parametrize("case", CASES, ids=IDS)
-def test_contact_acceleration_is_baumgarte(case):
+def test_contact_acceleration_is_baumgarte(case, kkt):
     """The contact-frame acceleration at the solution equals minus the Baumgarte terms."""
-    dam = make_dam(*case, force_cost=False)
+    dam = make_dam(*case, force_cost=False, kkt=kkt)
     x, u = random_point(dam, seed=5)
     d = dam.createData()
     dam.calc(d, x, u)
