@@ -18,7 +18,7 @@ Bertsekas' projected Newton method with the exact Hessian:
 5. projected backtracking line search over :attr:`BoxQP.alphas` (``1, 1/2, ..., 1/512``): accept the
    first ``x_a = clamp(x + a dx)`` with ``(f(x) - f(x_a)) >= th_acceptStep * g^T (x - x_a)`` (Armijo);
    if no step length is accepted the solver stops;
-6. at the new point, update the sets (step 2-3) and stop when ``||g_f||^2 <= th_grad``, else go to 4.
+6. at the new point, update the sets (step 2-3) and stop when ``||g_f|| <= th_grad`` (2-norm), else go to 4.
 
 At least one Newton step is taken (as Crocoddyl does), so a converged warm start costs one step.
 The returned :class:`BoxQPSolution` holds ``x``, the free/clamped index lists of the final point and
@@ -26,7 +26,7 @@ The returned :class:`BoxQPSolution` holds ``x``, the free/clamped index lists of
 step); the DDP solvers build their feedback gains from it.  If the warm start has the optimal
 clamped set, one Newton step reaches the optimum (the paper's lemma).
 
-Choices the paper leaves open: the step-length list (``2^-n, n = 0..9``), the squared 2-norm in the
+Choices the paper leaves open: the step-length list (``2^-n, n = 0..9``), the 2-norm in the
 gradient test, and the regularization on the free block are Crocoddyl's documented defaults.
 :attr:`BoxQP.nfactorizations` and :attr:`BoxQP.iter` are crocopy extensions used by the
 experiments (the paper reports factorizations per DDP iteration).
@@ -91,7 +91,7 @@ class BoxQP:
     th_acceptStep : float
         Armijo acceptance ratio of the projected line search (default 0.1).
     th_grad : float
-        Tolerance on the squared norm of the free gradient (default 1e-9).
+        Tolerance on the 2-norm of the free gradient (default 1e-9).
     reg : float
         Regularization added to the diagonal of the free Hessian block (default 1e-9).
     """
@@ -219,7 +219,7 @@ class BoxQP:
             self.iter += 1
             free_mask, f_idx, Hinv = self._free_set(H, x, g, lb, ub, free_mask, f_idx, Hinv)
             gf = g if f_idx is None else g[f_idx]
-            if gf @ gf <= self.th_grad:
+            if gf @ gf <= self.th_grad * self.th_grad:
                 break
         sol = self.solution
         sol.x = x

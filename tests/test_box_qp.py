@@ -92,7 +92,7 @@ def test_regularization_enters_the_free_block():
     qp = BoxQP(2, reg=0.5)
     sol = qp.solve(H, np.array([1.0, 1.0]), -np.ones(2) * 10, np.ones(2) * 10, np.zeros(2))
     assert np.allclose(sol.Hff_inv, np.diag([1 / 2.5, 1 / 3.5]))
-    assert np.allclose(sol.x, [-0.5, -1 / 3], atol=1e-4)  # stops at ‖g_f‖² ≤ th_grad
+    assert np.allclose(sol.x, [-0.5, -1 / 3], atol=1e-8)  # stops at ‖g_f‖ ≤ th_grad
 
 
 def test_not_positive_definite_raises():
