@@ -307,3 +307,33 @@ def test_bad_input():
         dam.calc(d, state.zero(), np.zeros(3))
     with pytest.raises(ValueError, match="inv_damping"):
         dam.JMinvJt_damping = -1.0
+
+
+def test_fddp_stance_reaches_com_target():
+    """ANYmal on its four feet shifts its CoM by 4 cm forward with FDDP (contact dynamics, Euler)."""
+    dam0, x0 = anymal_stance()
+    state, act, nu = dam0.state, dam0.actuation, dam0.nu
+    model = state.pinocchio
+    com0 = pin.centerOfMass(model, model.createData(), x0[: state.nq])
+    target = com0 + np.array([0.04, 0.0, 0.0])
+
+    def node(terminal):
+        costs = crocopy.CostModelSum(state, nu)
+        w = np.r_[np.zeros(3), np.full(3, 10.0), np.ones(model.nv - 6), np.ones(model.nv)]
+        xres = crocopy.ResidualModelState(state, x0, nu)
+        costs.addCost("x", crocopy.CostModelResidual(state, crocopy.ActivationModelWeightedQuad(w**2), xres), 1.0)
+        if terminal:
+            costs.addCost("com", crocopy.CostModelResidual(state, crocopy.ResidualModelCoMPosition(state, target, nu)),
+                          1e4)
+        else:
+            costs.addCost("u", crocopy.CostModelResidual(state, crocopy.ResidualModelControl(state, nu)), 1e-3)
+        dam = crocopy.DifferentialActionModelContactFwdDynamics(state, act, dam0.contacts, costs)
+        return crocopy.IntegratedActionModelEuler(dam, 0.0 if terminal else 2e-2)
+
+    problem = crocopy.ShootingProblem(x0, [node(False) for _ in range(25)], node(True))
+    xs = [x0] * 26
+    us = problem.quasiStatic(xs[:-1])
+    solver = crocopy.SolverFDDP(problem)
+    assert solver.solve(xs, us, 50)
+    com = pin.centerOfMass(model, model.createData(), solver.xs[-1][: state.nq])
+    assert np.linalg.norm(com - target) < 5e-3
