@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import crocopy
-from crocopy.residual_base import ResidualDataAbstract, ResidualModelAbstract
 from crocopy import SolverHDDP
+from crocopy.residual_base import ResidualDataAbstract, ResidualModelAbstract
 from crocopy.solvers.hddp_lq import LevelDerivatives, hierarchical_backward_pass
 from crocopy.solvers.projection_lq import projected_backward_pass
 
@@ -230,3 +230,14 @@ def test_bad_levels_are_rejected():
         SolverHDDP(problem, [["t1", "t2"], ["t2", "velocity", "effort"]])
     with pytest.raises(ValueError, match="non-empty"):
         SolverHDDP(problem, [])
+
+
+def test_talos_upper_body_scenario_reaches_compatible_targets():
+    from crocopy.paper_hddp import HDDPScenario, _hddp_solve
+
+    scn = HDDPScenario(T=10)
+    assert (scn.model.nq, scn.model.nv) == (10, 10)
+    solver, errors, iters, _ = _hddp_solve(scn, scn.targets(3), [["left"], ["right"], ["effort"]], 60)
+    assert solver.reason.startswith("converged")
+    assert errors["left"] < 1e-8 and errors["right"] < 1e-8
+    assert np.all(np.isfinite(np.array(solver.us)))

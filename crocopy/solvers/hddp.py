@@ -11,14 +11,13 @@ weights set to zero.
 Iteration (paper D, Alg. 2 and §IV): per-level derivatives; the prioritised backward pass of
 :mod:`crocopy.solvers.hddp_lq` with per-level regularisation ``λ⁽ᵏ⁾`` (on ``Vxx``) and damping
 ``μ⁽ᵏ⁾``; a lexicographic line search with one step ``ν⁽ᵏ⁾ ∈ alphas ∪ {0}`` per level, from the top
-level down, accepting a step for level ``k`` only if level ``k`` improves and no higher level gets
-worse than ``th_worse`` (relative) allows; the iterate is accepted if some level improved, the
-improved levels' ``λ, μ`` decrease, and if none improved all increase and the backward pass is
-redone.  Convergence: in two successive iterations every level has cost below ``th_abs[k]`` or
-relative change below ``th_rel[k]`` (paper: 1e-8 and 1e-4, one iteration), or no level improves
-after ``max_reg_increases`` regularisation increases (a lexicographically stationary point,
-reported in ``reason``).
-``level_costs`` holds the per-level costs of the iterate.
+level down, accepting a step for level ``k`` only if level ``k`` improves and no higher level ``j``
+gets worse than ``th_worse`` (relative) allows, unless it stays below its ``th_abs[j]``; the
+iterate is accepted if some level improved, the improved levels' ``λ, μ`` decrease, and if none
+improved all increase and the backward pass is redone.  Convergence: in two successive iterations
+every level has cost below ``th_abs[k]`` or relative change below ``th_rel[k]`` (paper: 1e-8 and
+1e-4, one iteration), or no level improves after ``max_reg_increases`` regularisation increases (a
+lexicographically stationary point, reported in ``reason``).  ``level_costs`` holds the per-level costs of the iterate.
 """
 
 from __future__ import annotations
@@ -176,7 +175,8 @@ class SolverHDDP(SolverDDP):
     lambdas, mus : list of float
         Per-level regularisation and damping (start ``lambda0``/``mu0``; factor ``reg_incFactor``).
     th_worse : float
-        Relative increase of a higher level tolerated by the line search (default 1e-10).
+        Relative increase of a higher level tolerated by the line search (default 1e-10); a level
+        may also rise up to its ``th_abs`` (set ``th_abs`` to 0 for strict priorities).
     max_reg_increases : int
         Regularisation increases without any improving level before the iterate is declared
         stationary (default 6).
@@ -248,7 +248,8 @@ class SolverHDDP(SolverDDP):
                 self.mus[k] = self.mus[k] / self.reg_decFactor if self.mus[k] > self.reg_min else 0.0
             self.preg = self.lambdas[0]
             self.stepLength = float(self.level_steps[0])
-            self.stop = float(np.max((old - self.level_costs) / np.maximum(np.abs(old), 1e-300)))
+            with np.errstate(all="ignore"):
+                self.stop = float(np.max((old - self.level_costs) / np.maximum(np.abs(old), 1e-300)))
             self.computeEqualityFeasibility()
             self._run_callbacks()
             small = self._converged(old)
@@ -298,7 +299,7 @@ class SolverHDDP(SolverDDP):
             for a in self.alphas:
                 steps[k] = a
                 Gt = self._rollout(steps)
-                no_worse = all(Gt[j] <= best[j] + self.th_worse * abs(best[j]) for j in range(k))
+                no_worse = all(Gt[j] <= max(best[j] + self.th_worse * abs(best[j]), self.th_abs[j]) for j in range(k))
                 if no_worse and Gt[k] < best[k]:
                     best = Gt
                     best_xs = [x.copy() for x in self.xs_try]
