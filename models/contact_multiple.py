@@ -82,6 +82,10 @@ class ContactModelMultiple:
         self._active = [(n, c.contact) for n, c in self._items.items() if c.active]
         self._inactive = [(n, c.contact) for n, c in self._items.items() if not c.active]
         self._lwa = [(n, c) for n, c in self._active if c.type != pin.LOCAL]
+        frames = self.state.pinocchio.frames
+        joints = [int(frames[c.id].parentJoint) for _, c in self._active]
+        self._shared_joints = len(set(joints)) != len(joints)
+        self._idle_joints = sorted({int(frames[c.id].parentJoint) for _, c in self._inactive} - set(joints))
 
     def addContact(self, name: str, contact: ContactModelAbstract, active: bool = True) -> None:
         """Add ``contact`` under ``name``.
@@ -196,15 +200,14 @@ class ContactModelMultiple:
         """
         if np.shape(force) != (self.nc,):
             raise ValueError(f"force has shape {np.shape(force)}, expected ({self.nc},)")
-        fext = data.fext
-        for j in data.touched:
+        fext, shared = data.fext, self._shared_joints
+        for j in data.touched if shared else self._idle_joints:
             fext[j] = data.zero_force
         i = 0
         for name, c in self._active:
             cd = data.contacts[name]
             c.updateForce(cd, force[i:i + c.nc])
-            j = cd.joint
-            fext[j] = fext[j] + cd.fext
+            fext[cd.joint] = fext[cd.joint] + cd.fext if shared else cd.fext
             i += c.nc
         for name, c in self._inactive:
             c.setZeroForce(data.contacts[name])

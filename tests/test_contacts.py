@@ -337,3 +337,34 @@ def test_fddp_stance_reaches_com_target():
     assert solver.solve(xs, us, 50)
     com = pin.centerOfMass(model, model.createData(), solver.xs[-1][: state.nq])
     assert np.linalg.norm(com - target) < 5e-3
+
+
+def test_contacts_sharing_a_joint():
+    """Two 3D contacts on one foot (same joint) plus the other foot: forces add up in ``fext``;
+    with ``inv_damping`` (rank-deficient Jc) the damped KKT path still has exact derivatives
+    (damping 1e-3 keeps the finite differences well conditioned)."""
+    model = load("talos_legs")
+    state = crocopy.StateMultibody(model)
+    act = crocopy.ActuationModelFloatingBase(state)
+    contacts = crocopy.ContactModelMultiple(state, act.nu)
+    for name in ("left_sole_link", "leg_left_6_link"):
+        contacts.addContact(name, crocopy.ContactModel3D(state, name, np.zeros(3), LWA, act.nu, [0.0, 2.0]))
+    contacts.addContact("right", crocopy.ContactModel6D(state, "right_sole_link", pin.SE3.Identity(), LOCAL, act.nu))
+    costs = crocopy.CostModelSum(state, act.nu)
+    costs.addCost("grav", crocopy.CostModelResidual(state, crocopy.ResidualModelContactControlGrav(state, act.nu)), 1.0)
+    dam = crocopy.DifferentialActionModelContactFwdDynamics(state, act, contacts, costs, 1e-3, True)
+    x, u = random_point(dam, seed=9)
+    d = dam.createData()
+    dam.calc(d, x, u)
+    dam.calcDiff(d, x, u)
+    assert d.rigid is None
+    cds = d.multibody.contacts.contacts
+    joint = cds["left_sole_link"].joint
+    assert cds["leg_left_6_link"].joint == joint
+    expected = cds["left_sole_link"].fext.vector + cds["leg_left_6_link"].fext.vector
+    np.testing.assert_allclose(d.multibody.contacts.fext[joint].vector, expected)
+    J = fd_dam(dam, x, u)
+    nv, ndx = dam.state.nv, dam.state.ndx
+    assert_close(d.Fx, J[:nv, :ndx], "Fx")
+    assert_close(d.Fu, J[:nv, ndx:], "Fu")
+    assert_close(d.df_dx, J[nv + 1:, :ndx], "df_dx")
