@@ -368,3 +368,21 @@ def test_contacts_sharing_a_joint():
     assert_close(d.Fx, J[:nv, :ndx], "Fx")
     assert_close(d.Fu, J[:nv, ndx:], "Fu")
     assert_close(d.df_dx, J[nv + 1:, :ndx], "df_dx")
+
+
+def test_reference_and_gain_changes_reach_both_paths():
+    """Changing a contact's reference or gains after createData changes the dynamics on both paths alike."""
+    fast, kkt = make_dam(*CASES[1]), make_dam(*CASES[1], kkt=True)
+    x, u = random_point(fast, seed=12)
+    df, dk = fast.createData(), kkt.createData()
+    for step in range(3):
+        if step == 1:
+            for dam in (fast, kkt):
+                dam.contacts.contacts["LF_FOOT"].contact.reference = np.array([0.3, 0.1, -0.2])
+        if step == 2:
+            for dam in (fast, kkt):
+                dam.contacts.contacts["RH_FOOT"].contact.gains = np.array([7.0, 1.0])
+        fast.calc(df, x, u)
+        kkt.calc(dk, x, u)
+        np.testing.assert_allclose(df.xout, dk.xout, atol=1e-9 * max(1.0, np.abs(dk.xout).max()))
+        assert df.rigid is not None and dk.rigid is None
