@@ -2,9 +2,13 @@
 
 * ``crocopy --version``
 * ``crocopy bench``: solver timings on LQR problems (and Crocoddyl's, when installed)
+* ``crocopy list``: the bundled problems
 * ``crocopy solve [PROBLEM] [--solver ...] [--maxiter N] [--html FILE] [--plot FILE]``: build a
   problem, solve it with the verbose table, print a summary and write the meshcat animation.
   With no problem it solves the ANYmal jump with Box-FDDP and writes ``jump.html``.
+* ``crocopy table1``: Box-FDDP paper Table I next to the paper's figures
+* ``crocopy paper box-ddp lq|car``, ``paper box-fddp quadrotor``, ``paper projection arm``,
+  ``paper hddp table1|table2``: the papers' experiments
 """
 
 from __future__ import annotations
@@ -30,31 +34,53 @@ def _bench(args: argparse.Namespace) -> int:
     return 0
 
 
-def _build_jump(lib):
-    """The ANYmal jump of the Box-FDDP paper and the robot used to display it."""
+ROBOT_OF_MODEL = {"2dof_planar": "double_pendulum", "": "talos_legs"}
+"""example-robot-data name of a Pinocchio model, where it differs from the model's own name."""
+
+
+def _display_robot(problem):
+    """The example-robot-data robot (with meshes) whose model matches the problem's, or None."""
     import example_robot_data
 
-    from .problems.quadruped import build_jump
+    model = getattr(problem.terminalModel.state, "pinocchio", None)
+    if model is None:
+        return None
+    name = ROBOT_OF_MODEL.get(model.name, model.name)
+    try:
+        robot = example_robot_data.load(name)
+    except Exception:
+        return None
+    return robot if robot.model.nq == model.nq and robot.model.nv == model.nv else None
 
-    problem, xs, us = build_jump(lib)
-    return problem, xs, us, example_robot_data.load("anymal"), 100
 
+def _list(args: argparse.Namespace) -> int:
+    from .problems import registry
 
-PROBLEM_BUILDERS = {"jump": _build_jump}
+    for name in registry.names():
+        spec = registry.get(name)
+        T, nx, nu = spec.dims
+        print(f"{name:12s} T={T:<4d} nx={nx:<3d} nu={nu:<3d} {spec.description}")
+    return 0
 
 
 def _solve(args: argparse.Namespace) -> int:
     import crocopy
 
-    if args.problem not in PROBLEM_BUILDERS:
-        print(f"unknown problem {args.problem!r}; choose from: {', '.join(sorted(PROBLEM_BUILDERS))}", file=sys.stderr)
+    from .problems import registry
+
+    try:
+        spec = registry.get(args.problem)
+    except KeyError as exc:
+        print(exc.args[0], file=sys.stderr)
         return 2
-    problem, xs, us, robot, maxiter = PROBLEM_BUILDERS[args.problem](crocopy)
+    problem, xs, us = spec.build(crocopy)
     solver = getattr(crocopy, SOLVERS[args.solver])(problem)
     if not args.quiet:
         solver.setCallbacks([crocopy.CallbackVerbose()])
+    logger = crocopy.CallbackLogger()
+    solver.setCallbacks([*solver.getCallbacks(), logger])
     t0 = time.perf_counter()
-    converged = solver.solve(xs, us, args.maxiter or maxiter, False)
+    converged = solver.solve(xs, us, args.maxiter or spec.maxiter, False)
     elapsed = time.perf_counter() - t0
     iters = max(solver.iter, 1)
     print(
@@ -62,13 +88,89 @@ def _solve(args: argparse.Namespace) -> int:
         f" ({solver.reason}) after {solver.iter} iterations, cost {solver.cost:.6g},"
         f" {elapsed:.2f} s ({1e3 * elapsed / iters:.1f} ms/iteration)"
     )
-    html = args.html or (f"{args.problem}.html" if not args.no_html else None)
-    if html:
-        from .models.html_export import export_html_from_solver
+    if args.plot:
+        from .plotting import plot_convergence_from_logger
 
-        path = export_html_from_solver(robot, solver, html)
-        print(f"meshcat animation written to {path}")
+        print(f"convergence plot written to {plot_convergence_from_logger(logger, args.plot)}")
+    html = None if args.no_html else (args.html or f"{args.problem}.html")
+    if html:
+        robot = _display_robot(problem)
+        if robot is None:
+            print(f"no meshcat model for {args.problem}; animation not written", file=sys.stderr)
+        else:
+            from .models.html_export import export_html_from_solver
+
+            print(f"meshcat animation written to {export_html_from_solver(robot, solver, html)}")
     return 0
+
+
+def _table1(args: argparse.Namespace) -> int:
+    import crocopy
+
+    from .problems import registry
+
+    rows = [
+        "| problem | Box-DDP iter | Box-DDP cost | sol | Box-FDDP iter | Box-FDDP cost | sol"
+        " | paper Box-DDP | paper Box-FDDP |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for name in args.problems or registry.TABLE1:
+        if name not in registry.PROBLEMS:
+            continue
+        spec = registry.get(name)
+        cells = [name]
+        for solver_name in ("SolverBoxDDP", "SolverBoxFDDP"):
+            problem, xs, us = spec.build(crocopy)
+            solver = getattr(crocopy, solver_name)(problem)
+            ok = solver.solve(xs, us, spec.maxiter, False)
+            cells += [str(solver.iter), f"{solver.cost:.6g}", "✓" if ok else "✗"]
+        paper = registry.PAPER_TABLE1.get(name, {})
+        for key in ("boxddp", "boxfddp"):
+            it, cost, ok = paper.get(key, (0, float("nan"), False))
+            cells.append(f"{it} / {cost:.5g} / {'✓' if ok else '✗'}")
+        rows.append("| " + " | ".join(cells) + " |")
+        print(rows[-1], flush=True)
+    print("\n".join(rows))
+    return 0
+
+
+def _paper(args: argparse.Namespace) -> int:
+    key = (args.paper, args.experiment)
+    if key == ("box-ddp", "lq"):
+        from .paper_boxddp import run_lq
+
+        run_lq(out_dir=args.out)
+    elif key == ("box-ddp", "car"):
+        from .paper_boxddp import run_car
+
+        run_car(out_dir=args.out)
+    elif key == ("box-fddp", "quadrotor"):
+        from .paper_boxfddp import run_quadrotor_ics
+
+        run_quadrotor_ics(out_dir=args.out)
+    elif key == ("projection", "arm"):
+        from .paper_projection import run_projection_arm
+
+        run_projection_arm()
+    elif key == ("hddp", "table1"):
+        from .paper_hddp import run_hddp
+
+        run_hddp()
+    elif key == ("hddp", "table2"):
+        from .paper_hddp import run_hddp_weighted
+
+        run_hddp_weighted()
+    else:
+        known = ", ".join(" ".join(k) for k in PAPER_EXPERIMENTS)
+        print(f"unknown experiment {args.paper} {args.experiment}; known: {known}", file=sys.stderr)
+        return 2
+    return 0
+
+
+PAPER_EXPERIMENTS = (
+    ("box-ddp", "lq"), ("box-ddp", "car"), ("box-fddp", "quadrotor"),
+    ("projection", "arm"), ("hddp", "table1"), ("hddp", "table2"),
+)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -79,14 +181,24 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--repeats", type=int, default=20, help="runs per measurement (median reported)")
     bench.add_argument("--T", type=int, default=100, help="horizon of the LQR problems")
     bench.set_defaults(func=_bench)
+    sub.add_parser("list", help="list the bundled problems").set_defaults(func=_list)
     solve = sub.add_parser("solve", help="solve a problem and write its meshcat animation")
     solve.add_argument("problem", nargs="?", default="jump", help="problem name (default: jump)")
     solve.add_argument("--solver", choices=sorted(SOLVERS), default="boxfddp")
     solve.add_argument("--maxiter", type=int, default=0, help="iteration limit (default: the problem's)")
     solve.add_argument("--html", default=None, help="animation file (default: <problem>.html)")
     solve.add_argument("--no-html", action="store_true", help="do not write the animation")
+    solve.add_argument("--plot", default=None, help="write the convergence plot (PNG) to this file")
     solve.add_argument("--quiet", action="store_true", help="no verbose table")
     solve.set_defaults(func=_solve)
+    table1 = sub.add_parser("table1", help="Box-FDDP paper Table I: Box-DDP vs Box-FDDP on the bundled problems")
+    table1.add_argument("problems", nargs="*", help="rows to run (default: all of Table I)")
+    table1.set_defaults(func=_table1)
+    paper = sub.add_parser("paper", help="reproduce a paper experiment (prints its metric, writes plots)")
+    paper.add_argument("paper", choices=sorted({p for p, _ in PAPER_EXPERIMENTS}))
+    paper.add_argument("experiment")
+    paper.add_argument("--out", default=".", help="folder for the plots")
+    paper.set_defaults(func=_paper)
     return parser
 
 

@@ -201,3 +201,17 @@ def test_compiled_riccati_kernel_equals_numpy_path(feasible):
         results.append((np.array(s.K), np.array(s.k), np.array(s.Vxx), np.array(s.Vx), np.array(s.Quu)))
     for a, b in zip(*results):
         np.testing.assert_allclose(a, b, atol=1e-10, rtol=1e-10)
+
+
+def test_fddp_rejects_blown_up_trials_on_double_pendulum():
+    """A diverging trial (huge finite cost, very negative gap term in d₀) must not pass the |d₀| < th_grad test.
+
+    Reference: Crocoddyl 3.2.1 on the same problem converges in 110 iterations to 0.111367.
+    """
+    from crocopy.problems import registry
+
+    problem, xs, us = registry.build("pend")
+    solver = crocopy.SolverFDDP(problem)
+    assert solver.solve(xs, us, 200, False), solver.reason
+    assert solver.iter == 110
+    assert solver.cost == pytest.approx(0.111367, rel=1e-5)

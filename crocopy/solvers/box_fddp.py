@@ -47,7 +47,7 @@ class SolverBoxFDDP(BoxSolverMixin, SolverFDDP):
         # A predicted cost increase is admissible only while closing gaps: on a feasible iterate a
         # negative dVexp (possible once clamped controls are zeroed out of d₀) rejects the step.
         if self.dVexp >= 0:
-            return self.d[0] < self.th_grad or self.dV > self.th_acceptStep * self.dVexp
+            return abs(self.d[0]) < self.th_grad or self.dV > self.th_acceptStep * self.dVexp
         return not self.isFeasible and self.dV > self.th_acceptNegStep * self.dVexp
 
     def forwardPass(self, steplength: float) -> None:

@@ -107,7 +107,8 @@ class SolverDDP(SolverAbstract):
             for alpha in self.alphas:
                 self.stepLength = alpha
                 try:
-                    self.dV = self.tryStep(alpha)
+                    with np.errstate(over="ignore", invalid="ignore"):
+                        self.dV = self.tryStep(alpha)
                 except ForwardPassError:
                     self._synced = False
                     continue
@@ -135,7 +136,7 @@ class SolverDDP(SolverAbstract):
 
     def _accept(self, alpha: float) -> bool:
         if self.dVexp >= 0:
-            return self.d[0] < self.th_grad or not self.isFeasible or self.dV > self.th_acceptStep * self.dVexp
+            return abs(self.d[0]) < self.th_grad or not self.isFeasible or self.dV > self.th_acceptStep * self.dVexp
         return False
 
     def _accept_trial(self, alpha: float) -> None:

@@ -27,8 +27,8 @@ class SolverFDDP(SolverDDP):
 
     def _accept(self, alpha: float) -> bool:
         if self.dVexp >= 0:
-            return self.d[0] < self.th_grad or self.dV > self.th_acceptStep * self.dVexp
-        return self.d[0] < self.th_grad or self.dV > self.th_acceptNegStep * self.dVexp
+            return abs(self.d[0]) < self.th_grad or self.dV > self.th_acceptStep * self.dVexp
+        return abs(self.d[0]) < self.th_grad or self.dV > self.th_acceptNegStep * self.dVexp
 
     def _accept_trial(self, alpha: float) -> None:
         feasible = self.isFeasible or alpha == 1.0
