@@ -241,7 +241,7 @@ class SolverHDDP(SolverDDP):
             self.xs, self.xs_try = self.xs_try, self.xs
             self.us, self.us_try = self.us_try, self.us
             self.level_costs = self._G_try_best
-            self.cost = float(np.sum(self.level_costs))
+            self.cost = self.merit = float(np.sum(self.level_costs))
             p.calc(self.xs, self.us)
             for k in np.nonzero(improved)[0]:
                 self.lambdas[k] = max(self.lambdas[k] / self.reg_decFactor, self.reg_min)
