@@ -123,7 +123,10 @@ class DifferentialActionModelContactFwdDynamics(DifferentialActionModelAbstract)
         if constraints is not None:
             self.g_lb = constraints.g_lb.copy()
             self.g_ub = constraints.g_ub.copy()
-        self._set_control_limits(np.array(actuation.u_lb, dtype=float), np.array(actuation.u_ub, dtype=float))
+        # as in Crocoddyl: the bounds default to the actuation's (URDF effort limits) while
+        # has_control_limits stays False until they are assigned
+        self._u_lb = np.array(actuation.u_lb, dtype=float)
+        self._u_ub = np.array(actuation.u_ub, dtype=float)
 
     @property
     def JMinvJt_damping(self) -> float:

@@ -237,6 +237,8 @@ def test_control_limits_from_urdf():
     effort = dam.state.pinocchio.effortLimit[6:]
     np.testing.assert_array_equal(dam.u_ub, effort)
     np.testing.assert_array_equal(dam.u_lb, -effort)
+    assert not dam.has_control_limits
+    assert crocopy.IntegratedActionModelEuler(dam, 1e-2).has_control_limits
 
 
 def test_inactive_contact_equals_removed_contact():
