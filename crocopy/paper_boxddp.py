@@ -176,9 +176,11 @@ def _methods_lq(problem: ShootingProblem, model) -> dict:
 
 
 def run_lq(out_dir: str = ".", maxiter: int = 30, n_random: int = 20, c_u: float = 10.0, plot: bool = True,
-           sizes: tuple[int, int, int] = (20, 7, 200)) -> dict:
+           sizes: tuple[int, int, int] = (20, 7, 200), n_range: tuple[int, int] = (10, 100)) -> dict:
     """Fig. 2: ΔJ per iteration on the showcase LQ problem and on ``n_random`` random sizes.
 
+    ``sizes`` is ``(n, m, N)`` of the showcase; the random problems draw ``n`` in ``n_range`` and
+    ``m ~ U{1..n/2}`` with the same ``N``.
     Returns ``{"showcase": {method: costs}, "random": [...], "factorizations_per_qp": float}``
     and writes ``boxddp_lq.png`` in ``out_dir`` when ``plot``.
     """
@@ -193,7 +195,7 @@ def run_lq(out_dir: str = ".", maxiter: int = 30, n_random: int = 20, c_u: float
     results = {"showcase": showcase, "random": []}
     rng = np.random.default_rng(12345)
     for seed in range(1, n_random + 1):
-        n_r = int(rng.integers(10, 101))
+        n_r = int(rng.integers(n_range[0], n_range[1] + 1))
         m_r = int(rng.integers(1, n_r // 2 + 1))
         prob_r, model_r = lq_problem(n_r, m_r, N, c_u=c_u, seed=seed)
         curves = {}
