@@ -202,3 +202,22 @@ def test_clamping_baselines_stay_in_the_box(clamping):
             assert np.all(target >= np.array([-0.3, -0.2]) - 1e-12) and np.all(target <= np.array([0.3, 0.2]) + 1e-12)
     with pytest.raises(ValueError, match="clamping"):
         SolverClampedDDP(problem, "sideways")
+
+
+@pytest.mark.parametrize("Solver", [SolverBoxDDP, SolverBoxFDDP])
+@pytest.mark.parametrize("general", [False, True])
+def test_compiled_and_numpy_backward_passes_agree(Solver, general):
+    runs = []
+    for kernel in (False, True):
+        problem = unicycle_problem(T=30)
+        solver = Solver(problem)
+        solver.use_kernel = kernel
+        solver.general_value_update = general
+        rows = record(solver)
+        assert solver.solve(None, None, 100)
+        runs.append((rows, solver.nfactorizations, solver.nqp))
+    (rows_np, f_np, q_np), (rows_k, f_k, q_k) = runs
+    assert len(rows_np) == len(rows_k) and (f_np, q_np) == (f_k, q_k)
+    for (x1, u1, c1), (x2, u2, c2) in zip(rows_np, rows_k, strict=True):
+        assert np.allclose(np.array(u1), np.array(u2), rtol=0, atol=1e-10)
+        assert c1 == pytest.approx(c2, rel=1e-12)

@@ -32,7 +32,8 @@ regularisation ``reg_min = 1e-9`` (also the initial value), factors 10, step len
 ``n = 0..9``; the box QP runs with ``maxiter = 100``, ``th_acceptStep = 0.1``, ``th_grad = 1e-9``
 and no extra regularisation (``preg`` is already on ``Quu``).  Crocopy extensions:
 ``nfactorizations`` and ``nqp`` count box-QP Cholesky factorizations and QP solves since the last
-``solve``.
+``solve``.  With ``use_kernel`` (numba available) the recursion runs the compiled node steps of
+:mod:`.box_kernel`, which give the numpy path's numbers to round-off.
 """
 
 from __future__ import annotations
@@ -42,6 +43,7 @@ import numpy as np
 from ..box_qp import BoxQP, BoxQPError
 from ..shooting import ShootingProblem
 from ..validation import check_bounds
+from . import box_kernel, riccati_kernel
 from .base import BackwardPassError, ForwardPassError
 from .ddp import SolverDDP
 
@@ -63,6 +65,7 @@ class BoxSolverMixin:
         self._ub: list[np.ndarray | None] = []
         self._clamped = [False] * problem.T
         self.nqp = 0
+        self._kernel_fact = 0
         self.general_value_update = False
         self._read_bounds()
 
@@ -85,12 +88,69 @@ class BoxSolverMixin:
         for qp in self._qps.values():
             qp.nfactorizations = 0
         self.nqp = 0
+        self._kernel_fact = 0
         super()._start(init_xs, init_us, is_feasible, init_reg)
 
     @property
     def nfactorizations(self) -> int:
         """Box-QP factorizations since the last ``solve`` (all nodes, all iterations)."""
-        return sum(qp.nfactorizations for qp in self._qps.values())
+        return self._kernel_fact + sum(qp.nfactorizations for qp in self._qps.values())
+
+    def _uses_box_steps(self) -> bool:
+        cls = type(self)
+        return (
+            cls.computeActionValueFunction is SolverDDP.computeActionValueFunction
+            and cls.computeGains is BoxSolverMixin.computeGains
+            and cls.computeValueFunction is BoxSolverMixin.computeValueFunction
+        )
+
+    def backwardPass(self) -> None:
+        """Riccati recursion with box-QP gains; compiled per-node steps when ``use_kernel`` is set.
+
+        The compiled path (:mod:`.box_kernel`, :mod:`.riccati_kernel`) gives the numbers of the numpy
+        path (``computeActionValueFunction`` / ``computeGains`` / ``computeValueFunction``) to round-off.
+        """
+        if not (self.use_kernel and box_kernel.available and self._uses_box_steps()):
+            super().backwardPass()
+            return
+        problem = self.problem
+        T = problem.T
+        td = problem.terminalData
+        Vxx, Vx = self.Vxx[T], self.Vx[T]
+        Vxx[:] = td.Lxx
+        Vx[:] = td.Lx
+        if self.preg:
+            Vxx.flat[:: Vxx.shape[0] + 1] += self.preg
+        gaps = not self.isFeasible
+        if gaps:
+            Vx += Vxx @ self.fs[T]
+        preg = float(self.preg)
+        box_mode = self._box_mode()
+        general = bool(self.general_value_update)
+        for t in range(T - 1, -1, -1):
+            d = problem.runningDatas[t]
+            lb = self._lb[t]
+            if lb is None or not box_mode:
+                self._clamped[t] = False
+                ok = riccati_kernel.riccati_step(
+                    d.Fx, d.Fu, d.Lxx, d.Lxu, d.Luu, d.Lx, d.Lu, self.Vxx[t + 1], self.Vx[t + 1], preg, self.fs[t],
+                    gaps, self.Qxx[t], self.Qxu[t], self.Quu[t], self.Qx[t], self.Qu[t], self.K[t], self.k[t],
+                    self.Vxx[t], self.Vx[t],
+                )
+            else:
+                qp = self._qps[lb.size]
+                ok, nfact, self._clamped[t] = box_kernel.box_step(
+                    d.Fx, d.Fu, d.Lxx, d.Lxu, d.Luu, d.Lx, d.Lu, self.Vxx[t + 1], self.Vx[t + 1], preg, self.fs[t],
+                    gaps, self.us[t], lb, self._ub[t], qp.th_grad, qp.maxiter, general,
+                    self.Qxx[t], self.Qxu[t], self.Quu[t], self.Qx[t], self.Qu[t], self.K[t], self.k[t],
+                    self.Quu_inv[t], self.Vxx[t], self.Vx[t],
+                )
+                self._kernel_fact += nfact
+                self.nqp += 1
+            if not ok:
+                raise BackwardPassError(f"Quu (or its free block) is not positive definite at node {t}")
+        if not (np.isfinite(self.Vx[0]).all() and np.isfinite(self.Vxx[0]).all()):
+            raise BackwardPassError("non-finite value function in the backward pass")
 
     def _box_mode(self) -> bool:
         return self.isFeasible

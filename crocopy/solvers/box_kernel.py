@@ -1,0 +1,186 @@
+"""Compiled Box-DDP node step (numba), twin of the numpy path of :mod:`.box_ddp` and :mod:`crocopy.box_qp`.
+
+For node t with next value function ``(V'x, V'xx)`` (Crocoddyl's signs) it computes the Q terms
+(as :mod:`.riccati_kernel`), solves the box QP ``min ½ δuᵀ Quu δu + Quᵀ δu, lb ≤ δu ≤ ub`` by the
+same projected-Newton iteration as :class:`crocopy.box_qp.BoxQP` (warm start ``-k``, no extra
+regularisation, Armijo 0.1 over ``2^-n``, stop on ``‖g_f‖ ≤ th_grad``), sets ``k = -δu``,
+``Quu_inv`` (free block inverse, zero-padded), ``K = Quu_inv Qux``, zeroes the ``Qu`` entries of
+clamped controls unless ``general``, and updates the value function (general gradient update when
+``general`` and a control is clamped).  Returns ``(ok, nfactorizations, clamped)``; ``ok`` is False
+when a free block is not positive definite.  Without numba the same Python function runs.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .riccati_kernel import available, njit
+
+
+def _chol_inverse(H, idx, nf, out):
+    """Inverse of ``H[idx, idx]`` (first ``nf`` entries of ``idx``) into ``out[:nf, :nf]``; False if not PD."""
+    L = np.zeros((nf, nf))
+    for j in range(nf):
+        s = H[idx[j], idx[j]]
+        for p in range(j):
+            s -= L[j, p] * L[j, p]
+        if not s > 0.0:
+            return False
+        L[j, j] = np.sqrt(s)
+        for i in range(j + 1, nf):
+            s = H[idx[i], idx[j]]
+            for p in range(j):
+                s -= L[i, p] * L[j, p]
+            L[i, j] = s / L[j, j]
+    for c in range(nf):
+        col = np.zeros(nf)
+        col[c] = 1.0
+        for i in range(nf):
+            s = col[i]
+            for p in range(i):
+                s -= L[i, p] * col[p]
+            col[i] = s / L[i, i]
+        for i in range(nf - 1, -1, -1):
+            s = col[i]
+            for p in range(i + 1, nf):
+                s -= L[p, i] * col[p]
+            col[i] = s / L[i, i]
+        for i in range(nf):
+            out[i, c] = col[i]
+    return True
+
+
+def _free_set(x, g, lb, ub, free):
+    n = x.size
+    changed = False
+    for j in range(n):
+        f = not ((x[j] <= lb[j] and g[j] > 0.0) or (x[j] >= ub[j] and g[j] < 0.0))
+        if f != free[j]:
+            changed = True
+        free[j] = f
+    return changed
+
+
+def _box_qp(H, q, lb, ub, x, th_grad, maxiter, free, Hinv):
+    """Projected Newton in place on ``x``; returns (ok, nfact, nf) with ``Hinv[:nf,:nf]`` for ``free``."""
+    n = x.size
+    idx = np.empty(n, dtype=np.int64)
+    for j in range(n):
+        x[j] = min(max(x[j], lb[j]), ub[j])
+    g = q + H @ x
+    for j in range(n):
+        free[j] = True
+    _free_set(x, g, lb, ub, free)
+    nf = 0
+    for j in range(n):
+        if free[j]:
+            idx[nf] = j
+            nf += 1
+    nfact = 0
+    if nf > 0:
+        if not _chol_inverse(H, idx, nf, Hinv):
+            return False, 1, nf
+        nfact = 1
+    for _ in range(maxiter):
+        if nf == 0:
+            break
+        dx = np.zeros(n)
+        for a in range(nf):
+            s = 0.0
+            for b in range(nf):
+                s += Hinv[a, b] * g[idx[b]]
+            dx[idx[a]] = -s
+        fold = 0.5 * (x @ (g + q))
+        accepted = False
+        alpha = 1.0
+        xa = np.empty(n)
+        ga = np.empty(n)
+        for _i in range(10):
+            for j in range(n):
+                xa[j] = min(max(x[j] + alpha * dx[j], lb[j]), ub[j])
+            ga[:] = q + H @ xa
+            fnew = 0.5 * (xa @ (ga + q))
+            if fold - fnew >= 0.1 * (g @ (x - xa)):
+                accepted = True
+                break
+            alpha *= 0.5
+        if not accepted:
+            break
+        x[:] = xa
+        g[:] = ga
+        if _free_set(x, g, lb, ub, free):
+            nf = 0
+            for j in range(n):
+                if free[j]:
+                    idx[nf] = j
+                    nf += 1
+            if nf > 0:
+                nfact += 1
+                if not _chol_inverse(H, idx, nf, Hinv):
+                    return False, nfact, nf
+        s = 0.0
+        for a in range(nf):
+            s += g[idx[a]] * g[idx[a]]
+        if s <= th_grad * th_grad:
+            break
+    return True, nfact, nf
+
+
+def _box_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, u, lb, ub, th_grad, maxiter, general,
+              Qxx, Qxu, Quu, Qx, Qu, K, k, Quu_inv, Vxx, Vx):
+    nu = Fu.shape[1]
+    ndx = Fx.shape[1]
+    FxTV = Fx.T @ Vxx_n
+    Qxx[:, :] = Lxx + FxTV @ Fx
+    Qx[:] = Lx + Fx.T @ Vx_n
+    FuTV = Fu.T @ Vxx_n
+    Quu[:, :] = Luu + FuTV @ Fu
+    Qxu[:, :] = Lxu + FxTV @ Fu
+    Qu[:] = Lu + Fu.T @ Vx_n
+    for i in range(nu):
+        Quu[i, i] += preg
+    x = -k
+    free = np.empty(nu, dtype=np.bool_)
+    Hinv = np.zeros((nu, nu))
+    ok, nfact, nf = _box_qp(Quu, Qu, lb - u, ub - u, x, th_grad, maxiter, free, Hinv)
+    if not ok:
+        return False, nfact, False
+    k[:] = -x
+    Quu_inv[:, :] = 0.0
+    a = 0
+    fidx = np.empty(nf, dtype=np.int64)
+    for j in range(nu):
+        if free[j]:
+            fidx[a] = j
+            a += 1
+    for a in range(nf):
+        for b in range(nf):
+            Quu_inv[fidx[a], fidx[b]] = Hinv[a, b]
+    K[:, :] = Quu_inv @ Qxu.T
+    clamped = nf < nu
+    if clamped and not general:
+        for j in range(nu):
+            if not free[j]:
+                Qu[j] = 0.0
+    Vxx[:, :] = Qxx - Qxu @ K
+    Vx[:] = Qx - K.T @ Qu
+    if clamped and general:
+        Vx[:] += K.T @ (Quu @ k) - Qxu @ k
+    for i in range(ndx):
+        for j in range(i + 1, ndx):
+            m = 0.5 * (Vxx[i, j] + Vxx[j, i])
+            Vxx[i, j] = m
+            Vxx[j, i] = m
+        Vxx[i, i] += preg
+    if gaps:
+        Vx[:] += Vxx @ fs
+    return True, nfact, clamped
+
+
+if available:
+    _chol_inverse = njit(cache=True)(_chol_inverse)
+    _free_set = njit(cache=True)(_free_set)
+    _box_qp = njit(cache=True)(_box_qp)
+    box_step = njit(cache=True)(_box_step)
+else:  # pragma: no cover - exercised only without numba
+    box_step = _box_step
