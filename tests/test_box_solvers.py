@@ -218,6 +218,6 @@ def test_compiled_and_numpy_backward_passes_agree(Solver, general):
         runs.append((rows, solver.nfactorizations, solver.nqp))
     (rows_np, f_np, q_np), (rows_k, f_k, q_k) = runs
     assert len(rows_np) == len(rows_k) and (f_np, q_np) == (f_k, q_k)
-    for (x1, u1, c1), (x2, u2, c2) in zip(rows_np, rows_k, strict=True):
+    for (_, u1, c1), (_, u2, c2) in zip(rows_np, rows_k, strict=True):
         assert np.allclose(np.array(u1), np.array(u2), rtol=0, atol=1e-10)
         assert c1 == pytest.approx(c2, rel=1e-12)
