@@ -8,8 +8,9 @@ and no friction/wrench cone on the hands while they hold the bar.
 Soles and hands make 6D contacts (wrench cone on the soles: mu 0.7, 0.2 m × 0.1 m foot).  All
 builders take the library module first and return ``(problem, xs, us)``; the warm start is the
 half-sitting posture at rest with quasi-static torques.  Cost names and default weights are
-those of :mod:`crocopy.problems.common`, with a humanoid state regularisation (base position
-free, base orientation 500, legs 0.01, torso/arms/grippers/head 10, velocities 10; squared).
+those of :mod:`crocopy.problems.common` except control 1e-3 and terminal state 1e1, with a
+humanoid state regularisation (base position free, base orientation 500, legs 0.01,
+torso/arms/grippers/head 1, velocities 10; squared).
 """
 
 from __future__ import annotations
@@ -26,8 +27,15 @@ FEET = ("left_sole_link", "right_sole_link")
 HANDS = ("gripper_left_joint", "gripper_right_joint")
 
 
+UPPER_BODY_WEIGHT = 1.0
+"""Posture weight of the torso, arms, grippers and head (legs 0.01, base orientation 500)."""
+HUMANOID_WEIGHTS = {"control": 1e-3, "terminal_state": 1e1}
+"""Humanoid overrides of :data:`crocopy.problems.common.DEFAULT_WEIGHTS` (Talos' torques are large)."""
+
+
 def _humanoid_state_weights(nv: int, n_legs: int = 12) -> np.ndarray:
-    w = np.concatenate([[0.0] * 3, [500.0] * 3, [0.01] * n_legs, [10.0] * (nv - 6 - n_legs), [10.0] * nv])
+    w = np.concatenate([[0.0] * 3, [500.0] * 3, [0.01] * n_legs, [UPPER_BODY_WEIGHT] * (nv - 6 - n_legs),
+                        [10.0] * nv])
     return w**2
 
 
@@ -48,8 +56,8 @@ def _setup(
     q0 = np.array(model.referenceConfigurations["half_sitting"])
     x0 = np.concatenate([q0, np.zeros(model.nv)])
     frames = FEET + HANDS if with_hands else FEET
-    return LeggedSetup(lib, model, x0, frames, contact_dim=6, mu=0.7, foot_size=(0.2, 0.1), weights=weights,
-                       state_weights=_humanoid_state_weights(model.nv))
+    return LeggedSetup(lib, model, x0, frames, contact_dim=6, mu=0.7, foot_size=(0.2, 0.1),
+                       weights={**HUMANOID_WEIGHTS, **(weights or {})}, state_weights=_humanoid_state_weights(model.nv))
 
 
 def _feet(setup: LeggedSetup) -> dict[str, pin.SE3]:
@@ -66,7 +74,7 @@ def build_manipulation(
     """Whole-body manipulation ("man"): reach ``target`` with the right hand on both feet.
 
     ``nodes`` double-support nodes (default 60 × 20 ms): right-hand translation tracking
-    (weight 1e2 running, 1e4 terminal), CoM kept above its initial position (weight 1e3),
+    (weight 1e3 running, 1e5 terminal), CoM kept above its initial position (weight 1e3),
     wrench cones, joint limits, state and control regularisation.  T = 60, nx = 77, nu = 32.
     """
     setup = _setup(lib, weights=weights)
@@ -75,8 +83,8 @@ def build_manipulation(
         raise ValueError(f"target must have shape (3,), got {target.shape}")
     feet = _feet(setup)
     hand = HANDS[1]
-    running = [_node(setup, dt, feet, {hand: (target, 1e2)}, setup.com0, 1e3) for _ in range(nodes)]
-    terminal = _node(setup, 0.0, feet, {hand: (target, 1e4)}, setup.com0, 1e3, terminal=True)
+    running = [_node(setup, dt, feet, {hand: (target, 1e3)}, setup.com0, 1e3) for _ in range(nodes)]
+    terminal = _node(setup, 0.0, feet, {hand: (target, 1e5)}, setup.com0, 1e3, terminal=True)
     return setup.problem(running, terminal)
 
 
@@ -112,7 +120,7 @@ def build_taichi(
 ) -> tuple[object, list, list]:
     """Taichi: manipulation, then standing on one foot, then balancing (3 × ``phase_knots`` nodes).
 
-    1. manipulation: both feet in contact, right hand to ``hand_target`` (weight 1e2);
+    1. manipulation: both feet in contact, right hand to ``hand_target`` (weight 1e3);
     2. standing on one foot: the left foot leaves the ground and tracks a placement ``foot_lift``
        higher (weight 1e4), the CoM moves above the right sole (weight 1e4), the hand keeps its
        target;
@@ -131,17 +139,17 @@ def build_taichi(
     lifted.translation = lifted.translation + np.array([0.0, 0.0, foot_lift])
     forward = feet[left].copy()
     forward.translation = forward.translation + np.array([0.15, 0.05, foot_lift])
-    running = [_node(setup, dt, feet, {hand: (target, 1e2)}, setup.com0, 1e3) for _ in range(phase_knots)]
+    running = [_node(setup, dt, feet, {hand: (target, 1e3)}, setup.com0, 1e3) for _ in range(phase_knots)]
     single = {right: feet[right]}
     running += [
-        _node(setup, dt, single, {hand: (target, 1e2), left: (lifted, 1e4)}, com_right, 1e4)
+        _node(setup, dt, single, {hand: (target, 1e3), left: (lifted, 1e4)}, com_right, 1e4)
         for _ in range(phase_knots)
     ]
     running += [
-        _node(setup, dt, single, {hand: (target, 1e2), left: (forward, 1e4)}, com_right, 1e4)
+        _node(setup, dt, single, {hand: (target, 1e3), left: (forward, 1e4)}, com_right, 1e4)
         for _ in range(phase_knots)
     ]
-    terminal = _node(setup, 0.0, single, {hand: (target, 1e3), left: (forward, 1e5)}, com_right, 1e5, True)
+    terminal = _node(setup, 0.0, single, {hand: (target, 1e5), left: (forward, 1e5)}, com_right, 1e5, True)
     return setup.problem(running, terminal)
 
 
@@ -207,6 +215,7 @@ def build_monkey_bar(
     dt: float = 3e-2,
     knots: tuple[int, int, int, int] = (30, 30, 30, 20),
     arm_torque_scale: float = 10.0,
+    climb_weight: float = 1e5,
     weights: Mapping[str, float] | None = None,
 ) -> tuple[object, list, list]:
     """Monkey bar: grasp a horizontal bar, climb up, land on the ground (Box-FDDP paper "bar").
@@ -218,8 +227,8 @@ def build_monkey_bar(
        1e3, CoM held, wrench cones on the soles), then a 6D impulse where the hands close on
        the bar (grasp-point weight 1e7; the soles take part in the impact);
     2. climbing (``knots[1]`` nodes hanging by the hands, no cone on the hands): the feet leave
-       the ground and track points ``climb_height`` higher (weight 1e4), the CoM rises by
-       ``climb_height`` (weight 1e4);
+       the ground and track points ``climb_height`` higher, the CoM rises by ``climb_height``
+       (both weighted ``climb_weight``);
     3. landing (``knots[2]`` nodes still hanging): the feet move to their initial places shifted
        by ``landing_shift`` forward (weight 1e4), then a 6D impulse at touch-down, then
        ``knots[3]`` nodes standing on the feet with the hands released, the CoM above the new
@@ -246,8 +255,8 @@ def build_monkey_bar(
     hanging = {h: grip_placements[h] for h in HANDS}
     for k in range(1, n_climb + 1):
         s = k / n_climb
-        tasks = {f: (feet[f].translation + s * up, 1e4) for f in FEET}
-        running.append(_node(setup, dt, hanging, tasks, setup.com0 + s * up, 1e4, friction=[]))
+        tasks = {f: (feet[f].translation + s * up, climb_weight) for f in FEET}
+        running.append(_node(setup, dt, hanging, tasks, setup.com0 + s * up, climb_weight, friction=[]))
     land = {f: pin.SE3(feet[f].rotation, feet[f].translation + forward) for f in FEET}
     for k in range(1, n_land + 1):
         s = k / n_land

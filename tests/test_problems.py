@@ -146,14 +146,14 @@ def test_registry_table() -> None:
             assert ref.iters > 0 and np.isfinite(ref.cost)
 
 
-@pytest.mark.parametrize("name", ["arm", "trot-short"])
-def test_quick_problem_solves_to_documented_cost(name: str) -> None:
+@pytest.mark.parametrize("name,solver_name", [("arm", "fddp"), ("trot-short", "fddp"), ("pend", "boxfddp")])
+def test_quick_problem_solves_to_documented_cost(name: str, solver_name: str) -> None:
     spec = registry.get(name)
     problem, xs, us = spec.build(crocopy)
     assert (problem.T, problem.nx, problem.runningModels[0].nu) == spec.dims
-    solver = crocopy.SolverFDDP(problem)
+    solver = {"fddp": crocopy.SolverFDDP, "boxfddp": crocopy.SolverBoxFDDP}[solver_name](problem)
     assert solver.solve(xs, us, spec.maxiter, False)
-    ref = spec.reference["fddp"]
+    ref = spec.reference[solver_name]
     assert solver.cost == pytest.approx(ref.cost, rel=spec.rtol)
     assert abs(solver.iter - ref.iters) <= 2
 
