@@ -249,14 +249,16 @@ def _plot_lq(results: dict, out_dir: str) -> str:
     for name, dj in deltas.items():
         axes[0].semilogy(dj, "-o", ms=3, color=colors[name], label=name)
     for r in results["random"]:
-        for name, dj in _delta(r["costs"])[0].items():
-            axes[1].semilogy(dj, color=colors[name], alpha=0.5, lw=0.8)
+        deltas_r, best_r = _delta(r["costs"])
+        for name, dj in deltas_r.items():
+            axes[1].semilogy(dj / max(abs(best_r), 1e-300), color=colors[name], alpha=0.5, lw=0.8)
     axes[0].set_title("n=20, m=7, N=200 (Fig. 2 top)")
     axes[1].set_title(f"{len(results['random'])} random LQ problems (Fig. 2 bottom)")
     for ax in axes:
         ax.set_xlabel("iteration")
-        ax.set_ylabel("ΔJ = J - J*")
         ax.set_ylim(1e-10, None)
+    axes[0].set_ylabel("ΔJ = J - J*  (J* = lowest cost reached)")
+    axes[1].set_ylabel("(J - J*) / |J*|")
     axes[0].legend()
     fig.tight_layout()
     path = os.path.join(out_dir, "boxddp_lq.png")
