@@ -152,7 +152,7 @@ def run_projection_arm(
     horizon: float = 3.0,
     maxiter: int = 20,
     timing_N: Sequence[int] = (150, 300, 600, 1200),
-    timing_iters: int = 3,
+    timing_iters: int = 5,
     th_stop: float = 1e-6,
     verbose: bool = True,
 ) -> dict:
@@ -167,7 +167,8 @@ def run_projection_arm(
     timing_N : sequence of int
         Horizons (numbers of nodes at fixed ``horizon``) for the scaling fit; empty to skip.
     timing_iters : int
-        Timed repetitions of one iteration's work per ``N`` (median reported, after a warm-up).
+        Timed repetitions of one iteration's work per ``N`` (the minimum is reported, after a
+        warm-up, to filter out load from other processes).
     th_stop : float
         Stopping threshold of the solver (``stop = |Δcost model| + σ Σ‖h‖₁``).
     verbose : bool
@@ -208,7 +209,7 @@ def run_projection_arm(
            "cpu_s": cpu, "timing": [], "r2": float("nan")}
     if timing_N:
         say(f"Time per iteration vs N (T = {horizon:g} s fixed; one iteration's work = calc + calcDiff + "
-            f"projected backward pass + one rollout (step 0), median of {timing_iters}):")
+            f"projected backward pass + one rollout (step 0), best of {timing_iters}):")
         for N in timing_N:
             p, us, _ = build_arm_problem(horizon / N, horizon)
             s = SolverProjection(p)
@@ -221,7 +222,7 @@ def run_projection_arm(
                 s.computeDirection(True)
                 s.tryStep(0.0)
                 samples.append(time.perf_counter() - t0)
-            per = float(np.median(samples[1:]))
+            per = float(np.min(samples[1:]))
             out["timing"].append((N, per))
             say(f"  N = {N:5d}: {1e3 * per:9.1f} ms/iteration")
         Ns = np.array([n for n, _ in out["timing"]], dtype=float)
