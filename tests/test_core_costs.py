@@ -8,7 +8,9 @@ import crocopy
 ACTIVATIONS = {
     "quad": lambda: crocopy.ActivationModelQuad(4),
     "wquad": lambda: crocopy.ActivationModelWeightedQuad(np.array([1.0, 2.0, 3.0, 4.0])),
-    "barrier": lambda: crocopy.ActivationModelQuadraticBarrier(crocopy.ActivationBounds(-0.5 * np.ones(4), 0.5 * np.ones(4))),
+    "barrier": lambda: crocopy.ActivationModelQuadraticBarrier(
+        crocopy.ActivationBounds(-0.5 * np.ones(4), 0.5 * np.ones(4))
+    ),
     "wbarrier": lambda: crocopy.ActivationModelWeightedQuadraticBarrier(
         crocopy.ActivationBounds(-0.5 * np.ones(4), 0.5 * np.ones(4), 0.8), np.array([1.0, 2.0, 3.0, 4.0])
     ),
@@ -73,7 +75,9 @@ def _cost_sum(state, nu):
         "xb",
         crocopy.CostModelResidual(
             state,
-            crocopy.ActivationModelQuadraticBarrier(crocopy.ActivationBounds(-0.1 * np.ones(state.ndx), 0.1 * np.ones(state.ndx))),
+            crocopy.ActivationModelQuadraticBarrier(
+                crocopy.ActivationBounds(-0.1 * np.ones(state.ndx), 0.1 * np.ones(state.ndx))
+            ),
             crocopy.ResidualModelState(state, nu),
         ),
         3.0,
