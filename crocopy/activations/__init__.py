@@ -1,7 +1,7 @@
 """Activation functions a(r): scalar of a residual r (shape ``(nr,)``), gradient ``Ar`` and Hessian ``Arr``."""
 
-from .base import ActivationDataAbstract, ActivationModelAbstract
 from .barrier import ActivationBounds, ActivationModelQuadraticBarrier, ActivationModelWeightedQuadraticBarrier
+from .base import ActivationDataAbstract, ActivationModelAbstract
 from .norms import ActivationModel2NormBarrier, ActivationModelSmooth1Norm, ActivationModelSmooth2Norm
 from .quad import ActivationModelQuad, ActivationModelWeightedQuad
 
