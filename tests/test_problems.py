@@ -174,7 +174,11 @@ def test_problem_solves_to_documented_cost(name: str, solver: str) -> None:
     cls = {"fddp": crocopy.SolverFDDP, "boxfddp": crocopy.SolverBoxFDDP}[solver]
     s = cls(problem)
     assert s.solve(xs, us, spec.maxiter, False)
-    assert s.cost == pytest.approx(spec.reference[solver].cost, rel=spec.rtol)
+    ref = spec.reference[solver]
+    if ref.exact:
+        assert s.cost == pytest.approx(ref.cost, rel=spec.rtol)
+    else:
+        assert s.cost <= ref.cost * (1.0 + spec.rtol)
 
 
 @pytest.mark.slow
