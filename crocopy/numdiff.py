@@ -24,6 +24,29 @@ class _NumDiffMixin:
     model: ActionModelAbstract | DifferentialActionModelAbstract
     disturbance: float
 
+    def __init__(self, model, with_gauss_approx: bool = False) -> None:
+        super().__init__(model.state, model.nu, model.nr, model.ng, model.nh, model.ng_T, model.nh_T)
+        self.model = model
+        self.with_gauss_approx = bool(with_gauss_approx)
+        self.disturbance = _EPS ** (1.0 / 3.0)
+        self.disturbance_hessian = _EPS ** (1.0 / 4.0)
+        if model.nu:
+            self._set_control_limits(model.u_lb, model.u_ub)
+
+    def calc(self, data, x: np.ndarray, u: np.ndarray | None = None) -> None:
+        """Evaluate the differentiated model and copy its outputs."""
+        inner = data.data_0
+        self.model.calc(inner, x, u)
+        data.cost = inner.cost
+        self._dynamics_output(data)[:] = self._dynamics_output(inner)
+        data.r[:] = inner.r
+        data.g[:] = inner.g
+        data.h[:] = inner.h
+
+    def calcDiff(self, data, x: np.ndarray, u: np.ndarray | None = None) -> None:
+        """Fill every derivative by finite differences."""
+        self._fill(data, x, u)
+
     def _perturbed(self, x: np.ndarray, u: np.ndarray | None, i: int, h: float):
         ndx = self.model.state.ndx
         if i < ndx:
@@ -117,29 +140,8 @@ class ActionModelNumDiff(_NumDiffMixin, ActionModelAbstract):
         Use ``Rᵀ R`` of the numerical residual Jacobian as cost Hessian.
     """
 
-    def __init__(self, model: ActionModelAbstract, with_gauss_approx: bool = False) -> None:
-        super().__init__(model.state, model.nu, model.nr, model.ng, model.nh, model.ng_T, model.nh_T)
-        self.model = model
-        self.with_gauss_approx = bool(with_gauss_approx)
-        self.disturbance = _EPS ** (1.0 / 3.0)
-        self.disturbance_hessian = _EPS ** (1.0 / 4.0)
-        if model.nu:
-            self._set_control_limits(model.u_lb, model.u_ub)
-
     def createData(self) -> "ActionDataNumDiff":
         return ActionDataNumDiff(self)
-
-    def calc(self, data: "ActionDataNumDiff", x: np.ndarray, u: np.ndarray | None = None) -> None:
-        inner = data.data_0
-        self.model.calc(inner, x, u)
-        data.cost = inner.cost
-        data.xnext[:] = inner.xnext
-        data.r[:] = inner.r
-        data.g[:] = inner.g
-        data.h[:] = inner.h
-
-    def calcDiff(self, data: "ActionDataNumDiff", x: np.ndarray, u: np.ndarray | None = None) -> None:
-        self._fill(data, x, u)
 
     def _dynamics_output(self, data: ActionDataAbstract) -> np.ndarray:
         return data.xnext
@@ -161,29 +163,8 @@ class ActionDataNumDiff(ActionDataAbstract):
 class DifferentialActionModelNumDiff(_NumDiffMixin, DifferentialActionModelAbstract):
     """Differential action model whose derivatives are computed by finite differences of ``model``."""
 
-    def __init__(self, model: DifferentialActionModelAbstract, with_gauss_approx: bool = False) -> None:
-        super().__init__(model.state, model.nu, model.nr, model.ng, model.nh, model.ng_T, model.nh_T)
-        self.model = model
-        self.with_gauss_approx = bool(with_gauss_approx)
-        self.disturbance = _EPS ** (1.0 / 3.0)
-        self.disturbance_hessian = _EPS ** (1.0 / 4.0)
-        if model.nu:
-            self._set_control_limits(model.u_lb, model.u_ub)
-
     def createData(self) -> "DifferentialActionDataNumDiff":
         return DifferentialActionDataNumDiff(self)
-
-    def calc(self, data: "DifferentialActionDataNumDiff", x: np.ndarray, u: np.ndarray | None = None) -> None:
-        inner = data.data_0
-        self.model.calc(inner, x, u)
-        data.cost = inner.cost
-        data.xout[:] = inner.xout
-        data.r[:] = inner.r
-        data.g[:] = inner.g
-        data.h[:] = inner.h
-
-    def calcDiff(self, data: "DifferentialActionDataNumDiff", x: np.ndarray, u: np.ndarray | None = None) -> None:
-        self._fill(data, x, u)
 
     def _dynamics_output(self, data: DifferentialActionDataAbstract) -> np.ndarray:
         return data.xout
