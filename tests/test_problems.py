@@ -140,6 +140,10 @@ def test_registry_table() -> None:
     assert set(registry.PAPER_TABLE1) == set(registry.TABLE1)
     with pytest.raises(KeyError, match="known problems"):
         registry.get("nope")
+    hop = registry.get("hop")
+    assert hop.solved(True, hop.reference["boxfddp"].cost)
+    assert not hop.solved(True, 1.75e6)
+    assert not hop.solved(False, hop.reference["boxfddp"].cost)
     for spec in registry.PROBLEMS.values():
         assert spec.description
         for ref in spec.reference.values():
