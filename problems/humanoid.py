@@ -126,7 +126,7 @@ def build_taichi(
        target;
     3. balancing: on the right foot, the left foot moves forward/outward to a raised pose, the
        CoM stays above the right sole, the hand keeps its target.
-    Terminal node: same tasks with weights ×10.  Defaults: T = 120 (2.4 s), nx = 77, nu = 32.
+    Terminal node: hand 1e5, foot 1e5, CoM 1e5.  Defaults: T = 120 (2.4 s), nx = 77, nu = 32.
     """
     setup = _setup(lib, weights=weights)
     target = np.asarray(hand_target, dtype=float)
