@@ -40,3 +40,17 @@ def test_solve_unknown_problem_is_a_clear_error(capsys):
 def test_unknown_paper_experiment(capsys):
     assert main(["paper", "hddp", "nope"]) == 2
     assert "known:" in capsys.readouterr().err
+
+
+def test_table1_row_uses_the_registry_success_rule(capsys):
+    from crocopy.problems import registry
+
+    assert main(["table1", "pend"]) == 0
+    out = capsys.readouterr().out
+    row = next(line for line in out.splitlines() if line.startswith("| pend |"))
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    spec = registry.get("pend")
+    assert cells[6] == "✓" and int(cells[4]) == 92  # Box-FDDP, same iterations as Crocoddyl 3.2.1
+    assert cells[3] == ("✓" if spec.solved(True, float(cells[2])) else "✗")
+    assert not spec.solved(True, 100.0 * spec.reference["boxfddp"].cost)
+    assert not spec.solved(False, spec.reference["boxfddp"].cost)
