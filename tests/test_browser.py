@@ -18,8 +18,9 @@ import example_robot_data as erd
 import numpy as np
 import pinocchio as pin
 import pytest
-from crocopy.models.display import MeshcatDisplay
 from PIL import Image
+
+from crocopy.models.display import MeshcatDisplay
 
 CHROMIUM = "/usr/bin/chromium"
 FLAGS = [

@@ -11,11 +11,11 @@ import example_robot_data as erd
 import numpy as np
 import pinocchio as pin
 import pytest
+
+import crocopy
 from crocopy.models import display as display_module
 from crocopy.models.display import MeshcatDisplay, start_meshcat_server
 from crocopy.models.html_export import _key_frames, export_html, static_html_commands
-
-import crocopy
 
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from crocopy.problems import arm, humanoid, pendulum, quadruped, registry
 
 import crocopy
+from crocopy.problems import arm, humanoid, pendulum, quadruped, registry
 
 SMALL = {
     "pend": (pendulum.build_pendulum, {"nodes": 10}, (4, 1)),
