@@ -16,4 +16,5 @@ for name in ("pend", "arm", "quad-goal", "trot-short"):
         loggers[solver_name] = logger
         print(f"{name:10s} {solver_name:14s} solved={spec.solved(ok, solver.cost)!s:5s} "
               f"iterations={solver.iter:4d} cost={solver.cost:.6g}")
-    print("  gaps plot:", plot_feasibility(loggers, f"{name}_gaps.png"))
+    plot_feasibility(loggers, f"{name}_gaps.png", title=name)
+    print(f"  gap norms per iteration plotted in {name}_gaps.png")

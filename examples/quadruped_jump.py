@@ -17,7 +17,7 @@ solver = crocopy.SolverBoxFDDP(problem)
 solver.setCallbacks([crocopy.CallbackVerbose()])
 solver.solve(xs, us, 300, False)
 print(f"{solver.reason}: {solver.iter} iterations, cost {solver.cost:.2f}")
-print("max |torque| =", max(abs(u).max() for u in solver.us), "N m (limit 32)")
+print("max |torque| =", max(abs(u).max() for u in solver.us if u.size), "N m (limit 32)")
 
 robot = example_robot_data.load("anymal")
 print("animation:", export_html_from_solver(robot, solver, "jump.html"))
