@@ -4,7 +4,7 @@ Computes, for node t with next value function ``(V'x, V'xx)`` (Crocoddyl signs):
 
     Qx = Lx + Fxᵀ V'x,  Qu = Lu + Fuᵀ V'x,  Qxx = Lxx + Fxᵀ V'xx Fx,
     Qxu = Lxu + Fxᵀ V'xx Fu,  Quu = Luu + Fuᵀ V'xx Fu + preg I,
-    [k K] = Quu⁻¹ [Qu Qux]  (Cholesky),
+    [k K] = L⁻ᵀ L⁻¹ [Qu Qux]  (Quu = L Lᵀ; L⁻¹ by LAPACK, the products by BLAS),
     Vx = Qx - Qxu k,  Vxx = sym(Qxx - Qxu K) + preg I,  Vx += Vxx f  (if gaps are open)
 
 ``riccati_step`` returns False when ``Quu`` is not positive definite (the caller raises the
@@ -50,21 +50,11 @@ def _riccati_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, Qx
                 for p in range(j):
                     s -= L[i, p] * L[j, p]
                 L[i, j] = s / L[j, j]
+        Linv = np.linalg.inv(L)
         rhs = np.empty((nu, ndx + 1))
         rhs[:, :ndx] = Qxu.T
         rhs[:, ndx] = Qu
-        for i in range(nu):
-            for c in range(ndx + 1):
-                s = rhs[i, c]
-                for p in range(i):
-                    s -= L[i, p] * rhs[p, c]
-                rhs[i, c] = s / L[i, i]
-        for i in range(nu - 1, -1, -1):
-            for c in range(ndx + 1):
-                s = rhs[i, c]
-                for p in range(i + 1, nu):
-                    s -= L[p, i] * rhs[p, c]
-                rhs[i, c] = s / L[i, i]
+        rhs = Linv.T @ (Linv @ rhs)
         K[:, :] = rhs[:, :ndx]
         k[:] = rhs[:, ndx]
         Vxx[:, :] = Qxx - Qxu @ K
