@@ -21,6 +21,10 @@ def as_vector(value: Any, size: int, name: str, allow_nonfinite: bool = False) -
     allow_nonfinite : bool
         Accept NaN/inf entries (used for bounds, where inf means "unbounded").
     """
+    if type(value) is np.ndarray and value.dtype == np.float64 and value.shape == (size,):
+        total = value.sum()
+        if total == total and (allow_nonfinite or abs(total) != np.inf):
+            return value
     try:
         arr = np.asarray(value, dtype=float)
     except (TypeError, ValueError) as exc:

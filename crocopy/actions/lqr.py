@@ -53,6 +53,10 @@ class ActionModelLQR(ActionModelAbstract):
         self.A = as_matrix(A, (nx, nx), "A")
         self.B = as_matrix(B, (nx, nu), "B")
         self.f = as_vector(f, nx, "f")
+        lq = self._lq
+        self._AB = np.hstack([self.A, self.B])
+        self._H = np.block([[lq.Q, lq.N], [lq.N.T, lq.R]])
+        self._h = np.concatenate([lq.q, lq.r])
 
     Q = property(lambda self: self._lq.Q)
     R = property(lambda self: self._lq.R)
@@ -78,17 +82,51 @@ class ActionModelLQR(ActionModelAbstract):
             rng.standard_normal(ng), rng.standard_normal(nh),
         )
 
-    def calc(self, data: ActionDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
+    def createData(self) -> "ActionDataLQR":
+        return ActionDataLQR(self)
+
+    def calc(self, data: "ActionDataLQR", x: np.ndarray, u: np.ndarray | None = None) -> None:
         if u is None:
             data.xnext[:] = x
+            data.cost = self._lq.cost(x, None)
         else:
-            data.xnext[:] = self.A @ x + self.B @ u + self.f
-        data.cost = self._lq.cost(x, u)
-        self._lq.fill_constraints(data, x, u, diff=False)
+            z, Hz = data.z, data.Hz
+            nx = z.size - u.size
+            z[:nx] = x
+            z[nx:] = u
+            np.dot(self._AB, z, out=data.xnext)
+            data.xnext += self.f
+            np.dot(self._H, z, out=Hz)
+            data.cost = 0.5 * float(z @ Hz) + float(self._h @ z)
+        if data.g.size or data.h.size:
+            self._lq.fill_constraints(data, x, u, diff=False)
 
-    def calcDiff(self, data: ActionDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
-        if u is not None:
-            data.Fx[:] = self.A
-            data.Fu[:] = self.B
-        self._lq.fill_cost_derivatives(data, x, u)
-        self._lq.fill_constraints(data, x, u, diff=True)
+    def calcDiff(self, data: "ActionDataLQR", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        """Gradients only: ``Fx, Fu, Lxx, Lxu, Luu`` are constant and set in :meth:`createData`."""
+        if u is None:
+            self._lq.fill_cost_derivatives(data, x, None)
+        else:
+            z, grad = data.z, data.Hz
+            nx = z.size - u.size
+            z[:nx] = x
+            z[nx:] = u
+            np.dot(self._H, z, out=grad)
+            grad += self._h
+            data.Lx[:] = grad[:nx]
+            data.Lu[:] = grad[nx:]
+        if data.g.size or data.h.size:
+            self._lq.fill_constraints(data, x, u, diff=True)
+
+
+class ActionDataLQR(ActionDataAbstract):
+    """Data of :class:`ActionModelLQR`, with the constant derivatives filled once and a ``z = (x, u)`` buffer."""
+
+    def __init__(self, model: ActionModelLQR) -> None:
+        super().__init__(model)
+        self.Fx[:] = model.A
+        self.Fu[:] = model.B
+        self.Lxx[:] = model.Q
+        self.Lxu[:] = model.N
+        self.Luu[:] = model.R
+        self.z = np.zeros(model.state.nx + model.nu)
+        self.Hz = np.zeros(model.state.nx + model.nu)

@@ -143,9 +143,12 @@ class SolverAbstract:
         return self.gfeas
 
     def _norm(self, vectors: Sequence[np.ndarray]) -> float:
+        stacked = np.concatenate(vectors) if len(vectors) else np.zeros(0)
+        if not stacked.size:
+            return 0.0
         if self.feasNorm == FeasibilityNorm.LInf:
-            return float(max((np.max(np.abs(v)) for v in vectors if v.size), default=0.0))
-        return float(sum(np.sum(np.abs(v)) for v in vectors))
+            return float(np.abs(stacked).max())
+        return float(np.abs(stacked).sum())
 
     def _check_x0(self) -> None:
         if not np.all(np.isfinite(self.problem.x0)):
