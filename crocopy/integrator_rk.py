@@ -43,12 +43,16 @@ class IntegratedActionModelRK(IntegratedActionModelAbstract):
         self.rk_c, self.rk_b = _TABLEAUX[rktype]
         self.ni = len(self.rk_c)
 
+    def _differential_data(self, data: "IntegratedActionDataRK"):
+        """The first stage's data: the differential model evaluated at the node's own state."""
+        return data.differential[0]
+
     def createData(self) -> "IntegratedActionDataRK":
         return IntegratedActionDataRK(self)
 
     def calc(self, data: "IntegratedActionDataRK", x: np.ndarray, u: np.ndarray | None = None) -> None:
         if u is None:
-            self._terminal_calc(data, data.differential[0], x)
+            self._terminal_calc(data, self._differential_data(data), x)
             return
         nv, dt, state = self.state.nv, self._dt, self.state
         cost = 0.0
@@ -77,7 +81,7 @@ class IntegratedActionModelRK(IntegratedActionModelAbstract):
 
     def calcDiff(self, data: "IntegratedActionDataRK", x: np.ndarray, u: np.ndarray | None = None) -> None:
         if u is None:
-            self._terminal_calcDiff(data, data.differential[0], x)
+            self._terminal_calcDiff(data, self._differential_data(data), x)
             return
         nv, dt, state = self.state.nv, self._dt, self.state
         ndx = state.ndx

@@ -141,3 +141,14 @@ def test_numdiff_on_lie_group_state_matches_analytic_free_dynamics():
     np.testing.assert_allclose(d.Fx, dn.Fx, atol=1e-5 * scale)
     np.testing.assert_allclose(d.Fu, dn.Fu, atol=1e-5 * max(1.0, np.abs(d.Fu).max()))
     np.testing.assert_allclose(d.Lx, dn.Lx, atol=1e-5 * max(1.0, np.abs(d.Lx).max()))
+
+
+@pytest.mark.parametrize("integrator", sorted(INTEGRATORS))
+def test_integrated_quasi_static_gives_zero_acceleration(integrator):
+    dam = crocopy.DifferentialActionModelLQR(2, 2)
+    iam = INTEGRATORS[integrator](dam)
+    x = np.array([0.3, -0.2, 0.0, 0.0])
+    u = iam.quasiStatic(iam.createData(), x)
+    dd = dam.createData()
+    dam.calc(dd, x, u)
+    np.testing.assert_allclose(dd.xout, 0.0, atol=1e-9)
