@@ -115,15 +115,7 @@ class BoxSolverMixin:
             return
         problem = self.problem
         T = problem.T
-        td = problem.terminalData
-        Vxx, Vx = self.Vxx[T], self.Vx[T]
-        Vxx[:] = td.Lxx
-        Vx[:] = td.Lx
-        if self.preg:
-            Vxx.flat[:: Vxx.shape[0] + 1] += self.preg
-        gaps = not self.isFeasible
-        if gaps:
-            Vx += Vxx @ self.fs[T]
+        gaps = self._terminal_value_function()
         preg = float(self.preg)
         box_mode = self._box_mode()
         general = bool(self.general_value_update)

@@ -189,16 +189,8 @@ class SolverDDP(SolverAbstract):
             self._backward_pass_kernel()
             return
         problem = self.problem
-        T = problem.T
-        td = problem.terminalData
-        Vxx, Vx = self.Vxx[T], self.Vx[T]
-        Vxx[:] = td.Lxx
-        Vx[:] = td.Lx
-        if self.preg:
-            Vxx.flat[:: Vxx.shape[0] + 1] += self.preg
-        if not self.isFeasible:
-            Vx += Vxx @ self.fs[T]
-        for t in range(T - 1, -1, -1):
+        self._terminal_value_function()
+        for t in range(problem.T - 1, -1, -1):
             model, data = problem.runningModels[t], problem.runningDatas[t]
             self.computeActionValueFunction(t, model, data)
             if model.nu:
@@ -207,10 +199,10 @@ class SolverDDP(SolverAbstract):
             if not (np.isfinite(self.Vx[t]).all() and np.isfinite(self.Vxx[t]).all()):
                 raise BackwardPassError(f"non-finite value function at node {t}")
 
-    def _backward_pass_kernel(self) -> None:
-        problem = self.problem
-        T = problem.T
-        td = problem.terminalData
+    def _terminal_value_function(self) -> bool:
+        """``V_T`` from the terminal cost (+ ``preg`` I, gap-deflected); returns True when gaps are open."""
+        T = self.problem.T
+        td = self.problem.terminalData
         Vxx, Vx = self.Vxx[T], self.Vx[T]
         Vxx[:] = td.Lxx
         Vx[:] = td.Lx
@@ -219,6 +211,12 @@ class SolverDDP(SolverAbstract):
         gaps = not self.isFeasible
         if gaps:
             Vx += Vxx @ self.fs[T]
+        return gaps
+
+    def _backward_pass_kernel(self) -> None:
+        problem = self.problem
+        T = problem.T
+        gaps = self._terminal_value_function()
         step = riccati_kernel.riccati_step
         preg = float(self.preg)
         for t in range(T - 1, -1, -1):
