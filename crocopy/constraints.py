@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .data_collector import DataCollectorAbstract
+from .named_items import NamedItems
 from .residual_base import ResidualModelAbstract
 from .state import StateAbstract
 from .validation import as_vector, check_bounds
@@ -191,7 +192,7 @@ class ConstraintItem:
         return f"{{{self.constraint!r}}}"
 
 
-class ConstraintModelManager:
+class ConstraintModelManager(NamedItems):
     """Named constraints stacked into one ``g``/``h`` (Crocoddyl's ``ConstraintModelManager``).
 
     Parameters
@@ -201,6 +202,8 @@ class ConstraintModelManager:
     nu : int, optional
         Control dimension (default ``state.nv``).
     """
+
+    _kind = "constraint"
 
     def __init__(self, state: StateAbstract, nu: int | None = None) -> None:
         if not isinstance(state, StateAbstract):
@@ -216,16 +219,6 @@ class ConstraintModelManager:
     def constraints(self) -> dict[str, ConstraintItem]:
         """All items (active or not), ordered by name."""
         return self._items
-
-    @property
-    def active_set(self) -> set[str]:
-        """Names of the active constraints."""
-        return {n for n, c in self._items.items() if c.active}
-
-    @property
-    def inactive_set(self) -> set[str]:
-        """Names of the inactive constraints."""
-        return {n for n, c in self._items.items() if not c.active}
 
     def _recount(self) -> None:
         active = [c.constraint for c in self._items.values() if c.active]
@@ -252,35 +245,24 @@ class ConstraintModelManager:
         """Add ``constraint`` under ``name`` (items are kept ordered by name)."""
         if not isinstance(constraint, ConstraintModelAbstract):
             raise ValueError(f"constraint must be a ConstraintModelAbstract, got {type(constraint).__name__}")
-        if name in self._items:
-            raise ValueError(f"a constraint named {name!r} already exists")
+        self._check_new_name(name)
         if constraint.nu != self.nu:
             raise ValueError(f"constraint {name!r} has nu = {constraint.nu}, expected nu = {self.nu}")
         if constraint.state.nx != self.state.nx or constraint.state.ndx != self.state.ndx:
             raise ValueError(f"constraint {name!r} was built on a state of another dimension")
-        self._items[name] = ConstraintItem(name, constraint, bool(active))
-        self._items = dict(sorted(self._items.items()))
-        self._recount()
+        self._insert(name, ConstraintItem(name, constraint, bool(active)))
 
     def removeConstraint(self, name: str) -> None:
         """Remove the constraint ``name``."""
-        if name not in self._items:
-            raise KeyError(f"no constraint named {name!r}")
-        del self._items[name]
-        self._recount()
+        self._remove(name)
 
     def changeConstraintStatus(self, name: str, active: bool) -> None:
         """Activate or deactivate the constraint ``name``."""
-        if name not in self._items:
-            raise KeyError(f"no constraint named {name!r}")
-        self._items[name].active = bool(active)
-        self._recount()
+        self._set_active(name, active)
 
     def getConstraintStatus(self, name: str) -> bool:
         """True if the constraint ``name`` is active."""
-        if name not in self._items:
-            raise KeyError(f"no constraint named {name!r}")
-        return self._items[name].active
+        return self._get(name).active
 
     def createData(self, data: DataCollectorAbstract | None = None) -> "ConstraintDataManager":
         """Allocate one data per item plus the stacked arrays, sized for the current active set."""

@@ -13,6 +13,7 @@ import numpy as np
 
 from .activations import ActivationModelAbstract, ActivationModelQuad
 from .data_collector import DataCollectorAbstract
+from .named_items import NamedItems
 from .residual_base import ResidualModelAbstract
 from .state import StateAbstract
 
@@ -120,7 +121,7 @@ class CostItem:
         return f"{{w={self.weight}, {self.cost!r}}}"
 
 
-class CostModelSum:
+class CostModelSum(NamedItems):
     """Weighted sum of named costs (Crocoddyl's ``CostModelSum``).
 
     Parameters
@@ -131,53 +132,43 @@ class CostModelSum:
         Control dimension (default ``state.nv``).
     """
 
+    _kind = "cost"
+    _sorted = False
+
     def __init__(self, state: StateAbstract, nu: int | None = None) -> None:
         self.state = state
         self.nu = state.nv if nu is None else int(nu)
-        self.costs: dict[str, CostItem] = {}
+        self._items: dict[str, CostItem] = {}
         self.nr = 0
         self.nr_total = 0
 
     @property
-    def active_set(self) -> set[str]:
-        """Names of the active costs."""
-        return {n for n, c in self.costs.items() if c.active}
-
-    @property
-    def inactive_set(self) -> set[str]:
-        """Names of the inactive costs."""
-        return {n for n, c in self.costs.items() if not c.active}
+    def costs(self) -> dict[str, CostItem]:
+        """All items (active or not), in insertion order."""
+        return self._items
 
     def _recount(self) -> None:
-        self.nr = sum(c.cost.activation.nr for c in self.costs.values() if c.active)
-        self.nr_total = sum(c.cost.activation.nr for c in self.costs.values())
+        self.nr = sum(c.cost.activation.nr for c in self._items.values() if c.active)
+        self.nr_total = sum(c.cost.activation.nr for c in self._items.values())
 
     def addCost(self, name: str, cost: CostModelAbstract, weight: float, active: bool = True) -> None:
         """Add ``weight * cost`` under ``name``."""
-        if name in self.costs:
-            raise ValueError(f"a cost named {name!r} already exists")
+        self._check_new_name(name)
         if cost.nu != self.nu:
             raise ValueError(f"cost {name!r} has nu = {cost.nu}, expected nu = {self.nu}")
         if cost.state.nx != self.state.nx or cost.state.ndx != self.state.ndx:
             raise ValueError(f"cost {name!r} was built on a state of another dimension")
         if not np.isfinite(weight):
             raise ValueError(f"weight of cost {name!r} must be finite, got {weight}")
-        self.costs[name] = CostItem(name, cost, float(weight), bool(active))
-        self._recount()
+        self._insert(name, CostItem(name, cost, float(weight), bool(active)))
 
     def removeCost(self, name: str) -> None:
         """Remove the cost ``name``."""
-        if name not in self.costs:
-            raise KeyError(f"no cost named {name!r}")
-        del self.costs[name]
-        self._recount()
+        self._remove(name)
 
     def changeCostStatus(self, name: str, active: bool) -> None:
         """Activate or deactivate the cost ``name``."""
-        if name not in self.costs:
-            raise KeyError(f"no cost named {name!r}")
-        self.costs[name].active = bool(active)
-        self._recount()
+        self._set_active(name, active)
 
     def createData(self, data: DataCollectorAbstract | None = None) -> "CostDataSum":
         return CostDataSum(self, data)

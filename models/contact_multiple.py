@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from crocopy.named_items import NamedItems
 from crocopy.state import StateAbstract
 
 from .contact_base import ContactDataAbstract, ContactModelAbstract
@@ -30,7 +31,7 @@ class ContactItem:
         return f"{{{self.name}, {self.contact!r}, active={self.active}}}"
 
 
-class ContactModelMultiple:
+class ContactModelMultiple(NamedItems):
     """Crocoddyl's ``ContactModelMultiple(state, nu=state.nv)``.
 
     Parameters
@@ -50,6 +51,8 @@ class ContactModelMultiple:
         Also evaluate inactive contacts in ``calc``/``calcDiff`` (default False).
     """
 
+    _kind = "contact"
+
     def __init__(self, state: StateAbstract, nu: int | None = None) -> None:
         if not isinstance(getattr(state, "pinocchio", None), pin.Model):
             raise ValueError(f"state must be a StateMultibody, got {type(state).__name__}")
@@ -65,18 +68,7 @@ class ContactModelMultiple:
     def contacts(self) -> dict[str, ContactItem]:
         return self._items
 
-    @property
-    def active_set(self) -> set[str]:
-        """Names of the active contacts."""
-        return {n for n, c in self._items.items() if c.active}
-
-    @property
-    def inactive_set(self) -> set[str]:
-        """Names of the inactive contacts."""
-        return {n for n, c in self._items.items() if not c.active}
-
     def _recount(self) -> None:
-        self._items = dict(sorted(self._items.items()))
         self.nc = sum(c.contact.nc for c in self._items.values() if c.active)
         self.nc_total = sum(c.contact.nc for c in self._items.values())
         self._active = [(n, c.contact) for n, c in self._items.items() if c.active]
@@ -97,36 +89,26 @@ class ContactModelMultiple:
         """
         if not isinstance(contact, ContactModelAbstract):
             raise ValueError(f"contact must be a ContactModelAbstract, got {type(contact).__name__}")
-        if name in self._items:
-            raise ValueError(f"a contact named {name!r} already exists")
+        self._check_new_name(name)
         if contact.nu != self.nu:
             raise ValueError(f"contact {name!r} has nu = {contact.nu}, expected nu = {self.nu}")
         if contact.state.pinocchio is not self.state.pinocchio and (
             contact.state.nx != self.state.nx or contact.state.pinocchio.nframes != self.state.pinocchio.nframes
         ):
             raise ValueError(f"contact {name!r} was built on the model of another robot")
-        self._items[name] = ContactItem(name, contact, bool(active))
-        self._recount()
+        self._insert(name, ContactItem(name, contact, bool(active)))
 
     def removeContact(self, name: str) -> None:
         """Remove the contact ``name`` (``KeyError`` if unknown)."""
-        if name not in self._items:
-            raise KeyError(f"no contact named {name!r}")
-        del self._items[name]
-        self._recount()
+        self._remove(name)
 
     def changeContactStatus(self, name: str, active: bool) -> None:
         """Activate or deactivate the contact ``name`` (``KeyError`` if unknown)."""
-        if name not in self._items:
-            raise KeyError(f"no contact named {name!r}")
-        self._items[name].active = bool(active)
-        self._recount()
+        self._set_active(name, active)
 
     def getContactStatus(self, name: str) -> bool:
         """True if the contact ``name`` is active (``KeyError`` if unknown)."""
-        if name not in self._items:
-            raise KeyError(f"no contact named {name!r}")
-        return self._items[name].active
+        return self._get(name).active
 
     def createData(self, data: pin.Data) -> "ContactDataMultiple":
         """Allocate the data of every contact (on the node's ``pinocchio.Data``) and the stacked arrays."""

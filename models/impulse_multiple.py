@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from crocopy.named_items import NamedItems
 from crocopy.state import StateAbstract
 
 from .impulse_base import ImpulseDataAbstract, ImpulseModelAbstract
@@ -29,7 +30,7 @@ class ImpulseItem:
         return f"{{{self.name}, {self.impulse!r}, active={self.active}}}"
 
 
-class ImpulseModelMultiple:
+class ImpulseModelMultiple(NamedItems):
     """Crocoddyl's ``ImpulseModelMultiple(state)``.
 
     Attributes
@@ -39,6 +40,8 @@ class ImpulseModelMultiple:
     nc, nc_total : int
         Dimension of the active impulses, of all impulses.
     """
+
+    _kind = "impulse"
 
     def __init__(self, state: StateAbstract) -> None:
         if not isinstance(getattr(state, "pinocchio", None), pin.Model):
@@ -52,52 +55,31 @@ class ImpulseModelMultiple:
     def impulses(self) -> dict[str, ImpulseItem]:
         return self._items
 
-    @property
-    def active_set(self) -> set[str]:
-        """Names of the active impulses."""
-        return {n for n, c in self._items.items() if c.active}
-
-    @property
-    def inactive_set(self) -> set[str]:
-        """Names of the inactive impulses."""
-        return {n for n, c in self._items.items() if not c.active}
-
     def _recount(self) -> None:
-        self._items = dict(sorted(self._items.items()))
         self.nc = sum(c.impulse.nc for c in self._items.values() if c.active)
         self.nc_total = sum(c.impulse.nc for c in self._items.values())
         self._active = [(n, c.impulse) for n, c in self._items.items() if c.active]
         self._inactive = [(n, c.impulse) for n, c in self._items.items() if not c.active]
         self._lwa = [(n, c) for n, c in self._active if c.type != pin.LOCAL]
 
-    def _get(self, name: str) -> ImpulseItem:
-        if name not in self._items:
-            raise KeyError(f"no impulse named {name!r}")
-        return self._items[name]
-
     def addImpulse(self, name: str, impulse: ImpulseModelAbstract, active: bool = True) -> None:
         """Add ``impulse`` under ``name`` (``ValueError`` if the name is taken or the robot differs)."""
         if not isinstance(impulse, ImpulseModelAbstract):
             raise ValueError(f"impulse must be an ImpulseModelAbstract, got {type(impulse).__name__}")
-        if name in self._items:
-            raise ValueError(f"an impulse named {name!r} already exists")
+        self._check_new_name(name)
         if impulse.state.pinocchio is not self.state.pinocchio and (
             impulse.state.nx != self.state.nx or impulse.state.pinocchio.nframes != self.state.pinocchio.nframes
         ):
             raise ValueError(f"impulse {name!r} was built on the model of another robot")
-        self._items[name] = ImpulseItem(name, impulse, bool(active))
-        self._recount()
+        self._insert(name, ImpulseItem(name, impulse, bool(active)))
 
     def removeImpulse(self, name: str) -> None:
         """Remove the impulse ``name`` (``KeyError`` if unknown)."""
-        self._get(name)
-        del self._items[name]
-        self._recount()
+        self._remove(name)
 
     def changeImpulseStatus(self, name: str, active: bool) -> None:
         """Activate or deactivate the impulse ``name`` (``KeyError`` if unknown)."""
-        self._get(name).active = bool(active)
-        self._recount()
+        self._set_active(name, active)
 
     def getImpulseStatus(self, name: str) -> bool:
         """True if the impulse ``name`` is active (``KeyError`` if unknown)."""
