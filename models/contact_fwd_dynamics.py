@@ -28,6 +28,7 @@ from crocopy.diff_action_base import DifferentialActionDataAbstract, Differentia
 
 from .contact_multiple import ContactModelMultiple
 from .data_collectors import DataCollectorJointActMultibodyInContact
+from .dynamics_options import ArmatureMixin, KKTDampingMixin
 
 
 def check_vector_shape(value: np.ndarray, size: int, name: str) -> None:
@@ -42,7 +43,7 @@ def link_cost_data(data: object, costs_data: object) -> None:
         setattr(data, name, getattr(costs_data, name))
 
 
-class DifferentialActionModelContactFwdDynamics(DifferentialActionModelAbstract):
+class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, DifferentialActionModelAbstract):
     """Crocoddyl's ``DifferentialActionModelContactFwdDynamics(state, actuation, contacts, costs,
     constraints=None, inv_damping=0., enable_force=False)``.
 
@@ -118,8 +119,7 @@ class DifferentialActionModelContactFwdDynamics(DifferentialActionModelAbstract)
         self.enable_force = bool(enable_force)
         self.use_pinocchio_constraints = True
         self.JMinvJt_damping = inv_damping
-        self._armature = np.zeros(state.nv)
-        self._with_armature = False
+        self.armature = np.zeros(state.nv)
         if constraints is not None:
             self.g_lb = constraints.g_lb.copy()
             self.g_ub = constraints.g_ub.copy()
@@ -127,31 +127,6 @@ class DifferentialActionModelContactFwdDynamics(DifferentialActionModelAbstract)
         # has_control_limits stays False until they are assigned
         self._u_lb = np.array(actuation.u_lb, dtype=float)
         self._u_ub = np.array(actuation.u_ub, dtype=float)
-
-    @property
-    def JMinvJt_damping(self) -> float:
-        """Damping factor of ``Jc M⁻¹ Jcᵀ`` (non-negative)."""
-        return self._damping
-
-    @JMinvJt_damping.setter
-    def JMinvJt_damping(self, value: float) -> None:
-        value = float(value)
-        if not value >= 0.0:
-            raise ValueError(f"inv_damping must be non-negative, got {value}")
-        self._damping = value
-
-    @property
-    def armature(self) -> np.ndarray:
-        """Armature added to the diagonal of ``M``, shape ``(nv,)``."""
-        return self._armature
-
-    @armature.setter
-    def armature(self, value: np.ndarray) -> None:
-        arm = np.asarray(value, dtype=float)
-        if arm.shape != (self.state.nv,):
-            raise ValueError(f"armature has shape {arm.shape}, expected ({self.state.nv},)")
-        self._armature = arm.copy()
-        self._with_armature = bool(np.any(arm != 0.0))
 
     def createData(self) -> "DifferentialActionDataContactFwdDynamics":
         return DifferentialActionDataContactFwdDynamics(self)

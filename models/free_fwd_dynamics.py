@@ -33,11 +33,12 @@ from crocopy.validation import as_vector
 
 from .actuations import ActuationModelFloatingBase, ActuationModelFloatingBaseThrusters, ActuationModelFull
 from .data_collectors import DataCollectorJointActMultibody
+from .dynamics_options import ArmatureMixin
 from .residuals_frame import check_same_robot
 from .state_multibody import StateMultibody
 
 
-class DifferentialActionModelFreeFwdDynamics(DifferentialActionModelAbstract):
+class DifferentialActionModelFreeFwdDynamics(ArmatureMixin, DifferentialActionModelAbstract):
     """Crocoddyl's ``DifferentialActionModelFreeFwdDynamics(state, actuation, costs, constraints=None)``.
 
     Parameters
@@ -88,8 +89,7 @@ class DifferentialActionModelFreeFwdDynamics(DifferentialActionModelAbstract):
         self.pinocchio = state.pinocchio
         self._u_lb = np.array(actuation.u_lb, dtype=float)
         self._u_ub = np.array(actuation.u_ub, dtype=float)
-        self._armature = np.zeros(state.nv)
-        self._with_armature = False
+        self.armature = np.zeros(state.nv)
         self._dtau_dx_nonzero = not isinstance(
             actuation, ActuationModelFull | ActuationModelFloatingBase | ActuationModelFloatingBaseThrusters
         )
@@ -99,17 +99,6 @@ class DifferentialActionModelFreeFwdDynamics(DifferentialActionModelAbstract):
             self._Fu_cols = slice(0, state.nv)
         elif type(actuation) is ActuationModelFloatingBase:
             self._Fu_cols = slice(state.nv - actuation.nu, state.nv)
-
-    @property
-    def armature(self) -> np.ndarray:
-        """Armature added to the diagonal of the mass matrix, shape ``(nv,)``."""
-        return self._armature
-
-    @armature.setter
-    def armature(self, value: np.ndarray) -> None:
-        arm = as_vector(value, self.state.nv, "armature")
-        self._armature = arm
-        self._with_armature = bool(np.any(arm != 0.0))
 
     def createData(self) -> "DifferentialActionDataFreeFwdDynamics":
         return DifferentialActionDataFreeFwdDynamics(self)

@@ -26,10 +26,11 @@ from crocopy.costs import CostModelSum
 
 from .contact_fwd_dynamics import check_vector_shape, link_cost_data
 from .data_collectors import DataCollectorMultibodyInImpulse
+from .dynamics_options import ArmatureMixin, KKTDampingMixin
 from .impulse_multiple import ImpulseModelMultiple
 
 
-class ActionModelImpulseFwdDynamics(ActionModelAbstract):
+class ActionModelImpulseFwdDynamics(ArmatureMixin, KKTDampingMixin, ActionModelAbstract):
     """Crocoddyl's ``ActionModelImpulseFwdDynamics(state, impulses, costs, constraints=None, r_coeff=0.,
     inv_damping=0., enable_force=False)``.
 
@@ -87,8 +88,7 @@ class ActionModelImpulseFwdDynamics(ActionModelAbstract):
         self.r_coeff = r_coeff
         self.JMinvJt_damping = inv_damping
         self.enable_force = bool(enable_force)
-        self._armature = np.zeros(state.nv)
-        self._with_armature = False
+        self.armature = np.zeros(state.nv)
         self._model_nograv = state.pinocchio.copy()
         self._model_nograv.gravity.setZero()
         if constraints is not None:
@@ -106,31 +106,6 @@ class ActionModelImpulseFwdDynamics(ActionModelAbstract):
         if not value >= 0.0:
             raise ValueError(f"r_coeff must be non-negative, got {value}")
         self._r_coeff = value
-
-    @property
-    def JMinvJt_damping(self) -> float:
-        """Damping factor of ``Jc M⁻¹ Jcᵀ`` (non-negative)."""
-        return self._damping
-
-    @JMinvJt_damping.setter
-    def JMinvJt_damping(self, value: float) -> None:
-        value = float(value)
-        if not value >= 0.0:
-            raise ValueError(f"inv_damping must be non-negative, got {value}")
-        self._damping = value
-
-    @property
-    def armature(self) -> np.ndarray:
-        """Armature added to the diagonal of ``M``, shape ``(nv,)``."""
-        return self._armature
-
-    @armature.setter
-    def armature(self, value: np.ndarray) -> None:
-        arm = np.asarray(value, dtype=float)
-        if arm.shape != (self.state.nv,):
-            raise ValueError(f"armature has shape {arm.shape}, expected ({self.state.nv},)")
-        self._armature = arm.copy()
-        self._with_armature = bool(np.any(arm != 0.0))
 
     def createData(self) -> "ActionDataImpulseFwdDynamics":
         return ActionDataImpulseFwdDynamics(self)
