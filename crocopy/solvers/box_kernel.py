@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .riccati_kernel import available, njit
+from .riccati_kernel import available, finish_value_function, njit
 
 
 def _chol_inverse(H, idx, nf, out):
@@ -129,7 +129,6 @@ def _box_qp(H, q, lb, ub, x, th_grad, maxiter, free, Hinv):
 def _box_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, u, lb, ub, th_grad, maxiter, general,
               Qxx, Qxu, Quu, Qx, Qu, K, k, Quu_inv, Vxx, Vx):
     nu = Fu.shape[1]
-    ndx = Fx.shape[1]
     FxTV = Fx.T @ Vxx_n
     Qxx[:, :] = Lxx + FxTV @ Fx
     Qx[:] = Lx + Fx.T @ Vx_n
@@ -166,14 +165,7 @@ def _box_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, u, lb,
     Vx[:] = Qx - K.T @ Qu
     if clamped and general:
         Vx[:] += K.T @ (Quu @ k) - Qxu @ k
-    for i in range(ndx):
-        for j in range(i + 1, ndx):
-            m = 0.5 * (Vxx[i, j] + Vxx[j, i])
-            Vxx[i, j] = m
-            Vxx[j, i] = m
-        Vxx[i, i] += preg
-    if gaps:
-        Vx[:] += Vxx @ fs
+    finish_value_function(Vxx, Vx, preg, fs, gaps)
     return True, nfact, clamped
 
 

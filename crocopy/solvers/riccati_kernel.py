@@ -24,6 +24,22 @@ except ImportError:  # pragma: no cover - exercised only without numba
 available = njit is not None
 
 
+def _finish_value_function(Vxx, Vx, preg, fs, gaps):
+    """Symmetrise ``Vxx``, add ``preg`` to its diagonal and deflect ``Vx`` by the gap (shared by the kernels)."""
+    n = Vxx.shape[0]
+    for i in range(n):
+        for j in range(i + 1, n):
+            m = 0.5 * (Vxx[i, j] + Vxx[j, i])
+            Vxx[i, j] = m
+            Vxx[j, i] = m
+        Vxx[i, i] += preg
+    if gaps:
+        Vx[:] += Vxx @ fs
+
+
+finish_value_function = njit(cache=True)(_finish_value_function) if available else _finish_value_function
+
+
 def _riccati_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx):
     nu = Fu.shape[1]
     ndx = Fx.shape[1]
@@ -62,14 +78,7 @@ def _riccati_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, Qx
     else:
         Vxx[:, :] = Qxx
         Vx[:] = Qx
-    for i in range(ndx):
-        for j in range(i + 1, ndx):
-            m = 0.5 * (Vxx[i, j] + Vxx[j, i])
-            Vxx[i, j] = m
-            Vxx[j, i] = m
-        Vxx[i, i] += preg
-    if gaps:
-        Vx[:] += Vxx @ fs
+    finish_value_function(Vxx, Vx, preg, fs, gaps)
     return True
 
 
