@@ -21,6 +21,7 @@ from .activations import (
     ActivationModelWeightedQuadraticBarrier,
 )
 from .actuation_base import ActuationDataAbstract, ActuationModelAbstract, JointDataAbstract
+from .batch import SolveManyError, SolveResult, solve_many
 from .box_qp import BoxQP, BoxQPSolution
 from .callback_display import CallbackDisplay
 from .callbacks import CallbackAbstract, CallbackLogger, CallbackVerbose

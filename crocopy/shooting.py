@@ -180,5 +180,16 @@ class ShootingProblem:
         """Replace node ``i`` by ``model`` with fresh data."""
         self.updateNode(i, model, model.createData())
 
+    def __getstate__(self) -> dict:
+        """Pickle the models, not the datas (workspaces, often large): :meth:`__setstate__` recreates them."""
+        state = self.__dict__.copy()
+        del state["_runningDatas"], state["_terminalData"]
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._runningDatas = [m.createData() for m in self._runningModels]
+        self._terminalData = self._terminalModel.createData()
+
     def __repr__(self) -> str:
         return f"ShootingProblem(T={self.T}, nx={self.nx}, nu_max={self.nu_max})"

@@ -12,6 +12,8 @@ with the configuration blocks from ``pinocchio.dDifference``/``pinocchio.dIntegr
 
 from __future__ import annotations
 
+import copyreg
+
 import numpy as np
 import pinocchio as pin
 
@@ -19,6 +21,36 @@ from crocopy.enums import Jcomponent
 from crocopy.state import StateAbstract
 
 _HUGE = 1e300  # URDF "no limit" values (numeric_limits::max) are mapped to inf
+
+
+_MODEL_VECTORS = ("lowerPositionLimit", "upperPositionLimit", "velocityLimit", "effortLimit", "armature")
+
+
+def _restore_model(model: pin.Model, fixes: dict) -> pin.Model:
+    """Unpickle a model saved by :func:`_reduce_model`: put back the name and non-finite vectors."""
+    for attr, value in fixes.items():
+        setattr(model, attr, value)
+    return model
+
+
+def _reduce_model(model: pin.Model) -> tuple:
+    """Pickle a ``pinocchio.Model`` with Pinocchio's own text archive, which cannot read back an
+    empty name or non-finite limits (Talos legs has both): those are pickled beside a cleaned copy."""
+    fixes = {} if model.name else {"name": ""}
+    for attr in _MODEL_VECTORS:
+        value = np.asarray(getattr(model, attr))
+        if not np.all(np.isfinite(value)):
+            fixes[attr] = value.copy()
+    if not fixes:
+        return model.__reduce__()
+    clean = pin.Model(model)
+    clean.name = model.name or "unnamed"
+    for attr in fixes.keys() - {"name"}:
+        setattr(clean, attr, np.nan_to_num(fixes[attr], posinf=0.0, neginf=0.0))
+    return _restore_model, (clean, fixes)
+
+
+copyreg.pickle(pin.Model, _reduce_model)
 
 
 def _finite_or_inf(values: np.ndarray, sign: float) -> np.ndarray:

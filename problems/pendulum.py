@@ -15,6 +15,8 @@ Costs (``0.5 ||r||^2`` activations times the weight, running costs multiplied by
 
 from __future__ import annotations
 
+import functools
+import importlib
 from types import ModuleType
 
 import numpy as np
@@ -22,8 +24,9 @@ import numpy as np
 from .common import load_model
 
 
+@functools.cache
 def _actuation_class(lib: ModuleType) -> type:
-    """One-joint actuation ``tau = S u`` derived from ``lib.ActuationModelAbstract``."""
+    """One-joint actuation ``tau = S u`` derived from ``lib.ActuationModelAbstract`` (one class per lib)."""
 
     class ActuationModelSingleJoint(lib.ActuationModelAbstract):
         """Actuation of joint ``joint`` only: ``tau = e_joint u`` (nu = 1)."""
@@ -33,6 +36,9 @@ def _actuation_class(lib: ModuleType) -> type:
             self.joint = joint
             self._S = np.zeros((state.nv, 1))
             self._S[joint, 0] = 1.0
+
+        def __reduce__(self) -> tuple:
+            return _single_joint_actuation, (lib.__name__, self.state, self.joint)
 
         def calc(self, data: object, x: np.ndarray, u: np.ndarray | None = None) -> None:
             data.tau[:] = 0.0
@@ -51,6 +57,11 @@ def _actuation_class(lib: ModuleType) -> type:
             Mtau[...] = self._S.T.reshape(Mtau.shape)
 
     return ActuationModelSingleJoint
+
+
+def _single_joint_actuation(lib_name: str, state: object, joint: int) -> object:
+    """Rebuild a pickled single-joint actuation (its class is local to :func:`_actuation_class`)."""
+    return _actuation_class(importlib.import_module(lib_name))(state, joint)
 
 
 def build_pendulum(
