@@ -2,6 +2,8 @@
 
 * ``crocopy --version``
 * ``crocopy bench``: solver timings on LQR problems (and Crocoddyl's, when installed)
+* ``crocopy bench --vs crocoddyl [--problems ...] [--repeats N] [--out BENCHMARKS.md]``: crocopy and
+  Crocoddyl side by side on the bundled problems (:mod:`crocopy.bench_problems`)
 * ``crocopy list``: the bundled problems
 * ``crocopy solve [PROBLEM] [--solver ...] [--maxiter N] [--html FILE] [--plot FILE]``: build a
   problem, solve it with the verbose table, print a summary and write the meshcat animation.
@@ -28,9 +30,29 @@ SOLVERS = {
 
 
 def _bench(args: argparse.Namespace) -> int:
+    if args.vs:
+        return _bench_vs(args)
     from .bench import run_lqr_bench
 
-    print(run_lqr_bench(repeats=args.repeats, T=args.T))
+    print(run_lqr_bench(repeats=args.repeats or 20, T=args.T))
+    return 0
+
+
+def _bench_vs(args: argparse.Namespace) -> int:
+    from .bench_problems import BenchDependencyError, run_vs
+
+    try:
+        report = run_vs(args.problems, solver_name=args.solver, repeats=args.repeats or 5, maxiter=args.maxiter or None,
+                        solve_budget=args.solve_budget, memory=not args.no_memory,
+                        progress=lambda line: print(line, file=sys.stderr, flush=True))
+    except (BenchDependencyError, KeyError) as exc:
+        print(exc.args[0], file=sys.stderr)
+        return 2
+    print(report)
+    if args.out:
+        with open(args.out, "w", encoding="utf-8") as f:
+            f.write(report)
+        print(f"report written to {args.out}", file=sys.stderr)
     return 0
 
 
@@ -178,8 +200,18 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"crocopy {__version__}")
     sub = parser.add_subparsers(dest="command")
     bench = sub.add_parser("bench", help="time the solvers (and Crocoddyl, if installed) on benchmark problems")
-    bench.add_argument("--repeats", type=int, default=20, help="runs per measurement (median reported)")
+    bench.add_argument("--repeats", type=int, default=0,
+                       help="runs per measurement, median reported (default 20; 5 with --vs)")
     bench.add_argument("--T", type=int, default=100, help="horizon of the LQR problems")
+    bench.add_argument("--vs", choices=["crocoddyl"], default=None,
+                       help="side-by-side run on the bundled problems against Crocoddyl (needs the bench extra)")
+    bench.add_argument("--problems", nargs="+", default=None, help="with --vs: problems (default: Table I, walk, arm)")
+    bench.add_argument("--solver", choices=sorted(SOLVERS), default="boxfddp", help="with --vs: the solver")
+    bench.add_argument("--maxiter", type=int, default=0, help="with --vs: iteration limit (default: the problem's)")
+    bench.add_argument("--solve-budget", type=float, default=30.0,
+                       help="with --vs: no further full-solve round starts after this many seconds per problem")
+    bench.add_argument("--no-memory", action="store_true", help="with --vs: skip the peak-memory subprocesses")
+    bench.add_argument("--out", default=None, help="with --vs: also write the markdown report to this file")
     bench.set_defaults(func=_bench)
     sub.add_parser("list", help="list the bundled problems").set_defaults(func=_list)
     solve = sub.add_parser("solve", help="solve a problem and write its meshcat animation")
