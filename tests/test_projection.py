@@ -128,6 +128,17 @@ def test_rank_deficient_rows_detected():
     assert err.value.node == 2
 
 
+def test_contradictory_rows_are_reported_infeasible():
+    rng = np.random.default_rng(3)
+    P = random_lq(rng, cons={2: ("su", 1)})
+    P["Hx"][2] = np.vstack([P["Hx"][2], 2.0 * P["Hx"][2]])
+    P["Hu"][2] = np.vstack([P["Hu"][2], 2.0 * P["Hu"][2]])
+    P["h"][2] = np.r_[P["h"][2], 2.0 * P["h"][2] + 0.5]
+    with pytest.raises(ConstraintRankError, match="contradict") as err:
+        projected_backward_pass(**P)
+    assert (err.value.node, err.value.kind) == (2, "infeasible")
+
+
 def test_relative_degree_violation_detected():
     rng = np.random.default_rng(4)
     P = random_lq(rng, cons={3: ("x", 1)})
@@ -253,46 +264,88 @@ def test_nonlinear_equality_constraints_converge(state_input):
     assert all(np.isfinite(u).all() for u in solver.us)
 
 
-def test_solver_reports_infeasible_x0_and_relative_degree():
+def test_solver_reports_infeasible_x0_and_over_constrained_nodes():
     x0 = np.array([-1.0, 0.6, 0.5])
     problem = crocopy.ShootingProblem(x0, [UnicycleHeading()] * 5, UnicycleHeading())
-    with pytest.raises(ConstraintRankError, match="x0 violates"):
+    with pytest.raises(ConstraintRankError, match="x0 violates") as err:
         SolverProjection(problem).solve([], [], maxiter=5)
+    assert err.value.kind == "infeasible"
     rng = np.random.default_rng(2)
     problem = lqr_problem(rng, nu=1, nh=1)
     with pytest.raises(ConstraintRankError, match="over-constrained"):
         SolverProjection(problem).solve([], [], maxiter=5)
 
 
-def test_arm_experiment_path_residual_and_short_solve():
-    from crocopy.paper_projection import build_arm_problem, constraint_ise
+def _double_integrator(H, h, H_T, h_T, dt=0.1):
+    """``p' = p + dt v``, ``v' = v + dt u`` (explicit Euler) with equality rows ``H [x; u] + h = 0``."""
+    A, B = np.array([[1.0, dt], [0.0, 1.0]]), np.array([[0.0], [dt]])
+    Q, R, N, f = 1e-2 * np.eye(2), np.eye(1), np.zeros((2, 1)), np.zeros(2)
+    q, r, G, g = np.zeros(2), np.zeros(1), np.zeros((0, 3)), np.zeros(0)
+    running = crocopy.ActionModelLQR(A, B, Q, R, N, G, np.atleast_2d(H), f, q, r, g, np.atleast_1d(h))
+    terminal = crocopy.ActionModelLQR(A, B, Q, R, N, G, np.atleast_2d(H_T), f, q, r, g, np.atleast_1d(h_T))
+    return crocopy.ShootingProblem(np.zeros(2), [running] * 8, terminal)
 
-    problem, us0, info = build_arm_problem(dt=0.05, horizon=1.0)
-    assert info["N"] == 20
-    model, data = problem.runningModels[0], problem.runningDatas[0]
+
+def test_solver_reports_contradictory_rows_and_relative_degree():
+    no_rows = (np.zeros((0, 3)), np.zeros(0))
+    problem = _double_integrator([[0.0, 1.0, 1.0], [0.0, 2.0, 2.0]], [0.0, -1.0], *no_rows)
+    with pytest.raises(ConstraintRankError, match="contradict") as err:
+        SolverProjection(problem).solve([], [], maxiter=5)
+    assert (err.value.kind, err.value.node) == ("infeasible", 7)
+    problem = _double_integrator(*no_rows, [[1.0, 0.0, 0.0]], [-1.0])
+    with pytest.raises(ConstraintRankError, match="relative degree above one") as err:
+        SolverProjection(problem).solve([], [], maxiter=5)
+    assert (err.value.kind, err.value.node) == ("relative-degree", 8)
+    problem = _double_integrator(*no_rows, [[0.0, 1.0, 0.0]], [-1.0])
+    solver = SolverProjection(problem)
+    assert solver.solve([], [], maxiter=5)
+    assert abs(solver.xs[-1][1] - 1.0) < 1e-9
+
+
+@pytest.mark.parametrize("tau", [0.0, 0.05])
+def test_arm_path_residual_derivatives(tau):
+    from crocopy.paper_projection import build_arm_problem
+
+    problem, us0, _ = build_arm_problem(dt=0.05, horizon=0.5, tau=tau)
     rng = np.random.default_rng(0)
     x = problem.x0 + 0.1 * rng.standard_normal(problem.x0.size)
     u = us0[0] + rng.standard_normal(6)
-    dam, ddata = model.differential, data.differential[0]
-    item = dam.constraints.constraints["ee_path"].constraint
+    dam, ddata = problem.runningModels[3].differential, problem.runningDatas[3].differential[0]
     cdata = ddata.constraints.constraints["ee_path"]
+    assert dam.constraints.constraints["ee_path"].constraint.nh == 2
     dam.calc(ddata, x, u)
     dam.calcDiff(ddata, x, u)
-    Hx = cdata.Hx.copy()
+    Hx, h0 = cdata.Hx.copy(), cdata.h.copy()
     eps = 1e-7
-    for i in range(6):
-        xp = x.copy()
-        xp[i] += eps
-        dam.calc(ddata, xp, u)
-        h1 = cdata.h.copy()
-        dam.calc(ddata, x, u)
-        assert (h1[0] - cdata.h[0]) / eps == pytest.approx(Hx[0, i], abs=1e-5)
-    assert item.nh == 1 and item.T_constraint
-    solver = SolverProjection(problem)
+    for i in range(12):
+        dx = np.zeros(12)
+        dx[i] = eps
+        dam.calc(ddata, problem.runningModels[3].state.integrate(x, dx), u)
+        np.testing.assert_allclose((cdata.h - h0) / eps, Hx[:, i], atol=1e-5)
+    assert (np.abs(Hx[:, 6:]).max() > 1e-3) == (tau > 0.0)
+
+
+@pytest.mark.parametrize("integrator, tau", [("rk4", 0.1), ("euler", 0.0)])
+def test_arm_experiment_removes_the_path_violation(integrator, tau):
+    from crocopy.paper_projection import build_arm_problem, path_ise
+
+    problem, us0, info = build_arm_problem(dt=0.05, horizon=2.0, integrator=integrator, tau=tau)
+    assert info["N"] == 40
     xs0 = problem.rollout(us0)
-    problem.calc(xs0, us0)
-    assert constraint_ise(problem, 0.05) < 1e-20
-    assert solver.solve(xs0, us0, maxiter=40, is_feasible=True), solver.reason
-    problem.calc(solver.xs, solver.us)
-    assert constraint_ise(problem, 0.05) < 1e-12
-    assert solver.cost < problem.calc(xs0, us0)
+    ise0 = path_ise(xs0, info)
+    assert ise0 > 1e-3
+    solver = SolverProjection(problem)
+    log = crocopy.CallbackLogger()
+    solver.setCallbacks([log])
+    assert solver.solve(xs0, us0, maxiter=20, is_feasible=True), solver.reason
+    assert path_ise(solver.xs, info) < (1e-7 if tau else 1e-12)
+    assert log.hfeass[-1] < 1e-9 < log.hfeass[0]
+    assert solver.cost < 10.0
+
+
+def test_arm_policy_check_finds_the_sampling_zero():
+    from crocopy.paper_projection import policy_check
+
+    rows = dict(policy_check(dt=0.05, horizon=0.5))
+    assert "most negative -1.0000" in rows["RK4, e = 0"]
+    assert "-1.0000" not in rows["Euler, e = 0"] and "-1.0000" not in rows["RK4, e + 0.05 ė = 0"]

@@ -34,9 +34,11 @@ class ConstraintRankError(ValueError):
     node : int
         Node index where the problem was found.
     kind : str
-        ``"rank-deficient"`` (dependent rows of ``[Hx Hu]``), ``"relative-degree"`` (a previewed
-        state constraint does not see the control one step later) or ``"over-constrained"``
-        (more independent rows than controls, or state-input and previewed rows conflict).
+        ``"rank-deficient"`` (dependent but consistent rows of ``[Hx Hu]``), ``"infeasible"``
+        (dependent rows whose values contradict each other, or pure-state rows violated at ``x0``),
+        ``"relative-degree"`` (a previewed state constraint does not see the control one step
+        later) or ``"over-constrained"`` (more independent rows than controls, or state-input and
+        previewed rows conflict).
     """
 
     def __init__(self, node: int, kind: str, message: str) -> None:
@@ -83,12 +85,26 @@ def split_equality(
     Raises
     ------
     ConstraintRankError
-        If ``[Hx Hu]`` does not have full row rank (dependent or empty rows).
+        If ``[Hx Hu]`` does not have full row rank: ``"infeasible"`` when the dependent rows
+        contradict each other, ``"rank-deficient"`` when they are redundant.
     """
     nh, ndx = Hx.shape
     J = Hx if Hu is None else np.hstack([Hx, Hu])
-    if nh and _rank(np.linalg.svd(J, compute_uv=False), rtol) < nh:
-        raise ConstraintRankError(node, "rank-deficient", f"the {nh} rows of [Hx Hu] are linearly dependent")
+    if nh:
+        W, s, _ = np.linalg.svd(J)
+        r = _rank(s, rtol)
+        if r < nh:
+            conflict = float(np.linalg.norm(W[:, r:].T @ h))
+            if conflict > rtol * max(1.0, float(np.linalg.norm(h))):
+                raise ConstraintRankError(
+                    node, "infeasible",
+                    f"the {nh} rows of [Hx Hu] are linearly dependent and contradict each other (their values "
+                    f"disagree by {conflict:.3g} along the dependent combination): no step satisfies them",
+                )
+            raise ConstraintRankError(
+                node, "rank-deficient", f"the {nh} rows of [Hx Hu] are linearly dependent (rank {r}); remove the "
+                "redundant rows",
+            )
     if Hu is None or Hu.shape[1] == 0 or not np.any(Hu):
         nu = 0 if Hu is None else Hu.shape[1]
         return np.zeros((0, ndx)), np.zeros((0, nu)), np.zeros(0), Hx, -h
