@@ -81,6 +81,8 @@ class SolveResult:
         The task's ``params`` entry.
     time : float
         Wall time of build and solve in the worker (s).
+    cpu_time : float
+        CPU time of the worker's process during build and solve (s).
     """
 
     xs: list[np.ndarray]
@@ -91,6 +93,7 @@ class SolveResult:
     reason: str
     params: dict = field(default_factory=dict)
     time: float = 0.0
+    cpu_time: float = 0.0
 
 
 def solve_one(
@@ -106,7 +109,7 @@ def solve_one(
     This is what a :func:`solve_many` worker runs; the arguments are those of :func:`solve_many`
     with one ``params`` entry.
     """
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     params = dict(params or {})
     init_xs = init_us = None
     if isinstance(builder, ShootingProblem):
@@ -140,6 +143,7 @@ def solve_one(
         reason=str(getattr(s, "reason", "")),
         params=params,
         time=time.perf_counter() - t0,
+        cpu_time=time.process_time() - c0,
     )
 
 

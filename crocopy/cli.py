@@ -4,6 +4,9 @@
 * ``crocopy bench``: solver timings on LQR problems (and Crocoddyl's, when installed)
 * ``crocopy bench --vs crocoddyl [--problems ...] [--repeats N] [--out BENCHMARKS.md]``: crocopy and
   Crocoddyl side by side on the bundled problems (:mod:`crocopy.bench_problems`)
+* ``crocopy bench --batch`` / ``--scaling``: :func:`crocopy.solve_many` speed-up on the quadrotor
+  starts; time per iteration vs horizon and peak memory (:mod:`crocopy.bench_batch`,
+  :mod:`crocopy.bench_scaling`)
 * ``crocopy list``: the bundled problems
 * ``crocopy solve [PROBLEM] [--solver ...] [--maxiter N] [--html FILE] [--plot FILE]``: build a
   problem, solve it with the verbose table, print a summary and write the meshcat animation.
@@ -29,7 +32,21 @@ SOLVERS = {
 }
 
 
+def _bench_batch_scaling(args: argparse.Namespace) -> int:
+    if args.batch:
+        from .bench_batch import run_batch_bench
+
+        run_batch_bench(workers=args.workers, repeats=args.runs)
+    if args.scaling:
+        from .bench_scaling import run_scaling_bench
+
+        run_scaling_bench(repeats=args.runs)
+    return 0
+
+
 def _bench(args: argparse.Namespace) -> int:
+    if args.batch or args.scaling:
+        return _bench_batch_scaling(args)
     if args.vs:
         return _bench_vs(args)
     from .bench import run_lqr_bench
@@ -212,6 +229,12 @@ def build_parser() -> argparse.ArgumentParser:
                        help="with --vs: no further full-solve round starts after this many seconds per problem")
     bench.add_argument("--no-memory", action="store_true", help="with --vs: skip the peak-memory subprocesses")
     bench.add_argument("--out", default=None, help="with --vs: also write the markdown report to this file")
+    bench.add_argument("--batch", action="store_true",
+                       help="10 quadrotor solves serially and with crocopy.solve_many (crocopy.bench_batch)")
+    bench.add_argument("--scaling", action="store_true",
+                       help="time per iteration vs horizon (ANYmal trot), peak memory of the hop (bench_scaling)")
+    bench.add_argument("--workers", type=int, default=2, help="with --batch: worker processes")
+    bench.add_argument("--runs", type=int, default=3, help="with --batch/--scaling: repetitions (median reported)")
     bench.set_defaults(func=_bench)
     sub.add_parser("list", help="list the bundled problems").set_defaults(func=_list)
     solve = sub.add_parser("solve", help="solve a problem and write its meshcat animation")

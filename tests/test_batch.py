@@ -9,6 +9,8 @@ from robots import load
 
 import crocopy
 from crocopy.batch import solve_one
+from crocopy.bench_batch import makespan, run_batch_bench
+from crocopy.bench_scaling import fit_exponent, run_scaling_bench
 from crocopy.problems import registry
 from crocopy.problems.common import load_model
 
@@ -202,3 +204,26 @@ def test_bad_arguments():
     with pytest.raises(crocopy.SolveManyError, match="no attribute 'th_stoop'"):
         crocopy.solve_many(unicycle, [{}], ThreadPoolExecutor(1), solver_options={"th_stoop": 1e-9})
     assert crocopy.solve_many(unicycle, []) == []
+
+
+def test_batch_bench_runs_the_quadrotor_starts_serially_and_in_parallel(capsys):
+    out = run_batch_bench(n=2, workers=2, repeats=1, maxiter=3)
+    assert out["same"] and len(out["results"]) == 2
+    assert [r.params["x0_position"][0] for r in out["results"]] == pytest.approx([-0.9, 0.3])
+    assert out["speedup"] > 0 and out["cpu_speedup"] > 0
+    assert "speed-up on idle cores" in capsys.readouterr().out
+    assert makespan([3.0, 1.0, 1.0, 1.0], 2) == 3.0 and makespan([1.0, 1.0, 1.0], 2) == 2.0
+    with pytest.raises(ValueError, match="workers"):
+        makespan([1.0], 0)
+
+
+def test_scaling_fit_and_short_run():
+    T = np.array([50.0, 100.0, 400.0])
+    a, b = fit_exponent(T, 3e-4 * T**1.5)
+    assert b == pytest.approx(1.5) and a == pytest.approx(np.log(3e-4))
+    with pytest.raises(ValueError, match="same length"):
+        fit_exponent(T, T[:2])
+    out = run_scaling_bench(repeats=1, cycles=(1, 2), memory=False)
+    assert [r["T"] for r in out["rows"]] == [58, 114]
+    assert all(r["iteration"] == pytest.approx(sum(r["phases"].values())) for r in out["rows"])
+    assert np.isfinite(out["exponent"]) and set(out["exponents"]) == {"calc", "calcDiff", "backward", "forward"}
