@@ -56,7 +56,7 @@ from .solvers import SolverAbstract, SolverDDP, SolverFDDP
 from .solvers.box_ddp import SolverBoxDDP
 from .solvers.box_fddp import SolverBoxFDDP
 from .solvers.clamping import SolverClampedDDP
-from .solvers.hddp import CallbackHDDPVerbose, SolverHDDP
+from .solvers.hddp import CallbackHDDPLogger, CallbackHDDPVerbose, SolverHDDP
 from .solvers.projection import ConstraintRankError, SolverProjection
 from .squashing_action import ActionModelSquashed
 from .state import StateAbstract, StateVector

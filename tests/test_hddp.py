@@ -220,6 +220,27 @@ def test_lq_hierarchy_converges_in_one_step():
     assert solver.level_steps[0] == 1.0
 
 
+def test_per_level_costs_are_reported_per_iteration(capsys):
+    problem = arm_problem(("t1", "t2"))
+    solver = SolverHDDP(problem, [["t1"], ["t2"], ["velocity", "effort"]])
+    log = crocopy.CallbackHDDPLogger()
+    solver.setCallbacks([crocopy.CallbackHDDPVerbose(), log])
+    solver.solve([], [], maxiter=30)
+    rows = [line.split() for line in capsys.readouterr().out.splitlines()[1:]]
+    assert len(rows) == len(log.level_costs) == len(log.iters) > 2
+    for row, G in zip(rows, log.level_costs):
+        assert G.shape == (3,)
+        np.testing.assert_allclose([float(v) for v in row[1:4]], G, rtol=1e-3)
+    G1 = [G[0] for G in log.level_costs]
+    assert all(b <= a * (1 + 1e-9) for a, b in zip(G1, G1[1:])) and G1[-1] == pytest.approx(0.01, rel=1e-8)
+    assert log.level_costs[-1][1] < 0.1 * log.level_costs[0][1]
+    problem.calc(solver.xs, solver.us)
+    items = problem.terminalData.differential.costs.costs
+    assert log.level_costs[-1][0] == pytest.approx(items["t1"].cost, rel=1e-12)
+    assert log.level_costs[-1][1] == pytest.approx(items["t2"].cost, rel=1e-12)
+    assert log.costs[-1] == pytest.approx(problem.calc(solver.xs, solver.us), rel=1e-12)
+
+
 def test_bad_levels_are_rejected():
     problem = arm_problem(("t1", "t2"))
     with pytest.raises(KeyError, match="nope"):

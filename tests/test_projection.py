@@ -264,6 +264,27 @@ def test_nonlinear_equality_constraints_converge(state_input):
     assert all(np.isfinite(u).all() for u in solver.us)
 
 
+def test_equality_feasibility_is_reported_per_iteration(capsys):
+    x0 = np.array([-1.0, 0.6, heading(-1.0)])
+    problem = crocopy.ShootingProblem(x0, [UnicycleHeading(True)] * 15, UnicycleHeading(True))
+    solver = SolverProjection(problem)
+    log = crocopy.CallbackLogger()
+    solver.setCallbacks([crocopy.CallbackVerbose(), log])
+    assert solver.solve([], [], maxiter=50)
+    lines = capsys.readouterr().out.splitlines()
+    header = next(line for line in lines if line.startswith("iter"))
+    assert "||hfeas||" in header
+    rows = [line.split() for line in lines if line[:4].strip().isdigit()]
+    column = header.split().index("||hfeas||")
+    assert len(rows) == len(log.hfeass) == solver.iter + 1
+    for row, hfeas in zip(rows, log.hfeass):
+        assert float(row[column]) == pytest.approx(hfeas, rel=1e-3, abs=1e-300)
+    assert log.hfeass[0] > 1e-2 and log.hfeass[-1] < 1e-9
+    problem.calc(solver.xs, solver.us)
+    worst = max(np.abs(d.h).max() for d in [*problem.runningDatas, problem.terminalData])
+    assert log.hfeass[-1] == pytest.approx(worst, rel=1e-9, abs=1e-15)
+
+
 def test_solver_reports_infeasible_x0_and_over_constrained_nodes():
     x0 = np.array([-1.0, 0.6, 0.5])
     problem = crocopy.ShootingProblem(x0, [UnicycleHeading()] * 5, UnicycleHeading())

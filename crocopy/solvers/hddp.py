@@ -34,7 +34,7 @@ from .base import ForwardPassError
 from .ddp import SolverDDP
 from .hddp_lq import LevelDerivatives, hierarchical_backward_pass
 
-__all__ = ["CallbackHDDPVerbose", "SolverHDDP"]
+__all__ = ["CallbackHDDPLogger", "CallbackHDDPVerbose", "SolverHDDP"]
 
 
 def _cost_sum(model) -> CostModelSum | None:
@@ -332,3 +332,25 @@ class CallbackHDDPVerbose:
         steps = ",".join(f"{s:g}" for s in solver.level_steps)
         lams = ",".join(f"{lam:.0e}" for lam in solver.lambdas)
         print(f"{solver.iter:4d}  {costs}  [{steps}]  [{lams}]")
+
+
+class CallbackHDDPLogger:
+    """Record per iteration the per-level costs, steps ``ν`` and regularisations ``λ`` of HDDP.
+
+    Attributes are lists with one entry per iteration: ``iters``, ``level_costs`` (arrays of
+    shape ``(K,)``), ``level_steps``, ``lambdas`` and ``costs`` (their sum).
+    """
+
+    def __init__(self) -> None:
+        self.iters: list[int] = []
+        self.level_costs: list[np.ndarray] = []
+        self.level_steps: list[np.ndarray] = []
+        self.lambdas: list[list[float]] = []
+        self.costs: list[float] = []
+
+    def __call__(self, solver: SolverHDDP) -> None:
+        self.iters.append(solver.iter)
+        self.level_costs.append(np.array(solver.level_costs, dtype=float))
+        self.level_steps.append(np.array(solver.level_steps, dtype=float))
+        self.lambdas.append(list(solver.lambdas))
+        self.costs.append(float(solver.cost))
