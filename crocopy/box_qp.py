@@ -2,34 +2,41 @@
 
 Solves ::
 
-    x* = argmin_x  1/2 x^T H x + q^T x   subject to   lb <= x <= ub
+    x* = argmin_x  f(x) = 1/2 x^T (H + reg I) x + q^T x   subject to   lb <= x <= ub
 
 with ``H`` of shape ``(nx, nx)`` (symmetric; positive definite on the free subspace) and
 ``q, lb, ub, x`` of shape ``(nx,)``.  This is the method of Tassa, Mansard and Todorov,
 *Control-Limited Differential Dynamic Programming* (ICRA 2014), Appendix I, a special case of
-Bertsekas' projected Newton method with the exact Hessian:
+Bertsekas' projected Newton method with the exact Hessian.  From ``x = clamp(xinit, lb, ub)``, each
+iteration:
 
-1. start from the projection of the warm start, ``x = clamp(xinit, lb, ub)``;
-2. gradient ``g = q + H x``; clamped set ``c = {j : x_j = lb_j and g_j > 0  or  x_j = ub_j and g_j < 0}``,
-   free set ``f`` its complement (stop if every variable is clamped);
-3. Cholesky factorization of ``H_ff + reg I``, redone only when the free set changes (each one is
+1. gradient ``g = q + (H + reg I) x``; clamped set ``c = {j : x_j <= lb_j and g_j > 0  or
+   x_j >= ub_j and g_j < 0}``, free set ``f`` its complement (stop if every variable is clamped);
+2. Cholesky factorization of ``H_ff + reg I``, redone only when the free set changes (each one is
    counted in :attr:`BoxQP.nfactorizations`);
-4. Newton step on the free set, ``dx_f = -(H_ff + reg I)^{-1} g_f``, ``dx_c = 0``;
-5. projected backtracking line search over :attr:`BoxQP.alphas` (``1, 1/2, ..., 1/512``): accept the
-   first ``x_a = clamp(x + a dx)`` with ``(f(x) - f(x_a)) >= th_acceptStep * g^T (x - x_a)`` (Armijo);
-   if no step length is accepted the solver stops;
-6. at the new point, update the sets (step 2-3) and stop when ``||g_f|| <= th_grad`` (2-norm), else go to 4.
+3. Newton step on the free set, ``dx_f = -(H_ff + reg I)^{-1} g_f``, ``dx_c = 0``;
+4. projected backtracking line search over :attr:`BoxQP.alphas` (``1, 1/2, ..., 1/512``): accept
+   the first ``x_a = clamp(x + a dx)`` with ``f(x) - f(x_a) >= th_acceptStep g^T (x - x_a)`` (the
+   paper's Armijo rule, eq. 20); if none is accepted the solver stops;
+5. ``x <- x_a``; stop when the free gradient of step 3 was small, ``||g_f||_inf <= th_grad``.
 
-At least one Newton step is taken (as Crocoddyl does), so a converged warm start costs one step.
-The returned :class:`BoxQPSolution` holds ``x``, the free/clamped index lists of the final point and
-``Hff_inv = (H_ff + reg I)^{-1}`` for that final free set (refactorized if it changed on the last
-step); the DDP solvers build their feedback gains from it.  If the warm start has the optimal
-clamped set, one Newton step reaches the optimum (the paper's lemma).
+Choices the paper leaves open follow Crocoddyl 3.2's ``BoxQP`` (measured as a black box on random
+QPs): step lengths ``2^-n, n = 0..9``; the infinity norm in the gradient test; the test made after
+the step computed from that gradient, so a converged warm start still takes one (vanishing) Newton
+step and the reported sets, ``Hff_inv = (H_ff + reg I)^{-1}``, are those the last step was computed
+on.  If the warm start has the optimal clamped set, the first Newton step reaches the optimum (the
+paper's lemma).
 
-Choices the paper leaves open: the step-length list (``2^-n, n = 0..9``), the 2-norm in the
-gradient test, and the regularization on the free block are Crocoddyl's documented defaults.
-:attr:`BoxQP.nfactorizations` and :attr:`BoxQP.iter` are crocopy extensions used by the
-experiments (the paper reports factorizations per DDP iteration).
+Two departures of Crocoddyl 3.2 from the paper are reproduced only with ``compat_crocoddyl = True``
+(used by ``crocopy bench --box-parity``): (a) its line search accepts when
+``f(x) - f(x_a) >= -th_acceptStep g^T (x - x_a)``, a flipped sign that admits a cost *increase*
+(on some random QPs it then cycles and returns a point far from the optimum after ``maxiter``
+iterations, where the paper's rule converges in three); (b) its clamped set and line-search objective
+use ``H`` without ``reg`` while the Newton step and the gradient test use ``H + reg I``, so for
+``reg > 0`` its answer solves neither QP exactly.  Both coincide with the paper when the line search
+takes full unprojected steps and ``reg = 0`` (as in the DDP solvers).  :attr:`BoxQP.nfactorizations`,
+:attr:`BoxQP.iter` (Newton steps of the last solve) and :attr:`BoxQP.compat_crocoddyl` are crocopy
+extensions.
 """
 
 from __future__ import annotations
@@ -91,7 +98,7 @@ class BoxQP:
     th_acceptStep : float
         Armijo acceptance ratio of the projected line search (default 0.1).
     th_grad : float
-        Tolerance on the 2-norm of the free gradient (default 1e-9).
+        Tolerance on the infinity norm of the free gradient (default 1e-9).
     reg : float
         Regularization added to the diagonal of the free Hessian block (default 1e-9).
     """
@@ -110,6 +117,7 @@ class BoxQP:
         self.solution = BoxQPSolution(np.zeros((0, 0)), np.zeros(self.nx), [], list(range(self.nx)))
         self.nfactorizations = 0
         self.iter = 0
+        self.compat_crocoddyl = False
         self._eye = {}
 
     @property
@@ -156,6 +164,11 @@ class BoxQP:
         xinit = as_vector(xinit, n, "xinit")
         return self._solve(H, q, lb, ub, xinit)
 
+    def _objective(self, H: np.ndarray, q: np.ndarray, x: np.ndarray, compat: bool) -> float:
+        """``1/2 x^T H x + q^T x``, plus ``reg/2 |x|^2`` unless in Crocoddyl-compatible mode."""
+        f = 0.5 * (x @ (H @ x)) + q @ x
+        return f if compat or not self.reg else f + 0.5 * self.reg * (x @ x)
+
     def _factorize(self, Hff: np.ndarray) -> np.ndarray:
         """Inverse of ``Hff + reg I`` through its Cholesky factor; raises :class:`BoxQPError`."""
         nf = Hff.shape[0]
@@ -173,69 +186,51 @@ class BoxQP:
             raise BoxQPError("BoxQP: the free block of the Hessian is singular")
         return inv
 
-    def _free_set(self, H, x, g, lb, ub, mask, f_idx, Hinv):
-        """Free mask (``None`` = all free), free indices and ``Hff_inv`` at ``x``; refactorizes on change."""
-        at_lb = x <= lb
-        at_ub = x >= ub
-        new = ~((at_lb & (g > 0.0)) | (at_ub & (g < 0.0))) if (at_lb.any() or at_ub.any()) else None
-        if new is not None and new.all():
-            new = None
-        if Hinv is not None and _same_mask(new, mask):
-            return mask, f_idx, Hinv
-        if new is None:
-            return None, None, self._factorize(H)
-        f_idx = np.flatnonzero(new)
-        return new, f_idx, (self._factorize(H[np.ix_(f_idx, f_idx)]) if f_idx.size else np.zeros((0, 0)))
-
     def _solve(self, H: np.ndarray, q: np.ndarray, lb: np.ndarray, ub: np.ndarray, xinit: np.ndarray) -> BoxQPSolution:
         """Unchecked solve (arguments already validated); the hot path of the box solvers."""
         n = self.nx
+        reg = self.reg
+        compat = self.compat_crocoddyl
+        th_acc = -self.th_acceptStep if compat else self.th_acceptStep
         x = np.minimum(np.maximum(xinit, lb), ub)
-        g = q + H @ x
-        free_mask, f_idx, Hinv = self._free_set(H, x, g, lb, ub, None, None, None)
+        free_mask = f_idx = Hinv = None
         self.iter = 0
         for _ in range(self.maxiter):
-            if f_idx is not None and f_idx.size == 0:
+            g = q + H @ x
+            gr = g + reg * x if reg else g
+            gs = g if compat else gr
+            new = ~(((x <= lb) & (gs > 0.0)) | ((x >= ub) & (gs < 0.0)))
+            if not new.any():
+                free_mask, f_idx, Hinv = new, np.zeros(0, dtype=int), np.zeros((0, 0))
                 break
-            if f_idx is None:
-                dx = -(Hinv @ g)
-            else:
-                dx = np.zeros(n)
-                dx[f_idx] = -(Hinv @ g[f_idx])
-            fold = 0.5 * (x @ (g + q))
-            accepted = False
+            if Hinv is None or not np.array_equal(new, free_mask):
+                free_mask, f_idx = new, np.flatnonzero(new)
+                Hinv = self._factorize(H if f_idx.size == n else H[np.ix_(f_idx, f_idx)])
+            grf = gr[f_idx]
+            dx = np.zeros(n)
+            dx[f_idx] = -(Hinv @ grf)
+            fold = self._objective(H, q, x, compat)
             for a in self.alphas:
                 xa = x + a * dx
                 np.maximum(xa, lb, out=xa)
                 np.minimum(xa, ub, out=xa)
-                ga = q + H @ xa
-                fnew = 0.5 * (xa @ (ga + q))
-                if fold - fnew >= self.th_acceptStep * (g @ (x - xa)):
-                    accepted = True
+                if fold - self._objective(H, q, xa, compat) >= th_acc * (gr @ (x - xa)):
                     break
-            if not accepted:
+            else:
                 break
-            x, g = xa, ga
+            x = xa
             self.iter += 1
-            free_mask, f_idx, Hinv = self._free_set(H, x, g, lb, ub, free_mask, f_idx, Hinv)
-            gf = g if f_idx is None else g[f_idx]
-            if gf @ gf <= self.th_grad * self.th_grad:
+            if np.abs(grf).max() <= self.th_grad:
                 break
+        if free_mask is None:  # maxiter = 0
+            g = q + H @ x + self.reg * x
+            free_mask = ~(((x <= lb) & (g > 0.0)) | ((x >= ub) & (g < 0.0)))
+            f_idx = np.flatnonzero(free_mask)
+            Hinv = self._factorize(H[np.ix_(f_idx, f_idx)]) if f_idx.size else np.zeros((0, 0))
         sol = self.solution
         sol.x = x
         sol.Hff_inv = Hinv
-        if f_idx is None:
-            sol.free_idx = list(range(n))
-            sol.clamped_idx = []
-        else:
-            sol.free_idx = f_idx.tolist()
-            sol.clamped_idx = np.flatnonzero(~free_mask).tolist()
+        sol.free_idx = f_idx.tolist()
+        sol.clamped_idx = np.flatnonzero(~free_mask).tolist()
         sol._free_mask = free_mask
         return sol
-
-
-def _same_mask(a: np.ndarray | None, b: np.ndarray | None) -> bool:
-    """Equality of two free masks, ``None`` meaning "all free"."""
-    if a is None or b is None:
-        return (a is None or a.all()) and (b is None or b.all())
-    return bool(np.array_equal(a, b))

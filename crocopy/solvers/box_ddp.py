@@ -133,7 +133,8 @@ class BoxSolverMixin:
                 qp = self._qps[lb.size]
                 ok, nfact, self._clamped[t] = box_kernel.box_step(
                     d.Fx, d.Fu, d.Lxx, d.Lxu, d.Luu, d.Lx, d.Lu, self.Vxx[t + 1], self.Vx[t + 1], preg, self.fs[t],
-                    gaps, self.us[t], lb, self._ub[t], qp.th_grad, qp.maxiter, general,
+                    gaps, self.us[t], lb, self._ub[t], qp.th_grad,
+                    -qp.th_acceptStep if qp.compat_crocoddyl else qp.th_acceptStep, qp.maxiter, general,
                     self.Qxx[t], self.Qxu[t], self.Quu[t], self.Qx[t], self.Qu[t], self.K[t], self.k[t],
                     self.Quu_inv[t], self.Vxx[t], self.Vx[t],
                 )

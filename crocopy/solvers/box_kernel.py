@@ -61,31 +61,38 @@ def _free_set(x, g, lb, ub, free):
     return changed
 
 
-def _box_qp(H, q, lb, ub, x, th_grad, maxiter, free, Hinv):
-    """Projected Newton in place on ``x``; returns (ok, nfact, nf) with ``Hinv[:nf,:nf]`` for ``free``."""
+def _box_qp(H, q, lb, ub, x, th_grad, th_acc, maxiter, free, Hinv):
+    """Projected Newton in place on ``x`` (``reg = 0``); returns (ok, nfact, nf) with ``Hinv[:nf,:nf]`` for ``free``.
+
+    ``th_acc`` is the signed Armijo ratio: ``+th_acceptStep`` (paper) or ``-th_acceptStep`` (Crocoddyl).
+    """
     n = x.size
     idx = np.empty(n, dtype=np.int64)
     for j in range(n):
         x[j] = min(max(x[j], lb[j]), ub[j])
-    g = q + H @ x
-    for j in range(n):
-        free[j] = True
-    _free_set(x, g, lb, ub, free)
-    nf = 0
-    for j in range(n):
-        if free[j]:
-            idx[nf] = j
-            nf += 1
+    dx = np.empty(n)
+    xa = np.empty(n)
+    nf = -1
     nfact = 0
-    if nf > 0:
-        if not _chol_inverse(H, idx, nf, Hinv):
-            return False, 1, nf
-        nfact = 1
     for _ in range(maxiter):
+        g = q + H @ x
+        changed = _free_set(x, g, lb, ub, free) or nf < 0
+        if changed:
+            nf = 0
+            for j in range(n):
+                if free[j]:
+                    idx[nf] = j
+                    nf += 1
         if nf == 0:
             break
-        dx = np.zeros(n)
+        if changed:
+            nfact += 1
+            if not _chol_inverse(H, idx, nf, Hinv):
+                return False, nfact, nf
+        gmax = 0.0
+        dx[:] = 0.0
         for a in range(nf):
+            gmax = max(gmax, abs(g[idx[a]]))
             s = 0.0
             for b in range(nf):
                 s += Hinv[a, b] * g[idx[b]]
@@ -93,40 +100,35 @@ def _box_qp(H, q, lb, ub, x, th_grad, maxiter, free, Hinv):
         fold = 0.5 * (x @ (g + q))
         accepted = False
         alpha = 1.0
-        xa = np.empty(n)
-        ga = np.empty(n)
         for _i in range(10):
             for j in range(n):
                 xa[j] = min(max(x[j] + alpha * dx[j], lb[j]), ub[j])
-            ga[:] = q + H @ xa
-            fnew = 0.5 * (xa @ (ga + q))
-            if fold - fnew >= 0.1 * (g @ (x - xa)):
+            fnew = 0.5 * (xa @ (H @ xa)) + q @ xa
+            if fold - fnew >= th_acc * (g @ (x - xa)):
                 accepted = True
                 break
             alpha *= 0.5
         if not accepted:
             break
         x[:] = xa
-        g[:] = ga
-        if _free_set(x, g, lb, ub, free):
-            nf = 0
-            for j in range(n):
-                if free[j]:
-                    idx[nf] = j
-                    nf += 1
-            if nf > 0:
-                nfact += 1
-                if not _chol_inverse(H, idx, nf, Hinv):
-                    return False, nfact, nf
-        s = 0.0
-        for a in range(nf):
-            s += g[idx[a]] * g[idx[a]]
-        if s <= th_grad * th_grad:
+        if gmax <= th_grad:
             break
+    if nf < 0:  # maxiter = 0
+        g = q + H @ x
+        _free_set(x, g, lb, ub, free)
+        nf = 0
+        for j in range(n):
+            if free[j]:
+                idx[nf] = j
+                nf += 1
+        if nf > 0:
+            nfact += 1
+            if not _chol_inverse(H, idx, nf, Hinv):
+                return False, nfact, nf
     return True, nfact, nf
 
 
-def _box_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, u, lb, ub, th_grad, maxiter, general,
+def _box_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, u, lb, ub, th_grad, th_acc, maxiter, general,
               Qxx, Qxu, Quu, Qx, Qu, K, k, Quu_inv, Vxx, Vx):
     nu = Fu.shape[1]
     FxTV = Fx.T @ Vxx_n
@@ -141,7 +143,7 @@ def _box_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, u, lb,
     x = -k
     free = np.empty(nu, dtype=np.bool_)
     Hinv = np.zeros((nu, nu))
-    ok, nfact, nf = _box_qp(Quu, Qu, lb - u, ub - u, x, th_grad, maxiter, free, Hinv)
+    ok, nfact, nf = _box_qp(Quu, Qu, lb - u, ub - u, x, th_grad, th_acc, maxiter, free, Hinv)
     if not ok:
         return False, nfact, False
     k[:] = -x
