@@ -75,8 +75,9 @@ def _lib(r: ProblemResult, name: str):
 def _solve_rows(results: Sequence[ProblemResult]) -> list[str]:
     rows = [
         "| problem | T, nx, nu | solver (maxiter) | crocopy iters | crocopy cost | Crocoddyl iters | Crocoddyl cost"
-        f" | same iters & cost ({AGREEMENT_RTOL:g}) | crocopy ms/iter | Crocoddyl ms/iter | ratio | solves |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        f" | cost rel. diff | agree (same iters, cost to {AGREEMENT_RTOL:g}) | crocopy ms/iter | Crocoddyl ms/iter"
+        " | ratio | solves |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in results:
         cells = [r.name, ", ".join(map(str, r.dims)), f"{r.solver} ({r.maxiter})"]
@@ -84,7 +85,8 @@ def _solve_rows(results: Sequence[ProblemResult]) -> list[str]:
             lib = _lib(r, name)
             mark = "" if lib is None or lib.converged else " (not converged)"
             cells += ["—", "—"] if lib is None else [f"{lib.iters}{mark}", f"{lib.cost:.10g}"]
-        agree = r.agree(AGREEMENT_RTOL)
+        diff, agree = r.cost_rel_diff(), r.agree(AGREEMENT_RTOL)
+        cells.append("—" if diff is None else f"{diff:.1e}")
         cells.append("—" if agree is None else "yes" if agree else "no")
         cells += [_num(lib.ms_per_iter) if (lib := _lib(r, name)) else "—" for name in ("crocopy", "crocoddyl")]
         cells.append(_ratio(r.ratio("ms_per_iter")))
@@ -119,17 +121,27 @@ def bar_met(r: ProblemResult) -> bool | None:
     return None if ratio is None else ratio <= bar_of(r.name)
 
 
+def bar_verdict(r: ProblemResult) -> str:
+    """``met`` (phase total and full-solve wall ratios within the bar), ``met (phases only)`` (the wall
+    ratio, measured on fewer and non-interleaved solves, is above it), ``not met``, or ``—``."""
+    met = bar_met(r)
+    if met is None:
+        return "—"
+    if not met:
+        return "not met"
+    wall = r.ratio("ms_per_iter")
+    return "met" if wall is not None and wall <= bar_of(r.name) else "met (phases only)"
+
+
 def _bar_rows(results: Sequence[ProblemResult]) -> list[str]:
     rows = [
         "| problem | bar | per-iteration ratio (phase total) | wall ratio (full solve) | met |",
         "|---|---|---|---|---|",
     ]
     for r in results:
-        met = bar_met(r)
-        verdict = "—" if met is None else "met" if met else "not met"
         rows.append(
             f"| {r.name} | ≤ {bar_of(r.name):g}× | {_ratio(r.ratio('total'))} | {_ratio(r.ratio('ms_per_iter'))}"
-            f" | {verdict} |"
+            f" | {bar_verdict(r)} |"
         )
     return rows
 
@@ -167,8 +179,9 @@ def format_report(results: Sequence[ProblemResult], meta: dict) -> str:
         f"- Full solves: wall time / iterations, median over up to {meta.get('repeats')} solves per library"
         f" (alternating), fewer where the next round would pass the {meta.get('solve_budget', 0):g} s budget"
         " (column *solves*); the first solve of each library runs in a fresh process that measures memory.",
-        "- Memory: peak resident memory (`ru_maxrss`) of building and solving the problem in that fresh"
-        " process, above the level after the imports (crocopy's includes loading its compiled numba kernels).",
+        "- Memory: peak resident memory (`VmHWM`, reset after the imports) of building and solving the problem"
+        " in that fresh process, above the level after the imports (crocopy's includes loading its compiled"
+        " numba kernels).",
         "",
         "## Solves",
         "",
@@ -185,7 +198,8 @@ def format_report(results: Sequence[ProblemResult], meta: dict) -> str:
         "## Bars (issue 7)",
         "",
         "Per-iteration time ≤ 1.5× Crocoddyl on jump, walk, taichi and man, ≤ 2× on the others,"
-        " judged on the interleaved phase total.",
+        " judged on the interleaved phase total; *met (phases only)* where the full-solve wall ratio (fewer,"
+        " non-interleaved solves; extra line-search trials and solver overhead) is above the bar.",
         "",
         *_bar_rows(results),
         "",
