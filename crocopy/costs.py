@@ -12,6 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .activations import ActivationModelAbstract, ActivationModelQuad
+from .activations.base import ParametersVersion
+from .cost_stack import CostStack
 from .data_collector import DataCollectorAbstract
 from .named_items import NamedItems
 from .residual_base import ResidualModelAbstract
@@ -78,44 +80,102 @@ class CostModelResidual(CostModelAbstract):
         super().__init__(state, activation, residual)
         self._terminal_zero = not (residual.q_dependent or residual.v_dependent)
 
-    def calc(self, data: CostDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
-        if u is None and self._terminal_zero:
+    def createData(self, data: DataCollectorAbstract | None = None) -> "CostDataResidual":
+        return CostDataResidual(self, data)
+
+    def calc(self, data: "CostDataResidual", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        data.zero = u is None and self._terminal_zero
+        if data.zero:
             data.residual.r[:] = 0.0
-            data.cost = 0.0
             return
         self.residual.calc(data.residual, x, u)
         self.activation.calc(data.activation, data.residual.r)
-        data.cost = data.activation.a_value
 
-    def calcDiff(self, data: CostDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
-        if u is None and self._terminal_zero:
+    def calcDiff(self, data: "CostDataResidual", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        """Residual and activation derivatives; ``data.Lx`` ... ``data.Luu`` are formed from them when read."""
+        data.with_u = u is not None and self.residual.u_dependent
+        data.zero = u is None and self._terminal_zero
+        if data.zero:
             return
-        rdata, adata = data.residual, data.activation
-        self.residual.calcDiff(rdata, x, u)
-        self.activation.calcDiff(adata, rdata.r)
-        Rx = rdata.Rx
-        if self.activation.diagonal:
-            ArrRx = adata.Arr_diag[:, None] * Rx
-        else:
-            ArrRx = adata.Arr @ Rx
-        np.dot(Rx.T, adata.Ar, out=data.Lx)
-        np.dot(Rx.T, ArrRx, out=data.Lxx)
-        if u is not None and self.residual.u_dependent:
-            Ru = rdata.Ru
-            ArrRu = adata.Arr_diag[:, None] * Ru if self.activation.diagonal else adata.Arr @ Ru
-            np.dot(Ru.T, adata.Ar, out=data.Lu)
-            np.dot(Rx.T, ArrRu, out=data.Lxu)
-            np.dot(Ru.T, ArrRu, out=data.Luu)
+        self.residual.calcDiff(data.residual, x, u)
+        self.activation.calcDiff(data.activation, data.residual.r)
+
+
+class CostDataResidual(CostDataAbstract):
+    """Data of :class:`CostModelResidual`.
+
+    ``cost`` is the activation value (zero for a control-only residual at a terminal node).
+    ``Lx``, ``Lu``, ``Lxx``, ``Lxu`` and ``Luu`` are read-only products of the residual Jacobians
+    and the activation derivatives of the last ``calcDiff`` (formed on each read; a cost sum never
+    reads them, it stacks the residual Jacobians instead).
+    """
+
+    def __init__(self, model: CostModelResidual, data: DataCollectorAbstract | None) -> None:
+        self.shared = data
+        self.residual = model.residual.createData(data)
+        self.activation = model.activation.createData()
+        self.with_u = False
+        self.zero = True
+        self._ndx, self._nu = model.state.ndx, model.nu
+
+    @property
+    def cost(self) -> float:
+        """Cost value ``a(r(x, u))``."""
+        return 0.0 if self.zero else self.activation.a_value
+
+    def _hessian_times(self, J: np.ndarray) -> np.ndarray:
+        adata = self.activation
+        if adata._diagonal:
+            return adata.Arr_diag[:, None] * J
+        return adata.Arr @ J
+
+    def _active(self, with_u: bool = False) -> bool:
+        return not self.zero and (self.with_u or not with_u)
+
+    @property
+    def Lx(self) -> np.ndarray:
+        """Gradient in ``x``, shape ``(ndx,)``."""
+        return self.residual.Rx.T @ self.activation.Ar if self._active() else np.zeros(self._ndx)
+
+    @property
+    def Lu(self) -> np.ndarray:
+        """Gradient in ``u``, shape ``(nu,)``."""
+        return self.residual.Ru.T @ self.activation.Ar if self._active(True) else np.zeros(self._nu)
+
+    @property
+    def Lxx(self) -> np.ndarray:
+        """Gauss-Newton Hessian in ``x``, shape ``(ndx, ndx)``."""
+        if not self._active():
+            return np.zeros((self._ndx, self._ndx))
+        return self.residual.Rx.T @ self._hessian_times(self.residual.Rx)
+
+    @property
+    def Lxu(self) -> np.ndarray:
+        """Gauss-Newton cross Hessian, shape ``(ndx, nu)``."""
+        if not self._active(True):
+            return np.zeros((self._ndx, self._nu))
+        return self.residual.Rx.T @ self._hessian_times(self.residual.Ru)
+
+    @property
+    def Luu(self) -> np.ndarray:
+        """Gauss-Newton Hessian in ``u``, shape ``(nu, nu)``."""
+        if not self._active(True):
+            return np.zeros((self._nu, self._nu))
+        return self.residual.Ru.T @ self._hessian_times(self.residual.Ru)
 
 
 @dataclass
 class CostItem:
-    """A named, weighted cost in a :class:`CostModelSum`."""
+    """A named, weighted cost in a :class:`CostModelSum` (changing ``weight``/``active`` is seen by its data)."""
 
     name: str
     cost: CostModelAbstract
     weight: float
     active: bool = True
+
+    def __setattr__(self, name: str, value: object) -> None:
+        object.__setattr__(self, name, value)
+        ParametersVersion.bump()
 
     def __repr__(self) -> str:
         return f"{{w={self.weight}, {self.cost!r}}}"
@@ -174,8 +234,9 @@ class CostModelSum(NamedItems):
         return CostDataSum(self, data)
 
     def calc(self, data: "CostDataSum", x: np.ndarray, u: np.ndarray | None = None) -> None:
-        total = 0.0
-        for name, item in self.costs.items():
+        total = data.stack.calc(x, u)
+        for name in data.generic:
+            item = self._items[name]
             if item.active:
                 cd = data.costs[name]
                 item.cost.calc(cd, x, u)
@@ -183,23 +244,18 @@ class CostModelSum(NamedItems):
         data.cost = total
 
     def calcDiff(self, data: "CostDataSum", x: np.ndarray, u: np.ndarray | None = None) -> None:
-        data.Lx[:] = 0.0
-        data.Lxx[:] = 0.0
         with_u = u is not None
-        if with_u:
-            data.Lu[:] = 0.0
-            data.Lxu[:] = 0.0
-            data.Luu[:] = 0.0
-        for name, item in self.costs.items():
+        data.stack.calcDiff(data, x, u)
+        for name in data.generic:
+            item = self._items[name]
             if not item.active:
                 continue
             cd = data.costs[name]
-            cost = item.cost
-            cost.calcDiff(cd, x, u)
+            item.cost.calcDiff(cd, x, u)
             w = item.weight
             data.Lx += w * cd.Lx
             data.Lxx += w * cd.Lxx
-            if with_u and cost.residual.u_dependent:
+            if with_u and item.cost.residual.u_dependent:
                 data.Lu += w * cd.Lu
                 data.Lxu += w * cd.Lxu
                 data.Luu += w * cd.Luu
@@ -209,7 +265,11 @@ class CostModelSum(NamedItems):
 
 
 class CostDataSum:
-    """Data of a :class:`CostModelSum`: one data per item in ``costs`` plus the sums."""
+    """Data of a :class:`CostModelSum`: one data per item in ``costs`` plus the sums.
+
+    Residual costs with diagonal activations share a :class:`~crocopy.cost_stack.CostStack`
+    (``stack``); the other items (``generic``) add their own derivatives.
+    """
 
     def __init__(self, model: CostModelSum, data: DataCollectorAbstract | None) -> None:
         ndx, nu = model.state.ndx, model.nu
@@ -221,3 +281,11 @@ class CostDataSum:
         self.Lxx = np.zeros((ndx, ndx))
         self.Lxu = np.zeros((ndx, nu))
         self.Luu = np.zeros((nu, nu))
+        stackable = [
+            (name, item, self.costs[name])
+            for name, item in model.costs.items()
+            if isinstance(item.cost, CostModelResidual) and item.cost.activation.diagonal and item.cost.residual.nr
+        ]
+        self.stack = CostStack(stackable, ndx, nu)
+        stacked = {name for name, _, _ in stackable}
+        self.generic = [name for name in model.costs if name not in stacked]

@@ -1,5 +1,7 @@
 """Activations, residuals and cost sums against finite differences; cost-sum bookkeeping."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -128,3 +130,80 @@ def test_state_residual_reference_checks_shape():
     state = crocopy.StateVector(4)
     with pytest.raises(ValueError, match=r"xref has shape \(3,\), expected \(4,\)"):
         crocopy.ResidualModelState(state, np.zeros(3), 2)
+
+
+def _every_activation_sum(state, nu, kinds=None):
+    """One item per activation kind (4 rows each) on state and control residuals in turn, plus a control cost."""
+    costs = crocopy.CostModelSum(state, nu)
+    for k, name in enumerate(kinds or sorted(ACTIVATIONS)):
+        if k % 2:
+            residual = crocopy.ResidualModelControl(state, 0.2 * np.ones(nu))
+        else:
+            residual = crocopy.ResidualModelState(state, 0.1 * np.arange(4.0), nu)
+        costs.addCost(name, crocopy.CostModelResidual(state, ACTIVATIONS[name](), residual), 0.5 + k)
+    costs.addCost("u", crocopy.CostModelResidual(state, crocopy.ResidualModelControl(state, nu)), 0.3)
+    return costs
+
+
+def _item_by_item(costs, data, x, u):
+    """Weighted sums of every active item's own cost and derivatives (the definition)."""
+    total, Lx, Lu = 0.0, np.zeros(costs.state.ndx), np.zeros(costs.nu)
+    Lxx, Luu = np.zeros((costs.state.ndx,) * 2), np.zeros((costs.nu, costs.nu))
+    for name, item in costs.costs.items():
+        if not item.active:
+            continue
+        cd = data.costs[name]
+        total += item.weight * cd.cost
+        Lx += item.weight * cd.Lx
+        Lxx += item.weight * cd.Lxx
+        if u is not None:
+            Lu += item.weight * cd.Lu
+            Luu += item.weight * cd.Luu
+    return total, Lx, Lu, Lxx, Luu
+
+
+@pytest.mark.parametrize("terminal", [False, True])
+def test_stacked_cost_sum_equals_its_items_and_follows_parameter_changes(terminal):
+    state, nu = crocopy.StateVector(4), 4
+    costs = _every_activation_sum(state, nu)
+    data = costs.createData(crocopy.DataCollectorAbstract())
+    x, u = np.array([0.9, -0.7, 0.2, 0.3]), (None if terminal else np.array([0.4, -1.2, 0.0, 0.7]))
+
+    def check():
+        costs.calc(data, x, u)
+        costs.calcDiff(data, x, u)
+        fresh = costs.createData(crocopy.DataCollectorAbstract())
+        costs.calc(fresh, x, u)
+        costs.calcDiff(fresh, x, u)
+        total, Lx, Lu, Lxx, Luu = _item_by_item(costs, data, x, u)
+        assert data.cost == pytest.approx(total, rel=1e-12) and data.cost == pytest.approx(fresh.cost, rel=1e-12)
+        np.testing.assert_allclose(data.Lx, Lx, atol=1e-12)
+        np.testing.assert_allclose(data.Lxx, Lxx, atol=1e-12)
+        np.testing.assert_allclose(data.Lxx, fresh.Lxx, atol=1e-12)
+        if u is not None:
+            np.testing.assert_allclose(data.Lu, Lu, atol=1e-12)
+            np.testing.assert_allclose(data.Luu, Luu, atol=1e-12)
+        return data.cost
+
+    first = check()
+    costs.costs["wquad"].cost.activation.weights = np.array([5.0, 1.0, 1.0, 1.0])
+    costs.costs["barrier"].cost.activation.bounds = crocopy.ActivationBounds(-0.1 * np.ones(4), 0.1 * np.ones(4))
+    costs.costs["wbarrier"].cost.activation.bounds.ub = 0.2 * np.ones(4)
+    costs.costs["quad"].weight = 7.0
+    costs.changeCostStatus("smooth1", False)
+    assert check() != pytest.approx(first)
+    with pytest.raises(ValueError):
+        costs.costs["wquad"].cost.activation.weights[0] = 3.0
+
+
+def test_stacked_cost_sum_reports_an_infinite_residual_without_warnings():
+    state = crocopy.StateVector(4)
+    costs = _every_activation_sum(state, 4, ("barrier", "quad", "wbarrier", "wquad"))
+    data = costs.createData(crocopy.DataCollectorAbstract())
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        costs.calc(data, np.array([1e300, 0.0, 0.0, 0.0]), np.zeros(4))
+    assert data.cost == np.inf
+    assert data.costs["barrier"].cost == np.inf
+    assert all(np.isfinite(data.costs[name].cost) for name in ("quad", "u"))

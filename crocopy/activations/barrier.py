@@ -8,11 +8,14 @@ from __future__ import annotations
 import numpy as np
 
 from ..validation import as_vector, check_bounds
-from .base import ActivationDataAbstract, ActivationModelAbstract
+from .base import ActivationDataAbstract, ActivationModelAbstract, ParametersVersion, frozen_copy
 
 
 class ActivationBounds:
-    """Bounds ``lb <= r <= ub`` (shape ``(nr,)``), shrunk around their middle by ``beta`` in (0, 1]."""
+    """Bounds ``lb <= r <= ub`` (shape ``(nr,)``), shrunk around their middle by ``beta`` in (0, 1].
+
+    ``lb`` and ``ub`` are read-only arrays; assigning new ones re-checks them.
+    """
 
     def __init__(self, lb: np.ndarray, ub: np.ndarray, beta: float = 1.0) -> None:
         lb = np.asarray(lb, dtype=float).reshape(-1)
@@ -26,7 +29,31 @@ class ActivationBounds:
             mid, half = 0.5 * (lb[finite] + ub[finite]), 0.5 * (ub[finite] - lb[finite])
             lb, ub = lb.copy(), ub.copy()
             lb[finite], ub[finite] = mid - beta * half, mid + beta * half
-        self.lb, self.ub, self.beta = lb, ub, float(beta)
+        self._lb, self._ub, self.beta = frozen_copy(lb), frozen_copy(ub), float(beta)
+
+    @property
+    def lb(self) -> np.ndarray:
+        """Lower bound, shape ``(nr,)``."""
+        return self._lb
+
+    @lb.setter
+    def lb(self, value: np.ndarray) -> None:
+        value = as_vector(value, self._lb.size, "lb", allow_nonfinite=True)
+        check_bounds(value, self._ub, "lb", "ub")
+        self._lb = frozen_copy(value)
+        ParametersVersion.bump()
+
+    @property
+    def ub(self) -> np.ndarray:
+        """Upper bound, shape ``(nr,)``."""
+        return self._ub
+
+    @ub.setter
+    def ub(self, value: np.ndarray) -> None:
+        value = as_vector(value, self._ub.size, "ub", allow_nonfinite=True)
+        check_bounds(self._lb, value, "lb", "ub")
+        self._ub = frozen_copy(value)
+        ParametersVersion.bump()
 
     def __repr__(self) -> str:
         return f"ActivationBounds(lb={self.lb}, ub={self.ub}, beta={self.beta})"
@@ -37,18 +64,50 @@ class ActivationModelQuadraticBarrier(ActivationModelAbstract):
 
     def __init__(self, bounds: ActivationBounds) -> None:
         super().__init__(bounds.lb.size)
-        self.bounds = bounds
+        self._bounds = bounds
 
-    def _excess(self, r: np.ndarray) -> np.ndarray:
-        return r - np.clip(r, self.bounds.lb, self.bounds.ub)
+    @property
+    def bounds(self) -> ActivationBounds:
+        """The bounds ``lb``/``ub``."""
+        return self._bounds
 
-    def calc(self, data: ActivationDataAbstract, r: np.ndarray) -> None:
-        e = self._excess(r)
+    @bounds.setter
+    def bounds(self, value: ActivationBounds) -> None:
+        if value.lb.size != self.nr:
+            raise ValueError(f"bounds have size {value.lb.size}, expected nr = {self.nr}")
+        self._bounds = value
+        ParametersVersion.bump()
+
+    def barrier_form(self) -> tuple:
+        return self._bounds.lb, self._bounds.ub, 1.0, False
+
+    def createData(self) -> "ActivationDataQuadraticBarrier":
+        return ActivationDataQuadraticBarrier(self)
+
+    def _excess(self, data: "ActivationDataQuadraticBarrier", r: np.ndarray) -> np.ndarray:
+        """``r - clip(r, lb, ub)`` into ``data.excess`` (and ``data.outside = excess != 0``)."""
+        e = data.excess
+        np.minimum(r, self.bounds.ub, out=e)
+        np.maximum(e, self.bounds.lb, out=e)
+        np.subtract(r, e, out=e)
+        return e
+
+    def calc(self, data: "ActivationDataQuadraticBarrier", r: np.ndarray) -> None:
+        e = self._excess(data, r)
         data.a_value = 0.5 * float(e @ e)
 
-    def calcDiff(self, data: ActivationDataAbstract, r: np.ndarray) -> None:
-        data.Ar[:] = self._excess(r)
-        data.Arr_diag[:] = (r < self.bounds.lb) | (r > self.bounds.ub)
+    def calcDiff(self, data: "ActivationDataQuadraticBarrier", r: np.ndarray) -> None:
+        e = self._excess(data, r)
+        data.Ar[:] = e
+        np.not_equal(e, 0.0, out=data.Arr_diag)
+
+
+class ActivationDataQuadraticBarrier(ActivationDataAbstract):
+    """Activation data with an ``excess`` work vector ``r - clip(r, lb, ub)``, shape ``(nr,)``."""
+
+    def __init__(self, model: ActivationModelQuadraticBarrier) -> None:
+        super().__init__(model)
+        self.excess = np.zeros(model.nr)
 
 
 class ActivationModelWeightedQuadraticBarrier(ActivationModelQuadraticBarrier):
@@ -56,12 +115,27 @@ class ActivationModelWeightedQuadraticBarrier(ActivationModelQuadraticBarrier):
 
     def __init__(self, bounds: ActivationBounds, weights: np.ndarray) -> None:
         super().__init__(bounds)
-        self.weights = as_vector(weights, self.nr, "weights")
+        self._weights = frozen_copy(as_vector(weights, self.nr, "weights"))
 
-    def calc(self, data: ActivationDataAbstract, r: np.ndarray) -> None:
-        e = self._excess(r)
+    @property
+    def weights(self) -> np.ndarray:
+        """Weights ``w``, shape ``(nr,)`` (read-only; assign a new array to change them)."""
+        return self._weights
+
+    @weights.setter
+    def weights(self, value: np.ndarray) -> None:
+        self._weights = frozen_copy(as_vector(value, self.nr, "weights"))
+        ParametersVersion.bump()
+
+    def barrier_form(self) -> tuple:
+        return self._bounds.lb, self._bounds.ub, self._weights, False
+
+    def calc(self, data: ActivationDataQuadraticBarrier, r: np.ndarray) -> None:
+        e = self._excess(data, r)
         data.a_value = 0.5 * float(e @ (self.weights * e))
 
-    def calcDiff(self, data: ActivationDataAbstract, r: np.ndarray) -> None:
-        data.Ar[:] = self.weights * self._excess(r)
-        data.Arr_diag[:] = self.weights * ((r < self.bounds.lb) | (r > self.bounds.ub))
+    def calcDiff(self, data: ActivationDataQuadraticBarrier, r: np.ndarray) -> None:
+        e = self._excess(data, r)
+        np.multiply(self.weights, e, out=data.Ar)
+        np.not_equal(e, 0.0, out=data.Arr_diag)
+        data.Arr_diag *= self.weights

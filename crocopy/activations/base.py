@@ -10,6 +10,27 @@ from __future__ import annotations
 import numpy as np
 
 
+class ParametersVersion:
+    """Counter bumped whenever a parameter that cost sums cache changes.
+
+    Activation weights and bounds, and the weight or status of a cost item, go through setters that
+    call :meth:`bump`; a :class:`~crocopy.cost_stack.CostStack` re-reads them when the value moved.
+    """
+
+    value = 0
+
+    @classmethod
+    def bump(cls) -> None:
+        cls.value += 1
+
+
+def frozen_copy(values: np.ndarray) -> np.ndarray:
+    """A read-only copy of ``values`` (parameters change through setters only)."""
+    out = np.array(values, dtype=float)
+    out.setflags(write=False)
+    return out
+
+
 class ActivationModelAbstract:
     """Abstract activation of a residual of dimension ``nr``."""
 
@@ -23,6 +44,15 @@ class ActivationModelAbstract:
 
     def createData(self) -> "ActivationDataAbstract":
         return ActivationDataAbstract(self)
+
+    def barrier_form(self) -> tuple | None:
+        """``(lb, ub, w, quadratic)`` if ``a(r) = ½ Σ wᵢ (rᵢ - clip(rᵢ, lbᵢ, ubᵢ))²`` exactly, else ``None``.
+
+        ``quadratic`` is True when ``Arr = diag(w)`` everywhere (``lb = ub = 0``), False when
+        ``Arr = diag(w ∘ [r outside the bounds]))``.  Cost sums evaluate such activations for all
+        their items at once.
+        """
+        return None
 
     def calc(self, data: "ActivationDataAbstract", r: np.ndarray) -> None:
         raise NotImplementedError
@@ -38,11 +68,20 @@ class ActivationDataAbstract:
     """Activation value ``a_value``, gradient ``Ar`` and Hessian ``Arr`` (dense or diagonal)."""
 
     def __init__(self, model: ActivationModelAbstract) -> None:
-        self.a_value = 0.0
+        self._a_store = np.zeros(1)
         self.Ar = np.zeros(model.nr)
         self.Arr_diag = np.zeros(model.nr)
         self._Arr = np.zeros((model.nr, model.nr))
         self._diagonal = model.diagonal
+
+    @property
+    def a_value(self) -> float:
+        """Activation value ``a(r)``."""
+        return float(self._a_store[0])
+
+    @a_value.setter
+    def a_value(self, value: float) -> None:
+        self._a_store[0] = value
 
     @property
     def Arr(self) -> np.ndarray:

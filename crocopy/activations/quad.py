@@ -5,11 +5,14 @@ from __future__ import annotations
 import numpy as np
 
 from ..validation import as_vector
-from .base import ActivationDataAbstract, ActivationModelAbstract
+from .base import ActivationDataAbstract, ActivationModelAbstract, ParametersVersion, frozen_copy
 
 
 class ActivationModelQuad(ActivationModelAbstract):
     """``a(r) = ½‖r‖²``; ``Ar = r``; ``Arr = I``."""
+
+    def barrier_form(self) -> tuple:
+        return 0.0, 0.0, 1.0, True
 
     def calc(self, data: ActivationDataAbstract, r: np.ndarray) -> None:
         data.a_value = 0.5 * float(r @ r)
@@ -25,15 +28,20 @@ class ActivationModelWeightedQuad(ActivationModelAbstract):
     def __init__(self, weights: np.ndarray) -> None:
         weights = np.asarray(weights, dtype=float).reshape(-1)
         super().__init__(weights.size)
-        self._weights = as_vector(weights, self.nr, "weights")
+        self._weights = frozen_copy(as_vector(weights, self.nr, "weights"))
 
     @property
     def weights(self) -> np.ndarray:
+        """Weights ``w``, shape ``(nr,)`` (read-only; assign a new array to change them)."""
         return self._weights
 
     @weights.setter
     def weights(self, value: np.ndarray) -> None:
-        self._weights = as_vector(value, self.nr, "weights")
+        self._weights = frozen_copy(as_vector(value, self.nr, "weights"))
+        ParametersVersion.bump()
+
+    def barrier_form(self) -> tuple:
+        return 0.0, 0.0, self._weights, True
 
     def calc(self, data: ActivationDataAbstract, r: np.ndarray) -> None:
         data.a_value = 0.5 * float(r @ (self._weights * r))
