@@ -34,7 +34,15 @@ from .constraints import (
     ConstraintModelResidual,
     ConstraintType,
 )
-from .costs import CostDataAbstract, CostDataResidual, CostDataSum, CostItem, CostModelAbstract, CostModelResidual, CostModelSum
+from .costs import (
+    CostDataAbstract,
+    CostDataResidual,
+    CostDataSum,
+    CostItem,
+    CostModelAbstract,
+    CostModelResidual,
+    CostModelSum,
+)
 from .data_collector import DataCollectorAbstract
 from .diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
 from .enums import AssignmentOp, Jcomponent, RKType, VerboseLevel
