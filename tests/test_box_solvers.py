@@ -205,14 +205,15 @@ def test_clamping_baselines_stay_in_the_box(clamping):
 
 
 @pytest.mark.parametrize("Solver", [SolverBoxDDP, SolverBoxFDDP])
-@pytest.mark.parametrize("general", [False, True])
-def test_compiled_and_numpy_backward_passes_agree(Solver, general):
+@pytest.mark.parametrize(("general", "compat"), [(False, False), (True, False), (False, True)])
+def test_compiled_and_numpy_backward_passes_agree(Solver, general, compat):
     runs = []
     for kernel in (False, True):
         problem = unicycle_problem(T=30)
         solver = Solver(problem)
         solver.use_kernel = kernel
         solver.general_value_update = general
+        solver.compat_crocoddyl = compat
         rows = record(solver)
         assert solver.solve(None, None, 100)
         runs.append((rows, solver.nfactorizations, solver.nqp))

@@ -6,7 +6,8 @@ sign, ``δu = -k - K δx``)::
 
     k = -argmin_δu ½ δuᵀ Quu δu + Quᵀ δu   s.t.  u_lb - u <= δu <= u_ub - u,
 
-solved by :class:`crocopy.box_qp.BoxQP` warm-started from the previous iteration's ``-k``.  The
+solved by :class:`crocopy.box_qp.BoxQP` warm-started from the previous iteration's solution
+``δu = -k`` (Box-FDDP paper eq. 15, projected into the box by the QP).  The
 feedback acts on the free subspace only: ``K = Quu_inv Qux`` with ``Quu_inv`` the inverse of the
 free block ``Quu_ff`` zero-padded to ``(nu, nu)`` (rows of clamped controls are zero).  The
 forward pass clamps the applied controls, ``û = clamp(u - α k - K (x̂ ⊖ x), u_lb, u_ub)``, so the
@@ -27,13 +28,28 @@ must already respect the box (a rollout of clamped controls).  An infeasible ite
 start that is not a rollout) gets unconstrained gains, as in Box-FDDP and Crocoddyl; Tassa's
 Box-DDP always starts from a rollout.
 
-Settings the paper leaves open are Crocoddyl's documented defaults: ``th_stop = 5e-5``,
-regularisation ``reg_min = 1e-9`` (also the initial value), factors 10, step lengths ``2^-n``,
-``n = 0..9``; the box QP runs with ``maxiter = 100``, ``th_acceptStep = 0.1``, ``th_grad = 1e-9``
-and no extra regularisation (``preg`` is already on ``Quu``).  Crocopy extensions:
-``nfactorizations`` and ``nqp`` count box-QP Cholesky factorizations and QP solves since the last
-``solve``.  With ``use_kernel`` (numba available) the recursion runs the compiled node steps of
-:mod:`.box_kernel`, which give the numpy path's numbers to round-off.
+Settings the paper leaves open are Crocoddyl 3.2's (documented defaults, or measured as a black
+box): ``th_stop = 5e-5``, regularisation ``reg_min = 1e-9`` (also the initial value), factors 10,
+step lengths ``2^-n``, ``n = 0..9``; the box QP runs with ``maxiter = 100``,
+``th_acceptStep = 0.1``, ``th_grad = 1e-5`` (infinity norm) and no extra regularisation (``preg`` is
+already on ``Quu``).
+
+``compat_crocoddyl = True`` (crocopy extension) reproduces three departures of Crocoddyl 3.2 from
+the papers, found by comparing its iterates as a black box; with them crocopy follows Crocoddyl's
+iterates to round-off (``crocopy bench --box-parity``):
+
+1. the QP warm start is Crocoddyl's stored ``k`` itself, i.e. ``-δu`` of the previous iteration (a
+   sign error against eq. 15: the mirrored guess is often clamped on the opposite bound);
+2. the QP's line search accepts a cost increase of up to ``th_acceptStep`` times the predicted
+   decrease (flipped Armijo sign, :mod:`crocopy.box_qp`);
+3. Box-DDP from an infeasible iterate rolls out from ``x0`` but keeps the *last* gap open by
+   ``(1 - α)`` and then declares the iterate feasible (and ``ffeas`` reports the gaps of iterates
+   declared feasible).
+
+Crocopy extensions: ``compat_crocoddyl``; ``nfactorizations`` and ``nqp`` count box-QP Cholesky
+factorizations and QP solves since the last ``solve``.  With ``use_kernel`` (numba available) the
+recursion runs the compiled node steps of :mod:`.box_kernel`, which give the numpy path's numbers to
+round-off.
 """
 
 from __future__ import annotations
@@ -60,13 +76,14 @@ class BoxSolverMixin:
         self._qps: dict[int, BoxQP] = {}
         for m in problem.runningModels:
             if m.nu and m.nu not in self._qps:
-                self._qps[m.nu] = BoxQP(m.nu, maxiter=100, th_acceptStep=0.1, th_grad=1e-9, reg=0.0)
+                self._qps[m.nu] = BoxQP(m.nu, maxiter=100, th_acceptStep=0.1, th_grad=1e-5, reg=0.0)
         self._lb: list[np.ndarray | None] = []
         self._ub: list[np.ndarray | None] = []
         self._clamped = [False] * problem.T
         self.nqp = 0
         self._kernel_fact = 0
         self.general_value_update = False
+        self._compat = False
         self._read_bounds()
 
     def _read_bounds(self) -> None:
@@ -90,6 +107,25 @@ class BoxSolverMixin:
         self.nqp = 0
         self._kernel_fact = 0
         super()._start(init_xs, init_us, is_feasible, init_reg)
+
+    def calcDiff(self) -> float:
+        cost = super().calcDiff()
+        if self._compat and self.isFeasible:  # Crocoddyl reports the gaps, its backward pass ignores them
+            self.computeDynamicFeasibility()
+            for f in self.fs:
+                f[:] = 0.0
+        return cost
+
+    @property
+    def compat_crocoddyl(self) -> bool:
+        """Reproduce Crocoddyl 3.2's departures from the papers (crocopy extension, default False)."""
+        return self._compat
+
+    @compat_crocoddyl.setter
+    def compat_crocoddyl(self, value: bool) -> None:
+        self._compat = bool(value)
+        for qp in self._qps.values():
+            qp.compat_crocoddyl = self._compat
 
     @property
     def nfactorizations(self) -> int:
@@ -119,6 +155,7 @@ class BoxSolverMixin:
         preg = float(self.preg)
         box_mode = self._box_mode()
         general = bool(self.general_value_update)
+        warm = 1.0 if self._compat else -1.0
         for t in range(T - 1, -1, -1):
             d = problem.runningDatas[t]
             lb = self._lb[t]
@@ -131,10 +168,10 @@ class BoxSolverMixin:
                 )
             else:
                 qp = self._qps[lb.size]
+                th_acc = -qp.th_acceptStep if self._compat else qp.th_acceptStep
                 ok, nfact, self._clamped[t] = box_kernel.box_step(
                     d.Fx, d.Fu, d.Lxx, d.Lxu, d.Luu, d.Lx, d.Lu, self.Vxx[t + 1], self.Vx[t + 1], preg, self.fs[t],
-                    gaps, self.us[t], lb, self._ub[t], qp.th_grad,
-                    -qp.th_acceptStep if qp.compat_crocoddyl else qp.th_acceptStep, qp.maxiter, general,
+                    gaps, self.us[t], lb, self._ub[t], qp.th_grad, th_acc, warm, qp.maxiter, general,
                     self.Qxx[t], self.Qxu[t], self.Quu[t], self.Qx[t], self.Qu[t], self.K[t], self.k[t],
                     self.Quu_inv[t], self.Vxx[t], self.Vx[t],
                 )
@@ -159,7 +196,7 @@ class BoxSolverMixin:
         k = self.k[t]
         qp = self._qps[u.size]
         try:
-            sol = qp._solve(self.Quu[t], self.Qu[t], lb - u, self._ub[t] - u, -k)
+            sol = qp._solve(self.Quu[t], self.Qu[t], lb - u, self._ub[t] - u, k if self._compat else -k)
         except BoxQPError as exc:
             raise BackwardPassError(f"box QP failed at node {t}: {exc}") from exc
         self.nqp += 1
@@ -186,12 +223,18 @@ class BoxSolverMixin:
             k, K = self.k[t], self.K[t]
             self.Vx[t] += K.T @ (self.Quu[t] @ k) - self.Qxu[t] @ k
 
-    def _box_rollout(self, steplength: float, gaps: bool) -> None:
-        """Rollout with clamped controls; ``gaps`` keeps them open by ``(1 - steplength)`` (FDDP)."""
+    def _box_rollout(self, steplength: float, gaps: bool, terminal_gap: bool = False) -> None:
+        """Rollout with clamped controls; ``gaps`` keeps them open by ``(1 - steplength)`` (FDDP).
+
+        ``terminal_gap`` keeps only the last gap open (Crocoddyl 3.2's Box-DDP from an infeasible
+        iterate, reproduced in ``compat_crocoddyl`` mode).
+        """
         problem = self.problem
         xs, us, xs_try, us_try, fs = self.xs, self.us, self.xs_try, self.us_try, self.fs
         models = problem.runningModels
         first = models[0] if models else problem.terminalModel
+        gaps = gaps and steplength != 1.0  # a full step closes the gaps exactly
+        terminal_gap = terminal_gap and steplength != 1.0
         xs_try[0] = first.state.integrate(problem.x0, (steplength - 1.0) * fs[0]) if gaps else problem.x0.copy()
         cost = 0.0
         for t, (m, d) in enumerate(zip(models, problem.runningDatas)):
@@ -205,7 +248,7 @@ class BoxSolverMixin:
                 us_try[t] = ut
             m.calc(d, xs_try[t], us_try[t])
             cost += d.cost
-            if gaps:
+            if gaps or (terminal_gap and t == problem.T - 1):
                 xs_try[t + 1] = m.state.integrate(d.xnext, (steplength - 1.0) * fs[t + 1])
             else:
                 xs_try[t + 1] = d.xnext.copy()
@@ -230,5 +273,8 @@ class SolverBoxDDP(BoxSolverMixin, SolverDDP):
         self._init_box()
 
     def forwardPass(self, steplength: float) -> None:
-        """Rollout from ``x0`` with ``û = clamp(u - α k - K (x̂ ⊖ x))``; raises ForwardPassError on NaN."""
-        self._box_rollout(steplength, gaps=False)
+        """Rollout with ``û = clamp(u - α k - K (x̂ ⊖ x))``; raises ForwardPassError on NaN.
+
+        In ``compat_crocoddyl`` mode an infeasible iterate keeps its last gap open by ``(1 - α)``.
+        """
+        self._box_rollout(steplength, gaps=False, terminal_gap=self.compat_crocoddyl and not self.isFeasible)

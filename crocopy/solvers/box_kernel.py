@@ -2,8 +2,9 @@
 
 For node t with next value function ``(V'x, V'xx)`` (Crocoddyl's signs) it computes the Q terms
 (as :mod:`.riccati_kernel`), solves the box QP ``min ½ δuᵀ Quu δu + Quᵀ δu, lb ≤ δu ≤ ub`` by the
-same projected-Newton iteration as :class:`crocopy.box_qp.BoxQP` (warm start ``-k``, no extra
-regularisation, Armijo 0.1 over ``2^-n``, stop on ``‖g_f‖ ≤ th_grad``), sets ``k = -δu``,
+same projected-Newton iteration as :class:`crocopy.box_qp.BoxQP` (warm start ``warm * k``, i.e. ``-k``,
+or ``+k`` in Crocoddyl-compatible mode; no extra regularisation; signed Armijo ratio ``th_acc`` over
+``2^-n``; stop on ``‖g_f‖∞ ≤ th_grad`` after the step), sets ``k = -δu``,
 ``Quu_inv`` (free block inverse, zero-padded), ``K = Quu_inv Qux``, zeroes the ``Qu`` entries of
 clamped controls unless ``general``, and updates the value function (general gradient update when
 ``general`` and a control is clamped).  Returns ``(ok, nfactorizations, clamped)``; ``ok`` is False
@@ -128,8 +129,8 @@ def _box_qp(H, q, lb, ub, x, th_grad, th_acc, maxiter, free, Hinv):
     return True, nfact, nf
 
 
-def _box_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, u, lb, ub, th_grad, th_acc, maxiter, general,
-              Qxx, Qxu, Quu, Qx, Qu, K, k, Quu_inv, Vxx, Vx):
+def _box_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, u, lb, ub, th_grad, th_acc, warm, maxiter,
+              general, Qxx, Qxu, Quu, Qx, Qu, K, k, Quu_inv, Vxx, Vx):
     nu = Fu.shape[1]
     FxTV = Fx.T @ Vxx_n
     Qxx[:, :] = Lxx + FxTV @ Fx
@@ -140,7 +141,7 @@ def _box_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, u, lb,
     Qu[:] = Lu + Fu.T @ Vx_n
     for i in range(nu):
         Quu[i, i] += preg
-    x = -k
+    x = warm * k
     free = np.empty(nu, dtype=np.bool_)
     Hinv = np.zeros((nu, nu))
     ok, nfact, nf = _box_qp(Quu, Qu, lb - u, ub - u, x, th_grad, th_acc, maxiter, free, Hinv)
