@@ -6,15 +6,18 @@ gait cycles: ``cycles`` 1, 2, 4, 9, 18, 36 give T = 56 cycles + 2 = 58, 114, 226
 2018 nodes.  For each T, one Box-FDDP iteration is run from the builder's warm start (loads the
 kernels, sets the iterate), then the work of one iteration is timed at that iterate, phase by
 phase: ``problem.calc``, ``problem.calcDiff``, the backward pass (``computeDirection(False)``) and
-one forward pass (``tryStep(1.0)``); the iteration time is the sum of the phase medians over
+one forward pass (``tryStep`` with the smallest line-search step: the same work as a full step,
+which can diverge on the long horizons).  The iteration time is the sum of the phase medians over
 ``repeats`` rounds, the horizons interleaved within each round so that load drift hits them all.
 The exponent ``b`` of ``log t = a + b log T`` is fitted by least squares (linear scaling: b = 1).
 
 Memory.  A fresh Python subprocess imports crocopy, Pinocchio and the problem builders, reads its
-peak resident set size (``resource.getrusage(RUSAGE_SELF).ru_maxrss``), builds the 580-node hop
-(registry ``hop``, T = 592 with its impulse nodes) and solves it with Box-FDDP (the registry's
-iteration budget), reading the peak after each step.  Reported: the peak minus the post-import
-baseline after building and after solving.
+peak resident set size, builds the 580-node hop (registry ``hop``, T = 592 with its impulse
+nodes) and solves it with Box-FDDP (the registry's iteration budget), reading the peak after each
+step.  Reported: the peak minus the post-import baseline after building and after solving.  The
+peak is ``VmHWM`` of ``/proc/self/status`` (``resource.getrusage(RUSAGE_SELF).ru_maxrss`` where
+that file does not exist): on Linux a child inherits its parent's ``ru_maxrss`` across fork and
+exec, so after this process has built the long trots that figure would be the parent's.
 """
 
 from __future__ import annotations
@@ -37,9 +40,19 @@ PHASES = ("calc", "calcDiff", "backward", "forward")
 
 _MEMORY_SCRIPT = """
 import json, resource, sys, time
+
+
+def peak():
+    try:
+        with open("/proc/self/status") as f:
+            return int(f.read().split("VmHWM:")[1].split()[0]) * 1024
+    except (OSError, IndexError):
+        return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
 import crocopy, crocopy.problems.quadruped
 from crocopy.problems import registry
-peak = lambda: resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
 base = peak()
 spec = registry.get("hop")
 problem, xs, us = spec.build()
@@ -67,7 +80,7 @@ def _phase_calls(solver) -> dict:
         "calc": lambda: problem.calc(xs, us),
         "calcDiff": lambda: problem.calcDiff(xs, us),
         "backward": lambda: solver.computeDirection(False),
-        "forward": lambda: solver.tryStep(1.0),
+        "forward": lambda: solver.tryStep(solver.alphas[-1]),
     }
 
 

@@ -10,7 +10,7 @@ from robots import load
 import crocopy
 from crocopy.batch import solve_one
 from crocopy.bench_batch import makespan, run_batch_bench
-from crocopy.bench_scaling import fit_exponent, run_scaling_bench
+from crocopy.bench_scaling import fit_exponent, hop_memory, run_scaling_bench
 from crocopy.problems import registry
 from crocopy.problems.common import load_model
 
@@ -227,3 +227,11 @@ def test_scaling_fit_and_short_run():
     assert [r["T"] for r in out["rows"]] == [58, 114]
     assert all(r["iteration"] == pytest.approx(sum(r["phases"].values())) for r in out["rows"])
     assert np.isfinite(out["exponent"]) and set(out["exponents"]) == {"calc", "calcDiff", "backward", "forward"}
+
+
+@pytest.mark.slow
+def test_hop_memory_subprocess_reports_its_own_peak():
+    m = hop_memory(maxiter=1)
+    assert m["T"] == 592 and m["iter"] <= 1
+    assert 0 < m["baseline"] < m["built"] <= m["solved"]
+    assert m["solved"] - m["baseline"] < 2**30
