@@ -11,6 +11,7 @@ import crocopy
 from crocopy.batch import solve_one
 from crocopy.bench_batch import makespan, run_batch_bench
 from crocopy.bench_scaling import fit_exponent, hop_memory, run_scaling_bench
+from crocopy.cli import build_parser
 from crocopy.problems import registry
 from crocopy.problems.common import load_model
 
@@ -227,6 +228,13 @@ def test_scaling_fit_and_short_run():
     assert [r["T"] for r in out["rows"]] == [58, 114]
     assert all(r["iteration"] == pytest.approx(sum(r["phases"].values())) for r in out["rows"])
     assert np.isfinite(out["exponent"]) and set(out["exponents"]) == {"calc", "calcDiff", "backward", "forward"}
+
+
+def test_cli_bench_flags():
+    args = build_parser().parse_args(["bench", "--batch", "--scaling", "--workers", "3", "--runs", "5"])
+    assert (args.batch, args.scaling, args.workers, args.runs) == (True, True, 3, 5)
+    args = build_parser().parse_args(["bench"])
+    assert (args.batch, args.scaling, args.workers, args.runs) == (False, False, 2, 3)
 
 
 @pytest.mark.slow
