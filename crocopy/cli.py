@@ -4,6 +4,8 @@
 * ``crocopy bench``: solver timings on LQR problems (and Crocoddyl's, when installed)
 * ``crocopy bench --vs crocoddyl [--problems ...] [--repeats N] [--out BENCHMARKS.md]``: crocopy and
   Crocoddyl side by side on the bundled problems (:mod:`crocopy.bench_problems`)
+* ``crocopy bench --box-parity [--problems ...] [--maxiter N]``: Box-DDP/Box-FDDP iterations and
+  final costs next to Crocoddyl's, and the box-QP backward-pass overhead (:mod:`crocopy.bench_box`)
 * ``crocopy bench --batch`` / ``--scaling``: :func:`crocopy.solve_many` speed-up on the quadrotor
   starts; time per iteration vs horizon and peak memory (:mod:`crocopy.bench_batch`,
   :mod:`crocopy.bench_scaling`)
@@ -44,7 +46,21 @@ def _bench_batch_scaling(args: argparse.Namespace) -> int:
     return 0
 
 
+def _bench_box_parity(args: argparse.Namespace) -> int:
+    from .bench_box import BenchDependencyError, run_box_parity
+
+    try:
+        print(run_box_parity(args.problems, maxiter=args.maxiter or None,
+                             progress=lambda rows: print(rows, file=sys.stderr, flush=True)))
+    except (BenchDependencyError, KeyError) as exc:
+        print(exc.args[0], file=sys.stderr)
+        return 2
+    return 0
+
+
 def _bench(args: argparse.Namespace) -> int:
+    if args.box_parity:
+        return _bench_box_parity(args)
     if args.batch or args.scaling:
         return _bench_batch_scaling(args)
     if args.vs:
@@ -233,6 +249,8 @@ def build_parser() -> argparse.ArgumentParser:
                        help="10 quadrotor solves serially and with crocopy.solve_many (crocopy.bench_batch)")
     bench.add_argument("--scaling", action="store_true",
                        help="time per iteration vs horizon (ANYmal trot), peak memory of the hop (bench_scaling)")
+    bench.add_argument("--box-parity", action="store_true",
+                       help="Box-DDP/Box-FDDP iterations and costs vs Crocoddyl's (crocopy.bench_box; bench extra)")
     bench.add_argument("--workers", type=int, default=2, help="with --batch: worker processes")
     bench.add_argument("--runs", type=int, default=3, help="with --batch/--scaling: repetitions (median reported)")
     bench.set_defaults(func=_bench)
