@@ -18,7 +18,8 @@
 Constants the paper leaves open, set to Crocoddyl's documented defaults: ``th_stop = 5e-5``,
 ``th_acceptStep = 0.1``, ``th_acceptNegStep = 2``, initial regularisation ``1e-9`` (the paper's),
 factors 10, ``reg_max = 1e9``, decrease after steps ``α > 0.5``, increase after ``α <= 0.01``,
-step lengths ``2^-n``, ``n = 0..9``.
+step lengths ``2^-n``, ``n = 0..9``; box QP ``th_grad = 1e-5``.  ``compat_crocoddyl = True``
+reproduces Crocoddyl 3.2's QP warm-start sign and line-search rule (:mod:`crocopy.solvers.box_ddp`).
 """
 
 from __future__ import annotations
