@@ -30,6 +30,7 @@ print(f"thrusts in [{thrusts.min():.2f}, {thrusts.max():.2f}] N (limits {THRUST_
 print("final position", np.round(solver.xs[-1][:3], 3), "m")
 
 robot = example_robot_data.load("iris")
-print("animation:", export_html_from_solver(robot, solver, f"quadrotor_{args.task}.html"))
+camera = [0.0, -3.0, 1.5, 0.0, 0.0, 0.0, 1.0]  # camera rig moved back: the flights span metres
+print("animation:", export_html_from_solver(robot, solver, f"quadrotor_{args.task}.html", cameraTF=camera))
 if args.live:
-    crocopy.MeshcatDisplay(robot).displayFromSolver(solver)
+    crocopy.MeshcatDisplay(robot, cameraTF=camera).displayFromSolver(solver)
