@@ -1,13 +1,16 @@
 """Peak memory (and time) of one (problem, library) solve, run as ``python -m crocopy.bench_memory``.
 
 ``python -m crocopy.bench_memory NAME LIBRARY SOLVER MAXITER`` imports the library (``crocopy``
-or ``crocoddyl``), Pinocchio and the problem registry, resets the process's resident-memory
-high-water mark (``/proc/self/clear_refs``, Linux) and records it (the baseline), builds problem
-``NAME`` with one thread, solves it from the builder's guess with ``SOLVER`` (a key of
-:data:`crocopy.bench_problems.SOLVER_CLASSES`) and ``MAXITER`` iterations, and prints one JSON
-line: ``baseline_kib``, ``peak_kib`` (the high-water mark after the solve), ``hwm_reset`` (whether
-the reset worked; without it a transient peak during the imports can hide a smaller problem's),
-``iters``, ``cost``, ``converged`` and ``seconds`` (the solve's wall time).
+or ``crocoddyl``), Pinocchio and the problem registry, warms up with two iterations of ``SOLVER``
+on the double pendulum (so crocopy's numba kernels are loaded, or compiled after a source change,
+before anything is measured: one-time costs that Crocoddyl, compiled ahead of time, does not have),
+resets the process's resident-memory high-water mark (``/proc/self/clear_refs``, Linux) and
+records it (the baseline), builds problem ``NAME`` with one thread, solves it from the builder's
+guess with ``SOLVER`` (a key of :data:`crocopy.bench_problems.SOLVER_CLASSES`) and ``MAXITER``
+iterations, and prints one JSON line: ``baseline_kib``, ``peak_kib`` (the high-water mark after
+the solve), ``hwm_reset`` (whether the reset worked; without it a transient peak during the
+imports can hide a smaller problem's), ``iters``, ``cost``, ``converged`` and ``seconds`` (the
+solve's wall time).
 
 The high-water mark is the process's own ``VmHWM`` (``/proc/self/status``), not
 ``getrusage(RUSAGE_SELF).ru_maxrss``: on Linux ``ru_maxrss`` is never below the parent's peak at
@@ -17,6 +20,7 @@ report no growth at all).  ``ru_maxrss`` is the fallback where ``/proc`` is miss
 
 from __future__ import annotations
 
+import gc
 import importlib
 import json
 import resource
@@ -56,6 +60,10 @@ def main(argv: list[str] | None = None) -> int:
     _limit_threads()
     lib = importlib.import_module(library)
     registry.get(name)
+    warm_problem, warm_xs, warm_us = build_problem("pend", lib)
+    getattr(lib, SOLVER_CLASSES[solver_name])(warm_problem).solve(warm_xs, warm_us, 2, False)
+    del warm_problem, warm_xs, warm_us
+    gc.collect()
     reset = reset_peak_memory()
     baseline = peak_memory_kib()
     problem, xs, us = build_problem(name, lib)
