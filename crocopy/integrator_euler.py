@@ -5,6 +5,9 @@ With ``x = (q, v)`` and ``a = a(x, u)``: ``dx = ((v + a dt) dt, a dt)``, ``xnext
 
     ∂dx/∂x = [[dt² Fx + dt [0 I]], [dt Fx]],   ∂dx/∂u = [[dt² Fu], [dt Fu]]
     Fx = J_x + J_dx ∂dx/∂x,                  Fu = J_dx ∂dx/∂u
+
+States that implement ``JintegrateTransport`` apply ``J_dx`` by transporting the rows of ``∂dx/∂x``
+and ``∂dx/∂u`` in place (no dense ``(ndx, ndx)`` product).
 """
 
 from __future__ import annotations
@@ -14,10 +17,15 @@ import numpy as np
 from .action_base import ActionDataAbstract
 from .enums import Jcomponent
 from .integrator_base import IntegratedActionModelAbstract
+from .state import StateAbstract
 
 
 class IntegratedActionModelEuler(IntegratedActionModelAbstract):
     """Crocoddyl's ``IntegratedActionModelEuler(diffModel, timeStep=1e-3, withCostResidual=True)``."""
+
+    def __init__(self, diffModel, timeStep: float = 1e-3, withCostResidual: bool = True) -> None:
+        super().__init__(diffModel, timeStep, withCostResidual)
+        self._transport = type(self.state).JintegrateTransport is not StateAbstract.JintegrateTransport
 
     def createData(self) -> "IntegratedActionDataEuler":
         return IntegratedActionDataEuler(self)
@@ -46,15 +54,21 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
             return
         self.differential.calcDiff(ddata, x, u)
         nv, dt = self.state.nv, self._dt
-        dxdx, dxdu = data.ddx_dx, data.ddx_du
+        if self._euclidean or self._transport:
+            dxdx, dxdu = data.Fx, data.Fu
+        else:
+            dxdx, dxdu = data.ddx_dx, data.ddx_du
         np.multiply(ddata.Fx, dt, out=dxdx[nv:])
         np.multiply(dxdx[nv:], dt, out=dxdx[:nv])
         dxdx[data.rows, data.vcols] += dt
         np.multiply(ddata.Fu, dt, out=dxdu[nv:])
         np.multiply(dxdu[nv:], dt, out=dxdu[:nv])
         if self._euclidean:
-            np.add(data.eye, dxdx, out=data.Fx)
-            data.Fu[:] = dxdu
+            data.Fx[data.diag, data.diag] += 1.0
+        elif self._transport:
+            self.state.JintegrateTransport(x, data.dx, data.Fx, Jcomponent.second)
+            self.state.JintegrateTransport(x, data.dx, data.Fu, Jcomponent.second)
+            data.Fx += self.state.Jintegrate(x, data.dx, Jcomponent.first)[0]
         else:
             Jx, Jdx = self.state.Jintegrate(x, data.dx, Jcomponent.both)
             np.dot(Jdx, dxdx, out=data.Fx)
@@ -78,7 +92,7 @@ class IntegratedActionDataEuler(ActionDataAbstract):
         self.dx = np.zeros(ndx)
         self.ddx_dx = np.zeros((ndx, ndx))
         self.ddx_du = np.zeros((ndx, nu))
-        self.eye = np.eye(ndx)
+        self.diag = np.arange(ndx)
         self.rows = np.arange(nv)
         self.vcols = ndx - nv + self.rows
 

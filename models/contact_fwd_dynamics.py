@@ -28,7 +28,7 @@ from crocopy.diff_action_base import DifferentialActionDataAbstract, Differentia
 
 from .contact_multiple import ContactModelMultiple
 from .data_collectors import DataCollectorJointActMultibodyInContact
-from .dynamics_options import ArmatureMixin, KKTDampingMixin
+from .dynamics_options import ActuationStructure, ArmatureMixin, KKTDampingMixin
 
 
 def check_vector_shape(value: np.ndarray, size: int, name: str) -> None:
@@ -117,6 +117,7 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         self.constraints = constraints
         self.pinocchio = state.pinocchio
         self.enable_force = bool(enable_force)
+        self._act = ActuationStructure(actuation, state.nv)
         self.use_pinocchio_constraints = True
         self.JMinvJt_damping = inv_damping
         self.armature = np.zeros(state.nv)
@@ -236,26 +237,27 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         if self.constraints is not None:
             self.constraints.calcDiff(data.constraints, x, u)
 
+    def _chain_rule(self, adata, d_dq, d_dv, d_dtau, d_dx, d_du) -> None:
+        """``d_dx = (d_dq, d_dv) + d_dtau ∂τ/∂x`` and ``d_du = d_dtau ∂τ/∂u``."""
+        nv = self.state.nv
+        d_dx[:, :nv] = d_dq
+        d_dx[:, nv:] = d_dv
+        if self._act.dtau_dx_nonzero:
+            d_dx += d_dtau @ adata.dtau_dx
+        self._act.times_dtau_du(d_dtau, adata.dtau_du, d_du)
+
     def _calcDiff_rigid(self, data: "DifferentialActionDataContactFwdDynamics", x: np.ndarray, u: np.ndarray) -> None:
         """Derivatives from Pinocchio's constraint-dynamics derivatives (same maths as the KKT path)."""
-        nv, pd, mb = self.state.nv, data.pinocchio, data.multibody
+        pd, mb = data.pinocchio, data.multibody
         adata, cdata = mb.actuation, mb.contacts
         cms, cds = data.rigid
         pin.computeConstraintDynamicsDerivatives(self.pinocchio, pd, cms, cds, data.prox)
         nq = self.state.nq
         pin.computeForwardKinematicsDerivatives(self.pinocchio, pd, x[:nq], x[nq:], data.xout)
         self.actuation.calcDiff(adata, x, u)
-        ddq_dtau = pd.ddq_dtau
-        np.dot(ddq_dtau, adata.dtau_dx, out=data.Fx)
-        data.Fx[:, :nv] += pd.ddq_dq
-        data.Fx[:, nv:] += pd.ddq_dv
-        np.dot(ddq_dtau, adata.dtau_du, out=data.Fu)
+        self._chain_rule(adata, pd.ddq_dq, pd.ddq_dv, pd.ddq_dtau, data.Fx, data.Fu)
         if self.enable_force:
-            dl_dtau = pd.dlambda_dtau
-            np.dot(dl_dtau, adata.dtau_dx, out=data.df_dx)
-            data.df_dx[:, :nv] += pd.dlambda_dq
-            data.df_dx[:, nv:] += pd.dlambda_dv
-            np.dot(dl_dtau, adata.dtau_du, out=data.df_du)
+            self._chain_rule(adata, pd.dlambda_dq, pd.dlambda_dv, pd.dlambda_dtau, data.df_dx, data.df_du)
             self.contacts.updateAccelerationDiff(cdata, data.Fx)
             self.contacts.updateForceDiff(cdata, data.df_dx, data.df_du)
         self.costs.calcDiff(data.costs, x, u)

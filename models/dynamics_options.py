@@ -4,6 +4,8 @@
   tells the models whether it is non-zero.
 * ``JMinvJt_damping`` (≥ 0): damping of the contact-space inertia ``Jc M⁻¹ Jcᵀ`` in the KKT solves of
   the contact and impulse dynamics (Crocoddyl's ``inv_damping``).
+* :class:`ActuationStructure`: what the bundled actuations let the dynamics skip in the chain rule
+  ``Fx = ∂a/∂x + ∂a/∂τ ∂τ/∂x``, ``Fu = ∂a/∂τ ∂τ/∂u``.
 """
 
 from __future__ import annotations
@@ -13,6 +15,8 @@ from typing import Any
 import numpy as np
 
 from crocopy.validation import as_vector
+
+from .actuations import ActuationModelFloatingBase, ActuationModelFloatingBaseThrusters, ActuationModelFull
 
 
 class ArmatureMixin:
@@ -46,3 +50,29 @@ class KKTDampingMixin:
         if not value >= 0.0:
             raise ValueError(f"inv_damping must be non-negative, got {value}")
         self._damping = value
+
+
+class ActuationStructure:
+    """Structure of an actuation's Jacobians, for the dynamics' chain rules.
+
+    ``dtau_dx_nonzero`` is False for the bundled actuations, whose ``τ`` does not depend on ``x``;
+    ``u_columns`` is the slice of joints driven one-to-one by ``u`` when ``∂τ/∂u`` is a selection
+    (full and floating-base actuations), so that ``A ∂τ/∂u = A[:, u_columns]``; ``None`` otherwise.
+    """
+
+    def __init__(self, actuation, nv: int) -> None:
+        self.dtau_dx_nonzero = not isinstance(
+            actuation, ActuationModelFull | ActuationModelFloatingBase | ActuationModelFloatingBaseThrusters
+        )
+        self.u_columns = None
+        if type(actuation) is ActuationModelFull:
+            self.u_columns = slice(0, nv)
+        elif type(actuation) is ActuationModelFloatingBase:
+            self.u_columns = slice(nv - actuation.nu, nv)
+
+    def times_dtau_du(self, A: np.ndarray, dtau_du: np.ndarray, out: np.ndarray) -> None:
+        """``out = A ∂τ/∂u``."""
+        if self.u_columns is None:
+            np.dot(A, dtau_du, out=out)
+        else:
+            out[:] = A[:, self.u_columns]

@@ -31,9 +31,8 @@ from crocopy.costs import CostModelSum
 from crocopy.diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
 from crocopy.validation import as_vector
 
-from .actuations import ActuationModelFloatingBase, ActuationModelFloatingBaseThrusters, ActuationModelFull
 from .data_collectors import DataCollectorJointActMultibody
-from .dynamics_options import ArmatureMixin
+from .dynamics_options import ActuationStructure, ArmatureMixin
 from .residuals_frame import check_same_robot
 from .state_multibody import StateMultibody
 
@@ -90,15 +89,7 @@ class DifferentialActionModelFreeFwdDynamics(ArmatureMixin, DifferentialActionMo
         self._u_lb = np.array(actuation.u_lb, dtype=float)
         self._u_ub = np.array(actuation.u_ub, dtype=float)
         self.armature = np.zeros(state.nv)
-        self._dtau_dx_nonzero = not isinstance(
-            actuation, ActuationModelFull | ActuationModelFloatingBase | ActuationModelFloatingBaseThrusters
-        )
-        # Fu = Minv dtau_du is a column block of Minv for the selection actuations
-        self._Fu_cols = None
-        if type(actuation) is ActuationModelFull:
-            self._Fu_cols = slice(0, state.nv)
-        elif type(actuation) is ActuationModelFloatingBase:
-            self._Fu_cols = slice(state.nv - actuation.nu, state.nv)
+        self._act = ActuationStructure(actuation, state.nv)
 
     def createData(self) -> "DifferentialActionDataFreeFwdDynamics":
         return DifferentialActionDataFreeFwdDynamics(self)
@@ -151,12 +142,9 @@ class DifferentialActionModelFreeFwdDynamics(ArmatureMixin, DifferentialActionMo
                 Minv[:] = pd.Minv
                 data.Fx[:, :nv] = pd.ddq_dq
                 data.Fx[:, nv:] = pd.ddq_dv
-                if self._dtau_dx_nonzero:
+                if self._act.dtau_dx_nonzero:
                     data.Fx += Minv @ act.dtau_dx
-            if self._Fu_cols is not None:
-                data.Fu[:] = data.Minv[:, self._Fu_cols]
-            else:
-                np.dot(data.Minv, act.dtau_du, out=data.Fu)
+            self._act.times_dtau_du(data.Minv, act.dtau_du, data.Fu)
         self.costs.calcDiff(data.costs, x, u)
         if self.constraints is not None:
             self.constraints.calcDiff(data.constraints, x, u)

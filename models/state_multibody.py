@@ -153,7 +153,10 @@ class StateMultibody(StateAbstract):
             raise ValueError("firstsecond must be Jcomponent.first or Jcomponent.second")
         arg = pin.ARG0 if firstsecond == Jcomponent.first else pin.ARG1
         nv = self.nv
-        Jin[:nv] = pin.dIntegrateTransport(self.pinocchio, x[: self.nq], dx[:nv], Jin[:nv], arg)
+        if Jin.shape[-1] == 0:
+            return
+        rows = Jin[:nv]
+        rows[...] = np.reshape(pin.dIntegrateTransport(self.pinocchio, x[: self.nq], dx[:nv], rows, arg), rows.shape)
 
     def __repr__(self) -> str:
         return f"StateMultibody(nq={self.nq}, nv={self.nv})"

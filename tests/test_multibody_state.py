@@ -69,9 +69,10 @@ def test_Jintegrate(state):
     assert np.allclose(state.Jintegrate(x, dx, Jcomponent.second)[0], J1)
 
 
-def test_JintegrateTransport(state):
+@pytest.mark.parametrize("ncols", [3, 1, 0])
+def test_JintegrateTransport(state, ncols):
     x, dx = state.rand(), np.random.rand(state.ndx) - 0.5
-    Jin = np.random.rand(state.ndx, 3)
+    Jin = np.random.rand(state.ndx, ncols)
     for comp in (Jcomponent.first, Jcomponent.second):
         J = Jin.copy()
         state.JintegrateTransport(x, dx, J, comp)
