@@ -210,7 +210,7 @@ def _paper(args: argparse.Namespace) -> int:
     elif key == ("hddp", "table1"):
         from .paper_hddp import run_hddp
 
-        run_hddp()
+        run_hddp(trials=args.trials or 100, jobs=args.jobs or 1)
     elif key == ("hddp", "table2"):
         from .paper_hddp import run_hddp_weighted
 
@@ -271,6 +271,8 @@ def build_parser() -> argparse.ArgumentParser:
     paper.add_argument("paper", choices=sorted({p for p, _ in PAPER_EXPERIMENTS}))
     paper.add_argument("experiment")
     paper.add_argument("--out", default=".", help="folder for the plots")
+    paper.add_argument("--trials", type=int, default=None, help="hddp table1: perturbed targets per test (100)")
+    paper.add_argument("--jobs", type=int, default=None, help="hddp table1: worker processes for the trials (1)")
     paper.set_defaults(func=_paper)
     return parser
 

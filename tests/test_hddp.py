@@ -253,12 +253,14 @@ def test_bad_levels_are_rejected():
         SolverHDDP(problem, [])
 
 
-def test_talos_upper_body_scenario_reaches_compatible_targets():
-    from crocopy.paper_hddp import HDDPScenario, _hddp_solve
+def test_icub_upper_body_scenario_reaches_compatible_targets():
+    from crocopy.paper_hddp import HDDPScenario, _hddp_solve, run_hddp
 
     scn = HDDPScenario(T=10)
-    assert (scn.model.nq, scn.model.nv) == (10, 10)
+    assert (scn.model.nq, scn.model.nv) == (11, 11)
     solver, errors, iters, _ = _hddp_solve(scn, scn.targets(3), [["left"], ["right"], ["effort"]], 60)
     assert solver.reason.startswith("converged")
     assert errors["left"] < 1e-8 and errors["right"] < 1e-8
     assert np.all(np.isfinite(np.array(solver.us)))
+    with pytest.raises(ValueError, match="trials"):
+        run_hddp(trials=0)

@@ -10,14 +10,16 @@ weights set to zero.
 
 Iteration (paper D, Alg. 2 and §IV): per-level derivatives; the prioritised backward pass of
 :mod:`crocopy.solvers.hddp_lq` with per-level regularisation ``λ⁽ᵏ⁾`` (on ``Vxx``) and damping
-``μ⁽ᵏ⁾``; a lexicographic line search with one step ``ν⁽ᵏ⁾ ∈ alphas ∪ {0}`` per level, from the top
-level down, accepting a step for level ``k`` only if level ``k`` improves and no higher level ``j``
-gets worse than ``th_worse`` (relative) allows, unless it stays below its ``th_abs[j]``; the
-iterate is accepted if some level improved, the improved levels' ``λ, μ`` decrease, and if none
-improved all increase and the backward pass is redone.  Convergence: in two successive iterations
-every level has cost below ``th_abs[k]`` or relative change below ``th_rel[k]`` (paper: 1e-8 and
-1e-4, one iteration), or no level improves after ``max_reg_increases`` regularisation increases (a
-lexicographically stationary point, reported in ``reason``).  ``level_costs`` holds the per-level costs of the iterate.
+``μ⁽ᵏ⁾``; a lexicographic line search with one step ``ν⁽ᵏ⁾ ∈ alphas ∪ {0}`` per level (warm-started
+from the level's last accepted step, see ``warm_steps``), from the top level down, accepting a
+step for level ``k`` only if level ``k`` improves and no higher level ``j`` gets worse than
+``th_worse`` (relative) allows, unless it stays below its ``th_abs[j]``; the iterate is accepted
+if some level improved, the improved levels' ``λ, μ`` decrease, and if none improved all increase
+and the backward pass is redone.  Convergence: in two successive iterations every level has cost
+below ``th_abs[k]`` or relative change below ``th_rel[k]`` (paper: 1e-8 and 1e-4, one iteration),
+or no level improves after ``max_reg_increases`` regularisation increases (a lexicographically
+stationary point, reported in ``reason``).  ``level_costs`` holds the per-level costs of the
+iterate; :class:`CallbackHDDPVerbose` prints and :class:`CallbackHDDPLogger` records them.
 """
 
 from __future__ import annotations
@@ -177,6 +179,10 @@ class SolverHDDP(SolverDDP):
     th_worse : float
         Relative increase of a higher level tolerated by the line search (default 1e-10); a level
         may also rise up to its ``th_abs`` (set ``th_abs`` to 0 for strict priorities).
+    warm_steps : bool
+        Per level, try the full step and then only steps up to twice the level's last accepted one
+        (default True; False tries every ``alphas`` value from 1 down, the paper's schedule being
+        unspecified).
     max_reg_increases : int
         Regularisation increases without any improving level before the iterate is declared
         stationary (default 6).
@@ -201,9 +207,11 @@ class SolverHDDP(SolverDDP):
         self.lambdas = [self.lambda0] * K
         self.mus = [self.mu0] * K
         self.alphas = [2.0 ** (-n) for n in range(8)]
+        self.warm_steps = True
         self.level_costs = np.zeros(K)
         self.level_steps = np.zeros(K)
-        self._ff: list[list[np.ndarray]] = []
+        self._last_steps = np.ones(K)
+        self._ff = np.zeros((K, problem.T, problem.nu_max))
 
     def solve(self, init_xs=None, init_us=None, maxiter: int = 100, is_feasible: bool = False, init_reg=None) -> bool:
         """Run HDDP from the rolled-out guess; True when every level meets its tolerance."""
@@ -211,6 +219,7 @@ class SolverHDDP(SolverDDP):
         p, K = self.problem, len(self.levels)
         self.lambdas = [self.preg if init_reg is not None else self.lambda0] * K
         self.mus = [self.mu0] * K
+        self._last_steps = np.ones(K)
         self.xs = [x.copy() for x in p.rollout(self.us)]
         self.isFeasible = True
         self.cost = p.calc(self.xs, self.us)
@@ -246,6 +255,8 @@ class SolverHDDP(SolverDDP):
             for k in np.nonzero(improved)[0]:
                 self.lambdas[k] = max(self.lambdas[k] / self.reg_decFactor, self.reg_min)
                 self.mus[k] = self.mus[k] / self.reg_decFactor if self.mus[k] > self.reg_min else 0.0
+            taken = self.level_steps > 0.0
+            self._last_steps[taken] = self.level_steps[taken]
             self.preg = self.lambdas[0]
             self.stepLength = float(self.level_steps[0])
             with np.errstate(all="ignore"):
@@ -273,21 +284,31 @@ class SolverHDDP(SolverDDP):
             [d.Fx for d in p.runningDatas], [d.Fu for d in p.runningDatas], derivs,
             self.lambdas, self.mus, self.th_rank,
         )
-        self._ff = res.ff
+        for k, ff in enumerate(res.ff):
+            for t, f in enumerate(ff):
+                self._ff[k, t, : f.size] = f
         for t in range(p.T):
             self.K[t][:] = -res.K[t]
         self.rank, self.free = res.rank, res.free
 
     def _rollout(self, steps: np.ndarray) -> np.ndarray:
         """Rollout with ``u = ū + Σₖ νₖ ffₖ - K (x̂ ⊖ x)``; returns the per-level costs (inf on NaN)."""
-        p = self.problem
-        for t in range(p.T):
-            self.k[t][:] = -sum(steps[k] * self._ff[k][t] for k in range(len(steps)))
+        k = -np.tensordot(steps, self._ff, axes=1)
+        for t, kt in enumerate(self.k):
+            kt[:] = k[t, : kt.size]
         try:
             self.forwardPass(1.0)
         except ForwardPassError:
             return np.full(len(steps), np.inf)
         return self._reader.costs(self.xs_try, self.us_try)
+
+    def _candidates(self, k: int) -> list[float]:
+        """Steps tried for level ``k``: all ``alphas``, or with ``warm_steps`` the full step then those
+        at most twice the level's last accepted step (the schedule is not given by the paper)."""
+        prev = self._last_steps[k]
+        if not self.warm_steps or prev >= 1.0:
+            return self.alphas
+        return [self.alphas[0], *(a for a in self.alphas[1:] if a <= 2.0 * prev)]
 
     def _line_search(self) -> np.ndarray:
         """Lexicographic per-level step search; returns which levels improved."""
@@ -296,7 +317,7 @@ class SolverHDDP(SolverDDP):
         steps, best = np.zeros(K), G0.copy()
         best_xs = best_us = None
         for k in range(K):
-            for a in self.alphas:
+            for a in self._candidates(k):
                 steps[k] = a
                 Gt = self._rollout(steps)
                 no_worse = all(Gt[j] <= max(best[j] + self.th_worse * abs(best[j]), self.th_abs[j]) for j in range(k))
