@@ -40,7 +40,8 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
         a = ddata.xout
         dx = data.dx
         np.multiply(a, dt, out=dx[nv:])
-        dx[:nv] = (x[-nv:] + dx[nv:]) * dt
+        np.add(x[-nv:], dx[nv:], out=dx[:nv])
+        dx[:nv] *= dt
         data.xnext[:] = self.state.integrate(x, dx)
         data.cost = dt * ddata.cost
         if self.withCostResidual:
@@ -60,11 +61,11 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
             dxdx, dxdu = data.ddx_dx, data.ddx_du
         np.multiply(ddata.Fx, dt, out=dxdx[nv:])
         np.multiply(dxdx[nv:], dt, out=dxdx[:nv])
-        dxdx[data.rows, data.vcols] += dt
+        dxdx.reshape(-1)[data.qv_diagonal] += dt
         np.multiply(ddata.Fu, dt, out=dxdu[nv:])
         np.multiply(dxdu[nv:], dt, out=dxdu[:nv])
         if self._euclidean:
-            data.Fx[data.diag, data.diag] += 1.0
+            data.Fx.reshape(-1)[:: data.Fx.shape[0] + 1] += 1.0
         elif self._transport:
             self.state.JintegrateTransport(x, data.dx, data.Fx, Jcomponent.second)
             self.state.JintegrateTransport(x, data.dx, data.Fu, Jcomponent.second)
@@ -92,7 +93,5 @@ class IntegratedActionDataEuler(ActionDataAbstract):
         self.dx = np.zeros(ndx)
         self.ddx_dx = np.zeros((ndx, ndx))
         self.ddx_du = np.zeros((ndx, nu))
-        self.diag = np.arange(ndx)
-        self.rows = np.arange(nv)
-        self.vcols = ndx - nv + self.rows
+        self.qv_diagonal = slice(ndx - nv, (ndx - nv) + nv * (ndx + 1), ndx + 1)
 

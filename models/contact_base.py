@@ -104,6 +104,16 @@ class ContactModelAbstract:
         """Store the contact force (shape ``(nc,)``) in ``data.f`` and its joint-frame image in ``data.fext``."""
         raise NotImplementedError(f"{type(self).__name__}.updateForce is not implemented")
 
+    def storeForce(self, data: "ContactDataAbstract", force: np.ndarray) -> None:
+        """Store the force in ``data.f``; the joint-frame image may wait for :meth:`updateJointForce`.
+
+        The default does the whole :meth:`updateForce`.
+        """
+        self.updateForce(data, force)
+
+    def updateJointForce(self, data: "ContactDataAbstract") -> None:
+        """Bring ``data.fext`` up to date with ``data.f`` after :meth:`storeForce` (default: nothing left to do)."""
+
     def updateForceDiff(self, data: "ContactDataAbstract", df_dx: np.ndarray, df_du: np.ndarray) -> None:
         """Store the force Jacobians ``df_dx (nc, ndx)`` and ``df_du (nc, nu)``."""
         data.df_dx[:] = df_dx

@@ -182,17 +182,27 @@ class ContactModelMultiple(NamedItems):
         """
         if np.shape(force) != (self.nc,):
             raise ValueError(f"force has shape {np.shape(force)}, expected ({self.nc},)")
-        fext, shared = data.fext, self._shared_joints
-        for j in data.touched if shared else self._idle_joints:
-            fext[j] = data.zero_force
         i = 0
         for name, c in self._active:
-            cd = data.contacts[name]
-            c.updateForce(cd, force[i:i + c.nc])
-            fext[cd.joint] = fext[cd.joint] + cd.fext if shared else cd.fext
+            c.storeForce(data.contacts[name], force[i:i + c.nc])
             i += c.nc
         for name, c in self._inactive:
             c.setZeroForce(data.contacts[name])
+        data.joint_forces_pending = True
+
+    def updateJointForces(self, data: "ContactDataMultiple") -> None:
+        """Refresh every contact's ``f_local``/``fext`` and the per-joint sums ``data.fext``.
+
+        :meth:`updateForce` defers this work until ``data.fext`` is read.
+        """
+        fext, shared = data.fext_by_joint, self._shared_joints
+        for j in data.touched if shared else self._idle_joints:
+            fext[j] = data.zero_force
+        for name, c in self._active:
+            cd = data.contacts[name]
+            c.updateJointForce(cd)
+            fext[cd.joint] = fext[cd.joint] + cd.fext if shared else cd.fext
+        data.joint_forces_pending = False
 
     def updateForceDiff(self, data: "ContactDataMultiple", df_dx: np.ndarray, df_du: np.ndarray) -> None:
         """Split the force Jacobians ``df_dx (nc, ndx)`` and ``df_du (nc, nu)`` into the active contacts.
@@ -228,7 +238,11 @@ class ContactModelMultiple(NamedItems):
 class ContactDataMultiple:
     """Data of :class:`ContactModelMultiple`: ``contacts`` (name → data), ``Jc (nc_total, nv)``,
     ``a0 (nc_total,)``, ``da0_dx (nc_total, ndx)``, ``dv (nv,)``, ``ddv_dx (nv, ndx)`` and ``fext``
-    (one ``pinocchio.Force`` per joint)."""
+    (one ``pinocchio.Force`` per joint).
+
+    ``fext`` and the contacts' ``f_local``/``fext`` are brought up to date with the forces when
+    ``fext`` is read (the constrained dynamics do not need them).
+    """
 
     def __init__(self, model: ContactModelMultiple, data: pin.Data) -> None:
         nv, ndx, nct = model.state.nv, model.state.ndx, model.nc_total
@@ -240,10 +254,19 @@ class ContactDataMultiple:
         self.da0_dx = np.zeros((nct, ndx))
         self.dv = np.zeros(nv)
         self.ddv_dx = np.zeros((nv, ndx))
-        self.fext = pin.StdVec_Force()
+        self.fext_by_joint = pin.StdVec_Force()
         for _ in range(model.state.pinocchio.njoints):
-            self.fext.append(pin.Force.Zero())
+            self.fext_by_joint.append(pin.Force.Zero())
+        self.joint_forces_pending = False
+        self._model = model
         self.zero_force = pin.Force.Zero()
         self.touched = sorted({cd.joint for cd in self.contacts.values()})
         self.rigid = None
         self.rigid_key = None
+
+    @property
+    def fext(self) -> pin.StdVec_Force:
+        """External force at each joint (``njoints`` ``pinocchio.Force``, the same object every time)."""
+        if self.joint_forces_pending:
+            self._model.updateJointForces(self)
+        return self.fext_by_joint

@@ -180,7 +180,16 @@ class ContactModel3D(ContactModelAbstract):
     def updateForce(self, data: "ContactData3D", force: np.ndarray) -> None:
         if force.shape != (3,):
             raise ValueError(f"force has shape {np.shape(force)}, expected (3,)")
+        self.storeForce(data, force)
+        self.updateJointForce(data)
+
+    def storeForce(self, data: "ContactData3D", force: np.ndarray) -> None:
+        """Store ``force (3,)`` in ``data.f`` only (``f_local``/``fext`` wait for :meth:`updateJointForce`)."""
         data.f.linear = force
+
+    def updateJointForce(self, data: "ContactData3D") -> None:
+        """``f_local`` and ``fext`` (the force at the parent joint) from ``data.f``."""
+        force = data.f.linear
         data.f_local.linear = force if self.type == _LOCAL else force @ data.pinocchio.oMf[self.id].rotation
         data.fext = data.jMf.act(data.f_local)
 
@@ -332,13 +341,21 @@ class ContactModel6D(ContactModelAbstract):
     def updateForce(self, data: "ContactData6D", force: np.ndarray) -> None:
         if np.shape(force) != (6,):
             raise ValueError(f"force has shape {np.shape(force)}, expected (6,)")
+        self.storeForce(data, force)
+        self.updateJointForce(data)
+
+    def storeForce(self, data: "ContactData6D", force: np.ndarray) -> None:
+        """Store ``force (6,)`` in ``data.f`` only (``f_local``/``fext`` wait for :meth:`updateJointForce`)."""
         data.f.vector = force
+
+    def updateJointForce(self, data: "ContactData6D") -> None:
+        """``f_local`` and ``fext`` (the force at the parent joint) from ``data.f``."""
         if self.type == _LOCAL:
-            data.f_local.vector = force
+            data.f_local.vector = data.f.vector
         else:
             Rt = data.pinocchio.oMf[self.id].rotation.T
-            data.f_local.linear = Rt @ force[:3]
-            data.f_local.angular = Rt @ force[3:]
+            data.f_local.linear = Rt @ data.f.linear
+            data.f_local.angular = Rt @ data.f.angular
         data.fext = data.jMf.act(data.f_local)
 
     def addRneaDiff(self, data: "ContactData6D", dtau_dq: np.ndarray) -> None:

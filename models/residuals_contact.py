@@ -192,7 +192,7 @@ class ResidualModelContactControlGrav(ResidualModelAbstract):
     def calc(self, data: "ResidualDataContactControlGrav", x: np.ndarray, u: np.ndarray | None = None) -> None:
         q = x[: self.state.nq]
         model = self.state.pinocchio
-        st = pin.computeStaticTorque(model, data.pinocchio, q, data.fext)
+        st = pin.computeStaticTorque(model, data.pinocchio, q, data.contacts.fext)
         if u is None:
             np.negative(st, out=data.r)
         else:
@@ -200,7 +200,7 @@ class ResidualModelContactControlGrav(ResidualModelAbstract):
 
     def calcDiff(self, data: "ResidualDataContactControlGrav", x: np.ndarray, u: np.ndarray | None = None) -> None:
         nq, nv = self.state.nq, self.state.nv
-        dst = pin.computeStaticTorqueDerivatives(self.state.pinocchio, data.pinocchio, x[:nq], data.fext)
+        dst = pin.computeStaticTorqueDerivatives(self.state.pinocchio, data.pinocchio, x[:nq], data.contacts.fext)
         if u is None:
             np.negative(dst, out=data.Rx[:, :nv])
             return
@@ -211,7 +211,7 @@ class ResidualModelContactControlGrav(ResidualModelAbstract):
 
 
 class ResidualDataContactControlGrav(ResidualDataAbstract):
-    """Data of :class:`ResidualModelContactControlGrav`: a private ``pinocchio`` data, ``actuation``, ``fext``."""
+    """Data of :class:`ResidualModelContactControlGrav`: a private ``pinocchio`` data, ``actuation``, ``contacts``."""
 
     def __init__(self, model: ResidualModelContactControlGrav, data: DataCollectorAbstract | None) -> None:
         super().__init__(model, data)
@@ -222,7 +222,7 @@ class ResidualDataContactControlGrav(ResidualDataAbstract):
                 f"ResidualModelContactControlGrav needs a data collector with actuation and contacts, "
                 f"got {type(data).__name__}"
             )
-        self.fext = contacts.fext
+        self.contacts = contacts
         self.pinocchio = model.state.pinocchio.createData()
 
 

@@ -388,3 +388,26 @@ def test_reference_and_gain_changes_reach_both_paths():
         kkt.calc(dk, x, u)
         np.testing.assert_allclose(df.xout, dk.xout, atol=1e-9 * max(1.0, np.abs(dk.xout).max()))
         assert df.rigid is not None and dk.rigid is None
+
+
+@pytest.mark.parametrize("typ", [LOCAL, LWA])
+def test_joint_forces_are_brought_up_to_date_when_read(typ):
+    """The dynamics defer the joint-frame forces; reading ``fext`` gives each contact's full update."""
+    dam = make_dam("anymal", "3333", typ, [0.0, 0.0])
+    x, u = random_point(dam, seed=4)
+    d = dam.createData()
+    dam.calc(d, x, u)
+    cdata = d.multibody.contacts
+    fext = cdata.fext
+    reference = dam.createData().multibody.contacts.contacts
+    for name, item in dam.contacts.contacts.items():
+        cd, ref = cdata.contacts[name], reference[name]
+        ref.pinocchio = d.pinocchio
+        item.contact.updateForce(ref, cd.f.linear.copy())
+        np.testing.assert_allclose(fext[cd.joint].vector, ref.fext.vector, atol=1e-12)
+        np.testing.assert_allclose(cd.fext.vector, ref.fext.vector, atol=1e-12)
+    x2 = x.copy()
+    x2[-1] += 0.5
+    dam.calc(d, x2, u)
+    assert cdata.fext is fext
+    assert not np.allclose(cdata.fext[cdata.contacts["LF_FOOT"].joint].vector, reference["LF_FOOT"].fext.vector)
