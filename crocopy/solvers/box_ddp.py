@@ -239,7 +239,7 @@ class BoxSolverMixin:
         cost = 0.0
         for t, (m, d) in enumerate(zip(models, problem.runningDatas)):
             if m.nu:
-                dx = m.state.diff(xs[t], xs_try[t])
+                dx = self._dx_try[t] = m.state.diff(xs[t], xs_try[t])
                 ut = us[t] - steplength * self.k[t] - self.K[t] @ dx
                 lb = self._lb[t]
                 if lb is not None:

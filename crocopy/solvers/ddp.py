@@ -51,6 +51,7 @@ class SolverDDP(SolverAbstract):
         self.Qu = [np.zeros(m.nu) for m in problem.runningModels]
         self.K = [np.zeros((m.nu, m.state.ndx)) for m in problem.runningModels]
         self.k = [np.zeros(m.nu) for m in problem.runningModels]
+        self._dx_try: list = [None] * (problem.T + 1)  # x_try ⊖ x of the last rollout, where it computed it
         self.xs_try = [m.state.zero() for m in models]
         self.us_try = [np.zeros(m.nu) for m in problem.runningModels]
         self._rhs = [np.zeros((m.nu, 1 + m.state.ndx)) for m in problem.runningModels]

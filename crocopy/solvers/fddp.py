@@ -24,6 +24,7 @@ class SolverFDDP(SolverDDP):
         self.th_acceptNegStep = 2.0
         self._dg = 0.0
         self._dq = 0.0
+        self._Vxx_f: list[np.ndarray] = []
 
     def _accept(self, alpha: float) -> bool:
         if self.dVexp >= 0:
@@ -46,10 +47,12 @@ class SolverFDDP(SolverDDP):
             if k.size:
                 dg += Qu @ k
                 dq -= k @ Quu @ k
+        self._Vxx_f = []
         if not self.isFeasible:
-            for Vx, Vxx, f in zip(self.Vx, self.Vxx, self.fs):
+            self._Vxx_f = [Vxx @ f for Vxx, f in zip(self.Vxx, self.fs)]
+            for Vx, Vxx_f, f in zip(self.Vx, self._Vxx_f, self.fs):
                 dg -= Vx @ f
-                dq += f @ Vxx @ f
+                dq += f @ Vxx_f
         self._dg, self._dq = dg, dq
 
     def expectedImprovement(self) -> np.ndarray:
@@ -58,8 +61,12 @@ class SolverFDDP(SolverDDP):
         if not self.isFeasible:
             problem = self.problem
             models = [*problem.runningModels, problem.terminalModel]
-            for m, x, x_try, Vxx, f in zip(models, self.xs, self.xs_try, self.Vxx, self.fs):
-                dv += f @ Vxx @ m.state.diff(x, x_try)
+            Vxx_fs = self._Vxx_f or [Vxx @ f for Vxx, f in zip(self.Vxx, self.fs)]
+            for t, (m, Vxx_f) in enumerate(zip(models, Vxx_fs)):
+                dx = self._dx_try[t]
+                if dx is None:
+                    dx = m.state.diff(self.xs[t], self.xs_try[t])
+                dv += Vxx_f @ dx
         self.d[0] = self._dg + dv
         self.d[1] = self._dq - 2.0 * dv
         return self.d
@@ -80,7 +87,7 @@ class SolverFDDP(SolverDDP):
         cost = 0.0
         for t, (m, d) in enumerate(zip(models, problem.runningDatas)):
             if m.nu:
-                dx = m.state.diff(xs[t], xs_try[t])
+                dx = self._dx_try[t] = m.state.diff(xs[t], xs_try[t])
                 us_try[t] = us[t] - steplength * self.k[t] - self.K[t] @ dx
             m.calc(d, xs_try[t], us_try[t])
             cost += d.cost
