@@ -8,9 +8,10 @@ The reference figures were measured with **Crocoddyl 3.2.1** run as a black box 
 problems (same builder, ``lib=crocoddyl``), warm-started with the builder's guess, ``maxiter``
 as in :attr:`ProblemSpec.maxiter`, ``isFeasible=False``, default solver settings, one thread.
 ``iters`` is ``solver.iter`` and ``cost`` is ``solver.cost`` at return; ``converged`` is the
-return value of ``solve``.  crocopy reproduces Crocoddyl's iterates, so its costs must match
-within :attr:`ProblemSpec.rtol` (iteration counts may differ by a few, and on long
-non-convex solves by more).  One reference is not exact: FDDP on the monkey bar (no control
+return value of ``solve``.  crocopy's DDP/FDDP reproduce Crocoddyl's iterates; its box solvers
+follow the papers where Crocoddyl 3.2 departs from them (``compat_crocoddyl = True`` reproduces
+Crocoddyl), so costs must match within :attr:`ProblemSpec.rtol` while iteration counts may
+differ by a few, and on long non-convex solves by more.  One reference is not exact: FDDP on the monkey bar (no control
 bounds, 180 iterations) ends in another local minimum after round-off-level differences; crocopy
 reaches 8339.10 in 119 iterations there, below Crocoddyl's 10569.26.
 
