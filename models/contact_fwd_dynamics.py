@@ -33,7 +33,7 @@ from .dynamics_options import ActuationStructure, ArmatureMixin, KKTDampingMixin
 
 def check_vector_shape(value: np.ndarray, size: int, name: str) -> None:
     """Raise ``ValueError`` unless ``value`` is a vector of shape ``(size,)``."""
-    if np.shape(value) != (size,):
+    if getattr(value, "shape", None) != (size,) and np.shape(value) != (size,):
         raise ValueError(f"{name} has shape {np.shape(value)}, expected ({size},)")
 
 

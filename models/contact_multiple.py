@@ -180,8 +180,10 @@ class ContactModelMultiple(NamedItems):
         ValueError
             If ``force`` does not have shape ``(nc,)``.
         """
-        if np.shape(force) != (self.nc,):
-            raise ValueError(f"force has shape {np.shape(force)}, expected ({self.nc},)")
+        if getattr(force, "shape", None) != (self.nc,):
+            force = np.asarray(force, dtype=float)
+            if force.shape != (self.nc,):
+                raise ValueError(f"force has shape {force.shape}, expected ({self.nc},)")
         i = 0
         for name, c in self._active:
             c.storeForce(data.contacts[name], force[i:i + c.nc])
@@ -212,7 +214,8 @@ class ContactModelMultiple(NamedItems):
         ValueError
             If the shapes are not ``(nc, ndx)`` and ``(nc, nu)``.
         """
-        if np.shape(df_dx) != (self.nc, self.state.ndx) or np.shape(df_du) != (self.nc, self.nu):
+        df_dx, df_du = np.asarray(df_dx), np.asarray(df_du)
+        if df_dx.shape != (self.nc, self.state.ndx) or df_du.shape != (self.nc, self.nu):
             raise ValueError(
                 f"df_dx, df_du have shapes {np.shape(df_dx)}, {np.shape(df_du)}, "
                 f"expected ({self.nc}, {self.state.ndx}), ({self.nc}, {self.nu})"
