@@ -2,8 +2,10 @@
 
 ``python -m crocopy.bench_memory NAME LIBRARY SOLVER MAXITER`` imports the library (``crocopy``
 or ``crocoddyl``), Pinocchio and the problem registry, warms up with two iterations of ``SOLVER``
-on the double pendulum (so crocopy's numba kernels are loaded, or compiled after a source change,
-before anything is measured: one-time costs that Crocoddyl, compiled ahead of time, does not have),
+on another small problem (:func:`warmup_problem`: crocopy's numba kernels are loaded, or compiled
+after a source change, before anything is measured: one-time costs that Crocoddyl, compiled ahead
+of time, does not have; another problem, since a problem's own memory freed by the warm-up would
+be reused by its measured build),
 resets the process's resident-memory high-water mark (``/proc/self/clear_refs``, Linux) and
 records it (the baseline), builds problem ``NAME`` with one thread, solves it from the builder's
 guess with ``SOLVER`` (a key of :data:`crocopy.bench_problems.SOLVER_CLASSES`) and ``MAXITER``
@@ -50,6 +52,12 @@ def peak_memory_kib() -> int:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 
 
+def warmup_problem(name: str) -> str:
+    """The small problem solved before measuring ``name``: the double pendulum, or the quadrotor
+    goal task when ``name`` is the pendulum."""
+    return "quad-goal" if name == "pend" else "pend"
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run one measurement and print its JSON line; returns the exit code."""
     name, library, solver_name, maxiter = argv if argv is not None else sys.argv[1:]
@@ -60,7 +68,7 @@ def main(argv: list[str] | None = None) -> int:
     _limit_threads()
     lib = importlib.import_module(library)
     registry.get(name)
-    warm_problem, warm_xs, warm_us = build_problem("pend", lib)
+    warm_problem, warm_xs, warm_us = build_problem(warmup_problem(name), lib)
     getattr(lib, SOLVER_CLASSES[solver_name])(warm_problem).solve(warm_xs, warm_us, 2, False)
     del warm_problem, warm_xs, warm_us
     gc.collect()

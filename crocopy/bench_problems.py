@@ -7,13 +7,13 @@ and the Kinova arm) the same builder makes the problem with each library (Crocod
 * **solve**: the full solve with the chosen solver (Box-FDDP unless told otherwise) from the
   builder's guess with the problem's ``maxiter``: iterations, final cost, convergence and the wall
   time per iteration (solve time / iterations).  The first solve of each library runs in a fresh
-  subprocess (:mod:`crocopy.bench_memory`, after a warm-up solve of the pendulum that loads the
+  subprocess (:mod:`crocopy.bench_memory`, after a warm-up solve of a small problem that loads the
   numba kernels) that also measures its **peak memory**: the resident high-water mark after the
   solve minus that after the imports and warm-up (reset there), in MiB — Crocoddyl allocates in
-  C++, where ``tracemalloc`` cannot see.  Further solves run in this
-  process, the libraries alternating, up to ``repeats`` in all while the next round fits in
-  ``solve_budget`` seconds, so the big problems (hop, monkey bar) are solved once per library; the
-  wall time per iteration is the median over the runs (their number is reported).
+  C++, where ``tracemalloc`` cannot see.  Further solves run in this process, the libraries
+  alternating, up to ``repeats`` in all while the next round fits in ``solve_budget`` seconds, so
+  the big problems (hop, monkey bar) are solved once per library; the wall time per iteration is
+  the median over the runs (their number is reported).
 * **phases**: milliseconds of ``problem.calc``, ``problem.calcDiff``, the backward pass
   (``solver.computeDirection(False)``) and the forward pass (``solver.tryStep``: the rollout,
   which also evaluates every node) on a fixed trajectory (the builder's guess, after one

@@ -180,8 +180,8 @@ def format_report(results: Sequence[ProblemResult], meta: dict) -> str:
         f" (alternating), fewer where the next round would pass the {meta.get('solve_budget', 0):g} s budget"
         " (column *solves*); the first solve of each library runs in a fresh process that measures memory.",
         "- Memory: peak resident memory (`VmHWM`, reset after the imports) of building and solving the problem"
-        " in that fresh process, above the level after the imports and a 2-iteration warm-up solve of the"
-        " pendulum (which loads crocopy's compiled numba kernels; that solve's own time is not counted).",
+        " in that fresh process, above the level after the imports and a 2-iteration warm-up solve of another"
+        " small problem (which loads crocopy's compiled numba kernels; not counted in the solve time).",
         "",
         "## Solves",
         "",

@@ -11,6 +11,7 @@ import sys
 import pytest
 
 from crocopy import bench_problems, bench_report
+from crocopy.bench_memory import warmup_problem
 from crocopy.bench_problems import BenchDependencyError, LibResult, ProblemResult, bench_problem
 from crocopy.cli import main
 
@@ -96,6 +97,15 @@ def test_common_steplength_skips_diverging_steps():
 
     assert bench_problems._common_steplength([fine_below_half, nan_at_quarter], cells) == 0.125
     assert cells == [[0.125], [0.125]]
+
+
+def test_default_problems_are_table1_walk_and_arm():
+    from crocopy.problems import registry
+
+    assert bench_problems.VS_PROBLEMS == (*registry.TABLE1, "walk", "arm")
+    assert all(name in registry.PROBLEMS for name in bench_problems.VS_PROBLEMS)
+    for name in bench_problems.VS_PROBLEMS:  # the memory warm-up never reuses the measured problem's memory
+        assert warmup_problem(name) != name and warmup_problem(name) in registry.PROBLEMS
 
 
 def test_bad_arguments_are_named():
