@@ -80,8 +80,15 @@ def main(argv: list[str] | None = None) -> int:
     converged = solver.solve(xs, us, int(maxiter), False)
     seconds = time.perf_counter() - t0
     peak = peak_memory_kib()
-    report = {"baseline_kib": baseline, "peak_kib": peak, "hwm_reset": reset, "iters": int(solver.iter),
-              "cost": float(solver.cost), "converged": bool(converged), "seconds": seconds}
+    report = {
+        "baseline_kib": baseline,
+        "peak_kib": peak,
+        "hwm_reset": reset,
+        "iters": int(solver.iter),
+        "cost": float(solver.cost),
+        "converged": bool(converged),
+        "seconds": seconds,
+    }
     print(json.dumps(report))
     return 0
 

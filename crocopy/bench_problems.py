@@ -213,9 +213,7 @@ def _sample_ms(fn: Callable[[], object], loops: int) -> float:
     return 1e3 * (time.perf_counter() - t0) / loops
 
 
-def time_phases_interleaved(
-    setups: dict[str, tuple], solver_name: str, repeats: int
-) -> dict[str, dict[str, float]]:
+def time_phases_interleaved(setups: dict[str, tuple], solver_name: str, repeats: int) -> dict[str, dict[str, float]]:
     """Median ms per phase for each library, samples interleaved across libraries.
 
     Parameters
@@ -287,7 +285,12 @@ def measure_memory(name: str, library: str, solver_name: str, maxiter: int, time
 
 
 def solve_interleaved(
-    name: str, setups: dict[str, tuple], solver_name: str, maxiter: int, repeats: int, budget: float,
+    name: str,
+    setups: dict[str, tuple],
+    solver_name: str,
+    maxiter: int,
+    repeats: int,
+    budget: float,
     memory: bool = True,
 ) -> dict[str, dict]:
     """Full solves of problem ``name``, libraries alternating, up to ``repeats`` rounds while the next
@@ -376,8 +379,9 @@ def bench_problem(
     result = ProblemResult(name, dims, SOLVER_CLASSES[solver_name], maxiter)
     for lib_name in libraries:
         sv = solves[lib_name]
-        result.libs[lib_name] = LibResult(sv["iters"], sv["cost"], sv["converged"], sv["ms_per_iter"], sv["runs"],
-                                          phases[lib_name], sv["mib"])
+        result.libs[lib_name] = LibResult(
+            sv["iters"], sv["cost"], sv["converged"], sv["ms_per_iter"], sv["runs"], phases[lib_name], sv["mib"]
+        )
     return result
 
 

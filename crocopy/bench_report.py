@@ -46,8 +46,13 @@ def cpu_model() -> str:
 def versions() -> dict[str, str]:
     """Versions of Python and of the packages in the benchmark (``"not installed"`` when absent)."""
     out = {"Python": platform.python_version()}
-    for label, module in (("NumPy", "numpy"), ("Pinocchio", "pinocchio"), ("Crocoddyl", "crocoddyl"),
-                          ("crocopy", "crocopy"), ("numba", "numba")):
+    for label, module in (
+        ("NumPy", "numpy"),
+        ("Pinocchio", "pinocchio"),
+        ("Crocoddyl", "crocoddyl"),
+        ("crocopy", "crocopy"),
+        ("numba", "numba"),
+    ):
         try:
             out[label] = importlib.import_module(module).__version__
         except ImportError:

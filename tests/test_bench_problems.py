@@ -39,8 +39,9 @@ def test_crocopy_only_run_has_every_figure(arm_crocopy):
 
 
 def test_report_of_a_crocopy_only_run(arm_crocopy):
-    text = bench_report.format_report([arm_crocopy], {"repeats": 2, "solve_budget": 30.0, "wall_s": 3.0,
-                                                        "load": ((1.0, 1.0, 1.0), (2.0, 2.0, 2.0))})
+    text = bench_report.format_report(
+        [arm_crocopy], {"repeats": 2, "solve_budget": 30.0, "wall_s": 3.0, "load": ((1.0, 1.0, 1.0), (2.0, 2.0, 2.0))}
+    )
     for heading in ("# crocopy vs Crocoddyl", "## Solves", "## Phases (ms)", "## Peak memory", "## Bars (issue 7)"):
         assert heading in text
     assert bench_report.cpu_model() in text and "NumPy" in text and "Pinocchio" in text
@@ -57,8 +58,13 @@ def _result(name, cp_total, cd_total, cp_cost=1.0, cd_cost=1.0, cp_iters=10, cd_
         phases = {"calc": 1.0, "calcDiff": total / 2, "backward": total / 4, "forward": total / 4, "total": total}
         return LibResult(iters, cost, True, wall or 1.1 * total, 5, phases, 10.0 * total)
 
-    return ProblemResult(name, (10, 4, 1), "SolverBoxFDDP", 100, {
-        "crocopy": lib(cp_total, cp_cost, cp_iters, cp_wall), "crocoddyl": lib(cd_total, cd_cost, cd_iters)})
+    return ProblemResult(
+        name,
+        (10, 4, 1),
+        "SolverBoxFDDP",
+        100,
+        {"crocopy": lib(cp_total, cp_cost, cp_iters, cp_wall), "crocoddyl": lib(cd_total, cd_cost, cd_iters)},
+    )
 
 
 def test_ratios_agreement_and_bars():
@@ -74,8 +80,9 @@ def test_ratios_agreement_and_bars():
     taichi_wall = _result("taichi", 1.4, 1.0, cp_wall=1.7 * 1.1)  # phases within 1.5×, full-solve wall not
     assert bench_report.bar_met(taichi_wall) and bench_report.bar_verdict(taichi_wall) == "met (phases only)"
     text = bench_report.format_report([jump_fast, jump_slow, pend], {"repeats": 5, "solve_budget": 30.0})
-    bars = [line for line in text.split("## Bars")[1].splitlines() if line.startswith("| jump") or
-            line.startswith("| pend")]
+    bars = [
+        line for line in text.split("## Bars")[1].splitlines() if line.startswith("| jump") or line.startswith("| pend")
+    ]
     assert [b.split("|")[-2].strip() for b in bars] == ["met", "not met", "met"]
     solve = next(line for line in text.splitlines() if line.startswith("| pend | 10, 4, 1 |"))
     assert [c.strip() for c in solve.strip("|").split("|")][7:9] == ["2.0e-07", "yes"]
@@ -132,8 +139,20 @@ def test_cli_unknown_problem_is_a_clear_error(capsys):
 def test_side_by_side_through_the_cli_or_the_missing_extra(tmp_path, capsys):
     """With Crocoddyl: a 2-iteration run writes the report; without: the clear error."""
     out = tmp_path / "BENCH.md"
-    argv = ["bench", "--vs", "crocoddyl", "--problems", "pend", "--repeats", "1", "--maxiter", "2",
-            "--no-memory", "--out", str(out)]
+    argv = [
+        "bench",
+        "--vs",
+        "crocoddyl",
+        "--problems",
+        "pend",
+        "--repeats",
+        "1",
+        "--maxiter",
+        "2",
+        "--no-memory",
+        "--out",
+        str(out),
+    ]
     if importlib.util.find_spec("crocoddyl") is None:
         with pytest.raises(BenchDependencyError, match="bench"):
             bench_problems.require_crocoddyl()
