@@ -62,20 +62,20 @@ def main(argv: list[str] | None = None) -> int:
     """Run one measurement and print its JSON line; returns the exit code."""
     name, library, solver_name, maxiter = argv if argv is not None else sys.argv[1:]
     from .bench import _limit_threads
-    from .bench_problems import SOLVER_CLASSES, build_problem
+    from .bench_problems import build_problem, make_solver
     from .problems import registry
 
     _limit_threads()
     lib = importlib.import_module(library)
     registry.get(name)
     warm_problem, warm_xs, warm_us = build_problem(warmup_problem(name), lib)
-    getattr(lib, SOLVER_CLASSES[solver_name])(warm_problem).solve(warm_xs, warm_us, 2, False)
+    make_solver(lib, warm_problem, solver_name).solve(warm_xs, warm_us, 2, False)
     del warm_problem, warm_xs, warm_us
     gc.collect()
     reset = reset_peak_memory()
     baseline = peak_memory_kib()
     problem, xs, us = build_problem(name, lib)
-    solver = getattr(lib, SOLVER_CLASSES[solver_name])(problem)
+    solver = make_solver(lib, problem, solver_name)
     t0 = time.perf_counter()
     converged = solver.solve(xs, us, int(maxiter), False)
     seconds = time.perf_counter() - t0

@@ -158,6 +158,15 @@ def build_problem(name: str, lib: ModuleType) -> tuple:
     return problem, [x.copy() for x in xs], [u.copy() for u in us]
 
 
+def make_solver(lib: ModuleType, problem, solver_name: str):
+    """The solver ``solver_name`` of ``lib`` on ``problem``; crocopy's box solvers in ``compat_crocoddyl``
+    mode, so that both libraries run the same algorithm (crocopy's default follows the papers)."""
+    solver = getattr(lib, SOLVER_CLASSES[solver_name])(problem)
+    if hasattr(solver, "compat_crocoddyl"):
+        solver.compat_crocoddyl = True
+    return solver
+
+
 def _phase_calls(
     lib: ModuleType, problem, xs, us, solver_name: str
 ) -> tuple[dict[str, Callable[[], object]], list[float]]:
@@ -166,7 +175,7 @@ def _phase_calls(
     Also returns the one-element list the forward callable reads its step length from (set by
     :func:`_common_steplength`).
     """
-    solver = getattr(lib, SOLVER_CLASSES[solver_name])(problem)
+    solver = make_solver(lib, problem, solver_name)
     solver.setCandidate(xs, us, False)
     solver.computeDirection(True)
     xs_c, us_c = list(solver.xs), list(solver.us)
@@ -250,7 +259,7 @@ def time_phases_interleaved(setups: dict[str, tuple], solver_name: str, repeats:
 
 def _solve_once(lib: ModuleType, problem, xs, us, solver_name: str, maxiter: int) -> tuple[int, float, bool, float]:
     """One full solve from the guess: ``(iterations, final cost, converged, seconds)``."""
-    solver = getattr(lib, SOLVER_CLASSES[solver_name])(problem)
+    solver = make_solver(lib, problem, solver_name)
     init_xs, init_us = [x.copy() for x in xs], [u.copy() for u in us]
     t0 = time.perf_counter()
     converged = solver.solve(init_xs, init_us, maxiter, False)

@@ -175,7 +175,9 @@ def format_report(results: Sequence[ProblemResult], meta: dict) -> str:
         f"- Machine: {cpu_model()}, {os.cpu_count()} cores{load_text}.",
         "- Versions: " + ", ".join(f"{k} {val}" for k, val in v.items()) + ".",
         f"- Solver: {', '.join(solvers)} from each builder's guess with the problem's iteration limit;"
-        " one thread on both sides (BLAS limited to 1 thread, Crocoddyl `problem.nthreads = 1`).",
+        " one thread on both sides (BLAS limited to 1 thread, Crocoddyl `problem.nthreads = 1`);"
+        " crocopy's box solvers with `compat_crocoddyl = True` (Crocoddyl's algorithm; crocopy's default"
+        " follows the papers where Crocoddyl 3.2 departs from them).",
         f"- Phases: medians of {meta.get('repeats')} samples on a fixed trajectory (the builder's guess), the"
         " two libraries interleaved sample by sample. calc = `problem.calc`, calcDiff = `problem.calcDiff`,"
         " backward = `solver.computeDirection(False)`, forward = `solver.tryStep(α)` (the rollout, which"
