@@ -35,6 +35,7 @@ import os
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -285,7 +286,8 @@ def measure_memory(name: str, library: str, solver_name: str, maxiter: int, time
     """
     env = {**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
     cmd = [sys.executable, "-m", "crocopy.bench_memory", name, library, solver_name, str(maxiter)]
-    proc = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=timeout)
+    with tempfile.TemporaryDirectory() as cwd:  # a source checkout in the cwd would shadow the installed package
+        proc = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=timeout, cwd=cwd)
     if proc.returncode != 0:
         raise RuntimeError(f"memory run of {name} with {library} failed: {proc.stderr.strip()[-2000:]}")
     report = json.loads(proc.stdout.strip().splitlines()[-1])

@@ -27,6 +27,7 @@ import os
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
 
 import numpy as np
@@ -118,9 +119,11 @@ def _scaling(cycles: tuple[int, ...], repeats: int) -> list[dict]:
 def hop_memory(maxiter: int = 0) -> dict:
     """Peak RSS (bytes) of building and solving the hop in a subprocess (see the module docstring)."""
     env = {**os.environ, "OMP_NUM_THREADS": "1"}
-    out = subprocess.run(
-        [sys.executable, "-c", _MEMORY_SCRIPT, str(maxiter)], capture_output=True, text=True, env=env, check=False
-    )
+    with tempfile.TemporaryDirectory() as cwd:  # a source checkout in the cwd would shadow the installed package
+        out = subprocess.run(
+            [sys.executable, "-c", _MEMORY_SCRIPT, str(maxiter)],
+            capture_output=True, text=True, env=env, check=False, cwd=cwd,
+        )
     if out.returncode:
         raise RuntimeError(f"hop memory subprocess failed:\n{out.stderr[-2000:]}")
     return json.loads(out.stdout.strip().splitlines()[-1])
