@@ -6,6 +6,8 @@
   Crocoddyl side by side on the bundled problems (:mod:`crocopy.bench_problems`)
 * ``crocopy bench --box-parity [--problems ...] [--maxiter N]``: Box-DDP/Box-FDDP iterations and
   final costs next to Crocoddyl's, and the box-QP backward-pass overhead (:mod:`crocopy.bench_box`)
+* ``crocopy bench --models [--problems ...]``: calc + calcDiff time and per-model-kind differences of
+  every node against Crocoddyl (:mod:`crocopy.bench_models`)
 * ``crocopy bench --batch`` / ``--scaling``: :func:`crocopy.solve_many` speed-up on the quadrotor
   starts; time per iteration vs horizon and peak memory (:mod:`crocopy.bench_batch`,
   :mod:`crocopy.bench_scaling`)
@@ -58,7 +60,21 @@ def _bench_box_parity(args: argparse.Namespace) -> int:
     return 0
 
 
+def _bench_models(args: argparse.Namespace) -> int:
+    from .bench_models import MODEL_PROBLEMS, run_model_bench
+    from .bench_problems import BenchDependencyError
+
+    try:
+        print(run_model_bench(tuple(args.problems or MODEL_PROBLEMS), repeats=args.repeats or 15))
+    except (BenchDependencyError, KeyError) as exc:
+        print(exc.args[0], file=sys.stderr)
+        return 2
+    return 0
+
+
 def _bench(args: argparse.Namespace) -> int:
+    if args.models:
+        return _bench_models(args)
     if args.box_parity:
         return _bench_box_parity(args)
     if args.batch or args.scaling:
@@ -251,6 +267,8 @@ def build_parser() -> argparse.ArgumentParser:
                        help="time per iteration vs horizon (ANYmal trot), peak memory of the hop (bench_scaling)")
     bench.add_argument("--box-parity", action="store_true",
                        help="Box-DDP/Box-FDDP iterations and costs vs Crocoddyl's (crocopy.bench_box; bench extra)")
+    bench.add_argument("--models", action="store_true",
+                       help="calc+calcDiff time and per-node differences vs Crocoddyl (crocopy.bench_models)")
     bench.add_argument("--workers", type=int, default=2, help="with --batch: worker processes")
     bench.add_argument("--runs", type=int, default=3, help="with --batch/--scaling: repetitions (median reported)")
     bench.set_defaults(func=_bench)

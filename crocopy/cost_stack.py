@@ -11,8 +11,9 @@ arrays and makes each item's residual ``r``/``Rx``/``Ru`` and activation ``Ar``/
 views into them, so residuals write straight into the stack.
 
 Activations of the quadratic-barrier family (quadratic, weighted quadratic, quadratic barrier and
-weighted quadratic barrier: ``a = ½ Σ aᵢ (rᵢ - clip(rᵢ, lbᵢ, ubᵢ))²``, see ``barrier_form``) are
-evaluated for all rows at once; other diagonal activations are called item by item.
+weighted quadratic barrier: ``a = ½ Σ aᵢ (rᵢ - clip(rᵢ, lbᵢ, ubᵢ))²``, ``Arr = aᵢ [rᵢ ≤ lbᵢ or
+rᵢ ≥ ubᵢ]``, the quadratic ones with ``lb = ub = 0``; see ``barrier_form``) are evaluated for all
+rows at once; other diagonal activations are called item by item.
 
 Rows are ordered with the control-independent residuals first: ``Ju`` holds only the rows of the
 control-dependent residuals (the tail of ``Jx``), so their zero ``Ru`` never enters a product.
@@ -44,7 +45,8 @@ class CostStack:
         self.r, self.Jx = np.zeros(nr), np.zeros((nr, ndx))
         self.Ar, self.Arr, self.excess = np.zeros(nr), np.zeros(nr), np.zeros(nr)
         self.lb, self.ub = np.zeros(nr), np.zeros(nr)
-        self.act_weights, self.always_curved = np.ones(nr), np.zeros(nr)
+        self.act_weights = np.ones(nr)
+        self.below, self.above = np.zeros(nr, dtype=bool), np.zeros(nr, dtype=bool)
         self.weights, self.wAr, self.wArr = np.zeros(nr), np.zeros(nr), np.zeros(nr)
         self.HJx, self.row_costs = np.zeros((nr, ndx)), np.zeros(nr)
         self.item_costs, self.item_weights = np.zeros(n), np.zeros(n)
@@ -93,10 +95,10 @@ class CostStack:
             self.item_weights[k] = weight
             form = cost.activation.barrier_form()
             if form is None:
-                form = (0.0, 0.0, 1.0, False)
+                form = (0.0, 0.0, 1.0)
                 if on:
                     self.unfused.append((cost.activation, cdata.activation, cdata.residual.r))
-            self.lb[rows], self.ub[rows], self.act_weights[rows], self.always_curved[rows] = form
+            self.lb[rows], self.ub[rows], self.act_weights[rows] = form
             if on:
                 self.active.append((cost.residual, cdata.residual))
             else:
@@ -139,9 +141,10 @@ class CostStack:
             residual.calcDiff(rdata, x, u)
         e = self._excess()
         np.multiply(self.act_weights, e, out=self.Ar)
-        np.not_equal(e, 0.0, out=self.Arr)
-        np.maximum(self.Arr, self.always_curved, out=self.Arr)
-        self.Arr *= self.act_weights
+        np.less_equal(self.r, self.lb, out=self.below)
+        np.greater_equal(self.r, self.ub, out=self.above)
+        np.logical_or(self.below, self.above, out=self.below)
+        np.multiply(self.below, self.act_weights, out=self.Arr)
         for activation, adata, r in self.unfused:
             activation.calcDiff(adata, r)
         self._accumulate(data, u is not None)

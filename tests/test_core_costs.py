@@ -207,3 +207,23 @@ def test_stacked_cost_sum_reports_an_infinite_residual_without_warnings():
     assert data.cost == np.inf
     assert data.costs["barrier"].cost == np.inf
     assert all(np.isfinite(data.costs[name].cost) for name in ("quad", "u"))
+
+
+@pytest.mark.parametrize("name", ["barrier", "wbarrier"])
+def test_barrier_curvature_counts_rows_on_their_bound_alone_and_in_a_sum(name):
+    """``Arr = w [r ≤ lb or r ≥ ub]`` (Crocoddyl's convention): a row sitting on its bound is curved."""
+    model = ACTIVATIONS[name]()
+    lb, ub = model.bounds.lb, model.bounds.ub
+    r = np.array([lb[0], ub[1], 0.5 * (lb[2] + ub[2]), ub[3] + 1.0])
+    data = model.createData()
+    model.calc(data, r)
+    model.calcDiff(data, r)
+    w = getattr(model, "weights", np.ones(4))
+    np.testing.assert_array_equal(data.Arr_diag, w * np.array([1.0, 1.0, 0.0, 1.0]))
+    state = crocopy.StateVector(4)
+    costs = crocopy.CostModelSum(state, 0)
+    costs.addCost("b", crocopy.CostModelResidual(state, model, crocopy.ResidualModelState(state, np.zeros(4), 0)), 2.0)
+    sdata = costs.createData(crocopy.DataCollectorAbstract())
+    costs.calc(sdata, r, np.zeros(0))
+    costs.calcDiff(sdata, r, np.zeros(0))
+    np.testing.assert_allclose(np.diag(sdata.Lxx), 2.0 * w * np.array([1.0, 1.0, 0.0, 1.0]))

@@ -79,7 +79,7 @@ class ActivationModelQuadraticBarrier(ActivationModelAbstract):
         ParametersVersion.bump()
 
     def barrier_form(self) -> tuple:
-        return self._bounds.lb, self._bounds.ub, 1.0, False
+        return self._bounds.lb, self._bounds.ub, 1.0
 
     def createData(self) -> "ActivationDataQuadraticBarrier":
         return ActivationDataQuadraticBarrier(self)
@@ -92,6 +92,13 @@ class ActivationModelQuadraticBarrier(ActivationModelAbstract):
         np.subtract(r, e, out=e)
         return e
 
+    def _active_rows(self, data: "ActivationDataQuadraticBarrier", r: np.ndarray) -> None:
+        """``Arr_diag = [r ≤ lb or r ≥ ub]`` (curvature on the bounds too, as Crocoddyl)."""
+        np.less_equal(r, self.bounds.lb, out=data.below)
+        np.greater_equal(r, self.bounds.ub, out=data.above)
+        np.logical_or(data.below, data.above, out=data.below)
+        data.Arr_diag[:] = data.below
+
     def calc(self, data: "ActivationDataQuadraticBarrier", r: np.ndarray) -> None:
         e = self._excess(data, r)
         data.a_value = 0.5 * float(e @ e)
@@ -99,7 +106,7 @@ class ActivationModelQuadraticBarrier(ActivationModelAbstract):
     def calcDiff(self, data: "ActivationDataQuadraticBarrier", r: np.ndarray) -> None:
         e = self._excess(data, r)
         data.Ar[:] = e
-        np.not_equal(e, 0.0, out=data.Arr_diag)
+        self._active_rows(data, r)
 
 
 class ActivationDataQuadraticBarrier(ActivationDataAbstract):
@@ -108,6 +115,8 @@ class ActivationDataQuadraticBarrier(ActivationDataAbstract):
     def __init__(self, model: ActivationModelQuadraticBarrier) -> None:
         super().__init__(model)
         self.excess = np.zeros(model.nr)
+        self.below = np.zeros(model.nr, dtype=bool)
+        self.above = np.zeros(model.nr, dtype=bool)
 
 
 class ActivationModelWeightedQuadraticBarrier(ActivationModelQuadraticBarrier):
@@ -128,7 +137,7 @@ class ActivationModelWeightedQuadraticBarrier(ActivationModelQuadraticBarrier):
         ParametersVersion.bump()
 
     def barrier_form(self) -> tuple:
-        return self._bounds.lb, self._bounds.ub, self._weights, False
+        return self._bounds.lb, self._bounds.ub, self._weights
 
     def calc(self, data: ActivationDataQuadraticBarrier, r: np.ndarray) -> None:
         e = self._excess(data, r)
@@ -137,5 +146,5 @@ class ActivationModelWeightedQuadraticBarrier(ActivationModelQuadraticBarrier):
     def calcDiff(self, data: ActivationDataQuadraticBarrier, r: np.ndarray) -> None:
         e = self._excess(data, r)
         np.multiply(self.weights, e, out=data.Ar)
-        np.not_equal(e, 0.0, out=data.Arr_diag)
+        self._active_rows(data, r)
         data.Arr_diag *= self.weights

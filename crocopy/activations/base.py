@@ -46,11 +46,11 @@ class ActivationModelAbstract:
         return ActivationDataAbstract(self)
 
     def barrier_form(self) -> tuple | None:
-        """``(lb, ub, w, quadratic)`` if ``a(r) = ½ Σ wᵢ (rᵢ - clip(rᵢ, lbᵢ, ubᵢ))²`` exactly, else ``None``.
+        """``(lb, ub, w)`` if ``a(r) = ½ Σ wᵢ (rᵢ - clip(rᵢ, lbᵢ, ubᵢ))²`` with
+        ``Arr = diag(w ∘ [r ≤ lb or r ≥ ub])`` exactly, else ``None``.
 
-        ``quadratic`` is True when ``Arr = diag(w)`` everywhere (``lb = ub = 0``), False when
-        ``Arr = diag(w ∘ [r outside the bounds]))``.  Cost sums evaluate such activations for all
-        their items at once.
+        The quadratic activations are the case ``lb = ub = 0``.  Cost sums evaluate such activations
+        for all their items at once.
         """
         return None
 

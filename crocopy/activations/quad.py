@@ -12,7 +12,7 @@ class ActivationModelQuad(ActivationModelAbstract):
     """``a(r) = ½‖r‖²``; ``Ar = r``; ``Arr = I``."""
 
     def barrier_form(self) -> tuple:
-        return 0.0, 0.0, 1.0, True
+        return 0.0, 0.0, 1.0
 
     def calc(self, data: ActivationDataAbstract, r: np.ndarray) -> None:
         data.a_value = 0.5 * float(r @ r)
@@ -41,7 +41,7 @@ class ActivationModelWeightedQuad(ActivationModelAbstract):
         ParametersVersion.bump()
 
     def barrier_form(self) -> tuple:
-        return 0.0, 0.0, self._weights, True
+        return 0.0, 0.0, self._weights
 
     def calc(self, data: ActivationDataAbstract, r: np.ndarray) -> None:
         data.a_value = 0.5 * float(r @ (self._weights * r))
