@@ -136,6 +136,8 @@ class CostStack:
         if self._seen != (ParametersVersion.value, u is None):
             self.refresh(u is None)
         if not self.items:
+            for name in ("Lx", "Lxx", "Lu", "Lxu", "Luu")[: 5 if u is not None else 2]:
+                getattr(data, name)[...] = 0.0
             return
         for residual, rdata in self.active:
             residual.calcDiff(rdata, x, u)

@@ -227,3 +227,18 @@ def test_barrier_curvature_counts_rows_on_their_bound_alone_and_in_a_sum(name):
     costs.calc(sdata, r, np.zeros(0))
     costs.calcDiff(sdata, r, np.zeros(0))
     np.testing.assert_allclose(np.diag(sdata.Lxx), 2.0 * w * np.array([1.0, 1.0, 0.0, 1.0]))
+
+
+def test_cost_sum_of_unstacked_costs_only_restarts_its_sums_at_each_calcdiff():
+    """A sum whose items all have dense activations (no stack) must not accumulate across calls."""
+    state = crocopy.StateVector(4)
+    costs = crocopy.CostModelSum(state, 2)
+    act = crocopy.ActivationModelSmooth2Norm(4, 0.1)
+    costs.addCost("n", crocopy.CostModelResidual(state, act, crocopy.ResidualModelState(state, np.zeros(4), 2)), 3.0)
+    data = costs.createData(crocopy.DataCollectorAbstract())
+    x, u = np.array([0.3, -0.5, 0.2, 0.05]), np.array([0.4, -1.2])
+    for _ in range(2):
+        costs.calc(data, x, u)
+        costs.calcDiff(data, x, u)
+    np.testing.assert_allclose(data.Lx, 3.0 * data.costs["n"].Lx, atol=1e-14)
+    np.testing.assert_allclose(data.Lxx, 3.0 * data.costs["n"].Lxx, atol=1e-14)
