@@ -117,8 +117,6 @@ class CostStack:
         """Residuals and activation values of every active item; returns ``Σ weight · cost``."""
         if self._seen != (ParametersVersion.value, u is None):
             self.refresh(u is None)
-        if not self.items:
-            return 0.0
         for residual, rdata in self.active:
             residual.calc(rdata, x, u)
         e = self._excess()
@@ -135,10 +133,6 @@ class CostStack:
         """Residual Jacobians, activation derivatives and the weighted sums into ``data``."""
         if self._seen != (ParametersVersion.value, u is None):
             self.refresh(u is None)
-        if not self.items:
-            for name in ("Lx", "Lxx", "Lu", "Lxu", "Luu")[: 5 if u is not None else 2]:
-                getattr(data, name)[...] = 0.0
-            return
         for residual, rdata in self.active:
             residual.calcDiff(rdata, x, u)
         e = self._excess()
