@@ -17,13 +17,12 @@ Needs the ``bench`` extra (Crocoddyl 3.2.1 on Pinocchio 4.0.0).
 from __future__ import annotations
 
 import statistics
-import time
 from types import ModuleType
 
 import numpy as np
 
 from .bench import _limit_threads
-from .bench_problems import build_problem, require_crocoddyl
+from .bench_problems import _loops, _sample_ms, build_problem, require_crocoddyl
 
 MODEL_PROBLEMS = ("jump", "taichi")
 FIELDS = ("Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu")
@@ -68,14 +67,18 @@ def node_differences(problems: tuple, xs: list, us: list) -> dict[str, dict[str,
 
 
 def time_calc_calcdiff(problems: tuple, xs: list, us: list, repeats: int) -> tuple[float, float]:
-    """Median seconds of ``calc + calcDiff`` of each problem, samples interleaved."""
-    samples: list[list[float]] = [[], []]
-    for _ in range(repeats):
-        for k, p in enumerate(problems):
-            t0 = time.perf_counter()
-            p.calc(xs, us)
-            p.calcDiff(xs, us)
-            samples[k].append(time.perf_counter() - t0)
+    """Median seconds of ``calc + calcDiff`` of each problem (the side-by-side bench's sampling:
+    samples of at least 20 ms, the order of the two problems alternating)."""
+
+    def make(p):
+        return lambda: (p.calc(xs, us), p.calcDiff(xs, us))
+
+    calls = [make(p) for p in problems]
+    loops = [_loops(fn) for fn in calls]
+    samples: list[list[float]] = [[] for _ in problems]
+    for r in range(repeats):
+        for k in (0, 1) if r % 2 == 0 else (1, 0):
+            samples[k].append(1e-3 * _sample_ms(calls[k], loops[k]))
     return statistics.median(samples[0]), statistics.median(samples[1])
 
 
