@@ -179,7 +179,9 @@ def _table1(args: argparse.Namespace) -> int:
     import crocopy
 
     from .problems import registry
+    from .table1 import RowResult, format_trend, trend_checks
 
+    results: dict[str, dict[str, RowResult]] = {}
     rows = [
         "| problem | Box-DDP iter | Box-DDP cost | sol | Box-FDDP iter | Box-FDDP cost | sol"
         " | paper Box-DDP | paper Box-FDDP |",
@@ -190,11 +192,13 @@ def _table1(args: argparse.Namespace) -> int:
             continue
         spec = registry.get(name)
         cells = [name]
-        for solver_name in ("SolverBoxDDP", "SolverBoxFDDP"):
+        for key, solver_name in (("boxddp", "SolverBoxDDP"), ("boxfddp", "SolverBoxFDDP")):
             problem, xs, us = spec.build(crocopy)
             solver = getattr(crocopy, solver_name)(problem)
             ok = solver.solve(xs, us, spec.maxiter, False)
-            cells += [str(solver.iter), f"{solver.cost:.6g}", "✓" if spec.solved(ok, solver.cost) else "✗"]
+            result = RowResult(solver.iter, solver.cost, spec.solved(ok, solver.cost))
+            results.setdefault(name, {})[key] = result
+            cells += [str(solver.iter), f"{solver.cost:.6g}", "✓" if result.solved else "✗"]
         paper = registry.PAPER_TABLE1.get(name, {})
         for key in ("boxddp", "boxfddp"):
             it, cost, ok = paper.get(key, (0, float("nan"), False))
@@ -202,6 +206,7 @@ def _table1(args: argparse.Namespace) -> int:
         rows.append("| " + " | ".join(cells) + " |")
         print(rows[-1], flush=True)
     print("\n".join(rows))
+    print(format_trend(trend_checks(results)))
     return 0
 
 
