@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import cost_stack_kernel
 from .activations.base import ParametersVersion
 
 
@@ -36,7 +37,15 @@ class CostStack:
         The stackable items (residual costs with diagonal activations, ``nr > 0``) and their data.
     ndx, nu : int
         Tangent and control dimensions.
+
+    Attributes
+    ----------
+    use_kernel : bool
+        Evaluate the activations and sums with :mod:`~crocopy.cost_stack_kernel` (default when numba is
+        available) instead of the numpy steps.
     """
+
+    use_kernel = cost_stack_kernel.available
 
     def __init__(self, items: list, ndx: int, nu: int) -> None:
         self.items = sorted(items, key=lambda it: it[1].cost.residual.u_dependent)
@@ -60,6 +69,7 @@ class CostStack:
                              if it.cost.residual.u_dependent), nr)
         self.Ju = np.zeros((nr - self.u_start, nu))
         self.HJu = np.zeros_like(self.Ju)
+        self.Jc, self.Juc = np.zeros_like(self.Jx), np.zeros_like(self.Ju)
         for k, ((_, item, cdata), rows) in enumerate(zip(self.items, self.slices)):
             self._share(item, cdata, rows, k)
         self._seen: tuple[int, bool] | None = None
@@ -119,15 +129,25 @@ class CostStack:
             self.refresh(u is None)
         for residual, rdata in self.active:
             residual.calc(rdata, x, u)
+        if self.use_kernel:
+            total = cost_stack_kernel.activation_values(
+                self.r, self.lb, self.ub, self.act_weights, self.starts, self.item_costs, self.item_weights
+            )
+            if not self.unfused:
+                return total
+        else:
+            self._values()
+        for activation, adata, r in self.unfused:
+            activation.calc(adata, r)
+        return float(self.item_weights @ self.item_costs)
+
+    def _values(self) -> None:
         e = self._excess()
         with np.errstate(over="ignore", invalid="ignore"):
             np.multiply(e, e, out=self.row_costs)
             self.row_costs *= self.act_weights
         np.add.reduceat(self.row_costs, self.starts, out=self.item_costs)
         self.item_costs *= 0.5
-        for activation, adata, r in self.unfused:
-            activation.calc(adata, r)
-        return float(self.item_weights @ self.item_costs)
 
     def calcDiff(self, data, x: np.ndarray, u: np.ndarray | None) -> None:
         """Residual Jacobians, activation derivatives and the weighted sums into ``data``."""
@@ -135,15 +155,27 @@ class CostStack:
             self.refresh(u is None)
         for residual, rdata in self.active:
             residual.calcDiff(rdata, x, u)
+        if self.use_kernel:
+            cost_stack_kernel.activation_derivatives(self.r, self.lb, self.ub, self.act_weights, self.Ar, self.Arr)
+        else:
+            self._derivatives()
+        for activation, adata, r in self.unfused:
+            activation.calcDiff(adata, r)
+        if self.use_kernel:
+            cost_stack_kernel.accumulate(
+                self.weights, self.Ar, self.Arr, self.Jx, self.Ju, self.u_start, u is not None,
+                self.Jc, self.HJx, self.Juc, self.HJu, data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu,
+            )
+        else:
+            self._accumulate(data, u is not None)
+
+    def _derivatives(self) -> None:
         e = self._excess()
         np.multiply(self.act_weights, e, out=self.Ar)
         np.less_equal(self.r, self.lb, out=self.below)
         np.greater_equal(self.r, self.ub, out=self.above)
         np.logical_or(self.below, self.above, out=self.below)
         np.multiply(self.below, self.act_weights, out=self.Arr)
-        for activation, adata, r in self.unfused:
-            activation.calcDiff(adata, r)
-        self._accumulate(data, u is not None)
 
     def _accumulate(self, data, with_u: bool) -> None:
         np.multiply(self.weights, self.Ar, out=self.wAr)

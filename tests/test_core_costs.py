@@ -196,6 +196,36 @@ def test_stacked_cost_sum_equals_its_items_and_follows_parameter_changes(termina
         costs.costs["wquad"].cost.activation.weights[0] = 3.0
 
 
+@pytest.mark.parametrize("terminal", [False, True])
+def test_compiled_stack_steps_equal_the_numpy_steps(terminal):
+    """The numba kernels of the stack give the numpy steps' cost, derivatives and activation rows."""
+    from crocopy import cost_stack_kernel
+
+    assert cost_stack_kernel.available
+    state, nu = crocopy.StateVector(4), 4
+    costs = _every_activation_sum(state, nu)
+    costs.changeCostStatus("wquad", False)
+    rng = np.random.default_rng(3)
+    results = []
+    for use_kernel in (True, False):
+        data = costs.createData(crocopy.DataCollectorAbstract())
+        data.stack.use_kernel = use_kernel
+        out = []
+        for _ in range(4):
+            x = rng.uniform(-1.0, 1.0, 4)
+            u = None if terminal else rng.uniform(-1.0, 1.0, nu)
+            costs.calc(data, x, u)
+            costs.calcDiff(data, x, u)
+            out.append([data.cost, data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu, data.stack.Ar, data.stack.Arr])
+            out[-1] = [np.array(a, copy=True) for a in out[-1]]
+        rng = np.random.default_rng(3)
+        results.append(out)
+    assert any(np.any(step[7] == 0.0) for step in results[0]), "some barrier row must lie inside its bounds"
+    for compiled, numpy_steps in zip(*results):
+        for a, b in zip(compiled, numpy_steps):
+            np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-13)
+
+
 def test_stacked_cost_sum_reports_an_infinite_residual_without_warnings():
     state = crocopy.StateVector(4)
     costs = _every_activation_sum(state, 4, ("barrier", "quad", "wbarrier", "wquad"))
