@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import integrator_kernel
 from .action_base import ActionDataAbstract
 from .enums import Jcomponent
 from .integrator_base import IntegratedActionModelAbstract
@@ -21,11 +22,19 @@ from .state import StateAbstract
 
 
 class IntegratedActionModelEuler(IntegratedActionModelAbstract):
-    """Crocoddyl's ``IntegratedActionModelEuler(diffModel, timeStep=1e-3, withCostResidual=True)``."""
+    """Crocoddyl's ``IntegratedActionModelEuler(diffModel, timeStep=1e-3, withCostResidual=True)``.
+
+    ``use_kernel`` (default: numba available) applies the chain rule with
+    :func:`~crocopy.integrator_kernel.euler_chain` instead of its numpy twin.
+    """
+
+    use_kernel = integrator_kernel.available
 
     def __init__(self, diffModel, timeStep: float = 1e-3, withCostResidual: bool = True) -> None:
         super().__init__(diffModel, timeStep, withCostResidual)
-        self._transport = type(self.state).JintegrateTransport is not StateAbstract.JintegrateTransport
+        self._transport = not self._euclidean and (
+            type(self.state).JintegrateTransport is not StateAbstract.JintegrateTransport
+        )
 
     def createData(self) -> "IntegratedActionDataEuler":
         return IntegratedActionDataEuler(self)
@@ -54,27 +63,27 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
             self._terminal_calcDiff(data, ddata, x)
             return
         self.differential.calcDiff(ddata, x, u)
-        nv, dt = self.state.nv, self._dt
         if self._euclidean or self._transport:
-            dxdx, dxdu = data.Fx, data.Fu
-        else:
-            dxdx, dxdu = data.ddx_dx, data.ddx_du
+            chain = integrator_kernel.euler_chain if self.use_kernel else integrator_kernel.euler_chain_numpy
+            chain(
+                ddata.Fx, ddata.Fu, ddata.Lx, ddata.Lu, ddata.Lxx, ddata.Lxu, ddata.Luu, self._dt, self._euclidean,
+                data.Fx, data.Fu, data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu,
+            )
+            if self._transport:
+                self.state._integrate_chain_rule(x, data.dx, data.Fx, data.Fu)
+            self._copy_constraints(data, ddata, diff=True)
+            return
+        nv, dt = self.state.nv, self._dt
+        dxdx, dxdu = data.ddx_dx, data.ddx_du
         np.multiply(ddata.Fx, dt, out=dxdx[nv:])
         np.multiply(dxdx[nv:], dt, out=dxdx[:nv])
         dxdx.reshape(-1)[data.qv_diagonal] += dt
         np.multiply(ddata.Fu, dt, out=dxdu[nv:])
         np.multiply(dxdu[nv:], dt, out=dxdu[:nv])
-        if self._euclidean:
-            data.Fx.reshape(-1)[:: data.Fx.shape[0] + 1] += 1.0
-        elif self._transport:
-            self.state.JintegrateTransport(x, data.dx, data.Fx, Jcomponent.second)
-            self.state.JintegrateTransport(x, data.dx, data.Fu, Jcomponent.second)
-            data.Fx += self.state.Jintegrate(x, data.dx, Jcomponent.first)[0]
-        else:
-            Jx, Jdx = self.state.Jintegrate(x, data.dx, Jcomponent.both)
-            np.dot(Jdx, dxdx, out=data.Fx)
-            data.Fx += Jx
-            np.dot(Jdx, dxdu, out=data.Fu)
+        Jx, Jdx = self.state.Jintegrate(x, data.dx, Jcomponent.both)
+        np.dot(Jdx, dxdx, out=data.Fx)
+        data.Fx += Jx
+        np.dot(Jdx, dxdu, out=data.Fu)
         np.multiply(ddata.Lx, dt, out=data.Lx)
         np.multiply(ddata.Lu, dt, out=data.Lu)
         np.multiply(ddata.Lxx, dt, out=data.Lxx)

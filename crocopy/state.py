@@ -83,6 +83,16 @@ class StateAbstract:
         """Transport ``Jin`` (rows in the tangent space at ``x ⊕ dx``) to the tangent space at ``x``, in place."""
         raise NotImplementedError
 
+    def _integrate_chain_rule(self, x: np.ndarray, dx: np.ndarray, Fx: np.ndarray, Fu: np.ndarray) -> None:
+        """Chain rule through ``x ⊕ dx``, in place: ``Fx ← ∂(x ⊕ dx)/∂x + J_dx Fx`` and ``Fu ← J_dx Fu``.
+
+        ``Fx (ndx, ndx)`` and ``Fu (ndx, nu)`` hold ``∂dx/∂x`` and ``∂dx/∂u``; ``J_dx`` is applied by
+        :meth:`JintegrateTransport`.  States override it with a cheaper form.
+        """
+        self.JintegrateTransport(x, dx, Fx, Jcomponent.second)
+        self.JintegrateTransport(x, dx, Fu, Jcomponent.second)
+        Fx += self.Jintegrate(x, dx, Jcomponent.first)[0]
+
     def safe_diff(self, x0: np.ndarray, x1: np.ndarray) -> np.ndarray:
         """``diff`` with dimension checks."""
         return self.diff(as_vector(x0, self.nx, "x0"), as_vector(x1, self.nx, "x1"))

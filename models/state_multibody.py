@@ -95,6 +95,7 @@ class StateMultibody(StateAbstract):
         self._Jpos = np.zeros((ndx, ndx))  # templates with ±I in the velocity block
         self._Jpos[nv:, nv:] = np.eye(nv)
         self._Jneg = -self._Jpos
+        self._velocity_diagonal = slice(nv * (ndx + 1), None, ndx + 1)
 
     def zero(self) -> np.ndarray:
         """Neutral configuration and zero velocity."""
@@ -157,6 +158,18 @@ class StateMultibody(StateAbstract):
             return
         rows = Jin[:nv]
         rows[...] = np.reshape(pin.dIntegrateTransport(self.pinocchio, x[: self.nq], dx[:nv], rows, arg), rows.shape)
+
+    def _integrate_chain_rule(self, x: np.ndarray, dx: np.ndarray, Fx: np.ndarray, Fu: np.ndarray) -> None:
+        """Chain rule through ``x ⊕ dx`` (see :meth:`StateAbstract._integrate_chain_rule`): Pinocchio's
+        ``dIntegrateTransport`` on the configuration rows, ``dIntegrate`` on the configuration block and the
+        identity on the velocity block."""
+        model, nv = self.pinocchio, self.nv
+        q, dq = x[: self.nq], dx[:nv]
+        Fx[:nv] = pin.dIntegrateTransport(model, q, dq, Fx[:nv], pin.ARG1)
+        if Fu.shape[1]:
+            Fu[:nv] = np.reshape(pin.dIntegrateTransport(model, q, dq, Fu[:nv], pin.ARG1), (nv, Fu.shape[1]))
+        Fx[:nv, :nv] += pin.dIntegrate(model, q, dq, pin.ARG0)
+        Fx.reshape(-1)[self._velocity_diagonal] += 1.0
 
     def __repr__(self) -> str:
         return f"StateMultibody(nq={self.nq}, nv={self.nv})"

@@ -143,6 +143,37 @@ def test_numdiff_on_lie_group_state_matches_analytic_free_dynamics():
     np.testing.assert_allclose(d.Lx, dn.Lx, atol=1e-5 * max(1.0, np.abs(d.Lx).max()))
 
 
+@pytest.mark.parametrize("robot", ["dlqr", "anymal"])
+def test_compiled_euler_chain_rule_equals_its_numpy_twin(robot):
+    """Euler's compiled chain rule gives the numpy twin's Fx, Fu and cost derivatives (Euclidean and Lie group)."""
+    from crocopy import integrator_kernel
+
+    assert integrator_kernel.available
+    if robot == "dlqr":
+        dam = crocopy.DifferentialActionModelLQR.Random(3, 2)
+    else:
+        import example_robot_data
+
+        state = crocopy.StateMultibody(example_robot_data.load("anymal").model)
+        actuation = crocopy.ActuationModelFloatingBase(state)
+        costs = crocopy.CostModelSum(state, actuation.nu)
+        costs.addCost("x", crocopy.CostModelResidual(state, crocopy.ResidualModelState(state, actuation.nu)), 1.0)
+        costs.addCost("u", crocopy.CostModelResidual(state, crocopy.ResidualModelControl(state, actuation.nu)), 0.1)
+        dam = crocopy.DifferentialActionModelFreeFwdDynamics(state, actuation, costs)
+    rng = np.random.default_rng(1)
+    x, u = dam.state.rand(), rng.standard_normal(dam.nu)
+    outputs = []
+    for use_kernel in (True, False):
+        iam = crocopy.IntegratedActionModelEuler(dam, 2e-2)
+        iam.use_kernel = use_kernel
+        d = iam.createData()
+        iam.calc(d, x, u)
+        iam.calcDiff(d, x, u)
+        outputs.append([d.Fx, d.Fu, d.Lx, d.Lu, d.Lxx, d.Lxu, d.Luu])
+    for compiled, numpy_twin in zip(*outputs):
+        np.testing.assert_allclose(compiled, numpy_twin, rtol=1e-13, atol=1e-14)
+
+
 @pytest.mark.parametrize("integrator", sorted(INTEGRATORS))
 def test_integrated_quasi_static_gives_zero_acceleration(integrator):
     dam = crocopy.DifferentialActionModelLQR(2, 2)

@@ -1,0 +1,75 @@
+"""Compiled chain-rule step of :class:`~crocopy.integrator_euler.IntegratedActionModelEuler` (numba).
+
+With ``nv`` velocity rows, ``ndx = 2 nv`` and the differential model's ``(Fx, Fu)`` of shapes
+``(nv, ndx)``/``(nv, nu)``, one call writes (``e`` = 1 for a Euclidean state, else 0)::
+
+    Fx[nv:] = dt Fx_d + e [0 I],   Fx[:nv] = dt² Fx_d + dt [0 I] + e [I 0],
+    Fu[nv:] = dt Fu_d,           Fu[:nv] = dt² Fu_d,
+    (Lx, Lu, Lxx, Lxu, Luu) = dt (Lx_d, Lu_d, Lxx_d, Lxu_d, Luu_d)
+
+i.e. the Euler Jacobians of a Euclidean state, and for a Lie-group state the blocks that are then
+carried through ``Jintegrate`` (transport of the rows, plus ``∂(x ⊕ dx)/∂x``).  ``euler_chain_numpy`` is the numpy
+twin; both give the same numbers (tested).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+try:
+    from numba import njit
+except ImportError:  # pragma: no cover - exercised only without numba
+    njit = None
+
+available = njit is not None
+
+
+def euler_chain_numpy(dFx, dFu, dLx, dLu, dLxx, dLxu, dLuu, dt, euclidean, Fx, Fu, Lx, Lu, Lxx, Lxu, Luu) -> None:
+    """Numpy twin of :func:`euler_chain` (see the module docstring)."""
+    nv = dFx.shape[0]
+    ndx = Fx.shape[0]
+    np.multiply(dFx, dt, out=Fx[nv:])
+    np.multiply(Fx[nv:], dt, out=Fx[:nv])
+    diagonal = Fx.reshape(-1)
+    diagonal[nv : nv + nv * (ndx + 1) : ndx + 1] += dt
+    if euclidean:
+        diagonal[:: ndx + 1] += 1.0
+    np.multiply(dFu, dt, out=Fu[nv:])
+    np.multiply(Fu[nv:], dt, out=Fu[:nv])
+    np.multiply(dLx, dt, out=Lx)
+    np.multiply(dLu, dt, out=Lu)
+    np.multiply(dLxx, dt, out=Lxx)
+    np.multiply(dLxu, dt, out=Lxu)
+    np.multiply(dLuu, dt, out=Luu)
+
+
+def _euler_chain(dFx, dFu, dLx, dLu, dLxx, dLxu, dLuu, dt, euclidean, Fx, Fu, Lx, Lu, Lxx, Lxu, Luu):
+    nv, ndx = dFx.shape
+    nu = dFu.shape[1]
+    dt2 = dt * dt
+    for i in range(nv):
+        for j in range(ndx):
+            a = dFx[i, j]
+            Fx[nv + i, j] = dt * a
+            Fx[i, j] = dt2 * a
+        Fx[i, nv + i] += dt
+        if euclidean:
+            Fx[i, i] += 1.0
+            Fx[nv + i, nv + i] += 1.0
+        for j in range(nu):
+            b = dFu[i, j]
+            Fu[nv + i, j] = dt * b
+            Fu[i, j] = dt2 * b
+    for i in range(ndx):
+        Lx[i] = dt * dLx[i]
+        for j in range(ndx):
+            Lxx[i, j] = dt * dLxx[i, j]
+        for j in range(nu):
+            Lxu[i, j] = dt * dLxu[i, j]
+    for i in range(nu):
+        Lu[i] = dt * dLu[i]
+        for j in range(nu):
+            Luu[i, j] = dt * dLuu[i, j]
+
+
+euler_chain = njit(cache=True)(_euler_chain) if available else euler_chain_numpy
