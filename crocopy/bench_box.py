@@ -52,6 +52,9 @@ __all__ = [
     "meets_bar",
     "self_spread",
     "is_chaotic",
+    "Replay",
+    "replay_steps",
+    "verdict",
     "backward_overhead",
     "run_box_parity",
 ]
@@ -67,6 +70,12 @@ PERTURBATIONS = ((1e-14, 1), (1e-12, 1), (1e-12, 2), (1e-10, 1))
 
 CHAOS_EPS = 1e-12
 """Perturbation size under which a self-disagreement beyond :data:`RTOL` marks a run as chaotic."""
+
+REPLAY_MAX = 100
+"""Iterations of Crocoddyl's run replayed step by step for a row that misses the bar."""
+
+REPLAY_EPS = 1e-14
+"""Perturbation of Crocoddyl's own iterate when a replayed step misses (:attr:`Replay.self_err`)."""
 
 SOLVERS = {"boxddp": "SolverBoxDDP", "boxfddp": "SolverBoxFDDP"}
 
@@ -85,9 +94,12 @@ class Trace:
     log: list[tuple] = field(default_factory=list)
 
 
-def _callback(lib: ModuleType, log: list) -> object:
-    def record(solver) -> None:
-        log.append((float(solver.cost), float(solver.stop), float(solver.stepLength), int(solver.iter)))
+def _callback(lib: ModuleType, log: list | None = None, record: Callable[[object], None] | None = None) -> object:
+    """A callback of ``lib`` calling ``record(solver)`` (default: append the log row to ``log``)."""
+    if record is None:
+
+        def record(solver) -> None:
+            log.append((float(solver.cost), float(solver.stop), float(solver.stepLength), int(solver.iter)))
 
     if lib.__name__ != "crocoddyl":
         return record
@@ -242,6 +254,119 @@ def is_chaotic(spread: Spread, eps: float = CHAOS_EPS, rtol: float = RTOL) -> bo
     return lo != spread.base_iters or hi != spread.base_iters or spread.cost[eps] > rtol
 
 
+@dataclass
+class Replay:
+    """crocopy's single iterations from Crocoddyl's own iterates (see :func:`replay_steps`).
+
+    ``cost_err[i]`` is the relative difference between crocopy's cost after one iteration from
+    Crocoddyl's iterate entering iteration ``i`` and Crocoddyl's cost after iteration ``i``;
+    ``step_same[i]`` whether both took the same step length.
+    """
+
+    cost_err: list[float] = field(default_factory=list)
+    step_same: list[bool] = field(default_factory=list)
+    self_err: dict[int, float] = field(default_factory=dict)
+    """At iterations whose replay misses (cost error > :data:`RTOL` or other step): the relative
+    difference between Crocoddyl's single iterations from its iterate and from that iterate perturbed
+    by :data:`REPLAY_EPS` (both with ``k = 0``), i.e. Crocoddyl's own sensitivity at that step."""
+
+    @property
+    def worst(self) -> tuple[int | None, float]:
+        """``(iteration, error)`` of the largest cost error (``(None, 0.0)`` when empty)."""
+        if not self.cost_err:
+            return None, 0.0
+        i = int(np.argmax([e if np.isfinite(e) else np.inf for e in self.cost_err]))
+        return i, self.cost_err[i]
+
+    @property
+    def step_mismatches(self) -> list[int]:
+        """Iterations whose step lengths differ."""
+        return [i for i, same in enumerate(self.step_same) if not same]
+
+    def misses(self, rtol: float = RTOL) -> list[int]:
+        """Iterations whose replayed cost differs by more than ``rtol`` or whose step length differs."""
+        return [i for i, (e, same) in enumerate(zip(self.cost_err, self.step_same)) if not (e <= rtol and same)]
+
+    def matched_error(self, rtol: float = RTOL) -> float:
+        """Largest cost error over the replayed iterations that do not miss (0 when there are none)."""
+        missed = set(self.misses(rtol))
+        return max((e for i, e in enumerate(self.cost_err) if i not in missed), default=0.0)
+
+    def unexplained(self, rtol: float = RTOL) -> list[int]:
+        """Missed iterations at which Crocoddyl's own step is stable (``self_err <= rtol``): real differences."""
+        return [i for i in self.misses(rtol) if i in self.self_err and self.self_err[i] <= rtol]
+
+    def unchecked(self, rtol: float = RTOL) -> list[int]:
+        """Missed iterations whose own sensitivity was not measured (beyond ``max_self_checks``)."""
+        return [i for i in self.misses(rtol) if i not in self.self_err]
+
+
+def replay_steps(name: str, solver_name: str, upto: int, max_self_checks: int = 5) -> Replay:
+    """Replay Crocoddyl's iterations ``0..upto`` one at a time with crocopy (``compat_crocoddyl``).
+
+    Crocoddyl solves registry problem ``name`` for ``upto + 1`` iterations; its callbacks keep each
+    accepted iterate ``(xs, us)``, feed-forward ``k`` (the box QP's warm start), regularization and
+    feasibility flag.  From each of these states (the builder's guess, ``k = 0`` and ``reg_min``
+    for iteration 0) crocopy runs one iteration, ``solve(xs, us, 1, isFeasible, reg)``, and its
+    cost and step length are compared with Crocoddyl's next ones; at the first ``max_self_checks``
+    iterations that miss, :attr:`Replay.self_err` measures Crocoddyl's own sensitivity.  Small errors
+    all the way up to a divergence of the full runs mean crocopy applies the same iteration map, and
+    the divergence is the amplification of round-off by the problem.
+
+    Raises
+    ------
+    BenchDependencyError
+        If Crocoddyl cannot be used.
+    """
+    import crocopy
+
+    crocoddyl = require_crocoddyl()
+    if solver_name not in SOLVERS:
+        raise ValueError(f"solver_name: expected one of {sorted(SOLVERS)}, got {solver_name!r}")
+    problem, xs, us = build_problem(name, crocoddyl)
+    ref = getattr(crocoddyl, SOLVERS[solver_name])(problem)
+    states = [([x.copy() for x in xs], [u.copy() for u in us], None, None, False)]
+    results: list[tuple[float, float]] = []
+
+    def snapshot(solver) -> None:
+        results.append((float(solver.cost), float(solver.stepLength)))
+        states.append(
+            (
+                [np.array(x) for x in solver.xs],
+                [np.array(u) for u in solver.us],
+                [np.array(k) for k in solver.k],
+                float(solver.preg),
+                bool(solver.isFeasible),
+            )
+        )
+
+    ref.setCallbacks([_callback(crocoddyl, record=snapshot)])
+    ref.solve(xs, us, upto + 1, False)
+    mine_problem, _, _ = build_problem(name, crocopy)
+    mine = getattr(crocopy, SOLVERS[solver_name])(mine_problem)
+    mine.compat_crocoddyl = True
+    replay = Replay()
+    model_states = [m.state for m in problem.runningModels] + [problem.terminalModel.state]
+    for i, ((cost, step), (x_i, u_i, k_i, reg, feasible)) in enumerate(zip(results, states)):
+        for k, k_ref in zip(mine.k, k_i or [np.zeros_like(k) for k in mine.k]):
+            k[:] = k_ref
+        try:
+            mine.solve(x_i, u_i, 1, feasible, reg)
+            replay.cost_err.append(_rel(cost, float(mine.cost)))
+            replay.step_same.append(float(mine.stepLength) == step)
+        except (ArithmeticError, ValueError):
+            replay.cost_err.append(float("inf"))
+            replay.step_same.append(False)
+        if (replay.cost_err[-1] > RTOL or not replay.step_same[-1]) and len(replay.self_err) < max_self_checks:
+            own = []
+            for guess in ((x_i, u_i), perturb_guess(model_states, x_i, u_i, REPLAY_EPS, 1)):
+                fresh = getattr(crocoddyl, SOLVERS[solver_name])(build_problem(name, crocoddyl)[0])
+                fresh.solve(*guess, 1, feasible, reg if reg is not None else fresh.reg_min)
+                own.append(float(fresh.cost))
+            replay.self_err[i] = _rel(*own)
+    return replay
+
+
 def backward_overhead(name: str = "jump", warm_iters: int = 60, repeats: int = 15) -> dict[str, float]:
     """Median ms of Box-FDDP's and FDDP's backward passes on the same feasible iterate of ``name``.
 
@@ -286,8 +411,23 @@ def _spread_cells(spread: Spread | None, epss: Sequence[float]) -> str:
     return "".join(f" {c} |" for c in cells)
 
 
+def _replay_cell(replay: Replay | None) -> str:
+    if replay is None:
+        return ""
+    missed = replay.misses()
+    shown = ",".join(map(str, missed[:5])) + ("..." if len(missed) > 5 else "")
+    return f"{len(replay.cost_err)} its <= {replay.matched_error():.0e}, missed {shown or '-'}"
+
+
 def _row(
-    problem: str, solver: str, label: str, ref: Trace, t: Trace, spread: Spread | None, epss: Sequence[float]
+    problem: str,
+    solver: str,
+    label: str,
+    ref: Trace,
+    t: Trace,
+    spread: Spread | None,
+    epss: Sequence[float],
+    replay: Replay | None = None,
 ) -> str:
     if t is ref:
         cells = f"{t.iters} | {t.cost:.10g} | | | |"
@@ -298,25 +438,53 @@ def _row(
             f"{'met' if meets_bar(ref, t) else 'not met'} |"
         )
     chaos = "" if spread is None else ("chaotic" if is_chaotic(spread, CHAOS_EPS) else "stable")
-    return f"| {problem} | {solver} | {label} | {cells}{_spread_cells(spread, epss)} {chaos} |"
+    return f"| {problem} | {solver} | {label} | {cells}{_spread_cells(spread, epss)} {chaos} | {_replay_cell(replay)} |"
 
 
-def _verdict(name: str, solver: str, ref: Trace, compat: Trace, croc: Spread | None, eps: float) -> str:
-    head = f"- {name} {solver}: "
+def verdict(ref: Trace, compat: Trace, croc: Spread | None, replay: Replay | None, eps: float = CHAOS_EPS) -> str:
+    """One-line reading of a row: bar met, ill-conditioned (chaotic), or a real difference.
+
+    ``croc`` is Crocoddyl's self-spread (:func:`self_spread`), ``replay`` the one-step replay
+    (:func:`replay_steps`); either may be ``None`` (not measured).  A row missing the bar is *chaotic*
+    when Crocoddyl disagrees with itself under a perturbation ``eps`` (:func:`is_chaotic`); a replayed
+    iteration that misses while Crocoddyl's own step there is stable is a *real difference*.
+    """
     div = first_divergence(ref, compat)
     if meets_bar(ref, compat):
-        return head + "bar met"
-    if croc is None:
-        return head + f"bar not met (first diverging iteration {div}); self-sensitivity not measured"
-    lo, hi = croc.iters[eps]
-    own = (
-        f"Crocoddyl's own final cost moves by {croc.cost[eps]:.1e} (iterations {lo}-{hi}, unperturbed "
-        f"{croc.base_iters}) under a {eps:g} perturbation, and leaves its unperturbed run at iteration "
-        f"{croc.divergence[eps]}; crocopy compat leaves it at iteration {div}"
-    )
-    if is_chaotic(croc, eps):
-        return head + "bar not met; ill-conditioned (chaotic): " + own
-    return head + "bar not met while Crocoddyl is stable: a real difference? " + own
+        return "bar met"
+    parts = [f"bar not met, first diverging iteration {div}"]
+    if croc is not None:
+        lo, hi = croc.iters[eps]
+        parts.append(
+            f"under a {eps:g} perturbation Crocoddyl's own final cost moves by {croc.cost[eps]:.1e} "
+            f"(iterations {lo}-{hi}, unperturbed {croc.base_iters}) and its run leaves the unperturbed one at "
+            f"iteration {croc.divergence[eps]}"
+        )
+    if replay is not None:
+        missed = replay.misses()
+        text = (
+            f"crocopy's single iterations from Crocoddyl's iterates 0-{len(replay.cost_err) - 1} match its "
+            f"costs within {replay.matched_error():.0e}"
+        )
+        if missed:
+            own = ", ".join(f"{i}: {replay.self_err[i]:.0e}" for i in missed if i in replay.self_err)
+            text += (
+                f" except at {len(missed)} iterations (first {missed[0]}), where Crocoddyl's own step moves "
+                f"by [{own}] when its iterate is perturbed by {REPLAY_EPS:g}"
+            )
+        parts.append(text)
+    real = replay.unexplained() if replay is not None else []
+    if real:
+        head = f"REAL DIFFERENCE at iterations {real} (crocopy misses a step on which Crocoddyl is stable)"
+    elif croc is not None and is_chaotic(croc, eps):
+        head = "ill-conditioned (chaotic)" + (
+            "; no algorithmic difference found" if replay is not None and not replay.unchecked() else ""
+        )
+    elif croc is None:
+        head = "not classified (self-sensitivity not measured)"
+    else:
+        head = "unexplained: Crocoddyl is stable under the perturbation"
+    return head + ": " + "; ".join(parts)
 
 
 def run_box_parity(
@@ -330,8 +498,9 @@ def run_box_parity(
     """Markdown report of the parity runs, their self-sensitivity and the backward-pass overhead.
 
     With ``sensitivity``, Crocoddyl and crocopy (compat mode) are rerun from each of
-    :data:`PERTURBATIONS`' perturbed guesses; their rows get the spread columns and the report ends
-    with a verdict per problem and solver.
+    :data:`PERTURBATIONS`' perturbed guesses (their rows get the spread columns), a row missing the
+    bar gets the one-step replay of up to :data:`REPLAY_MAX` of Crocoddyl's iterations
+    (:func:`replay_steps`), and the report ends with a :func:`verdict` per problem and solver.
 
     Raises
     ------
@@ -360,8 +529,9 @@ def run_box_parity(
         f"with itself beyond {RTOL:g} under {CHAOS_EPS:g}",
         "",
         "| problem | solver | library | iters | final cost | rel. diff | first diverging iter | bar |"
-        f"{pert_cols} first self-div. iter @{' / '.join(f'{e:g}' for e in epss)} | conditioning |",
-        "|---" * (9 + 2 * len(epss) + 1) + "|",
+        f"{pert_cols} first self-div. iter @{' / '.join(f'{e:g}' for e in epss)} | conditioning | "
+        "one-step replay (its <= matched err, missed its) |",
+        "|---" * (9 + 2 * len(epss) + 2) + "|",
     ]
     verdicts = []
     for name in names:
@@ -370,6 +540,9 @@ def run_box_parity(
             default = solve_trace(crocopy, name, solver, maxiter)
             compat = solve_trace(crocopy, name, solver, maxiter, True)
             spreads: dict[str, Spread | None] = {"croc": None, "compat": None}
+            replay = None
+            if sensitivity and not meets_bar(ref, compat):
+                replay = replay_steps(name, solver, min(ref.iters, REPLAY_MAX) - 1)
             if sensitivity:
                 for key, lib, base in (("croc", crocoddyl, ref), ("compat", crocopy, compat)):
                     runs = [
@@ -380,9 +553,9 @@ def run_box_parity(
             lines += [
                 _row(name, solver, "Crocoddyl", ref, ref, spreads["croc"], epss),
                 _row(name, solver, "crocopy", ref, default, None, epss),
-                _row(name, solver, "crocopy compat", ref, compat, spreads["compat"], epss),
+                _row(name, solver, "crocopy compat", ref, compat, spreads["compat"], epss, replay),
             ]
-            verdicts.append(_verdict(name, solver, ref, compat, spreads["croc"], CHAOS_EPS))
+            verdicts.append(f"- {name} {solver}: {verdict(ref, compat, spreads['croc'], replay)}")
             if progress:
                 progress("\n".join(lines[-3:]))
     lines += ["", "Verdicts (crocopy compat against Crocoddyl):", *verdicts]

@@ -7,12 +7,14 @@ import crocopy
 from crocopy.bench_box import (
     CHAOS_EPS,
     PERTURBATIONS,
+    Replay,
     Trace,
     first_divergence,
     is_chaotic,
     perturb_guess,
     self_spread,
     solve_trace,
+    verdict,
 )
 
 
@@ -86,3 +88,27 @@ def test_perturbed_solve_of_a_stable_row_stays_on_the_unperturbed_iterates():
     assert [row[3] for row in pert.log] == list(range(4))
     assert first_divergence(base, pert) is None
     assert 0.0 < abs(pert.cost - base.cost) < 1e-9 * abs(base.cost)
+
+
+def test_replay_classifies_missed_steps():
+    replay = Replay([1e-12, 0.5, 3e-11, np.inf, 2e-7], [True, False, True, False, False], {1: 0.9, 3: 1e-9})
+    assert replay.misses() == [1, 3, 4] and replay.step_mismatches == [1, 3, 4]
+    assert replay.matched_error() == 3e-11 and replay.worst == (3, np.inf)
+    assert replay.unexplained() == [3] and replay.unchecked() == [4]
+    assert Replay().worst == (None, 0.0) and Replay().matched_error() == 0.0
+
+
+def test_verdict_separates_met_chaotic_and_real_differences():
+    ref = trace([10.0, 5.0, 2.0, 1.0])
+    off = trace([10.0, 5.0, 2.1, 1.3])
+    chaotic = self_spread(ref, [(CHAOS_EPS, trace([10.0, 5.0, 2.2, 1.5]))])
+    stable = self_spread(ref, [(CHAOS_EPS, trace([10.0, 5.0, 2.0, 1.0]))])
+    explained = Replay([1e-12, 1e-12, 0.05, 1e-11], [True, True, True, True], {2: 0.1})
+    real = Replay([1e-12, 1e-12, 0.05, 1e-11], [True, True, True, True], {2: 1e-13})
+    assert verdict(ref, trace([10.0, 5.0, 2.0, 1.0 + 1e-9]), chaotic, real) == "bar met"
+    text = verdict(ref, off, chaotic, explained)
+    assert text.startswith("ill-conditioned (chaotic); no algorithmic difference found") and "iteration 2" in text
+    assert verdict(ref, off, chaotic, real).startswith("REAL DIFFERENCE at iterations [2]")
+    assert verdict(ref, off, stable, explained).startswith("unexplained")
+    assert verdict(ref, off, chaotic, None).startswith("ill-conditioned (chaotic):")
+    assert verdict(ref, off, None, None).startswith("not classified")
