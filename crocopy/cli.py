@@ -5,7 +5,9 @@
 * ``crocopy bench --vs crocoddyl [--problems ...] [--repeats N] [--out BENCHMARKS.md]``: crocopy and
   Crocoddyl side by side on the bundled problems (:mod:`crocopy.bench_problems`)
 * ``crocopy bench --box-parity [--problems ...] [--maxiter N]``: Box-DDP/Box-FDDP iterations and
-  final costs next to Crocoddyl's, and the box-QP backward-pass overhead (:mod:`crocopy.bench_box`)
+  final costs next to Crocoddyl's, each library's self-sensitivity to a perturbed guess, a one-step
+  replay of Crocoddyl's iterations and a verdict per row, and the box-QP backward-pass overhead
+  (:mod:`crocopy.bench_box`)
 * ``crocopy bench --models [--problems ...]``: calc + calcDiff time and per-model-kind differences of
   every node against Crocoddyl (:mod:`crocopy.bench_models`)
 * ``crocopy bench --batch`` / ``--scaling``: :func:`crocopy.solve_many` speed-up on the quadrotor
