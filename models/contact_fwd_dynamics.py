@@ -252,8 +252,6 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         adata, cdata = mb.actuation, mb.contacts
         cms, cds = data.rigid
         pin.computeConstraintDynamicsDerivatives(self.pinocchio, pd, cms, cds, data.prox)
-        nq = self.state.nq
-        pin.computeForwardKinematicsDerivatives(self.pinocchio, pd, x[:nq], x[nq:], data.xout)
         self.actuation.calcDiff(adata, x, u)
         self._chain_rule(adata, pd.ddq_dq, pd.ddq_dv, pd.ddq_dtau, data.Fx, data.Fu)
         if self.enable_force:

@@ -411,3 +411,29 @@ def test_joint_forces_are_brought_up_to_date_when_read(typ):
     dam.calc(d, x2, u)
     assert cdata.fext is fext
     assert not np.allclose(cdata.fext[cdata.contacts["LF_FOOT"].joint].vector, reference["LF_FOOT"].fext.vector)
+
+
+@pytest.mark.parametrize("case", [CASES[0], CASES[4]], ids=[IDS[0], IDS[4]])
+def test_rigid_calcdiff_leaves_the_kinematic_derivatives_of_the_motion(case):
+    """After the constraint-dynamics ``calcDiff``, ``data.pinocchio`` holds what residuals read (joint Jacobians
+    and their derivatives, velocities, accelerations): those of ``computeForwardKinematicsDerivatives`` at
+    ``(q, v, xout)``, so the DAM does not call it again."""
+    dam = make_dam(*case)
+    x, u = random_point(dam)
+    data = dam.createData()
+    dam.calc(data, x, u)
+    dam.calcDiff(data, x, u)
+    assert data.rigid is not None
+    model, pd = dam.pinocchio, data.pinocchio
+    fresh = model.createData()
+    pin.computeForwardKinematicsDerivatives(model, fresh, x[: model.nq], x[model.nq :], data.xout)
+    for name in ("J", "dJ"):
+        np.testing.assert_allclose(getattr(pd, name), getattr(fresh, name), atol=1e-10, err_msg=name)
+    for name in ("ov", "oa", "v", "a"):
+        for mine, ref in zip(getattr(pd, name), getattr(fresh, name)):
+            np.testing.assert_allclose(mine.vector, ref.vector, atol=1e-10, err_msg=name)
+    frame = model.getFrameId(FEET[case[0]][0])
+    for ref_frame in (LOCAL, LWA, pin.WORLD):
+        for derivatives in (pin.getFrameVelocityDerivatives, pin.getFrameAccelerationDerivatives):
+            for mine, ref in zip(derivatives(model, pd, frame, ref_frame), derivatives(model, fresh, frame, ref_frame)):
+                np.testing.assert_allclose(mine, ref, atol=1e-10, err_msg=derivatives.__name__)
