@@ -83,6 +83,14 @@ class StateAbstract:
         """Transport ``Jin`` (rows in the tangent space at ``x ⊕ dx``) to the tangent space at ``x``, in place."""
         raise NotImplementedError
 
+    def _diff_into(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:
+        """``out[:] = x1 ⊖ x0`` (states override it to skip the temporary)."""
+        out[:] = self.diff(x0, x1)
+
+    def _Jdiff_second_into(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:
+        """``out[:] = ∂(x1 ⊖ x0)/∂x1`` (states override it to skip the temporaries)."""
+        out[:] = self.Jdiff(x0, x1, Jcomponent.second)[0]
+
     def _integrate_chain_rule(self, x: np.ndarray, dx: np.ndarray, Fx: np.ndarray, Fu: np.ndarray) -> None:
         """Chain rule through ``x ⊕ dx``, in place: ``Fx ← ∂(x ⊕ dx)/∂x + J_dx Fx`` and ``Fu ← J_dx Fu``.
 

@@ -96,6 +96,8 @@ class StateMultibody(StateAbstract):
         self._Jpos[nv:, nv:] = np.eye(nv)
         self._Jneg = -self._Jpos
         self._velocity_diagonal = slice(nv * (ndx + 1), None, ndx + 1)
+        cls = type(self)
+        self._overrides_diff = cls.diff is not StateMultibody.diff or cls.Jdiff is not StateMultibody.Jdiff
 
     def zero(self) -> np.ndarray:
         """Neutral configuration and zero velocity."""
@@ -158,6 +160,22 @@ class StateMultibody(StateAbstract):
             return
         rows = Jin[:nv]
         rows[...] = np.reshape(pin.dIntegrateTransport(self.pinocchio, x[: self.nq], dx[:nv], rows, arg), rows.shape)
+
+    def _diff_into(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:
+        if self._overrides_diff:
+            super()._diff_into(x0, x1, out)
+            return
+        nq = self.nq
+        out[: self.nv] = pin.difference(self.pinocchio, x0[:nq], x1[:nq])
+        np.subtract(x1[nq:], x0[nq:], out=out[self.nv :])
+
+    def _Jdiff_second_into(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:
+        if self._overrides_diff:
+            super()._Jdiff_second_into(x0, x1, out)
+            return
+        nq, nv = self.nq, self.nv
+        out[:] = self._Jpos
+        out[:nv, :nv] = pin.dDifference(self.pinocchio, x0[:nq], x1[:nq], pin.ARG1)
 
     def _integrate_chain_rule(self, x: np.ndarray, dx: np.ndarray, Fx: np.ndarray, Fu: np.ndarray) -> None:
         """Chain rule through ``x ⊕ dx`` (see :meth:`StateAbstract._integrate_chain_rule`): Pinocchio's

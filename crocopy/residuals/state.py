@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..data_collector import DataCollectorAbstract
-from ..enums import Jcomponent
 from ..residual_base import ResidualDataAbstract, ResidualModelAbstract
 from ..state import StateAbstract
 from ..validation import as_vector
@@ -38,10 +37,10 @@ class ResidualModelState(ResidualModelAbstract):
         self._xref = as_vector(value, self.state.nx, "xref")
 
     def calc(self, data: ResidualDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
-        data.r[:] = self.state.diff(self._xref, x)
+        self.state._diff_into(self._xref, x, data.r)
 
     def calcDiff(self, data: ResidualDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
-        data.Rx[:] = self.state.Jdiff(self._xref, x, Jcomponent.second)[0]
+        self.state._Jdiff_second_into(self._xref, x, data.Rx)
 
     def createData(self, data: DataCollectorAbstract | None = None) -> ResidualDataAbstract:
         return ResidualDataAbstract(self, data)
