@@ -8,8 +8,8 @@ is ``ctorque = 0.016`` m times the thrust (the paper gives no value; a typical r
 propellers).  Dynamics: free forward dynamics, explicit Euler, ``dt = 0.03`` s.
 
 A task is a list of way-points ``(node, SE3 placement, base velocity or None)``; the last one sits
-on the terminal node.  Costs (weights multiply ``0.5 ||r||^2``; running costs are scaled by ``dt``
-through the integrator, as in every crocopy/Crocoddyl integrated model):
+on the terminal node.  Costs (weights in :data:`WEIGHTS`, each multiplying ``0.5 ||r||^2``; running
+costs are scaled by ``dt`` through the integrator, as in every crocopy/Crocoddyl integrated model):
 
 * running ``state``: base orientation and velocities towards hover at rest, position free,
   weight ``1e-5``;  ``control``: ``||u||^2``, weight ``1e-5``;  ``goal``: placement of the base
@@ -21,9 +21,19 @@ Tasks (none of their geometry is given in the paper; chosen here and documented)
 
 * ``goal``: from ``x0`` (default ``(-0.3, 0, 0)`` at rest, level) to ``(3, 0, 1)`` level and at rest,
   ``T = 50`` nodes (1.5 s) — the Fig. 7 task (start ``(-0.3 ± 0.6, 0, 0)``, target ``(3, 0, 1)``);
-* ``loop``: a vertical loop in the x-z plane of radius 1 m centred at ``(0, 0, 2)`` — way-points
-  at pitch ``-π/2`` (front), ``π`` (top, upside down), ``π/2`` (back) and back to the start, level,
-  ``T = 100`` nodes;
+* ``loop``: a closed vertical loop in the x-z plane, radius 1 m, whose lowest point is the start
+  (centre ``x0 + (0, 0, 1)``): way-points at ``T/4`` (front, ``+x``, pitch ``-π/2``), ``T/2`` (top,
+  pitch ``π``, upside down) and ``3T/4`` (back, pitch ``π/2``), each attitude pointing the thrust
+  at the centre, then back at ``x0``, level and at rest, at ``T = 100`` nodes (3 s).  Design: a loop
+  is a closed manoeuvre, so it starts and ends at the same state (the lowest point used to be
+  ``(0, 0, 1)``, 1 m above and 0.3 m beside the default start, which made the task a climb plus a
+  loop).  Only targets consistent with a flown loop are given: thrust towards the centre (vertical
+  acceleration ``-g`` at the sides, speed at least ``sqrt(g r)`` at the top, left free).  Tangential
+  way-point velocities at a uniform speed (2.1 m/s over 3 s) are too slow for the top, and dense
+  way-points sampled from a constant-speed loop (attitude from the required acceleration) made
+  the loop-skipping trajectory both solvers' local minimum.  Attitude costs (SE(3) log) do not
+  tell windings apart: a solution may reach the attitudes by rotating back and forth instead of
+  once around (Box-FDDP's does);
 * ``narrow``: a passage at ``(1.5, 0, 1)`` crossed rolled by ``π/2`` (the slot is narrower than the
   rotor span) with forward velocity 2 m/s, then the goal ``(3, 0, 1)``, ``T = 60`` nodes.
 
@@ -42,6 +52,15 @@ THRUST_RANGE = (0.1, 10.3)
 CTORQUE = 0.016
 DT = 0.03
 BASE_FRAME = "iris__base_link"
+WEIGHTS = {
+    "state": 1e-5,
+    "control": 1e-5,
+    "goal": 1e-2,
+    "waypoint": 1e2,
+    "terminal_waypoint": 1e3,
+    "waypoint_velocity": 1e1,
+}
+"""Cost weights (see the module docstring); each multiplies ``0.5 ||r||^2``."""
 
 
 def _thrusters(lib: ModuleType, model: pin.Model) -> list:
@@ -59,15 +78,20 @@ def _rot_y(angle: float) -> np.ndarray:
     return pin.utils.rotate("y", angle)
 
 
-def task_waypoints(task: str, T: int | None = None) -> tuple[int, list]:
-    """Horizon and way-points ``(node, SE3, velocity or None)`` of a task (see the module docstring)."""
+def task_waypoints(
+    task: str, T: int | None = None, start: tuple[float, float, float] | np.ndarray = (-0.3, 0.0, 0.0)
+) -> tuple[int, list]:
+    """Horizon and way-points ``(node, SE3, velocity or None)`` of a task (see the module docstring).
+
+    ``start`` is the initial base position; only the loop depends on it (its lowest point).
+    """
     level = np.eye(3)
     if task == "goal":
         T = 50 if T is None else T
         return T, [(T, pin.SE3(level, np.array([3.0, 0.0, 1.0])), np.zeros(6))]
     if task == "loop":
         T = 100 if T is None else T
-        c = np.array([0.0, 0.0, 2.0])
+        c = np.asarray(start, dtype=float) + [0.0, 0.0, 1.0]
         pts = [
             (T // 4, pin.SE3(_rot_y(-np.pi / 2), c + [1.0, 0.0, 0.0]), None),
             (T // 2, pin.SE3(_rot_y(np.pi), c + [0.0, 0.0, 1.0]), None),
@@ -78,8 +102,10 @@ def task_waypoints(task: str, T: int | None = None) -> tuple[int, list]:
     if task == "narrow":
         T = 60 if T is None else T
         passage = pin.SE3(pin.utils.rotate("x", np.pi / 2), np.array([1.5, 0.0, 1.0]))
-        return T, [(T // 2, passage, np.array([2.0, 0.0, 0.0, 0.0, 0.0, 0.0])),
-                   (T, pin.SE3(level, np.array([3.0, 0.0, 1.0])), np.zeros(6))]
+        return T, [
+            (T // 2, passage, np.array([2.0, 0.0, 0.0, 0.0, 0.0, 0.0])),
+            (T, pin.SE3(level, np.array([3.0, 0.0, 1.0])), np.zeros(6)),
+        ]
     raise ValueError(f"task must be 'goal', 'loop' or 'narrow', got {task!r}")
 
 
@@ -114,12 +140,12 @@ def build_quadrotor(
     state = lib.StateMultibody(model)
     actuation = lib.ActuationModelFloatingBaseThrusters(state, _thrusters(lib, model))
     nu = actuation.nu
-    T, waypoints = task_waypoints(task, T)
+    x0 = np.concatenate([np.asarray(x0_position, dtype=float).ravel(), [0.0, 0.0, 0.0, 1.0], np.zeros(6)])
+    if np.shape(x0_position) != (3,):
+        raise ValueError(f"x0_position must have shape (3,), got {np.shape(x0_position)}")
+    T, waypoints = task_waypoints(task, T, x0[:3])
     if not all(0 < t <= T for t, _, _ in waypoints):
         raise ValueError(f"way-point nodes must lie in (0, T = {T}]")
-    x0 = np.concatenate([np.asarray(x0_position, dtype=float), [0.0, 0.0, 0.0, 1.0], np.zeros(6)])
-    if x0.shape != (13,):
-        raise ValueError(f"x0_position must have shape (3,), got {np.shape(x0_position)}")
     fid = model.getFrameId(BASE_FRAME)
     x_rest = x0.copy()
     state_act = lib.ActivationModelWeightedQuad(np.array([0.0] * 3 + [1.0] * 3 + [1.0] * 6))
@@ -130,19 +156,30 @@ def build_quadrotor(
         terminal = t == T
         costs = lib.CostModelSum(state, nu)
         if not terminal:
-            costs.addCost("state", lib.CostModelResidual(state, state_act, lib.ResidualModelState(state, x_rest, nu)),
-                          1e-5)
-            costs.addCost("control", lib.CostModelResidual(state, lib.ResidualModelControl(state, nu)), 1e-5)
+            costs.addCost(
+                "state",
+                lib.CostModelResidual(state, state_act, lib.ResidualModelState(state, x_rest, nu)),
+                WEIGHTS["state"],
+            )
+            costs.addCost(
+                "control", lib.CostModelResidual(state, lib.ResidualModelControl(state, nu)), WEIGHTS["control"]
+            )
             target = next(M for tw, M, _ in waypoints if tw > t)
-            costs.addCost("goal", lib.CostModelResidual(state, lib.ResidualModelFramePlacement(state, fid, target, nu)),
-                          1e-2)
+            costs.addCost(
+                "goal",
+                lib.CostModelResidual(state, lib.ResidualModelFramePlacement(state, fid, target, nu)),
+                WEIGHTS["goal"],
+            )
         if t in by_node:
             M, v = by_node[t]
-            costs.addCost("waypoint", lib.CostModelResidual(state, lib.ResidualModelFramePlacement(state, fid, M, nu)),
-                          1e3 if terminal else 1e2)
+            costs.addCost(
+                "waypoint",
+                lib.CostModelResidual(state, lib.ResidualModelFramePlacement(state, fid, M, nu)),
+                WEIGHTS["terminal_waypoint" if terminal else "waypoint"],
+            )
             if v is not None:
                 vel = lib.ResidualModelFrameVelocity(state, fid, pin.Motion(np.asarray(v, dtype=float)), pin.LOCAL, nu)
-                costs.addCost("waypoint_velocity", lib.CostModelResidual(state, vel), 1e1)
+                costs.addCost("waypoint_velocity", lib.CostModelResidual(state, vel), WEIGHTS["waypoint_velocity"])
         dam = lib.DifferentialActionModelFreeFwdDynamics(state, actuation, costs)
         iam = lib.IntegratedActionModelEuler(dam, 0.0 if terminal else dt)
         for m in (dam, iam):
