@@ -8,8 +8,13 @@ With ``nv`` velocity rows, ``ndx = 2 nv`` and the differential model's ``(Fx, Fu
     (Lx, Lu, Lxx, Lxu, Luu) = dt (Lx_d, Lu_d, Lxx_d, Lxu_d, Luu_d)
 
 i.e. the Euler Jacobians of a Euclidean state, and for a Lie-group state the blocks that are then
-carried through ``Jintegrate`` (transport of the rows, plus ``∂(x ⊕ dx)/∂x``).  ``euler_chain_numpy`` is the numpy
-twin; both give the same numbers (tested).
+carried through ``Jintegrate`` (transport of the rows, plus ``∂(x ⊕ dx)/∂x``).  For a multibody state,
+``add_integrate_jacobian(rows, Jq, Fx, Fu)`` finishes that step from the transported configuration rows
+``rows = [Fx[:nv] Fu[:nv]]`` (one Pinocchio call) and ``Jq = ∂(q ⊕ dq)/∂q``::
+
+    Fx[:nv] = rows[:, :ndx] + [Jq 0],   Fx[nv:, nv:] += I,   Fu[:nv] = rows[:, ndx:]
+
+Each kernel has a numpy twin (``*_numpy``) giving the same numbers (tested).
 """
 
 from __future__ import annotations
@@ -73,3 +78,28 @@ def _euler_chain(dFx, dFu, dLx, dLu, dLxx, dLxu, dLuu, dt, euclidean, Fx, Fu, Lx
 
 
 euler_chain = njit(cache=True)(_euler_chain) if available else euler_chain_numpy
+
+
+def add_integrate_jacobian_numpy(rows, Jq, Fx, Fu) -> None:
+    """Numpy twin of :func:`add_integrate_jacobian`."""
+    nv, ndx = Jq.shape[0], Fx.shape[1]
+    Fx[:nv] = rows[:, :ndx]
+    Fx[:nv, :nv] += Jq
+    Fx.reshape(-1)[nv * (ndx + 1) :: ndx + 1] += 1.0
+    Fu[:nv] = rows[:, ndx:]
+
+
+def _add_integrate_jacobian(rows, Jq, Fx, Fu):
+    nv = Jq.shape[0]
+    ndx, nu = Fx.shape[1], Fu.shape[1]
+    for i in range(nv):
+        for j in range(ndx):
+            Fx[i, j] = rows[i, j]
+        for j in range(nv):
+            Fx[i, j] += Jq[i, j]
+        for j in range(nu):
+            Fu[i, j] = rows[i, ndx + j]
+        Fx[nv + i, nv + i] += 1.0
+
+
+add_integrate_jacobian = njit(cache=True)(_add_integrate_jacobian) if available else add_integrate_jacobian_numpy

@@ -18,6 +18,7 @@ import numpy as np
 import pinocchio as pin
 
 from crocopy.enums import Jcomponent
+from crocopy.integrator_kernel import add_integrate_jacobian
 from crocopy.state import StateAbstract
 
 _HUGE = 1e300  # URDF "no limit" values (numeric_limits::max) are mapped to inf
@@ -95,7 +96,6 @@ class StateMultibody(StateAbstract):
         self._Jpos = np.zeros((ndx, ndx))  # templates with ±I in the velocity block
         self._Jpos[nv:, nv:] = np.eye(nv)
         self._Jneg = -self._Jpos
-        self._velocity_diagonal = slice(nv * (ndx + 1), None, ndx + 1)
         cls = type(self)
         self._overrides_diff = cls.diff is not StateMultibody.diff or cls.Jdiff is not StateMultibody.Jdiff
 
@@ -179,15 +179,12 @@ class StateMultibody(StateAbstract):
 
     def _integrate_chain_rule(self, x: np.ndarray, dx: np.ndarray, Fx: np.ndarray, Fu: np.ndarray) -> None:
         """Chain rule through ``x ⊕ dx`` (see :meth:`StateAbstract._integrate_chain_rule`): Pinocchio's
-        ``dIntegrateTransport`` on the configuration rows, ``dIntegrate`` on the configuration block and the
-        identity on the velocity block."""
+        ``dIntegrateTransport`` on the configuration rows of ``[Fx Fu]`` (one call), ``dIntegrate`` on the
+        configuration block and the identity on the velocity block."""
         model, nv = self.pinocchio, self.nv
         q, dq = x[: self.nq], dx[:nv]
-        Fx[:nv] = pin.dIntegrateTransport(model, q, dq, Fx[:nv], pin.ARG1)
-        if Fu.shape[1]:
-            Fu[:nv] = np.reshape(pin.dIntegrateTransport(model, q, dq, Fu[:nv], pin.ARG1), (nv, Fu.shape[1]))
-        Fx[:nv, :nv] += pin.dIntegrate(model, q, dq, pin.ARG0)
-        Fx.reshape(-1)[self._velocity_diagonal] += 1.0
+        rows = pin.dIntegrateTransport(model, q, dq, np.hstack((Fx[:nv], Fu[:nv])), pin.ARG1)
+        add_integrate_jacobian(np.reshape(rows, (nv, -1)), pin.dIntegrate(model, q, dq, pin.ARG0), Fx, Fu)
 
     def __repr__(self) -> str:
         return f"StateMultibody(nq={self.nq}, nv={self.nv})"

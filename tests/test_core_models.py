@@ -172,6 +172,17 @@ def test_compiled_euler_chain_rule_equals_its_numpy_twin(robot):
         outputs.append([d.Fx, d.Fu, d.Lx, d.Lu, d.Lxx, d.Lxu, d.Luu])
     for compiled, numpy_twin in zip(*outputs):
         np.testing.assert_allclose(compiled, numpy_twin, rtol=1e-13, atol=1e-14)
+    nv, ndx, nu = 4, 8, 3
+    rows, Jq = np.asfortranarray(rng.standard_normal((nv, ndx + nu))), rng.standard_normal((nv, nv))
+    F0 = rng.standard_normal((ndx, ndx)), rng.standard_normal((ndx, nu))
+    results = []
+    for add in (integrator_kernel.add_integrate_jacobian, integrator_kernel.add_integrate_jacobian_numpy):
+        Fx, Fu = F0[0].copy(), F0[1].copy()
+        add(rows, Jq, Fx, Fu)
+        results.append((Fx, Fu))
+    np.testing.assert_array_equal(results[0][0], results[1][0])
+    np.testing.assert_array_equal(results[0][1], results[1][1])
+    assert not np.array_equal(results[0][0], F0[0])
 
 
 @pytest.mark.parametrize("integrator", sorted(INTEGRATORS))
