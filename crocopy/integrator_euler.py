@@ -45,13 +45,13 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
             self._terminal_calc(data, ddata, x)
             return
         self.differential.calc(ddata, x, u)
-        nv, dt = self.state.nv, self._dt
-        a = ddata.xout
+        dt = self._dt
         dx = data.dx
-        np.multiply(a, dt, out=dx[nv:])
-        np.add(x[-nv:], dx[nv:], out=dx[:nv])
-        dx[:nv] *= dt
-        data.xnext[:] = self.state.integrate(x, dx)
+        if self.use_kernel:
+            integrator_kernel.euler_step(ddata.xout, x, dt, dx)
+        else:
+            integrator_kernel.euler_step_numpy(ddata.xout, x, dt, dx)
+        self.state._integrate_into(x, dx, data.xnext)
         data.cost = dt * ddata.cost
         if self.withCostResidual:
             data.r[:] = ddata.r

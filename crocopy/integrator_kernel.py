@@ -1,5 +1,7 @@
 """Compiled chain-rule step of :class:`~crocopy.integrator_euler.IntegratedActionModelEuler` (numba).
 
+``euler_step(a, x, dt, dx)`` writes the symplectic Euler step ``dx = ((v + a dt) dt, a dt)``.
+
 With ``nv`` velocity rows, ``ndx = 2 nv`` and the differential model's ``(Fx, Fu)`` of shapes
 ``(nv, ndx)``/``(nv, nu)``, one call writes (``e`` = 1 for a Euclidean state, else 0)::
 
@@ -27,6 +29,22 @@ except ImportError:  # pragma: no cover - exercised only without numba
     njit = None
 
 available = njit is not None
+
+
+def euler_step_numpy(a, x, dt, dx) -> None:
+    """Numpy twin of :func:`euler_step`."""
+    nv = a.shape[0]
+    np.multiply(a, dt, out=dx[nv:])
+    np.add(x[-nv:], dx[nv:], out=dx[:nv])
+    dx[:nv] *= dt
+
+
+def _euler_step(a, x, dt, dx):
+    nv, nx = a.shape[0], x.shape[0]
+    for i in range(nv):
+        dv = a[i] * dt
+        dx[nv + i] = dv
+        dx[i] = (x[nx - nv + i] + dv) * dt
 
 
 def euler_chain_numpy(dFx, dFu, dLx, dLu, dLxx, dLxu, dLuu, dt, euclidean, Fx, Fu, Lx, Lu, Lxx, Lxu, Luu) -> None:
@@ -77,6 +95,7 @@ def _euler_chain(dFx, dFu, dLx, dLu, dLxx, dLxu, dLuu, dt, euclidean, Fx, Fu, Lx
             Luu[i, j] = dt * dLuu[i, j]
 
 
+euler_step = njit(cache=True)(_euler_step) if available else euler_step_numpy
 euler_chain = njit(cache=True)(_euler_chain) if available else euler_chain_numpy
 
 

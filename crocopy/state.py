@@ -83,6 +83,10 @@ class StateAbstract:
         """Transport ``Jin`` (rows in the tangent space at ``x ⊕ dx``) to the tangent space at ``x``, in place."""
         raise NotImplementedError
 
+    def _integrate_into(self, x: np.ndarray, dx: np.ndarray, out: np.ndarray) -> None:
+        """``out[:] = x ⊕ dx`` (states override it to skip the temporary)."""
+        out[:] = self.integrate(x, dx)
+
     def _diff_into(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:
         """``out[:] = x1 ⊖ x0`` (states override it to skip the temporary)."""
         out[:] = self.diff(x0, x1)

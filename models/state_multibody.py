@@ -97,7 +97,9 @@ class StateMultibody(StateAbstract):
         self._Jpos[nv:, nv:] = np.eye(nv)
         self._Jneg = -self._Jpos
         cls = type(self)
-        self._overrides_diff = cls.diff is not StateMultibody.diff or cls.Jdiff is not StateMultibody.Jdiff
+        self._custom_operations = any(
+            getattr(cls, name) is not getattr(StateMultibody, name) for name in ("diff", "Jdiff", "integrate")
+        )
 
     def zero(self) -> np.ndarray:
         """Neutral configuration and zero velocity."""
@@ -161,8 +163,16 @@ class StateMultibody(StateAbstract):
         rows = Jin[:nv]
         rows[...] = np.reshape(pin.dIntegrateTransport(self.pinocchio, x[: self.nq], dx[:nv], rows, arg), rows.shape)
 
+    def _integrate_into(self, x: np.ndarray, dx: np.ndarray, out: np.ndarray) -> None:
+        if self._custom_operations:
+            super()._integrate_into(x, dx, out)
+            return
+        nq, nv = self.nq, self.nv
+        out[:nq] = pin.integrate(self.pinocchio, x[:nq], dx[:nv])
+        np.add(x[nq:], dx[nv:], out=out[nq:])
+
     def _diff_into(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:
-        if self._overrides_diff:
+        if self._custom_operations:
             super()._diff_into(x0, x1, out)
             return
         nq = self.nq
@@ -170,7 +180,7 @@ class StateMultibody(StateAbstract):
         np.subtract(x1[nq:], x0[nq:], out=out[self.nv :])
 
     def _Jdiff_second_into(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:
-        if self._overrides_diff:
+        if self._custom_operations:
             super()._Jdiff_second_into(x0, x1, out)
             return
         nq, nv = self.nq, self.nv

@@ -145,7 +145,7 @@ def test_numdiff_on_lie_group_state_matches_analytic_free_dynamics():
 
 @pytest.mark.parametrize("robot", ["dlqr", "anymal"])
 def test_compiled_euler_chain_rule_equals_its_numpy_twin(robot):
-    """Euler's compiled chain rule gives the numpy twin's Fx, Fu and cost derivatives (Euclidean and Lie group)."""
+    """Euler's compiled step and chain rule give the numpy twins' xnext, Fx, Fu and cost derivatives."""
     from crocopy import integrator_kernel
 
     assert integrator_kernel.available
@@ -169,7 +169,7 @@ def test_compiled_euler_chain_rule_equals_its_numpy_twin(robot):
         d = iam.createData()
         iam.calc(d, x, u)
         iam.calcDiff(d, x, u)
-        outputs.append([d.Fx, d.Fu, d.Lx, d.Lu, d.Lxx, d.Lxu, d.Luu])
+        outputs.append([d.xnext, d.Fx, d.Fu, d.Lx, d.Lu, d.Lxx, d.Lxu, d.Luu])
     for compiled, numpy_twin in zip(*outputs):
         np.testing.assert_allclose(compiled, numpy_twin, rtol=1e-13, atol=1e-14)
     nv, ndx, nu = 4, 8, 3

@@ -112,16 +112,19 @@ def test_collectors():
 
 
 def test_in_place_forms_equal_the_public_operations(state):
-    """``_diff_into``, ``_Jdiff_second_into`` and ``_integrate_chain_rule`` (used by residuals and Euler) give
-    ``diff``, ``Jdiff`` and ``Jintegrate``'s chain rule."""
+    """``_integrate_into``, ``_diff_into``, ``_Jdiff_second_into`` and ``_integrate_chain_rule`` (used by
+    residuals and Euler) give ``integrate``, ``diff``, ``Jdiff`` and ``Jintegrate``'s chain rule."""
     x0, x1 = state.rand(), state.rand()
+    dx = 0.3 * np.random.rand(state.ndx)
+    xout = np.full(state.nx, np.nan)
+    state._integrate_into(x0, dx, xout)
+    np.testing.assert_allclose(xout, state.integrate(x0, dx), atol=1e-14)
     out = np.full(state.ndx, np.nan)
     state._diff_into(x0, x1, out)
     np.testing.assert_allclose(out, state.diff(x0, x1), atol=1e-14)
     J = np.full((state.ndx, state.ndx), np.nan)
     state._Jdiff_second_into(x0, x1, J)
     np.testing.assert_allclose(J, state.Jdiff(x0, x1, Jcomponent.second)[0], atol=1e-14)
-    dx = 0.3 * np.random.rand(state.ndx)
     Fx, Fu = np.random.rand(state.ndx, state.ndx), np.random.rand(state.ndx, 3)
     Jx, Jdx = state.Jintegrate(x0, dx, Jcomponent.both)
     expected_x, expected_u = Jx + Jdx @ Fx, Jdx @ Fu
@@ -130,7 +133,7 @@ def test_in_place_forms_equal_the_public_operations(state):
     np.testing.assert_allclose(Fu, expected_u, atol=1e-12)
 
 
-def test_subclass_overriding_diff_is_honoured_by_the_state_residual():
+def test_subclass_overriding_diff_is_honoured_by_the_in_place_forms():
     class ShiftedState(crocopy.StateMultibody):
         def diff(self, x0, x1):
             return super().diff(x0, x1) + 1.0
@@ -141,3 +144,12 @@ def test_subclass_overriding_diff_is_honoured_by_the_state_residual():
     x = state.rand()
     residual.calc(data, x, np.zeros(state.nv))
     np.testing.assert_allclose(data.r, crocopy.StateMultibody.diff(state, state.zero(), x) + 1.0, atol=1e-14)
+
+    class ShiftedIntegrate(crocopy.StateMultibody):
+        def integrate(self, x, dx):
+            return super().integrate(x, dx) + 1.0
+
+    state = ShiftedIntegrate(load("talos_arm"))
+    out = np.zeros(state.nx)
+    state._integrate_into(x, np.zeros(state.ndx), out)
+    np.testing.assert_allclose(out, x + 1.0, atol=1e-14)
