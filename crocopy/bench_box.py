@@ -133,6 +133,8 @@ def perturb_guess(
         raise ValueError(f"states: expected one state per xs entry ({len(xs)}), got {len(states)}")
     if not eps >= 0.0:
         raise ValueError(f"eps: expected a non-negative size, got {eps}")
+    if eps == 0.0:  # x ⊕ 0 may differ from x in the last bit on a manifold
+        return [np.array(x, dtype=float) for x in xs], [np.array(u, dtype=float) for u in us]
     rng = np.random.default_rng(seed)
     xs_p = []
     for state, x in zip(states, xs):
@@ -268,7 +270,7 @@ class Replay:
     self_err: dict[int, float] = field(default_factory=dict)
     """At iterations whose replay misses (cost error > :data:`RTOL` or other step): the relative
     difference between Crocoddyl's single iterations from its iterate and from that iterate perturbed
-    by :data:`REPLAY_EPS` (both with ``k = 0``), i.e. Crocoddyl's own sensitivity at that step."""
+    by :data:`REPLAY_EPS` (both warm-started with its own ``k``), i.e. its own sensitivity at that step."""
 
     @property
     def worst(self) -> tuple[int | None, float]:
@@ -360,7 +362,11 @@ def replay_steps(name: str, solver_name: str, upto: int, max_self_checks: int = 
         if (replay.cost_err[-1] > RTOL or not replay.step_same[-1]) and len(replay.self_err) < max_self_checks:
             own = []
             for guess in ((x_i, u_i), perturb_guess(model_states, x_i, u_i, REPLAY_EPS, 1)):
-                fresh = getattr(crocoddyl, SOLVERS[solver_name])(build_problem(name, crocoddyl)[0])
+                # Crocoddyl's k cannot be set: rerun its first i iterations so that its QP warm start is k_{i-1}
+                again, xs0, us0 = build_problem(name, crocoddyl)
+                fresh = getattr(crocoddyl, SOLVERS[solver_name])(again)
+                if i:
+                    fresh.solve(xs0, us0, i, False)
                 fresh.solve(*guess, 1, feasible, reg if reg is not None else fresh.reg_min)
                 own.append(float(fresh.cost))
             replay.self_err[i] = _rel(*own)
