@@ -54,6 +54,8 @@ def test_perturbation_stays_on_the_manifold():
     (xp,), _ = perturb_guess([state], [x], [], 1e-9, 3)
     assert abs(np.linalg.norm(xp[3:7]) - 1.0) < 1e-14
     assert 1e-11 < np.abs(state.diff(x, xp)).max() < 1e-7
+    (x0,), _ = perturb_guess([state], [x], [], 0.0, 3)
+    assert np.array_equal(x0, x)  # exact copy, not x ⊕ 0
 
 
 def test_self_spread_and_chaos_verdict():
