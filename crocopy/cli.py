@@ -77,6 +77,11 @@ def _bench_models(args: argparse.Namespace) -> int:
 def _bench(args: argparse.Namespace) -> int:
     if args.models:
         return _bench_models(args)
+    if args.floor:
+        from .bench_floor import FLOOR_PROBLEMS, run_floor_bench
+
+        print(run_floor_bench(tuple(args.problems or FLOOR_PROBLEMS), repeats=args.repeats or 7))
+        return 0
     if args.box_parity:
         return _bench_box_parity(args)
     if args.batch or args.scaling:
@@ -276,6 +281,8 @@ def build_parser() -> argparse.ArgumentParser:
                        help="Box-DDP/Box-FDDP iterations and costs vs Crocoddyl's (crocopy.bench_box; bench extra)")
     bench.add_argument("--models", action="store_true",
                        help="calc+calcDiff time and per-node differences vs Crocoddyl (crocopy.bench_models)")
+    bench.add_argument("--floor", action="store_true",
+                       help="calc+calcDiff time inside Pinocchio's bindings vs Crocoddyl (crocopy.bench_floor)")
     bench.add_argument("--workers", type=int, default=2, help="with --batch: worker processes")
     bench.add_argument("--runs", type=int, default=3, help="with --batch/--scaling: repetitions (median reported)")
     bench.set_defaults(func=_bench)
