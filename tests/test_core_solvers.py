@@ -203,6 +203,21 @@ def test_compiled_riccati_kernel_equals_numpy_path(feasible):
         np.testing.assert_allclose(a, b, atol=1e-10, rtol=1e-10)
 
 
+def test_compiled_feedback_control_equals_numpy_twin_and_clamps():
+    kernel = crocopy.solvers.riccati_kernel
+    rng = np.random.default_rng(4)
+    u, k, K, dx = rng.standard_normal(5), rng.standard_normal(5), rng.standard_normal((5, 7)), rng.standard_normal(7)
+    lb, ub = np.full(5, -0.5), np.full(5, 0.5)
+    free = u - 0.3 * k - K @ dx
+    for bounds in ((np.full(5, -np.inf), np.full(5, np.inf)), (lb, ub)):
+        outs = [np.full(5, np.nan), np.full(5, np.nan)]
+        kernel.feedback_control(u, k, K, dx, 0.3, *bounds, outs[0])
+        kernel.feedback_control_numpy(u, k, K, dx, 0.3, *bounds, outs[1])
+        np.testing.assert_allclose(outs[0], outs[1], rtol=1e-14, atol=1e-15)
+        np.testing.assert_allclose(outs[0], np.clip(free, *bounds), rtol=1e-14, atol=1e-15)
+    assert np.any(np.abs(free) > 0.5)
+
+
 def test_fddp_rejects_blown_up_trials_on_double_pendulum():
     """A diverging trial (huge finite cost, very negative gap term in d₀) must not pass the |d₀| < th_grad test.
 

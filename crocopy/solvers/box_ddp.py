@@ -230,7 +230,7 @@ class BoxSolverMixin:
         iterate, reproduced in ``compat_crocoddyl`` mode).
         """
         problem = self.problem
-        xs, us, xs_try, us_try, fs = self.xs, self.us, self.xs_try, self.us_try, self.fs
+        xs, xs_try, us_try, fs = self.xs, self.xs_try, self.us_try, self.fs
         models = problem.runningModels
         first = models[0] if models else problem.terminalModel
         gaps = gaps and steplength != 1.0  # a full step closes the gaps exactly
@@ -240,12 +240,7 @@ class BoxSolverMixin:
         for t, (m, d) in enumerate(zip(models, problem.runningDatas)):
             if m.nu:
                 dx = self._dx_try[t] = m.state.diff(xs[t], xs_try[t])
-                ut = us[t] - steplength * self.k[t] - self.K[t] @ dx
-                lb = self._lb[t]
-                if lb is not None:
-                    np.maximum(ut, lb, out=ut)
-                    np.minimum(ut, self._ub[t], out=ut)
-                us_try[t] = ut
+                us_try[t] = self._feedback_control(t, steplength, dx, self._lb[t], self._ub[t])
             m.calc(d, xs_try[t], us_try[t])
             cost += d.cost
             if gaps or (terminal_gap and t == problem.T - 1):

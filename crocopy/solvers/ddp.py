@@ -55,6 +55,7 @@ class SolverDDP(SolverAbstract):
         self.xs_try = [m.state.zero() for m in models]
         self.us_try = [np.zeros(m.nu) for m in problem.runningModels]
         self._rhs = [np.zeros((m.nu, 1 + m.state.ndx)) for m in problem.runningModels]
+        self._unbounded = {m.nu: (np.full(m.nu, -np.inf), np.full(m.nu, np.inf)) for m in problem.runningModels}
         self._synced = False
 
     # ------------------------------------------------------------------ regularisation
@@ -298,13 +299,12 @@ class SolverDDP(SolverAbstract):
     def forwardPass(self, steplength: float) -> None:
         """Nonlinear rollout from ``x0`` with ``û = u - α k - K (x̂ ⊖ x)``; raises ForwardPassError on NaN."""
         problem = self.problem
-        xs, us, xs_try, us_try = self.xs, self.us, self.xs_try, self.us_try
+        xs, xs_try, us_try = self.xs, self.xs_try, self.us_try
         xs_try[0] = problem.x0.copy()
         cost = 0.0
         for t, (m, d) in enumerate(zip(problem.runningModels, problem.runningDatas)):
             if m.nu:
-                dx = m.state.diff(xs[t], xs_try[t])
-                us_try[t] = us[t] - steplength * self.k[t] - self.K[t] @ dx
+                us_try[t] = self._feedback_control(t, steplength, m.state.diff(xs[t], xs_try[t]))
             m.calc(d, xs_try[t], us_try[t])
             xs_try[t + 1] = d.xnext.copy()
             cost += d.cost
@@ -313,6 +313,16 @@ class SolverDDP(SolverAbstract):
         if not np.isfinite(cost) or not np.isfinite(xs_try[-1]).all():
             raise ForwardPassError("the rollout produced a non-finite state or cost")
         self.cost_try = cost
+
+    def _feedback_control(self, t: int, steplength: float, dx: np.ndarray, lb=None, ub=None) -> np.ndarray:
+        """Rollout control ``clamp(u - α k - K dx, lb, ub)`` of node ``t`` (a new array; no clamp without bounds)."""
+        u = self.us[t]
+        if lb is None:
+            lb, ub = self._unbounded[u.shape[0]]
+        out = np.empty(u.shape[0])
+        feedback = riccati_kernel.feedback_control if self.use_kernel else riccati_kernel.feedback_control_numpy
+        feedback(u, self.k[t], self.K[t], dx, steplength, lb, ub, out)
+        return out
 
     def stoppingCriteria(self) -> float:
         """``stop = |d₀ + ½ d₁|``: the expected reduction of a full step."""

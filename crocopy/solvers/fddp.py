@@ -79,7 +79,7 @@ class SolverFDDP(SolverDDP):
     def forwardPass(self, steplength: float) -> None:
         """Rollout with the gaps shrunk by ``(1 - steplength)``; raises ForwardPassError on NaN."""
         problem = self.problem
-        xs, us, xs_try, us_try, fs = self.xs, self.us, self.xs_try, self.us_try, self.fs
+        xs, xs_try, us_try, fs = self.xs, self.xs_try, self.us_try, self.fs
         feasible = self.isFeasible
         models = problem.runningModels
         first = models[0] if models else problem.terminalModel
@@ -88,7 +88,7 @@ class SolverFDDP(SolverDDP):
         for t, (m, d) in enumerate(zip(models, problem.runningDatas)):
             if m.nu:
                 dx = self._dx_try[t] = m.state.diff(xs[t], xs_try[t])
-                us_try[t] = us[t] - steplength * self.k[t] - self.K[t] @ dx
+                us_try[t] = self._feedback_control(t, steplength, dx)
             m.calc(d, xs_try[t], us_try[t])
             cost += d.cost
             if feasible:

@@ -7,6 +7,9 @@ Computes, for node t with next value function ``(V'x, V'xx)`` (Crocoddyl signs):
     [k K] = L⁻ᵀ L⁻¹ [Qu Qux]  (Quu = L Lᵀ; L⁻¹ by LAPACK, the products by BLAS),
     Vx = Qx - Qxu k,  Vxx = sym(Qxx - Qxu K) + preg I,  Vx += Vxx f  (if gaps are open)
 
+``feedback_control(u, k, K, dx, α, lb, ub, out)`` writes the rollout's control
+``clamp(u - α k - K dx, lb, ub)`` (infinite bounds for the unconstrained solvers).
+
 ``riccati_step`` returns False when ``Quu`` is not positive definite (the caller raises the
 regularisation).  ``available`` is False when numba cannot be imported; the solvers then use the
 numpy path, which gives the same numbers to round-off (tested to 1e-10).
@@ -83,3 +86,26 @@ def _riccati_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, Qx
 
 
 riccati_step = njit(cache=True)(_riccati_step) if available else _riccati_step
+
+
+def feedback_control_numpy(u, k, K, dx, alpha, lb, ub, out) -> None:
+    """Numpy twin of :func:`feedback_control`."""
+    np.subtract(u, alpha * k, out=out)
+    out -= K @ dx
+    np.maximum(out, lb, out=out)
+    np.minimum(out, ub, out=out)
+
+
+def _feedback_control(u, k, K, dx, alpha, lb, ub, out):
+    for i in range(u.shape[0]):
+        s = u[i] - alpha * k[i]
+        for j in range(dx.shape[0]):
+            s -= K[i, j] * dx[j]
+        if s < lb[i]:
+            s = lb[i]
+        if s > ub[i]:
+            s = ub[i]
+        out[i] = s
+
+
+feedback_control = njit(cache=True)(_feedback_control) if available else feedback_control_numpy
