@@ -24,8 +24,8 @@ from .state import StateAbstract
 class IntegratedActionModelEuler(IntegratedActionModelAbstract):
     """Crocoddyl's ``IntegratedActionModelEuler(diffModel, timeStep=1e-3, withCostResidual=True)``.
 
-    ``use_kernel`` (default: numba available) applies the chain rule with
-    :func:`~crocopy.integrator_kernel.euler_chain` instead of its numpy twin.
+    ``use_kernel`` (default: numba available) takes the step and applies the chain rule with
+    :mod:`~crocopy.integrator_kernel`'s compiled functions instead of their numpy twins.
     """
 
     use_kernel = integrator_kernel.available
@@ -47,10 +47,8 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
         self.differential.calc(ddata, x, u)
         dt = self._dt
         dx = data.dx
-        if self.use_kernel:
-            integrator_kernel.euler_step(ddata.xout, x, dt, dx)
-        else:
-            integrator_kernel.euler_step_numpy(ddata.xout, x, dt, dx)
+        step = integrator_kernel.euler_step if self.use_kernel else integrator_kernel.euler_step_numpy
+        step(ddata.xout, x, dt, dx)
         self.state._integrate_into(x, dx, data.xnext)
         data.cost = dt * ddata.cost
         if self.withCostResidual:

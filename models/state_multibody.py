@@ -113,22 +113,33 @@ class StateMultibody(StateAbstract):
         return np.concatenate([q, np.random.rand(self.nv) * 2.0 - 1.0])
 
     def diff(self, x0: np.ndarray, x1: np.ndarray) -> np.ndarray:
-        nq = self.nq
         dx = np.empty(self.ndx)
-        dx[: self.nv] = pin.difference(self.pinocchio, x0[:nq], x1[:nq])
-        np.subtract(x1[nq:], x0[nq:], out=dx[self.nv :])
+        self._write_diff(x0, x1, dx)
         return dx
 
     def integrate(self, x: np.ndarray, dx: np.ndarray) -> np.ndarray:
-        nq, nv = self.nq, self.nv
         xout = np.empty(self.nx)
-        xout[:nq] = pin.integrate(self.pinocchio, x[:nq], dx[:nv])
-        np.add(x[nq:], dx[nv:], out=xout[nq:])
+        self._write_integrate(x, dx, xout)
         return xout
 
+    def _write_diff(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:
+        nq = self.nq
+        out[: self.nv] = pin.difference(self.pinocchio, x0[:nq], x1[:nq])
+        np.subtract(x1[nq:], x0[nq:], out=out[self.nv :])
+
+    def _write_integrate(self, x: np.ndarray, dx: np.ndarray, out: np.ndarray) -> None:
+        nq, nv = self.nq, self.nv
+        out[:nq] = pin.integrate(self.pinocchio, x[:nq], dx[:nv])
+        np.add(x[nq:], dx[nv:], out=out[nq:])
+
+    def _write_block(self, Jq: np.ndarray, sign: float, out: np.ndarray) -> None:
+        """``out = [[Jq, 0], [0, ±I]]``."""
+        out[:] = self._Jpos if sign > 0.0 else self._Jneg
+        out[: self.nv, : self.nv] = Jq
+
     def _block(self, Jq: np.ndarray, sign: float) -> np.ndarray:
-        J = (self._Jpos if sign > 0.0 else self._Jneg).copy()
-        J[: self.nv, : self.nv] = Jq
+        J = np.empty((self.ndx, self.ndx))
+        self._write_block(Jq, sign, J)
         return J
 
     def Jdiff(self, x0: np.ndarray, x1: np.ndarray, firstsecond: Jcomponent = Jcomponent.both) -> list:
@@ -167,25 +178,20 @@ class StateMultibody(StateAbstract):
         if self._custom_operations:
             super()._integrate_into(x, dx, out)
             return
-        nq, nv = self.nq, self.nv
-        out[:nq] = pin.integrate(self.pinocchio, x[:nq], dx[:nv])
-        np.add(x[nq:], dx[nv:], out=out[nq:])
+        self._write_integrate(x, dx, out)
 
     def _diff_into(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:
         if self._custom_operations:
             super()._diff_into(x0, x1, out)
             return
-        nq = self.nq
-        out[: self.nv] = pin.difference(self.pinocchio, x0[:nq], x1[:nq])
-        np.subtract(x1[nq:], x0[nq:], out=out[self.nv :])
+        self._write_diff(x0, x1, out)
 
     def _Jdiff_second_into(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:
         if self._custom_operations:
             super()._Jdiff_second_into(x0, x1, out)
             return
-        nq, nv = self.nq, self.nv
-        out[:] = self._Jpos
-        out[:nv, :nv] = pin.dDifference(self.pinocchio, x0[:nq], x1[:nq], pin.ARG1)
+        nq = self.nq
+        self._write_block(pin.dDifference(self.pinocchio, x0[:nq], x1[:nq], pin.ARG1), 1.0, out)
 
     def _integrate_chain_rule(self, x: np.ndarray, dx: np.ndarray, Fx: np.ndarray, Fu: np.ndarray) -> None:
         """Chain rule through ``x ⊕ dx`` (see :meth:`StateAbstract._integrate_chain_rule`): Pinocchio's
