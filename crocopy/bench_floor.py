@@ -27,7 +27,7 @@ from types import ModuleType
 import pinocchio
 
 from .bench import _limit_threads
-from .bench_problems import _loops, build_problem
+from .bench_problems import _loops, _sample_ms, build_problem
 
 FLOOR_PROBLEMS = ("pend", "quad-goal", "arm", "jump", "walk", "taichi")
 
@@ -99,14 +99,6 @@ class PinocchioCallTimer:
         return max(0.0, self.seconds - self.calls * self.overhead)
 
 
-def _cpu_ms(fn: Callable[[], object], loops: int) -> float:
-    """Thread CPU time per call (robust to other processes sharing the cores)."""
-    t0 = time.thread_time()
-    for _ in range(loops):
-        fn()
-    return 1e3 * (time.thread_time() - t0) / loops
-
-
 def _evaluator(problem, xs: list, us: list) -> Callable[[], None]:
     def evaluate() -> None:
         problem.calc(xs, us)
@@ -126,7 +118,7 @@ def floor_of_problem(name: str, crocopy: ModuleType, crocoddyl: ModuleType | Non
     samples: dict[str, list[float]] = {lib: [] for lib in evaluators}
     for _ in range(repeats):
         for lib, fn in evaluators.items():
-            samples[lib].append(_cpu_ms(fn, loops[lib]))
+            samples[lib].append(_sample_ms(fn, loops[lib], time.thread_time))
     inside = []
     with PinocchioCallTimer() as timer:  # wall clock inside the calls: run it on a quiet machine
         evaluators["crocopy"]()

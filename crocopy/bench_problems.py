@@ -216,11 +216,12 @@ def _loops(fn: Callable[[], object]) -> int:
     return max(1, math.ceil(MIN_SAMPLE_S / max(elapsed, 1e-9)))
 
 
-def _sample_ms(fn: Callable[[], object], loops: int) -> float:
-    t0 = time.perf_counter()
+def _sample_ms(fn: Callable[[], object], loops: int, clock: Callable[[], float] = time.perf_counter) -> float:
+    """Milliseconds per call of ``fn`` over ``loops`` calls, by ``clock`` (wall clock unless told)."""
+    t0 = clock()
     for _ in range(loops):
         fn()
-    return 1e3 * (time.perf_counter() - t0) / loops
+    return 1e3 * (clock() - t0) / loops
 
 
 def time_phases_interleaved(setups: dict[str, tuple], solver_name: str, repeats: int) -> dict[str, dict[str, float]]:
