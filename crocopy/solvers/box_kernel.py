@@ -15,24 +15,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from .riccati_kernel import available, finish_value_function, njit
+from .riccati_kernel import available, cholesky_lower, finish_value_function, njit
 
 
 def _chol_inverse(H, idx, nf, out):
     """Inverse of ``H[idx, idx]`` (first ``nf`` entries of ``idx``) into ``out[:nf, :nf]``; False if not PD."""
     L = np.zeros((nf, nf))
-    for j in range(nf):
-        s = H[idx[j], idx[j]]
-        for p in range(j):
-            s -= L[j, p] * L[j, p]
-        if not s > 0.0:
-            return False
-        L[j, j] = np.sqrt(s)
-        for i in range(j + 1, nf):
-            s = H[idx[i], idx[j]]
-            for p in range(j):
-                s -= L[i, p] * L[j, p]
-            L[i, j] = s / L[j, j]
+    if not cholesky_lower(H, idx, nf, L):
+        return False
     for c in range(nf):
         col = np.zeros(nf)
         col[c] = 1.0

@@ -43,6 +43,26 @@ def _finish_value_function(Vxx, Vx, preg, fs, gaps):
 finish_value_function = njit(cache=True)(_finish_value_function) if available else _finish_value_function
 
 
+def _cholesky_lower(A, idx, n, L):
+    """Lower Cholesky factor of ``A[idx[:n], idx[:n]]`` into ``L[:n, :n]``; False if not positive definite."""
+    for j in range(n):
+        s = A[idx[j], idx[j]]
+        for p in range(j):
+            s -= L[j, p] * L[j, p]
+        if not s > 0.0:
+            return False
+        L[j, j] = np.sqrt(s)
+        for i in range(j + 1, n):
+            s = A[idx[i], idx[j]]
+            for p in range(j):
+                s -= L[i, p] * L[j, p]
+            L[i, j] = s / L[j, j]
+    return True
+
+
+cholesky_lower = njit(cache=True)(_cholesky_lower) if available else _cholesky_lower
+
+
 def _riccati_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx):
     nu = Fu.shape[1]
     ndx = Fx.shape[1]
@@ -57,18 +77,8 @@ def _riccati_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, Qx
         for i in range(nu):
             Quu[i, i] += preg
         L = np.zeros((nu, nu))
-        for j in range(nu):
-            s = Quu[j, j]
-            for p in range(j):
-                s -= L[j, p] * L[j, p]
-            if not s > 0.0:
-                return False
-            L[j, j] = np.sqrt(s)
-            for i in range(j + 1, nu):
-                s = Quu[i, j]
-                for p in range(j):
-                    s -= L[i, p] * L[j, p]
-                L[i, j] = s / L[j, j]
+        if not cholesky_lower(Quu, np.arange(nu), nu, L):
+            return False
         Linv = np.linalg.inv(L)
         rhs = np.empty((nu, ndx + 1))
         rhs[:, :ndx] = Qxu.T
