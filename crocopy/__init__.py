@@ -8,6 +8,7 @@ from importlib.metadata import PackageNotFoundError, version
 
 from .action_base import ActionDataAbstract, ActionModelAbstract
 from .actions import ActionModelLQR, ActionModelUnicycle, DifferentialActionModelLQR
+from .actions.control_penalty import ActionModelControlPenalty
 from .activations import (
     ActivationBounds,
     ActivationDataAbstract,
@@ -22,51 +23,42 @@ from .activations import (
 )
 from .actuation_base import ActuationDataAbstract, ActuationModelAbstract, JointDataAbstract
 from .batch import SolveManyError, SolveResult, solve_many
-from .box_qp import BoxQP, BoxQPSolution
-from .callback_display import CallbackDisplay
-from .callbacks import CallbackAbstract, CallbackLogger, CallbackVerbose
-from .constraints import (
-    ConstraintDataAbstract,
-    ConstraintDataManager,
-    ConstraintItem,
-    ConstraintModelAbstract,
-    ConstraintModelManager,
-    ConstraintModelResidual,
-    ConstraintType,
-)
-from .costs import (
-    CostDataAbstract,
-    CostDataResidual,
-    CostDataSum,
-    CostItem,
-    CostModelAbstract,
-    CostModelResidual,
-    CostModelSum,
-)
+from .callbacks.base import CallbackAbstract, CallbackLogger, CallbackVerbose
+from .callbacks.display import CallbackDisplay
+from .callbacks.plotting import plotConvergence, plotFeasibility, plotOCSolution
+from .constraints.base import ConstraintDataAbstract, ConstraintModelAbstract, ConstraintModelResidual, ConstraintType
+from .constraints.manager import ConstraintDataManager, ConstraintItem, ConstraintModelManager
+from .costs.base import CostDataAbstract, CostDataResidual, CostModelAbstract, CostModelResidual
+from .costs.sum import CostDataSum, CostItem, CostModelSum
 from .data_collector import DataCollectorAbstract
 from .diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
 from .enums import AssignmentOp, Jcomponent, RKType, VerboseLevel
-from .integrator_base import IntegratedActionModelAbstract
-from .integrator_euler import IntegratedActionDataEuler, IntegratedActionModelEuler
-from .integrator_rk import IntegratedActionDataRK, IntegratedActionModelRK
+from .integrators.base import IntegratedActionModelAbstract
+from .integrators.euler import IntegratedActionDataEuler, IntegratedActionModelEuler
+from .integrators.rk import IntegratedActionDataRK, IntegratedActionModelRK
 from .numdiff import (
     ActionDataNumDiff,
     ActionModelNumDiff,
     DifferentialActionDataNumDiff,
     DifferentialActionModelNumDiff,
 )
-from .penalty import ActionModelControlPenalty
-from .plotting import plotConvergence, plotFeasibility, plotOCSolution
-from .residual_base import ResidualDataAbstract, ResidualModelAbstract
 from .residuals import ResidualModelControl, ResidualModelState
+from .residuals.base import ResidualDataAbstract, ResidualModelAbstract
 from .shooting import ShootingProblem
 from .solvers import SolverAbstract, SolverDDP, SolverFDDP
 from .solvers.box_ddp import SolverBoxDDP
 from .solvers.box_fddp import SolverBoxFDDP
+from .solvers.box_qp import BoxQP, BoxQPSolution
 from .solvers.clamping import SolverClampedDDP
 from .solvers.hddp import CallbackHDDPLogger, CallbackHDDPVerbose, SolverHDDP
 from .solvers.projection import ConstraintRankError, SolverProjection
-from .squashing_action import ActionModelSquashed
+from .squashing.action import ActionModelSquashed
+from .squashing.smooth_sat import (
+    ActuationSquashingModel,
+    SquashingDataAbstract,
+    SquashingModelAbstract,
+    SquashingModelSmoothSat,
+)
 from .state import StateAbstract, StateVector
 
 try:

@@ -3,16 +3,16 @@
 * ``crocopy --version``
 * ``crocopy bench``: solver timings on LQR problems (and Crocoddyl's, when installed)
 * ``crocopy bench --vs crocoddyl [--problems ...] [--repeats N] [--out BENCHMARKS.md]``: crocopy and
-  Crocoddyl side by side on the bundled problems (:mod:`crocopy.bench_problems`)
+  Crocoddyl side by side on the bundled problems (:mod:`crocopy.bench.side_by_side`)
 * ``crocopy bench --box-parity [--problems ...] [--maxiter N]``: Box-DDP/Box-FDDP iterations and
   final costs next to Crocoddyl's, each library's self-sensitivity to a perturbed guess, a one-step
   replay of Crocoddyl's iterations and a verdict per row, and the box-QP backward-pass overhead
-  (:mod:`crocopy.bench_box`)
+  (:mod:`crocopy.bench.box_parity`)
 * ``crocopy bench --models [--problems ...]``: calc + calcDiff time and per-model-kind differences of
-  every node against Crocoddyl (:mod:`crocopy.bench_models`)
+  every node against Crocoddyl (:mod:`crocopy.bench.node_eval`)
 * ``crocopy bench --batch`` / ``--scaling``: :func:`crocopy.solve_many` speed-up on the quadrotor
-  starts; time per iteration vs horizon and peak memory (:mod:`crocopy.bench_batch`,
-  :mod:`crocopy.bench_scaling`)
+  starts; time per iteration vs horizon and peak memory (:mod:`crocopy.bench.batch`,
+  :mod:`crocopy.bench.scaling`)
 * ``crocopy list``: the bundled problems
 * ``crocopy solve [PROBLEM] [--solver ...] [--maxiter N] [--html FILE] [--plot FILE]``: build a
   problem, solve it with the verbose table, print a summary and write the meshcat animation.
@@ -29,29 +29,23 @@ import sys
 import time
 
 from . import __version__
-
-SOLVERS = {
-    "boxfddp": "SolverBoxFDDP",
-    "boxddp": "SolverBoxDDP",
-    "fddp": "SolverFDDP",
-    "ddp": "SolverDDP",
-}
+from .solvers import SOLVERS
 
 
 def _bench_batch_scaling(args: argparse.Namespace) -> int:
     if args.batch:
-        from .bench_batch import run_batch_bench
+        from .bench.batch import run_batch_bench
 
         run_batch_bench(workers=args.workers, repeats=args.runs)
     if args.scaling:
-        from .bench_scaling import run_scaling_bench
+        from .bench.scaling import run_scaling_bench
 
         run_scaling_bench(repeats=args.runs)
     return 0
 
 
 def _bench_box_parity(args: argparse.Namespace) -> int:
-    from .bench_box import BenchDependencyError, run_box_parity
+    from .bench.box_parity import BenchDependencyError, run_box_parity
 
     try:
         print(run_box_parity(args.problems, maxiter=args.maxiter or None,
@@ -63,8 +57,8 @@ def _bench_box_parity(args: argparse.Namespace) -> int:
 
 
 def _bench_models(args: argparse.Namespace) -> int:
-    from .bench_models import MODEL_PROBLEMS, run_model_bench
-    from .bench_problems import BenchDependencyError
+    from .bench.node_eval import MODEL_PROBLEMS, run_model_bench
+    from .bench.side_by_side import BenchDependencyError
 
     try:
         print(run_model_bench(tuple(args.problems or MODEL_PROBLEMS), repeats=args.repeats or 15))
@@ -78,7 +72,7 @@ def _bench(args: argparse.Namespace) -> int:
     if args.models:
         return _bench_models(args)
     if args.floor:
-        from .bench_floor import FLOOR_PROBLEMS, run_floor_bench
+        from .bench.floor import FLOOR_PROBLEMS, run_floor_bench
 
         print(run_floor_bench(tuple(args.problems or FLOOR_PROBLEMS), repeats=args.repeats or 7))
         return 0
@@ -88,14 +82,14 @@ def _bench(args: argparse.Namespace) -> int:
         return _bench_batch_scaling(args)
     if args.vs:
         return _bench_vs(args)
-    from .bench import run_lqr_bench
+    from .bench.lqr import run_lqr_bench
 
     print(run_lqr_bench(repeats=args.repeats or 20, T=args.T))
     return 0
 
 
 def _bench_vs(args: argparse.Namespace) -> int:
-    from .bench_problems import BenchDependencyError, run_vs
+    from .bench.side_by_side import BenchDependencyError, run_vs
 
     try:
         report = run_vs(args.problems, solver_name=args.solver, repeats=args.repeats or 5, maxiter=args.maxiter or None,
@@ -167,7 +161,7 @@ def _solve(args: argparse.Namespace) -> int:
         f" {elapsed:.2f} s ({1e3 * elapsed / iters:.1f} ms/iteration)"
     )
     if args.plot:
-        from .plotting import plot_convergence_from_logger
+        from .callbacks.plotting import plot_convergence_from_logger
 
         print(f"convergence plot written to {plot_convergence_from_logger(logger, args.plot)}")
     html = None if args.no_html else (args.html or f"{args.problem}.html")
@@ -176,7 +170,7 @@ def _solve(args: argparse.Namespace) -> int:
         if robot is None:
             print(f"no meshcat model for {args.problem}; animation not written", file=sys.stderr)
         else:
-            from .models.html_export import export_html_from_solver
+            from .models.display.html import export_html_from_solver
 
             print(f"meshcat animation written to {export_html_from_solver(robot, solver, html)}")
     return 0
@@ -185,8 +179,8 @@ def _solve(args: argparse.Namespace) -> int:
 def _table1(args: argparse.Namespace) -> int:
     import crocopy
 
+    from .experiments.table1 import RowResult, format_trend, trend_checks
     from .problems import registry
-    from .table1 import RowResult, format_trend, trend_checks
 
     results: dict[str, dict[str, RowResult]] = {}
     rows = [
@@ -220,27 +214,27 @@ def _table1(args: argparse.Namespace) -> int:
 def _paper(args: argparse.Namespace) -> int:
     key = (args.paper, args.experiment)
     if key == ("box-ddp", "lq"):
-        from .paper_boxddp import run_lq
+        from .experiments.box_ddp import run_lq
 
         run_lq(out_dir=args.out)
     elif key == ("box-ddp", "car"):
-        from .paper_boxddp import run_car
+        from .experiments.box_ddp import run_car
 
         run_car(out_dir=args.out)
     elif key == ("box-fddp", "quadrotor"):
-        from .paper_boxfddp import run_quadrotor_ics
+        from .experiments.box_fddp import run_quadrotor_ics
 
         run_quadrotor_ics(out_dir=args.out)
     elif key == ("projection", "arm"):
-        from .paper_projection import run_projection_arm
+        from .experiments.projection import run_projection_arm
 
         run_projection_arm()
     elif key == ("hddp", "table1"):
-        from .paper_hddp import run_hddp
+        from .experiments.hddp import run_hddp
 
         run_hddp(trials=args.trials or 100, jobs=args.jobs or 1)
     elif key == ("hddp", "table2"):
-        from .paper_hddp import run_hddp_weighted
+        from .experiments.hddp import run_hddp_weighted
 
         run_hddp_weighted()
     else:
@@ -274,15 +268,15 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--no-memory", action="store_true", help="with --vs: skip the peak-memory subprocesses")
     bench.add_argument("--out", default=None, help="with --vs: also write the markdown report to this file")
     bench.add_argument("--batch", action="store_true",
-                       help="10 quadrotor solves serially and with crocopy.solve_many (crocopy.bench_batch)")
+                       help="10 quadrotor solves serially and with crocopy.solve_many (crocopy.bench.batch)")
     bench.add_argument("--scaling", action="store_true",
                        help="time per iteration vs horizon (ANYmal trot), peak memory of the hop (bench_scaling)")
     bench.add_argument("--box-parity", action="store_true",
-                       help="Box-DDP/Box-FDDP iterations and costs vs Crocoddyl's (crocopy.bench_box; bench extra)")
+                       help="Box-DDP/Box-FDDP iterations and costs vs Crocoddyl's (bench.box_parity; bench extra)")
     bench.add_argument("--models", action="store_true",
-                       help="calc+calcDiff time and per-node differences vs Crocoddyl (crocopy.bench_models)")
+                       help="calc+calcDiff time and per-node differences vs Crocoddyl (crocopy.bench.node_eval)")
     bench.add_argument("--floor", action="store_true",
-                       help="calc+calcDiff time inside Pinocchio's bindings vs Crocoddyl (crocopy.bench_floor)")
+                       help="calc+calcDiff time inside Pinocchio's bindings vs Crocoddyl (crocopy.bench.floor)")
     bench.add_argument("--workers", type=int, default=2, help="with --batch: worker processes")
     bench.add_argument("--runs", type=int, default=3, help="with --batch/--scaling: repetitions (median reported)")
     bench.set_defaults(func=_bench)

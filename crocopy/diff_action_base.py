@@ -3,7 +3,7 @@
 A differential action model maps ``(x, u)`` to the acceleration ``xout = a(x, u)`` (shape
 ``(nv,)``) and a cost rate ``l(x, u)``.  ``calcDiff`` fills ``Fx (nv, ndx)``, ``Fu (nv, nu)``
 and the cost derivatives ``Lx, Lu, Lxx, Lxu, Luu``.  Integrators
-(:mod:`crocopy.integrator_euler`, :mod:`crocopy.integrator_rk`) turn it into an action model.
+(:mod:`crocopy.integrators.euler`, :mod:`crocopy.integrators.rk`) turn it into an action model.
 """
 
 from __future__ import annotations

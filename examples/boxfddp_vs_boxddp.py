@@ -1,7 +1,7 @@
 """Box-FDDP against Box-DDP on the fast bundled problems, with the gap-contraction plot (Box-FDDP paper Fig. 4)."""
 
 import crocopy
-from crocopy.plotting import plot_feasibility
+from crocopy.callbacks.plotting import plot_feasibility
 from crocopy.problems import registry
 
 for name in ("pend", "arm", "quad-goal", "trot-short"):

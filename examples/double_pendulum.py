@@ -3,7 +3,7 @@
 import example_robot_data
 
 import crocopy
-from crocopy.models.html_export import export_html_from_solver
+from crocopy.models.display.html import export_html_from_solver
 from crocopy.problems.pendulum import build_pendulum
 
 for name in ("SolverBoxFDDP", "SolverBoxDDP"):

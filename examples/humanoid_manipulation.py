@@ -12,7 +12,7 @@ import numpy as np
 import pinocchio as pin
 
 import crocopy
-from crocopy.models.html_export import export_html_from_solver
+from crocopy.models.display.html import export_html_from_solver
 from crocopy.problems.humanoid import HANDS, build_manipulation
 
 parser = argparse.ArgumentParser(description="Talos whole-body manipulation solved with Box-FDDP")

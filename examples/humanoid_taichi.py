@@ -10,7 +10,7 @@ import argparse
 import example_robot_data
 
 import crocopy
-from crocopy.models.html_export import export_html_from_solver
+from crocopy.models.display.html import export_html_from_solver
 from crocopy.problems.humanoid import build_taichi
 
 parser = argparse.ArgumentParser(description="Talos taichi solved with Box-FDDP")

@@ -12,7 +12,7 @@ import example_robot_data
 import numpy as np
 
 import crocopy
-from crocopy.models.html_export import export_html_from_solver
+from crocopy.models.display.html import export_html_from_solver
 from crocopy.problems.humanoid import build_monkey_bar
 
 parser = argparse.ArgumentParser(description="Talos monkey bar solved with Box-FDDP")

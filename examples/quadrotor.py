@@ -11,7 +11,7 @@ import example_robot_data
 import numpy as np
 
 import crocopy
-from crocopy.models.html_export import export_html_from_solver
+from crocopy.models.display.html import export_html_from_solver
 from crocopy.problems.quadrotor import THRUST_RANGE, build_quadrotor
 
 parser = argparse.ArgumentParser(description="IRIS quadrotor tasks solved with Box-FDDP")

@@ -9,7 +9,7 @@ import sys
 import example_robot_data
 
 import crocopy
-from crocopy.models.html_export import export_html_from_solver
+from crocopy.models.display.html import export_html_from_solver
 from crocopy.problems.quadruped import build_jump
 
 problem, xs, us = build_jump(crocopy)

@@ -9,10 +9,7 @@ from .actuations import (
 )
 from .cones import CoPSupport, FrictionCone, WrenchCone
 from .contact_base import ContactDataAbstract, ContactModelAbstract
-from .contact_fwd_dynamics import (
-    DifferentialActionDataContactFwdDynamics,
-    DifferentialActionModelContactFwdDynamics,
-)
+from .contact_fwd_dynamics import DifferentialActionDataContactFwdDynamics, DifferentialActionModelContactFwdDynamics
 from .contact_multiple import ContactDataMultiple, ContactItem, ContactModelMultiple
 from .contacts import ContactData3D, ContactData6D, ContactModel3D, ContactModel6D
 from .data_collectors import (
@@ -58,12 +55,6 @@ from .residuals_frame import (
     ResidualModelFrameTranslation,
     ResidualModelFrameVelocity,
 )
-from .squashing import (
-    ActuationSquashingModel,
-    SquashingDataAbstract,
-    SquashingModelAbstract,
-    SquashingModelSmoothSat,
-)
 from .state_multibody import StateMultibody
 
 __all__ = [
@@ -102,7 +93,6 @@ __all__ = [
     "ActuationModelFloatingBase",
     "ActuationModelFloatingBaseThrusters",
     "ActuationModelFull",
-    "ActuationSquashingModel",
     "DataCollectorActMultibody",
     "DataCollectorActMultibodyInContact",
     "DataCollectorActuation",
@@ -126,21 +116,18 @@ __all__ = [
     "ResidualModelFrameVelocity",
     "ResidualModelJointAcceleration",
     "ResidualModelJointEffort",
-    "SquashingDataAbstract",
-    "SquashingModelAbstract",
-    "SquashingModelSmoothSat",
     "StateMultibody",
     "Thruster",
     "ThrusterType",
 ]
 
-_LAZY_DISPLAY = {"MeshcatDisplay": "display", "export_html": "html_export", "export_html_from_solver": "html_export"}
+_LAZY_DISPLAY = ("MeshcatDisplay", "export_html", "export_html_from_solver")
 
 
 def __getattr__(name: str):
     """Import the meshcat display and HTML export lazily (meshcat is only needed to display)."""
     if name in _LAZY_DISPLAY:
-        import importlib
+        from . import display
 
-        return getattr(importlib.import_module(f".{_LAZY_DISPLAY[name]}", __name__), name)
+        return getattr(display, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

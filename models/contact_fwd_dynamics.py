@@ -22,8 +22,8 @@ import numpy as np
 import pinocchio as pin
 
 from crocopy.actuation_base import ActuationModelAbstract, JointDataAbstract
-from crocopy.constraints import ConstraintModelManager
-from crocopy.costs import CostModelSum
+from crocopy.constraints.manager import ConstraintModelManager
+from crocopy.costs.sum import CostModelSum
 from crocopy.diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
 
 from .contact_multiple import ContactModelMultiple

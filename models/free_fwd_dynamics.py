@@ -27,7 +27,7 @@ import pinocchio as pin
 from scipy.linalg import cho_factor, cho_solve
 
 from crocopy.actuation_base import ActuationModelAbstract, JointDataAbstract
-from crocopy.costs import CostModelSum
+from crocopy.costs.sum import CostModelSum
 from crocopy.diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
 from crocopy.validation import as_vector
 

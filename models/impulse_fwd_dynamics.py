@@ -21,8 +21,8 @@ import numpy as np
 import pinocchio as pin
 
 from crocopy.action_base import ActionDataAbstract, ActionModelAbstract
-from crocopy.constraints import ConstraintModelManager
-from crocopy.costs import CostModelSum
+from crocopy.constraints.manager import ConstraintModelManager
+from crocopy.costs.sum import CostModelSum
 
 from .contact_fwd_dynamics import check_vector_shape, link_cost_data
 from .data_collectors import DataCollectorMultibodyInImpulse

@@ -20,7 +20,7 @@ import numpy as np
 import pinocchio as pin
 
 from crocopy.data_collector import DataCollectorAbstract
-from crocopy.residual_base import ResidualDataAbstract, ResidualModelAbstract
+from crocopy.residuals.base import ResidualDataAbstract, ResidualModelAbstract
 from crocopy.state import StateAbstract
 
 from .cones import CoPSupport, FrictionCone, WrenchCone

@@ -21,7 +21,7 @@ import pinocchio as pin
 
 from crocopy.actuation_base import ActuationModelAbstract
 from crocopy.data_collector import DataCollectorAbstract
-from crocopy.residual_base import ResidualDataAbstract, ResidualModelAbstract
+from crocopy.residuals.base import ResidualDataAbstract, ResidualModelAbstract
 from crocopy.state import StateAbstract
 from crocopy.validation import as_vector
 

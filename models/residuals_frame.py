@@ -20,7 +20,7 @@ import numpy as np
 import pinocchio as pin
 
 from crocopy.data_collector import DataCollectorAbstract
-from crocopy.residual_base import ResidualDataAbstract, ResidualModelAbstract
+from crocopy.residuals.base import ResidualDataAbstract, ResidualModelAbstract
 from crocopy.validation import as_matrix, as_vector
 
 from .state_multibody import StateMultibody

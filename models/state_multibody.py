@@ -18,7 +18,7 @@ import numpy as np
 import pinocchio as pin
 
 from crocopy.enums import Jcomponent
-from crocopy.integrator_kernel import add_integrate_jacobian
+from crocopy.integrators.euler_kernel import add_integrate_jacobian
 from crocopy.state import StateAbstract
 
 _HUGE = 1e300  # URDF "no limit" values (numeric_limits::max) are mapped to inf

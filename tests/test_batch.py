@@ -9,8 +9,8 @@ from robots import load
 
 import crocopy
 from crocopy.batch import solve_one
-from crocopy.bench_batch import makespan, run_batch_bench
-from crocopy.bench_scaling import fit_exponent, hop_memory, run_scaling_bench
+from crocopy.bench.batch import makespan, run_batch_bench
+from crocopy.bench.scaling import fit_exponent, hop_memory, run_scaling_bench
 from crocopy.cli import build_parser
 from crocopy.problems import registry
 from crocopy.problems.common import load_model

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import crocopy
-from crocopy.bench_box import (
+from crocopy.bench.box_parity import (
     CHAOS_EPS,
     PERTURBATIONS,
     Replay,

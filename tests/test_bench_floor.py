@@ -1,10 +1,10 @@
-"""crocopy.bench_floor: the Pinocchio call timer and the floor table (crocopy side; no Crocoddyl needed)."""
+"""crocopy.bench.floor: the Pinocchio call timer and the floor table (crocopy side; no Crocoddyl needed)."""
 
 import numpy as np
 import pinocchio
 
 import crocopy
-from crocopy.bench_floor import PinocchioCallTimer, floor_of_problem, format_floor
+from crocopy.bench.floor import PinocchioCallTimer, floor_of_problem, format_floor
 
 
 def test_timer_counts_wrapped_calls_and_restores_the_module():

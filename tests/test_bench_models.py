@@ -3,8 +3,8 @@
 import numpy as np
 
 import crocopy
-from crocopy.bench_models import FIELDS, compare_problem, model_kind, node_differences
-from crocopy.bench_problems import build_problem
+from crocopy.bench.node_eval import FIELDS, compare_problem, model_kind, node_differences
+from crocopy.bench.side_by_side import build_problem
 
 
 def test_identical_problems_have_no_differences_and_a_perturbed_one_shows_up():

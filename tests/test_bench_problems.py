@@ -10,9 +10,10 @@ import sys
 
 import pytest
 
-from crocopy import bench_problems, bench_report
-from crocopy.bench_memory import warmup_problem
-from crocopy.bench_problems import BenchDependencyError, LibResult, ProblemResult, bench_problem
+from crocopy.bench import report as bench_report
+from crocopy.bench import side_by_side as bench_problems
+from crocopy.bench.memory import warmup_problem
+from crocopy.bench.side_by_side import BenchDependencyError, LibResult, ProblemResult, bench_problem
 from crocopy.cli import main
 
 PHASE_KEYS = {*bench_problems.PHASES, "total"}

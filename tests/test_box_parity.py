@@ -1,15 +1,15 @@
 """Rules that make the box solvers follow Crocoddyl 3.2 (crocopy-only checks; the side-by-side runs
-against Crocoddyl are ``crocopy bench --box-parity``, :mod:`crocopy.bench_box`)."""
+against Crocoddyl are ``crocopy bench --box-parity``, :mod:`crocopy.bench.box_parity`)."""
 
 import numpy as np
 import pytest
 
 from crocopy import ActionModelUnicycle
-from crocopy.bench_box import Trace, first_divergence, meets_bar, solve_trace
-from crocopy.box_qp import BoxQP
+from crocopy.bench.box_parity import Trace, first_divergence, meets_bar, solve_trace
 from crocopy.shooting import ShootingProblem
 from crocopy.solvers.box_ddp import SolverBoxDDP
 from crocopy.solvers.box_fddp import SolverBoxFDDP
+from crocopy.solvers.box_qp import BoxQP
 
 # a QP on which the flipped Armijo sign cycles (Crocoddyl 3.2 returns the same non-optimal point)
 A = np.array([[-0.8, 0.5, 0.3], [-1.6, 0.4, 0.4], [-1.4, 0.6, -0.2]])

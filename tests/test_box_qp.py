@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize
 
-from crocopy.box_qp import BoxQP, BoxQPError, BoxQPSolution
+from crocopy.solvers.box_qp import BoxQP, BoxQPError, BoxQPSolution
 
 
 def random_qp(rng, n):

@@ -20,7 +20,7 @@ import pinocchio as pin
 import pytest
 from PIL import Image
 
-from crocopy.models.display import MeshcatDisplay
+from crocopy.models.display.meshcat_display import MeshcatDisplay
 
 CHROMIUM = "/usr/bin/chromium"
 FLAGS = [

@@ -54,5 +54,5 @@ def test_table1_row_uses_the_registry_success_rule(capsys):
     assert cells[3] == ("✓" if spec.solved(True, float(cells[2])) else "✗")
     assert not spec.solved(True, 100.0 * spec.reference["boxfddp"].cost)
     assert not spec.solved(False, spec.reference["boxfddp"].cost)
-    assert "- Box-FDDP solves all 1 rows: yes" in out  # trend summary (crocopy.table1) after the table
+    assert "- Box-FDDP solves all 1 rows: yes" in out  # trend summary (crocopy.experiments.table1) after the table
     assert "- Box-DDP fails at least on pend, jump, hop, bar: no (jump (not run), hop (not run)" in out

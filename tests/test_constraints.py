@@ -6,12 +6,9 @@ import numpy as np
 import pytest
 
 import crocopy
-from crocopy.constraints import (
-    ConstraintModelManager,
-    ConstraintModelResidual,
-    ConstraintType,
-)
-from crocopy.residual_base import ResidualDataAbstract, ResidualModelAbstract
+from crocopy.constraints.base import ConstraintModelResidual, ConstraintType
+from crocopy.constraints.manager import ConstraintModelManager
+from crocopy.residuals.base import ResidualDataAbstract, ResidualModelAbstract
 
 
 class ResidualSinus(ResidualModelAbstract):

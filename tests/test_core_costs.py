@@ -199,7 +199,7 @@ def test_stacked_cost_sum_equals_its_items_and_follows_parameter_changes(termina
 @pytest.mark.parametrize("terminal", [False, True])
 def test_compiled_stack_steps_equal_the_numpy_steps(terminal):
     """The numba kernels of the stack give the numpy steps' cost, derivatives and activation rows."""
-    from crocopy import cost_stack_kernel
+    from crocopy.costs import stack_kernel as cost_stack_kernel
 
     assert cost_stack_kernel.available
     state, nu = crocopy.StateVector(4), 4

@@ -146,7 +146,7 @@ def test_numdiff_on_lie_group_state_matches_analytic_free_dynamics():
 @pytest.mark.parametrize("robot", ["dlqr", "anymal"])
 def test_compiled_euler_chain_rule_equals_its_numpy_twin(robot):
     """Euler's compiled step and chain rule give the numpy twins' xnext, Fx, Fu and cost derivatives."""
-    from crocopy import integrator_kernel
+    from crocopy.integrators import euler_kernel as integrator_kernel
 
     assert integrator_kernel.available
     if robot == "dlqr":

@@ -13,9 +13,9 @@ import pinocchio as pin
 import pytest
 
 import crocopy
-from crocopy.models import display as display_module
-from crocopy.models.display import MeshcatDisplay, start_meshcat_server
-from crocopy.models.html_export import _key_frames, export_html, static_html_commands
+from crocopy.models.display import meshcat_display as display_module
+from crocopy.models.display.html import _key_frames, export_html, static_html_commands
+from crocopy.models.display.meshcat_display import MeshcatDisplay, start_meshcat_server
 
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
@@ -105,8 +105,8 @@ def test_bad_arguments(anymal, anymal_display):
 def test_display_rate_freq_and_dts(anymal, monkeypatch):
     with MeshcatDisplay(anymal, openDisplay=False, freq=3) as d:
         calls = []
-        original = d._set_robot
-        monkeypatch.setattr(d, "_set_robot", lambda target, q: calls.append(q.copy()) or original(target, q))
+        original = d.set_robot
+        monkeypatch.setattr(d, "set_robot", lambda target, q: calls.append(q.copy()) or original(target, q))
         xs = _bobbing(anymal, n=10)
         start = time.time()
         d.display(xs, dts=[0.02] * 9)

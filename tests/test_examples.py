@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 import crocopy
-from crocopy.models.html_export import static_html_commands
+from crocopy.models.display.html import static_html_commands
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 MAXITER = 2

@@ -7,7 +7,7 @@ import pytest
 
 import crocopy
 from crocopy import SolverHDDP
-from crocopy.residual_base import ResidualDataAbstract, ResidualModelAbstract
+from crocopy.residuals.base import ResidualDataAbstract, ResidualModelAbstract
 from crocopy.solvers.hddp_lq import LevelDerivatives, hierarchical_backward_pass
 from crocopy.solvers.projection_lq import projected_backward_pass
 
@@ -254,7 +254,7 @@ def test_bad_levels_are_rejected():
 
 
 def test_icub_upper_body_scenario_reaches_compatible_targets():
-    from crocopy.paper_hddp import HDDPScenario, _hddp_solve, run_hddp
+    from crocopy.experiments.hddp import HDDPScenario, _hddp_solve, run_hddp
 
     scn = HDDPScenario(T=10)
     assert (scn.model.nq, scn.model.nv) == (11, 11)

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 import crocopy
-from crocopy.paper_boxddp import ActionModelCar, lq_problem, run_car, run_lq
-from crocopy.paper_boxfddp import initial_positions, run_quadrotor_ics, solve_quadrotor
+from crocopy.experiments.box_ddp import ActionModelCar, lq_problem, run_car, run_lq
+from crocopy.experiments.box_fddp import initial_positions, run_quadrotor_ics, solve_quadrotor
 
 
 @pytest.mark.parametrize("u", [np.array([0.3, -1.1]), np.array([-0.45, 1.7]), None])

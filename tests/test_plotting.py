@@ -17,7 +17,7 @@ import pytest  # noqa: E402
 from PIL import Image  # noqa: E402
 
 import crocopy  # noqa: E402
-from crocopy.plotting import (  # noqa: E402
+from crocopy.callbacks.plotting import (  # noqa: E402
     gap_norms,
     plot_convergence_from_logger,
     plot_feasibility,
@@ -53,7 +53,7 @@ def _png_ok(path) -> np.ndarray:
 
 
 def test_plotting_does_not_load_matplotlib_with_crocopy(tmp_path):
-    code = "import sys, crocopy, crocopy.plotting; print('matplotlib' in sys.modules)"
+    code = "import sys, crocopy, crocopy.callbacks.plotting; print('matplotlib' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=tmp_path)
     assert out.stdout.strip() == "False"
     assert crocopy.plotOCSolution is plotOCSolution and crocopy.plotConvergence is plotConvergence

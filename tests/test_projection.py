@@ -325,7 +325,7 @@ def test_solver_reports_contradictory_rows_and_relative_degree():
 
 @pytest.mark.parametrize("tau", [0.0, 0.05])
 def test_arm_path_residual_derivatives(tau):
-    from crocopy.paper_projection import build_arm_problem
+    from crocopy.experiments.projection import build_arm_problem
 
     problem, us0, _ = build_arm_problem(dt=0.05, horizon=0.5, tau=tau)
     rng = np.random.default_rng(0)
@@ -348,7 +348,7 @@ def test_arm_path_residual_derivatives(tau):
 
 @pytest.mark.parametrize("integrator, tau", [("rk4", 0.1), ("euler", 0.0)])
 def test_arm_experiment_removes_the_path_violation(integrator, tau):
-    from crocopy.paper_projection import build_arm_problem, path_ise
+    from crocopy.experiments.projection import build_arm_problem, path_ise
 
     problem, us0, info = build_arm_problem(dt=0.05, horizon=2.0, integrator=integrator, tau=tau)
     assert info["N"] == 40
@@ -365,7 +365,7 @@ def test_arm_experiment_removes_the_path_violation(integrator, tau):
 
 
 def test_arm_policy_check_finds_the_sampling_zero():
-    from crocopy.paper_projection import policy_check
+    from crocopy.experiments.projection import policy_check
 
     rows = dict(policy_check(dt=0.05, horizon=0.5))
     assert "most negative -1.0000" in rows["RK4, e = 0"]

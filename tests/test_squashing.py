@@ -4,16 +4,10 @@ import numpy as np
 import pytest
 
 from crocopy import ActionModelLQR, ActionModelUnicycle
-from crocopy.penalty import ActionModelControlPenalty
+from crocopy.actions.control_penalty import ActionModelControlPenalty
 from crocopy.shooting import ShootingProblem
 from crocopy.solvers import SolverDDP
-from crocopy.squashing_action import (
-    ActionModelSquashed,
-    smooth_sat,
-    smooth_sat_diff,
-    tanh_squash,
-    tanh_squash_diff,
-)
+from crocopy.squashing.action import ActionModelSquashed, smooth_sat, smooth_sat_diff, tanh_squash, tanh_squash_diff
 
 H = 1e-6
 

@@ -1,8 +1,8 @@
-"""Trend checks of ``crocopy table1`` (:mod:`crocopy.table1`) on synthetic rows."""
+"""Trend checks of ``crocopy table1`` (:mod:`crocopy.experiments.table1`) on synthetic rows."""
 
 import pytest
 
-from crocopy.table1 import BOXDDP_MUST_FAIL, TIE_RTOL, RowResult, format_trend, trend_checks
+from crocopy.experiments.table1 import BOXDDP_MUST_FAIL, TIE_RTOL, RowResult, format_trend, trend_checks
 
 
 def _rows(**overrides):

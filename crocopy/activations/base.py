@@ -14,7 +14,7 @@ class ParametersVersion:
     """Counter bumped whenever a parameter that cost sums cache changes.
 
     Activation weights and bounds, and the weight or status of a cost item, go through setters that
-    call :meth:`bump`; a :class:`~crocopy.cost_stack.CostStack` re-reads them when the value moved.
+    call :meth:`bump`; a :class:`~crocopy.costs.stack.CostStack` re-reads them when the value moved.
     """
 
     value = 0

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..data_collector import DataCollectorAbstract
-from ..residual_base import ResidualDataAbstract, ResidualModelAbstract
 from ..state import StateAbstract
 from ..validation import as_vector
+from .base import ResidualDataAbstract, ResidualModelAbstract
 
 
 class ResidualModelControl(ResidualModelAbstract):

@@ -4,4 +4,12 @@ from .base import BackwardPassError, SolverAbstract
 from .ddp import SolverDDP
 from .fddp import SolverFDDP
 
-__all__ = ["BackwardPassError", "SolverAbstract", "SolverDDP", "SolverFDDP"]
+SOLVERS = {
+    "boxfddp": "SolverBoxFDDP",
+    "boxddp": "SolverBoxDDP",
+    "fddp": "SolverFDDP",
+    "ddp": "SolverDDP",
+}
+"""Short solver names (the CLI's ``--solver`` choices) → class names, the same in crocopy and Crocoddyl."""
+
+__all__ = ["SOLVERS", "BackwardPassError", "SolverAbstract", "SolverDDP", "SolverFDDP"]

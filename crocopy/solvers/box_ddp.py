@@ -6,7 +6,7 @@ sign, ``δu = -k - K δx``)::
 
     k = -argmin_δu ½ δuᵀ Quu δu + Quᵀ δu   s.t.  u_lb - u <= δu <= u_ub - u,
 
-solved by :class:`crocopy.box_qp.BoxQP` warm-started from the previous iteration's solution
+solved by :class:`crocopy.solvers.box_qp.BoxQP` warm-started from the previous iteration's solution
 ``δu = -k`` (Box-FDDP paper eq. 15, projected into the box by the QP).  The
 feedback acts on the free subspace only: ``K = Quu_inv Qux`` with ``Quu_inv`` the inverse of the
 free block ``Quu_ff`` zero-padded to ``(nu, nu)`` (rows of clamped controls are zero).  The
@@ -41,7 +41,7 @@ iterates to round-off (``crocopy bench --box-parity``):
 1. the QP warm start is Crocoddyl's stored ``k`` itself, i.e. ``-δu`` of the previous iteration (a
    sign error against eq. 15: the mirrored guess is often clamped on the opposite bound);
 2. the QP's line search accepts a cost increase of up to ``th_acceptStep`` times the predicted
-   decrease (flipped Armijo sign, :mod:`crocopy.box_qp`);
+   decrease (flipped Armijo sign, :mod:`crocopy.solvers.box_qp`);
 3. Box-DDP from an infeasible iterate rolls out from ``x0`` but keeps the *last* gap open by
    ``(1 - α)`` and then declares the iterate feasible (and ``ffeas`` reports the gaps of iterates
    declared feasible).
@@ -56,11 +56,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..box_qp import BoxQP, BoxQPError
 from ..shooting import ShootingProblem
 from ..validation import check_bounds
 from . import box_kernel, riccati_kernel
 from .base import BackwardPassError, ForwardPassError
+from .box_qp import BoxQP, BoxQPError
 from .ddp import SolverDDP
 
 __all__ = ["SolverBoxDDP"]

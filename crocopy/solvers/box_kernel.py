@@ -1,8 +1,8 @@
-"""Compiled Box-DDP node step (numba), twin of the numpy path of :mod:`.box_ddp` and :mod:`crocopy.box_qp`.
+"""Compiled Box-DDP node step (numba), twin of the numpy path of :mod:`.box_ddp` and :mod:`crocopy.solvers.box_qp`.
 
 For node t with next value function ``(V'x, V'xx)`` (Crocoddyl's signs) it computes the Q terms
 (as :mod:`.riccati_kernel`), solves the box QP ``min ½ δuᵀ Quu δu + Quᵀ δu, lb ≤ δu ≤ ub`` by the
-same projected-Newton iteration as :class:`crocopy.box_qp.BoxQP` (warm start ``warm * k``, i.e. ``-k``,
+same projected-Newton iteration as :class:`crocopy.solvers.box_qp.BoxQP` (warm start ``warm * k``, i.e. ``-k``,
 or ``+k`` in Crocoddyl-compatible mode; no extra regularisation; signed Armijo ratio ``th_acc`` over
 ``2^-n``; stop on ``‖g_f‖∞ ≤ th_grad`` after the step), sets ``k = -δu``,
 ``Quu_inv`` (free block inverse, zero-padded), ``K = Quu_inv Qux``, zeroes the ``Qu`` entries of

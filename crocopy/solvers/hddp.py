@@ -28,9 +28,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..costs import CostModelSum
-from ..integrator_base import IntegratedActionModelAbstract
-from ..integrator_euler import IntegratedActionModelEuler
+from ..costs.sum import CostModelSum
+from ..integrators.base import IntegratedActionModelAbstract
+from ..integrators.euler import IntegratedActionModelEuler
 from ..shooting import ShootingProblem
 from .base import ForwardPassError
 from .ddp import SolverDDP

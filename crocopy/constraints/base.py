@@ -1,0 +1,178 @@
+"""Constraint models: residuals used as inequalities ``lb <= g(x, u) <= ub`` or equalities ``h(x, u) = 0``.
+
+A constraint holds ``ng`` inequality rows (value ``g (ng,)``, Jacobians ``Gx (ng, ndx)``,
+``Gu (ng, nu)``, bounds ``lb``/``ub``) and ``nh`` equality rows (``h (nh,)``, ``Hx (nh, ndx)``,
+``Hu (nh, nu)``).  :class:`ConstraintModelManager` stacks named constraints, ordered by name as in
+Crocoddyl; on terminal nodes (``u`` omitted) only constraints with ``T_constraint`` contribute,
+and they fill the first ``ng_T``/``nh_T`` rows.  A differential or action model with constraints
+exposes the manager's counts as its ``ng, nh, ng_T, nh_T`` and bounds as ``g_lb, g_ub``, and hands
+its data arrays to the manager's data with :meth:`ConstraintDataManager.shareMemory`.
+"""
+
+from __future__ import annotations
+
+import enum
+
+import numpy as np
+
+from ..data_collector import DataCollectorAbstract
+from ..residuals.base import ResidualModelAbstract
+from ..state import StateAbstract
+from ..validation import as_vector, check_bounds
+
+
+class ConstraintType(enum.IntEnum):
+    """Kind of rows a constraint holds."""
+
+    Inequality = 0
+    Equality = 1
+    Both = 2
+
+
+class ConstraintModelAbstract:
+    """Abstract constraint (Crocoddyl's ``ConstraintModelAbstract``).
+
+    Constructed as ``(state, residual, ng, nh)``, ``(state, nu, ng, nh, T_const=True)`` or
+    ``(state, ng, nh, T_const=True)`` (then ``nu = state.nv``).
+    """
+
+    def __init__(self, state: StateAbstract, *args, T_const: bool = True) -> None:
+        if not isinstance(state, StateAbstract):
+            raise ValueError(f"state must be a StateAbstract, got {type(state).__name__}")
+        self.state = state
+        self.residual: ResidualModelAbstract | None = None
+        if args and isinstance(args[0], ResidualModelAbstract):
+            if len(args) != 3:
+                raise ValueError("ConstraintModelAbstract(state, residual, ng, nh) takes exactly ng and nh")
+            self.residual, ng, nh = args
+            self.nu = self.residual.nu
+            T_const = True
+        elif len(args) in (3, 4):
+            nu, ng, nh = args[:3]
+            if len(args) == 4:
+                T_const = args[3]
+            self.nu = int(nu)
+        elif len(args) in (2,):
+            ng, nh = args
+            self.nu = state.nv
+        else:
+            raise ValueError("ConstraintModelAbstract takes (state, residual, ng, nh), (state, nu, ng, nh[, T_const])"
+                             " or (state, ng, nh[, T_const])")
+        if int(ng) < 0 or int(nh) < 0:
+            raise ValueError(f"ng and nh must be non-negative, got ng={ng}, nh={nh}")
+        self.ng = int(ng)
+        self.nh = int(nh)
+        self.T_constraint = bool(T_const)
+        self._lb = np.full(self.ng, -np.inf)
+        self._ub = np.full(self.ng, np.inf)
+        self._update_type()
+
+    def _update_type(self) -> None:
+        if self.ng and self.nh:
+            self.type = ConstraintType.Both
+        elif self.ng:
+            self.type = ConstraintType.Inequality
+        else:
+            self.type = ConstraintType.Equality
+
+    @property
+    def lb(self) -> np.ndarray:
+        """Lower bound of the inequality rows, shape ``(ng,)``."""
+        return self._lb
+
+    @property
+    def ub(self) -> np.ndarray:
+        """Upper bound of the inequality rows, shape ``(ng,)``."""
+        return self._ub
+
+    def updateBounds(self, lower: np.ndarray, upper: np.ndarray) -> None:
+        """Set the inequality bounds (each of shape ``(ng,)``, ``lower <= upper``)."""
+        lower = as_vector(lower, self.ng, "lower", allow_nonfinite=True)
+        upper = as_vector(upper, self.ng, "upper", allow_nonfinite=True)
+        check_bounds(lower, upper, "lower", "upper")
+        self._lb, self._ub = lower.copy(), upper.copy()
+
+    def removeBounds(self) -> None:
+        """Make the inequality rows unbounded."""
+        self._lb = np.full(self.ng, -np.inf)
+        self._ub = np.full(self.ng, np.inf)
+
+    def createData(self, data: DataCollectorAbstract | None = None) -> "ConstraintDataAbstract":
+        """Allocate the data this constraint writes into (``data`` is the node's data collector)."""
+        return ConstraintDataAbstract(self, data)
+
+    def calc(self, data: "ConstraintDataAbstract", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        raise NotImplementedError(f"{type(self).__name__}.calc is not implemented")
+
+    def calcDiff(self, data: "ConstraintDataAbstract", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        raise NotImplementedError(f"{type(self).__name__}.calcDiff is not implemented")
+
+    def __repr__(self) -> str:
+        inner = f"{{{type(self.residual).__name__}}}" if self.residual is not None else f"(ng={self.ng}, nh={self.nh})"
+        return f"{type(self).__name__} {inner}"
+
+
+class ConstraintDataAbstract:
+    """Values ``g, h``, Jacobians ``Gx, Gu, Hx, Hu``, the residual data and the ``shared`` collector."""
+
+    def __init__(self, model: ConstraintModelAbstract, data: DataCollectorAbstract | None) -> None:
+        ndx, nu = model.state.ndx, model.nu
+        self.shared = data
+        self.residual = model.residual.createData(data) if model.residual is not None else None
+        self.g = np.zeros(model.ng)
+        self.Gx = np.zeros((model.ng, ndx))
+        self.Gu = np.zeros((model.ng, nu))
+        self.h = np.zeros(model.nh)
+        self.Hx = np.zeros((model.nh, ndx))
+        self.Hu = np.zeros((model.nh, nu))
+
+
+class ConstraintModelResidual(ConstraintModelAbstract):
+    """A residual as a constraint (Crocoddyl's ``ConstraintModelResidual``).
+
+    ``ConstraintModelResidual(state, residual, lower, upper, T_constraint=True)`` gives the
+    inequality ``lower <= r(x, u) <= upper``; ``ConstraintModelResidual(state, residual,
+    T_constraint=True)`` gives the equality ``r(x, u) = 0``.  A residual that reads only ``u``
+    is never a terminal constraint.
+    """
+
+    def __init__(self, state: StateAbstract, residual: ResidualModelAbstract, *args, T_constraint: bool = True) -> None:
+        if not isinstance(residual, ResidualModelAbstract):
+            raise ValueError(f"residual must be a ResidualModelAbstract, got {type(residual).__name__}")
+        if residual.state.nx != state.nx or residual.state.ndx != state.ndx:
+            raise ValueError("residual was built on a state of another dimension than the constraint")
+        if len(args) >= 2 and not isinstance(args[0], bool):
+            lower, upper = args[0], args[1]
+            if len(args) == 3:
+                T_constraint = args[2]
+            elif len(args) > 3:
+                raise ValueError("ConstraintModelResidual takes (state, residual, lower, upper[, T_constraint])")
+            super().__init__(state, residual, residual.nr, 0)
+            self.updateBounds(lower, upper)
+        elif len(args) <= 1:
+            if args:
+                T_constraint = args[0]
+            super().__init__(state, residual, 0, residual.nr)
+        else:
+            raise ValueError("ConstraintModelResidual takes (state, residual[, T_constraint]) or "
+                             "(state, residual, lower, upper[, T_constraint])")
+        self.T_constraint = bool(T_constraint) and (residual.q_dependent or residual.v_dependent)
+
+    def calc(self, data: ConstraintDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
+        """Evaluate the residual into ``g`` (inequality) or ``h`` (equality)."""
+        self.residual.calc(data.residual, x, u)
+        if self.ng:
+            data.g[:] = data.residual.r
+        else:
+            data.h[:] = data.residual.r
+
+    def calcDiff(self, data: ConstraintDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
+        """Copy the residual Jacobians into ``Gx, Gu`` or ``Hx, Hu`` (``Gu``/``Hu`` zero when ``u`` is None)."""
+        rdata = data.residual
+        self.residual.calcDiff(rdata, x, u)
+        Jx, Ju = (data.Gx, data.Gu) if self.ng else (data.Hx, data.Hu)
+        Jx[:] = rdata.Rx
+        if u is None or not self.residual.u_dependent:
+            Ju[:] = 0.0
+        else:
+            Ju[:] = rdata.Ru

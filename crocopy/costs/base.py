@@ -1,0 +1,159 @@
+"""Cost models: an activation of a residual, and weighted sums of named costs.
+
+For ``l = a(r(x, u))``: ``Lx = Rxᵀ Ar``, ``Lu = Ruᵀ Ar``, and the Gauss-Newton Hessians
+``Lxx = Rxᵀ Arr Rx``, ``Lxu = Rxᵀ Arr Ru``, ``Luu = Ruᵀ Arr Ru``.  A cost sum adds
+``weight * l`` over its active items.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..activations import ActivationModelAbstract, ActivationModelQuad
+from ..data_collector import DataCollectorAbstract
+from ..residuals.base import ResidualModelAbstract
+from ..state import StateAbstract
+
+
+class CostModelAbstract:
+    """Abstract cost ``l(x, u)`` of an activation and a residual (Crocoddyl's ``CostModelAbstract``)."""
+
+    def __init__(
+        self, state: StateAbstract, activation: ActivationModelAbstract, residual: ResidualModelAbstract
+    ) -> None:
+        if activation.nr != residual.nr:
+            raise ValueError(
+                f"activation.nr = {activation.nr} does not match residual.nr = {residual.nr}"
+            )
+        if residual.state.nx != state.nx or residual.state.ndx != state.ndx:
+            raise ValueError("residual was built on a different state than the cost")
+        self.state = state
+        self.activation = activation
+        self.residual = residual
+        self.nu = residual.nu
+
+    def createData(self, data: DataCollectorAbstract | None = None) -> "CostDataAbstract":
+        return CostDataAbstract(self, data)
+
+    def calc(self, data: "CostDataAbstract", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        raise NotImplementedError
+
+    def calcDiff(self, data: "CostDataAbstract", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        raise NotImplementedError
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.residual!r}, {self.activation!r})"
+
+
+class CostDataAbstract:
+    """Cost value and derivatives, with the residual and activation data."""
+
+    def __init__(self, model: CostModelAbstract, data: DataCollectorAbstract | None) -> None:
+        ndx, nu = model.state.ndx, model.nu
+        self.shared = data
+        self.cost = 0.0
+        self.Lx = np.zeros(ndx)
+        self.Lu = np.zeros(nu)
+        self.Lxx = np.zeros((ndx, ndx))
+        self.Lxu = np.zeros((ndx, nu))
+        self.Luu = np.zeros((nu, nu))
+        self.residual = model.residual.createData(data)
+        self.activation = model.activation.createData()
+
+    @property
+    def r(self) -> np.ndarray:
+        """Residual vector of this cost, shape ``(nr,)``."""
+        return self.residual.r
+
+
+class CostModelResidual(CostModelAbstract):
+    """``CostModelResidual(state, activation, residual)`` or ``(state, residual)`` (quadratic activation)."""
+
+    def __init__(self, state: StateAbstract, activation, residual: ResidualModelAbstract | None = None) -> None:
+        if residual is None:
+            residual, activation = activation, ActivationModelQuad(activation.nr)
+        super().__init__(state, activation, residual)
+        self._terminal_zero = not (residual.q_dependent or residual.v_dependent)
+
+    def createData(self, data: DataCollectorAbstract | None = None) -> "CostDataResidual":
+        return CostDataResidual(self, data)
+
+    def calc(self, data: "CostDataResidual", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        data.zero = u is None and self._terminal_zero
+        if data.zero:
+            data.residual.r[:] = 0.0
+            return
+        self.residual.calc(data.residual, x, u)
+        self.activation.calc(data.activation, data.residual.r)
+
+    def calcDiff(self, data: "CostDataResidual", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        """Residual and activation derivatives; ``data.Lx`` ... ``data.Luu`` are formed from them when read."""
+        data.with_u = u is not None and self.residual.u_dependent
+        data.zero = u is None and self._terminal_zero
+        if data.zero:
+            return
+        self.residual.calcDiff(data.residual, x, u)
+        self.activation.calcDiff(data.activation, data.residual.r)
+
+
+class CostDataResidual(CostDataAbstract):
+    """Data of :class:`CostModelResidual`.
+
+    ``cost`` is the activation value (zero for a control-only residual at a terminal node).
+    ``Lx``, ``Lu``, ``Lxx``, ``Lxu`` and ``Luu`` are read-only products of the residual Jacobians
+    and the activation derivatives of the last ``calcDiff`` (formed on each read; a cost sum never
+    reads them, it stacks the residual Jacobians instead).
+    """
+
+    def __init__(self, model: CostModelResidual, data: DataCollectorAbstract | None) -> None:
+        self.shared = data
+        self.residual = model.residual.createData(data)
+        self.activation = model.activation.createData()
+        self.with_u = False
+        self.zero = True
+        self._ndx, self._nu = model.state.ndx, model.nu
+
+    @property
+    def cost(self) -> float:
+        """Cost value ``a(r(x, u))``."""
+        return 0.0 if self.zero else self.activation.a_value
+
+    def _hessian_times(self, J: np.ndarray) -> np.ndarray:
+        adata = self.activation
+        if adata._diagonal:
+            return adata.Arr_diag[:, None] * J
+        return adata.Arr @ J
+
+    def _active(self, with_u: bool = False) -> bool:
+        return not self.zero and (self.with_u or not with_u)
+
+    @property
+    def Lx(self) -> np.ndarray:
+        """Gradient in ``x``, shape ``(ndx,)``."""
+        return self.residual.Rx.T @ self.activation.Ar if self._active() else np.zeros(self._ndx)
+
+    @property
+    def Lu(self) -> np.ndarray:
+        """Gradient in ``u``, shape ``(nu,)``."""
+        return self.residual.Ru.T @ self.activation.Ar if self._active(True) else np.zeros(self._nu)
+
+    @property
+    def Lxx(self) -> np.ndarray:
+        """Gauss-Newton Hessian in ``x``, shape ``(ndx, ndx)``."""
+        if not self._active():
+            return np.zeros((self._ndx, self._ndx))
+        return self.residual.Rx.T @ self._hessian_times(self.residual.Rx)
+
+    @property
+    def Lxu(self) -> np.ndarray:
+        """Gauss-Newton cross Hessian, shape ``(ndx, nu)``."""
+        if not self._active(True):
+            return np.zeros((self._ndx, self._nu))
+        return self.residual.Rx.T @ self._hessian_times(self.residual.Ru)
+
+    @property
+    def Luu(self) -> np.ndarray:
+        """Gauss-Newton Hessian in ``u``, shape ``(nu, nu)``."""
+        if not self._active(True):
+            return np.zeros((self._nu, self._nu))
+        return self.residual.Ru.T @ self._hessian_times(self.residual.Ru)

@@ -1,0 +1,141 @@
+"""Weighted sums of named costs (Crocoddyl's ``CostModelSum``), ordered by name."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..activations.base import ParametersVersion
+from ..data_collector import DataCollectorAbstract
+from ..named_items import NamedItems
+from ..state import StateAbstract
+from .base import CostModelAbstract, CostModelResidual
+from .stack import CostStack
+
+
+@dataclass
+class CostItem:
+    """A named, weighted cost in a :class:`CostModelSum` (changing ``weight``/``active`` is seen by its data)."""
+
+    name: str
+    cost: CostModelAbstract
+    weight: float
+    active: bool = True
+
+    def __setattr__(self, name: str, value: object) -> None:
+        object.__setattr__(self, name, value)
+        ParametersVersion.bump()
+
+    def __repr__(self) -> str:
+        return f"{{w={self.weight}, {self.cost!r}}}"
+
+
+class CostModelSum(NamedItems):
+    """Weighted sum of named costs (Crocoddyl's ``CostModelSum``).
+
+    Parameters
+    ----------
+    state : StateAbstract
+        State manifold.
+    nu : int, optional
+        Control dimension (default ``state.nv``).
+    """
+
+    _kind = "cost"
+    _sorted = False
+
+    def __init__(self, state: StateAbstract, nu: int | None = None) -> None:
+        self.state = state
+        self.nu = state.nv if nu is None else int(nu)
+        self._items: dict[str, CostItem] = {}
+        self.nr = 0
+        self.nr_total = 0
+
+    @property
+    def costs(self) -> dict[str, CostItem]:
+        """All items (active or not), in insertion order."""
+        return self._items
+
+    def _recount(self) -> None:
+        self.nr = sum(c.cost.activation.nr for c in self._items.values() if c.active)
+        self.nr_total = sum(c.cost.activation.nr for c in self._items.values())
+
+    def addCost(self, name: str, cost: CostModelAbstract, weight: float, active: bool = True) -> None:
+        """Add ``weight * cost`` under ``name``."""
+        self._check_new_name(name)
+        if cost.nu != self.nu:
+            raise ValueError(f"cost {name!r} has nu = {cost.nu}, expected nu = {self.nu}")
+        if cost.state.nx != self.state.nx or cost.state.ndx != self.state.ndx:
+            raise ValueError(f"cost {name!r} was built on a state of another dimension")
+        if not np.isfinite(weight):
+            raise ValueError(f"weight of cost {name!r} must be finite, got {weight}")
+        self._insert(name, CostItem(name, cost, float(weight), bool(active)))
+
+    def removeCost(self, name: str) -> None:
+        """Remove the cost ``name``."""
+        self._remove(name)
+
+    def changeCostStatus(self, name: str, active: bool) -> None:
+        """Activate or deactivate the cost ``name``."""
+        self._set_active(name, active)
+
+    def createData(self, data: DataCollectorAbstract | None = None) -> "CostDataSum":
+        return CostDataSum(self, data)
+
+    def calc(self, data: "CostDataSum", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        total = data.stack.calc(x, u)
+        for name in data.generic:
+            item = self._items[name]
+            if item.active:
+                cd = data.costs[name]
+                item.cost.calc(cd, x, u)
+                total += item.weight * cd.cost
+        data.cost = total
+
+    def calcDiff(self, data: "CostDataSum", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        with_u = u is not None
+        data.stack.calcDiff(data, x, u)
+        for name in data.generic:
+            item = self._items[name]
+            if not item.active:
+                continue
+            cd = data.costs[name]
+            item.cost.calcDiff(cd, x, u)
+            w = item.weight
+            data.Lx += w * cd.Lx
+            data.Lxx += w * cd.Lxx
+            if with_u and item.cost.residual.u_dependent:
+                data.Lu += w * cd.Lu
+                data.Lxu += w * cd.Lxu
+                data.Luu += w * cd.Luu
+
+    def __repr__(self) -> str:
+        return "CostModelSum(" + ", ".join(f"{n}: {c!r}" for n, c in self.costs.items()) + ")"
+
+
+class CostDataSum:
+    """Data of a :class:`CostModelSum`: one data per item in ``costs`` plus the sums.
+
+    Residual costs with diagonal activations share a :class:`~crocopy.costs.stack.CostStack`
+    (``stack``); the other items (``generic``) add their own derivatives.
+    """
+
+    def __init__(self, model: CostModelSum, data: DataCollectorAbstract | None) -> None:
+        ndx, nu = model.state.ndx, model.nu
+        self.shared = data
+        self.costs = {name: item.cost.createData(data) for name, item in model.costs.items()}
+        self.cost = 0.0
+        self.Lx = np.zeros(ndx)
+        self.Lu = np.zeros(nu)
+        self.Lxx = np.zeros((ndx, ndx))
+        self.Lxu = np.zeros((ndx, nu))
+        self.Luu = np.zeros((nu, nu))
+        stackable = [
+            (name, item, self.costs[name])
+            for name, item in model.costs.items()
+            if isinstance(item.cost, CostModelResidual) and item.cost.activation.diagonal and item.cost.residual.nr
+        ]
+        self.stack = CostStack(stackable, ndx, nu)
+        stacked = {name for name, _, _ in stackable}
+        self.generic = [name for name in model.costs if name not in stacked]

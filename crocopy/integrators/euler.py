@@ -1,0 +1,104 @@
+"""Symplectic Euler integration of a differential action model.
+
+With ``x = (q, v)`` and ``a = a(x, u)``: ``dx = ((v + a dt) dt, a dt)``, ``xnext = x ⊕ dx``,
+``cost = dt l(x, u)``.  Derivatives by the chain rule through the state's ``Jintegrate``::
+
+    ∂dx/∂x = [[dt² Fx + dt [0 I]], [dt Fx]],   ∂dx/∂u = [[dt² Fu], [dt Fu]]
+    Fx = J_x + J_dx ∂dx/∂x,                  Fu = J_dx ∂dx/∂u
+
+States that implement ``JintegrateTransport`` apply ``J_dx`` by transporting the rows of ``∂dx/∂x``
+and ``∂dx/∂u`` in place (no dense ``(ndx, ndx)`` product).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..action_base import ActionDataAbstract
+from ..enums import Jcomponent
+from ..state import StateAbstract
+from . import euler_kernel as integrator_kernel
+from .base import IntegratedActionModelAbstract
+
+
+class IntegratedActionModelEuler(IntegratedActionModelAbstract):
+    """Crocoddyl's ``IntegratedActionModelEuler(diffModel, timeStep=1e-3, withCostResidual=True)``.
+
+    ``use_kernel`` (default: numba available) takes the step and applies the chain rule with
+    :mod:`~crocopy.integrators.euler_kernel`'s compiled functions instead of their numpy twins.
+    """
+
+    use_kernel = integrator_kernel.available
+
+    def __init__(self, diffModel, timeStep: float = 1e-3, withCostResidual: bool = True) -> None:
+        super().__init__(diffModel, timeStep, withCostResidual)
+        self._transport = not self._euclidean and (
+            type(self.state).JintegrateTransport is not StateAbstract.JintegrateTransport
+        )
+
+    def createData(self) -> "IntegratedActionDataEuler":
+        return IntegratedActionDataEuler(self)
+
+    def calc(self, data: "IntegratedActionDataEuler", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        ddata = data.differential
+        if u is None:
+            self._terminal_calc(data, ddata, x)
+            return
+        self.differential.calc(ddata, x, u)
+        dt = self._dt
+        dx = data.dx
+        step = integrator_kernel.euler_step if self.use_kernel else integrator_kernel.euler_step_numpy
+        step(ddata.xout, x, dt, dx)
+        self.state._integrate_into(x, dx, data.xnext)
+        data.cost = dt * ddata.cost
+        if self.withCostResidual:
+            data.r[:] = ddata.r
+        self._copy_constraints(data, ddata, diff=False)
+
+    def calcDiff(self, data: "IntegratedActionDataEuler", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        ddata = data.differential
+        if u is None:
+            self._terminal_calcDiff(data, ddata, x)
+            return
+        self.differential.calcDiff(ddata, x, u)
+        if self._euclidean or self._transport:
+            chain = integrator_kernel.euler_chain if self.use_kernel else integrator_kernel.euler_chain_numpy
+            chain(
+                ddata.Fx, ddata.Fu, ddata.Lx, ddata.Lu, ddata.Lxx, ddata.Lxu, ddata.Luu, self._dt, self._euclidean,
+                data.Fx, data.Fu, data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu,
+            )
+            if self._transport:
+                self.state._integrate_chain_rule(x, data.dx, data.Fx, data.Fu)
+            self._copy_constraints(data, ddata, diff=True)
+            return
+        nv, dt = self.state.nv, self._dt
+        dxdx, dxdu = data.ddx_dx, data.ddx_du
+        np.multiply(ddata.Fx, dt, out=dxdx[nv:])
+        np.multiply(dxdx[nv:], dt, out=dxdx[:nv])
+        dxdx.reshape(-1)[data.qv_diagonal] += dt
+        np.multiply(ddata.Fu, dt, out=dxdu[nv:])
+        np.multiply(dxdu[nv:], dt, out=dxdu[:nv])
+        Jx, Jdx = self.state.Jintegrate(x, data.dx, Jcomponent.both)
+        np.dot(Jdx, dxdx, out=data.Fx)
+        data.Fx += Jx
+        np.dot(Jdx, dxdu, out=data.Fu)
+        np.multiply(ddata.Lx, dt, out=data.Lx)
+        np.multiply(ddata.Lu, dt, out=data.Lu)
+        np.multiply(ddata.Lxx, dt, out=data.Lxx)
+        np.multiply(ddata.Lxu, dt, out=data.Lxu)
+        np.multiply(ddata.Luu, dt, out=data.Luu)
+        self._copy_constraints(data, ddata, diff=True)
+
+
+class IntegratedActionDataEuler(ActionDataAbstract):
+    """Data of :class:`IntegratedActionModelEuler`: ``differential`` data, ``dx`` and the chain-rule blocks."""
+
+    def __init__(self, model: IntegratedActionModelEuler) -> None:
+        super().__init__(model)
+        ndx, nv, nu = model.state.ndx, model.state.nv, model.nu
+        self.differential = model.differential.createData()
+        self.dx = np.zeros(ndx)
+        self.ddx_dx = np.zeros((ndx, ndx))
+        self.ddx_du = np.zeros((ndx, nu))
+        self.qv_diagonal = slice(ndx - nv, (ndx - nv) + nv * (ndx + 1), ndx + 1)
+

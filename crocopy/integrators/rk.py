@@ -1,0 +1,146 @@
+"""Explicit Runge-Kutta integration (orders 2, 3, 4) of a differential action model.
+
+Stage ``i`` evaluates the differential model at ``yᵢ = x ⊕ (cᵢ dt kᵢ₋₁)`` (``y₀ = x``) and forms
+the tangent rate ``kᵢ = (vᵢ, aᵢ)``; then ``xnext = x ⊕ dt Σ bᵢ kᵢ`` and ``cost = dt Σ bᵢ lᵢ``.
+Tableaux (each stage uses only the previous one): RK2 midpoint ``c = (0, ½)``, ``b = (0, 1)``;
+RK3 Heun ``c = (0, ⅓, ⅔)``, ``b = (¼, 0, ¾)``; RK4 classic ``c = (0, ½, ½, 1)``,
+``b = (⅙, ⅓, ⅓, ⅙)``.  Derivatives propagate ``∂yᵢ/∂(x, u)`` stage by stage; cost Hessians are
+Gauss-Newton (the curvature of ``yᵢ`` itself is dropped).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..action_base import ActionDataAbstract
+from ..diff_action_base import DifferentialActionModelAbstract
+from ..enums import Jcomponent, RKType
+from .base import IntegratedActionModelAbstract
+
+_TABLEAUX = {
+    RKType.two: ((0.0, 0.5), (0.0, 1.0)),
+    RKType.three: ((0.0, 1.0 / 3.0, 2.0 / 3.0), (0.25, 0.0, 0.75)),
+    RKType.four: ((0.0, 0.5, 0.5, 1.0), (1.0 / 6.0, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 6.0)),
+}
+
+
+class IntegratedActionModelRK(IntegratedActionModelAbstract):
+    """Crocoddyl's ``IntegratedActionModelRK(diffModel, rktype, timeStep=1e-3, withCostResidual=True)``."""
+
+    def __init__(
+        self,
+        diffModel: DifferentialActionModelAbstract,
+        rktype: RKType,
+        timeStep: float = 1e-3,
+        withCostResidual: bool = True,
+    ) -> None:
+        try:
+            rktype = RKType(rktype)
+        except ValueError as exc:
+            raise ValueError(f"rktype must be RKType.two, three or four, got {rktype!r}") from exc
+        super().__init__(diffModel, timeStep, withCostResidual)
+        self.rk_type = rktype
+        self.rk_c, self.rk_b = _TABLEAUX[rktype]
+        self.ni = len(self.rk_c)
+
+    def _differential_data(self, data: "IntegratedActionDataRK"):
+        """The first stage's data: the differential model evaluated at the node's own state."""
+        return data.differential[0]
+
+    def createData(self) -> "IntegratedActionDataRK":
+        return IntegratedActionDataRK(self)
+
+    def calc(self, data: "IntegratedActionDataRK", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        if u is None:
+            self._terminal_calc(data, self._differential_data(data), x)
+            return
+        nv, dt, state = self.state.nv, self._dt, self.state
+        cost = 0.0
+        dx = data.dx
+        dx[:] = 0.0
+        for i, (c, b) in enumerate(zip(self.rk_c, self.rk_b)):
+            if i == 0:
+                y = x
+            else:
+                np.multiply(data.ki[i - 1], c * dt, out=data.dyi[i])
+                y = state.integrate(x, data.dyi[i])
+            data.y[i][:] = y
+            dd = data.differential[i]
+            self.differential.calc(dd, y, u)
+            data.ki[i][:nv] = y[-nv:]
+            data.ki[i][nv:] = dd.xout
+            if b:
+                dx += (b * dt) * data.ki[i]
+                cost += b * dd.cost
+        data.xnext[:] = state.integrate(x, dx)
+        data.cost = dt * cost
+        d0 = data.differential[0]
+        if self.withCostResidual:
+            data.r[:] = d0.r
+        self._copy_constraints(data, d0, diff=False)
+
+    def calcDiff(self, data: "IntegratedActionDataRK", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        if u is None:
+            self._terminal_calcDiff(data, self._differential_data(data), x)
+            return
+        nv, dt, state = self.state.nv, self._dt, self.state
+        ndx = state.ndx
+        dkdx_sum, dkdu_sum = data.dkdx_sum, data.dkdu_sum
+        dkdx_sum[:] = 0.0
+        dkdu_sum[:] = 0.0
+        for name in ("Lx", "Lu", "Lxx", "Lxu", "Luu"):
+            getattr(data, name)[:] = 0.0
+        for i, (c, b) in enumerate(zip(self.rk_c, self.rk_b)):
+            dydx, dydu = data.dydx[i], data.dydu[i]
+            if i == 0:
+                dydx[:] = np.eye(ndx)
+                dydu[:] = 0.0
+            else:
+                Jx, Jdy = state.Jintegrate(x, data.dyi[i], Jcomponent.both)
+                dydx[:] = Jx + (c * dt) * (Jdy @ data.dkdx[i - 1])
+                dydu[:] = (c * dt) * (Jdy @ data.dkdu[i - 1])
+            dd = data.differential[i]
+            self.differential.calcDiff(dd, data.y[i], u)
+            dkdx, dkdu = data.dkdx[i], data.dkdu[i]
+            dkdx[:nv] = dydx[nv:]
+            dkdu[:nv] = dydu[nv:]
+            dkdx[nv:] = dd.Fx @ dydx
+            dkdu[nv:] = dd.Fx @ dydu + dd.Fu
+            if b:
+                w = b * dt
+                dkdx_sum += w * dkdx
+                dkdu_sum += w * dkdu
+                LxxJ = dd.Lxx @ dydu
+                data.Lx += w * (dydx.T @ dd.Lx)
+                data.Lu += w * (dydu.T @ dd.Lx + dd.Lu)
+                data.Lxx += w * (dydx.T @ dd.Lxx @ dydx)
+                data.Lxu += w * (dydx.T @ (LxxJ + dd.Lxu))
+                dLxu = dydu.T @ dd.Lxu
+                data.Luu += w * (dydu.T @ LxxJ + dLxu + dLxu.T + dd.Luu)
+        if self._euclidean:
+            data.Fx[:] = np.eye(ndx) + dkdx_sum
+            data.Fu[:] = dkdu_sum
+        else:
+            Jx, Jdx = state.Jintegrate(x, data.dx, Jcomponent.both)
+            data.Fx[:] = Jx + Jdx @ dkdx_sum
+            data.Fu[:] = Jdx @ dkdu_sum
+        self._copy_constraints(data, data.differential[0], diff=True)
+
+
+class IntegratedActionDataRK(ActionDataAbstract):
+    """Data of :class:`IntegratedActionModelRK`: one differential data per stage (``differential``)."""
+
+    def __init__(self, model: IntegratedActionModelRK) -> None:
+        super().__init__(model)
+        ndx, nu, nx, ni = model.state.ndx, model.nu, model.state.nx, model.ni
+        self.differential = [model.differential.createData() for _ in range(ni)]
+        self.dx = np.zeros(ndx)
+        self.y = [np.zeros(nx) for _ in range(ni)]
+        self.dyi = [np.zeros(ndx) for _ in range(ni)]
+        self.ki = [np.zeros(ndx) for _ in range(ni)]
+        self.dydx = [np.zeros((ndx, ndx)) for _ in range(ni)]
+        self.dydu = [np.zeros((ndx, nu)) for _ in range(ni)]
+        self.dkdx = [np.zeros((ndx, ndx)) for _ in range(ni)]
+        self.dkdu = [np.zeros((ndx, nu)) for _ in range(ni)]
+        self.dkdx_sum = np.zeros((ndx, ndx))
+        self.dkdu_sum = np.zeros((ndx, nu))

@@ -1,0 +1,579 @@
+"""Meshcat display of robot trajectories (Crocoddyl-compatible ``MeshcatDisplay``).
+
+The display is built on :class:`pinocchio.visualize.MeshcatVisualizer` (mesh loading and
+materials) and :mod:`meshcat` (scene graph, animations, static HTML). It shows
+
+* the robot, one pose per node of a trajectory ``xs`` (only ``q = x[:nq]`` is used);
+* the floor (a thin grey box under ``z = 0``);
+* frame trajectories ``ps`` as poly-lines;
+* contact forces ``fs`` as arrows and their friction cones.
+
+Scene layout (meshcat paths under ``/meshcat``)::
+
+    pinocchio/visuals/<geometry>          rigid placement oMg of the geometry
+    pinocchio/visuals/<geometry>/shape    the mesh, with its static (possibly mirroring) scale
+    floor                                 the floor box
+    forces/<key>                          arrow at the contact point, +y along the force
+    cones/<key>                           friction cone, apex at the contact point
+    trajectories/<name>                   poly-line of a frame's positions
+
+Keeping the mesh scale on a static child makes recorded animations exact: meshcat's animation
+tracks store only position and quaternion, which cannot encode a reflection (Talos' right limbs
+use ``meshScale = (1, -1, 1)``).
+
+Facts handled (meshcat 0.3.2): the server is a subprocess on 127.0.0.1 that this class kills in
+:meth:`MeshcatDisplay.close`; every request has a receive timeout so a dead server raises
+:class:`TimeoutError` instead of hanging; Collada meshes whose sub-meshes mix textured and
+untextured primitives (ANYmal's trunk) are invisible in the browser and are sent as plain
+triangles taken from the collision library's mesh instead.
+"""
+
+from __future__ import annotations
+
+import re
+import time
+from collections.abc import Sequence
+from typing import Any
+
+import meshcat
+import meshcat.geometry as mg
+import numpy as np
+import pinocchio as pin
+import zmq
+from meshcat.visualizer import ViewerWindow
+from pinocchio.visualize import MeshcatVisualizer
+
+from .scene import active_contacts, frame_ids_of, friction_cones
+
+__all__ = ["MeshcatDisplay", "start_meshcat_server", "stop_meshcat_server"]
+
+_DEFAULT_TIMEOUT = 60.0
+_PLAIN_MESH_CACHE: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+
+
+def start_meshcat_server(zmq_url: str | None = None, timeout: float = _DEFAULT_TIMEOUT) -> meshcat.Visualizer:
+    """Start (or connect to) a meshcat server and return a visualizer with request timeouts.
+
+    Parameters
+    ----------
+    zmq_url : str, optional
+        Address of an already running ``meshcat-server``; ``None`` starts a local server
+        subprocess on 127.0.0.1.
+    timeout : float
+        Seconds a request may wait for the server's answer before :class:`TimeoutError`.
+    """
+    if timeout <= 0:
+        raise ValueError(f"timeout must be positive, got {timeout}")
+    # Sockets take their options from the context when created: set them for the duration of the
+    # construction only, so that even the first request (the web URL) cannot hang.
+    context = ViewerWindow.context
+    saved = dict(context.sockopts)
+    context.setsockopt(zmq.RCVTIMEO, int(timeout * 1000))
+    context.setsockopt(zmq.SNDTIMEO, int(timeout * 1000))
+    context.setsockopt(zmq.LINGER, 0)
+    try:
+        return meshcat.Visualizer(zmq_url=zmq_url)
+    except zmq.error.Again as e:
+        raise TimeoutError(f"no meshcat server answered at {zmq_url} within {timeout} s") from e
+    finally:
+        context.sockopts.clear()
+        context.sockopts.update(saved)
+
+
+def stop_meshcat_server(vis: meshcat.Visualizer) -> None:
+    """Close the visualizer's socket and end the server subprocess it started (if any)."""
+    window = vis.window
+    window.zmq_socket.close(linger=0)
+    proc = getattr(window, "server_proc", None)
+    if proc is None:
+        return
+    if proc.poll() is None:
+        proc.terminate()
+        try:
+            proc.wait(timeout=5)
+        except Exception:
+            proc.kill()
+            proc.wait(timeout=5)
+    for stream in (proc.stdout, proc.stderr):
+        if stream is not None:
+            stream.close()
+
+
+def _has_mixed_texcoords(path: str) -> bool:
+    """Whether a Collada file mixes primitives with and without texture coordinates."""
+    if not path.lower().endswith(".dae"):
+        return False
+    with open(path, encoding="utf-8", errors="replace") as f:
+        text = f.read()
+    blocks = re.findall(r"<(?:triangles|polylist|polygons)\b.*?</(?:triangles|polylist|polygons)>", text, re.S)
+    textured = sum('semantic="TEXCOORD"' in b for b in blocks)
+    return 0 < textured < len(blocks)
+
+
+def _plain_mesh(geometry_object: pin.GeometryObject) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (unscaled) and triangles of a mesh geometry, read from its collision mesh."""
+    key = geometry_object.meshPath
+    if key not in _PLAIN_MESH_CACHE:
+        bvh = geometry_object.geometry
+        scale = np.where(np.abs(geometry_object.meshScale) > 0, geometry_object.meshScale, 1.0)
+        vertices = np.asarray(bvh.vertices(), dtype=np.float32) / scale.astype(np.float32)
+        faces = np.empty((bvh.num_tris, 3), dtype=np.uint32)
+        for i in range(bvh.num_tris):
+            tri = bvh.tri_indices(i)
+            faces[i] = (tri[0], tri[1], tri[2])
+        _PLAIN_MESH_CACHE[key] = (vertices, faces)
+    return _PLAIN_MESH_CACHE[key]
+
+
+def _rgb_int(rgba: Sequence[float]) -> int:
+    return int(rgba[0] * 255) * 65536 + int(rgba[1] * 255) * 256 + int(rgba[2] * 255)
+
+
+def _rotation_y_to(direction: np.ndarray) -> np.ndarray:
+    """A rotation matrix whose second column (local +y) is the unit vector ``direction``."""
+    y = direction / np.linalg.norm(direction)
+    helper = np.array([1.0, 0.0, 0.0]) if abs(y[0]) < 0.9 else np.array([0.0, 0.0, 1.0])
+    x = np.cross(y, helper)
+    x /= np.linalg.norm(x)
+    z = np.cross(x, y)
+    return np.column_stack([x, y, z])
+
+
+def _homogeneous(rotation: np.ndarray, translation: np.ndarray) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3] = rotation
+    T[:3, 3] = translation
+    return T
+
+
+class MeshcatDisplay:
+    """Display robot trajectories in meshcat, with Crocoddyl's ``MeshcatDisplay`` interface.
+
+    Parameters
+    ----------
+    robot : pinocchio.RobotWrapper
+        Robot with ``model``, ``visual_model`` and ``collision_model`` (e.g. from
+        ``example_robot_data.load``).
+    rate : float
+        Display rate in Hz; ``-1`` plays in real time using the node durations ``dts``.
+    freq : int
+        Display every ``freq``-th node.
+    cameraTF : array_like, optional
+        Camera rig placement: ``[x, y, z, qx, qy, qz, qw]`` or a 4x4 homogeneous matrix.
+    floor : bool
+        Draw a floor under ``z = 0``.
+    frameNames : list of str, optional
+        Frames whose trajectories are drawn in addition to those found in a solver's problem.
+    visibility : bool
+        Initial visibility of forces, cones and trajectories.
+    openDisplay : bool
+        Open the viewer in a web browser (``False`` for headless use and HTML export).
+    viewer : meshcat.Visualizer, optional
+        Existing visualizer to draw into; by default a local server is started (and ended by
+        :meth:`close`).
+    timeout : float
+        Seconds a request to the meshcat server may take before :class:`TimeoutError`.
+    """
+
+    forceScale = 1.0 / 300.0  # metres of arrow per newton
+    coneHeight = 0.1
+    forceColor = 0xD62728
+    coneColor = 0x2CA02C
+    trajColors = (0x1F77B4, 0xFF7F0E, 0x9467BD, 0x8C564B, 0xE377C2, 0x17BECF)
+
+    def __init__(
+        self,
+        robot: Any,
+        rate: float = -1,
+        freq: int = 1,
+        cameraTF: Sequence[float] | np.ndarray | None = None,
+        floor: bool = True,
+        frameNames: Sequence[str] | None = None,
+        visibility: bool = True,
+        openDisplay: bool = True,
+        viewer: meshcat.Visualizer | None = None,
+        timeout: float = _DEFAULT_TIMEOUT,
+    ) -> None:
+        if int(freq) < 1:
+            raise ValueError(f"freq must be a positive integer, got {freq}")
+        self.robot = robot
+        self.rate = float(rate)
+        self.freq = int(freq)
+        self.floor = bool(floor)
+        self.frameNames = list(frameNames) if frameNames is not None else []
+        self.visibility = bool(visibility)
+        self.model = robot.model
+        self.data = self.model.createData()
+        self.visual_model = robot.visual_model
+        self.visual_data = pin.GeometryData(self.visual_model)
+        self._owns_viewer = viewer is None
+        self.viewer = start_meshcat_server(timeout=timeout) if viewer is None else viewer
+        self.viz = MeshcatVisualizer(self.model, robot.collision_model, self.visual_model)
+        try:
+            self.guarded(self._build_scene, cameraTF)
+        except BaseException:
+            self.close()
+            raise
+        self._forceKeys: list[str] = []
+        self._trajNames: list[str] = []
+        if openDisplay:
+            self.viewer.open()
+
+    # ------------------------------------------------------------------ scene construction
+    def guarded(self, fn: Any, *args: Any) -> Any:
+        """Run ``fn`` and turn a meshcat server timeout into a clear :class:`TimeoutError`."""
+        try:
+            return fn(*args)
+        except zmq.error.Again as e:
+            raise TimeoutError(
+                "the meshcat server did not answer in time (is it running? see MeshcatDisplay(timeout=...))"
+            ) from e
+
+    def _build_scene(self, cameraTF: Any) -> None:
+        viz = self.viz
+        viz.initViewer(viewer=self.viewer)
+        viz.viewerRootNodeName = "pinocchio"
+        viz.viewerVisualGroupName = "pinocchio/visuals"
+        viz.viewerCollisionGroupName = "pinocchio/collisions"
+        viz.viewerFramesGroupName = "pinocchio/frames"
+        self._nodes: list[tuple[int, str]] = []
+        for gid, go in enumerate(self.visual_model.geometryObjects):
+            parent = viz.getViewerNodeName(go, pin.GeometryType.VISUAL)
+            child = parent + "/shape"
+            if go.meshPath and _has_mixed_texcoords(go.meshPath) and hasattr(go.geometry, "num_tris"):
+                vertices, faces = _plain_mesh(go)
+                material = mg.MeshPhongMaterial(color=_rgb_int(go.meshColor))
+                self.viewer[child].set_object(mg.TriangularMeshGeometry(vertices, faces), material)
+            else:
+                shaped = go.copy()
+                shaped.name = go.name + "/shape"
+                viz.loadViewerGeometryObject(shaped, pin.GeometryType.VISUAL)
+            self.viewer[child].set_transform(np.diag(np.append(np.asarray(go.meshScale, dtype=float), 1.0)))
+            self._nodes.append((gid, parent))
+        if self.floor:
+            self.viewer["floor"].set_object(mg.Box([4.0, 4.0, 0.02]), mg.MeshPhongMaterial(color=0xB0B0B0))
+            self.viewer["floor"].set_transform(_homogeneous(np.eye(3), np.array([0.0, 0.0, -0.0105])))
+        q0 = getattr(self.robot, "q0", None)
+        q0 = pin.neutral(self.model) if q0 is None else np.asarray(q0)
+        self.set_robot(self.viewer, q0)
+        if cameraTF is not None:
+            self.viewer["/Cameras/default"].set_transform(self._camera_matrix(cameraTF))
+        else:
+            pin.framesForwardKinematics(self.model, self.data, q0)
+            radius = max(float(np.linalg.norm(oMf.translation)) for oMf in self.data.oMf)
+            self.setCameraPosition(float(np.clip(3.0 * radius, 1.0, 6.0)) * np.array([0.8, -0.56, 0.4]))
+
+    @staticmethod
+    def _camera_matrix(cameraTF: Any) -> np.ndarray:
+        arr = np.asarray(cameraTF, dtype=float)
+        if arr.shape == (4, 4):
+            return arr
+        if arr.shape == (7,):
+            return pin.XYZQUATToSE3(arr).homogeneous
+        raise ValueError(f"cameraTF must be a 7-vector [x, y, z, qx, qy, qz, qw] or a 4x4 matrix, got {arr.shape}")
+
+    def setCameraPosition(self, position: Sequence[float] | np.ndarray) -> None:
+        """Put the camera at ``position`` (world frame, z up); it keeps looking at the origin."""
+        p = np.asarray(position, dtype=float).reshape(-1)
+        if p.shape != (3,):
+            raise ValueError(f"position must have shape (3,), got {p.shape}")
+        # The camera node lives in meshcat's y-up frame: world (x, y, z) is (x, z, -y) there.
+        node = self.viewer["/Cameras/default/rotated/<object>"]
+        self.guarded(node.set_property, "position", [p[0], p[2], -p[1]])
+
+    def set_robot(self, target: Any, q: np.ndarray) -> None:
+        """Place every visual geometry at configuration ``q`` (``target``: viewer or animation frame)."""
+        q = np.asarray(q, dtype=float).reshape(-1)
+        if q.shape[0] != self.model.nq:
+            raise ValueError(f"q must have shape ({self.model.nq},), got {q.shape}")
+        pin.forwardKinematics(self.model, self.data, q)
+        pin.updateGeometryPlacements(self.model, self.data, self.visual_model, self.visual_data)
+        for gid, node in self._nodes:
+            target[node].set_transform(self.visual_data.oMg[gid].homogeneous)
+
+    # ------------------------------------------------------------------ forces and trajectories
+    def _force_world(self, item: dict) -> tuple[np.ndarray, np.ndarray]:
+        """Contact point and force (world coordinates) of one force record."""
+        oMf = item["oMf"]
+        f = item["f"]
+        lin = np.asarray(f.linear if hasattr(f, "linear") else np.asarray(f)[:3], dtype=float)
+        if item.get("type", pin.ReferenceFrame.LOCAL_WORLD_ALIGNED) == pin.ReferenceFrame.LOCAL:
+            lin = oMf.rotation @ lin
+        return np.asarray(oMf.translation, dtype=float), lin
+
+    def ensure_force_nodes(self, fs: Sequence[Sequence[dict]]) -> None:
+        """Create one arrow (and cone) node per contact key seen in the force trajectory ``fs``."""
+        keys = sorted({str(item["key"]) for node in fs for item in node})
+        for key in keys:
+            if key in self._forceKeys:
+                continue
+            self._forceKeys.append(key)
+            arrow, cone = self.viewer["forces"][key], self.viewer["cones"][key]
+            red = mg.MeshPhongMaterial(color=self.forceColor)
+            arrow["shaft"].set_object(mg.Cylinder(0.8, 0.008), red)
+            arrow["shaft"].set_transform(_homogeneous(np.eye(3), np.array([0.0, 0.4, 0.0])))
+            arrow["head"].set_object(mg.Cylinder(0.2, radiusTop=0.0, radiusBottom=0.02), red)
+            arrow["head"].set_transform(_homogeneous(np.eye(3), np.array([0.0, 0.9, 0.0])))
+            green = mg.MeshPhongMaterial(color=self.coneColor, transparent=True, opacity=0.35)
+            cone["shape"].set_object(mg.Cylinder(1.0, radiusTop=1.0, radiusBottom=0.0), green)
+            cone["shape"].set_transform(_homogeneous(np.eye(3), np.array([0.0, 0.5, 0.0])))
+        self.setVisibility("forces", self.visibility)
+        self.setVisibility("cones", self.visibility)
+
+    def _force_poses(self, node: Sequence[dict]) -> dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """Per key: (rigid arrow pose, arrow scale, rigid cone pose with scale folded separately)."""
+        poses = {}
+        for item in node:
+            p, f = self._force_world(item)
+            norm = float(np.linalg.norm(f))
+            key = str(item["key"])
+            R = np.asarray(item.get("R", np.eye(3)), dtype=float)
+            mu = float(item.get("mu", 0.7))
+            arrow_T = _homogeneous(_rotation_y_to(f) if norm > 1e-9 else np.eye(3), p)
+            cone_T = _homogeneous(_rotation_y_to(R[:, 2]), p)
+            length = max(norm * self.forceScale, 1e-6)
+            h = self.coneHeight
+            poses[key] = (arrow_T, np.array([1.0, length, 1.0]), cone_T, np.array([mu * h, h, mu * h]))
+        return poses
+
+    def set_forces(self, target: Any, node: Sequence[dict], animation: bool) -> None:
+        """Place the force arrows of one node's contacts (``target``: viewer or animation frame)."""
+        poses = self._force_poses(node)
+        tiny = np.full(3, 1e-6)
+        for key in self._forceKeys:
+            arrow_T, arrow_s, cone_T, cone_s = poses.get(key, (np.eye(4), tiny, np.eye(4), tiny))
+            for name, T, s in (("forces", arrow_T, arrow_s), ("cones", cone_T, cone_s)):
+                if animation:
+                    target[name][key].set_transform(T)
+                    target[name][key].set_property("scale", "vector3", s.tolist())
+                else:
+                    target[name][key].set_transform(T @ np.diag(np.append(s, 1.0)))
+
+    def _draw_trajectories(self, ps: dict) -> None:
+        for i, (name, points) in enumerate(ps.items()):
+            pts = np.asarray(points, dtype=float).reshape(-1, 3)
+            if pts.shape[0] < 2:
+                continue
+            color = self.trajColors[i % len(self.trajColors)]
+            line = mg.Line(mg.PointsGeometry(pts.T.astype(np.float32)), mg.LineBasicMaterial(color=color, linewidth=3))
+            self.viewer["trajectories"][str(name)].set_object(line)
+            if str(name) not in self._trajNames:
+                self._trajNames.append(str(name))
+        self.setVisibility("trajectories", self.visibility)
+
+    # ------------------------------------------------------------------ Crocoddyl's interface
+    def displayContactForce(self, f: Sequence[dict]) -> None:
+        """Draw the contact forces (and friction cones) of one node (list of force records)."""
+        self.guarded(self.ensure_force_nodes, [f])
+        self.guarded(self.set_forces, self.viewer, f, False)
+
+    def displayFrictionCone(self, f: Sequence[dict]) -> None:
+        """Draw the friction cones of one node (same records as :meth:`displayContactForce`)."""
+        self.displayContactForce(f)
+
+    def displayFramePoses(self, ps: dict) -> None:
+        """Draw frame trajectories: ``{name: [[x, y, z], ...]}``."""
+        self.guarded(self._draw_trajectories, ps)
+
+    def displayThrustForce(self, f: Any) -> None:
+        """Thrust arrows are not drawn (accepted for interface compatibility)."""
+
+    def setVisibility(self, name: str, status: bool) -> None:
+        """Show or hide ``"robot"``, ``"floor"``, ``"forces"``, ``"cones"``, ``"trajectories"`` or a meshcat path."""
+        path = {"robot": "pinocchio"}.get(name, name)
+        self.guarded(self.viewer[path].set_property, "visible", bool(status))
+
+    def display(
+        self,
+        xs: Sequence[np.ndarray],
+        us: Sequence[np.ndarray] = (),
+        rs: Sequence[Any] = (),
+        ps: dict | Sequence = (),
+        pds: Sequence[Any] = (),
+        fs: Sequence[Sequence[dict]] = (),
+        ss: Sequence[Any] = (),
+        dts: Sequence[float] = (),
+        factor: float = 1.0,
+    ) -> None:
+        """Play a state trajectory (with forces ``fs`` and frame trajectories ``ps``).
+
+        Parameters
+        ----------
+        xs : list of ndarray, each (nx,) with nx >= nq
+            States; the configuration is ``x[:nq]``.
+        us, rs, pds, ss
+            Accepted for Crocoddyl compatibility (torques, thrusts, ...); not drawn.
+        ps : dict
+            Frame trajectories ``{name: [[x, y, z], ...]}``.
+        fs : list (one per node) of lists of force records
+            Records are dicts with ``key``, ``oMf`` (pin.SE3), ``f`` (pin.Force), optionally
+            ``R`` (3x3 cone orientation), ``mu`` and ``type`` (pin.ReferenceFrame of ``f``).
+        dts : list of float
+            Node durations for real-time playback when ``rate == -1``.
+        factor : float
+            Slow-down factor applied to the playback time.
+        """
+        qs = self.configurations(xs)
+        if ps:
+            self.displayFramePoses(dict(ps))
+        if fs:
+            self.guarded(self.ensure_force_nodes, fs)
+        for i in range(0, len(qs), self.freq):
+            start = time.time()
+            self.guarded(self.set_robot, self.viewer, qs[i])
+            if fs and i < len(fs):
+                self.guarded(self.set_forces, self.viewer, fs[i], False)
+            if self.rate > 0:
+                wait = factor / self.rate
+            else:
+                wait = factor * float(np.sum(dts[i : i + self.freq])) if len(dts) else 0.0
+            remaining = wait - (time.time() - start)
+            if remaining > 0:
+                time.sleep(remaining)
+
+    def displayFromSolver(self, solver: Any, factor: float = 1.0) -> None:
+        """Play a solver's current trajectory, with its contact forces and frame trajectories."""
+        self.display(
+            solver.xs,
+            ps=self.getFrameTrajectoryFromSolver(solver),
+            fs=self.getForceTrajectoryFromSolver(solver),
+            dts=self.getDurationSequenceFromSolver(solver),
+            factor=factor,
+        )
+
+    def exportHTML(
+        self,
+        xs: Sequence[np.ndarray],
+        path: str,
+        fs: Sequence[Sequence[dict]] = (),
+        ps: dict | None = None,
+        dts: Sequence[float] = (),
+        factor: float = 1.0,
+        fps: int = 30,
+        repetitions: int = 1000,
+    ) -> str:
+        """Record ``xs`` as a meshcat animation and write a self-contained HTML file.
+
+        See :func:`crocopy.models.display.html.export_animation`; returns ``path``.
+        """
+        from .html import export_animation
+
+        return export_animation(self, xs, path, fs=fs, ps=ps, dts=dts, factor=factor, fps=fps, repetitions=repetitions)
+
+    def exportHTMLFromSolver(self, solver: Any, path: str, factor: float = 1.0, fps: int = 30) -> str:
+        """Export a solver's trajectory (forces, cones, frame trajectories) as a static HTML file."""
+        return self.exportHTML(
+            solver.xs,
+            path,
+            fs=self.getForceTrajectoryFromSolver(solver),
+            ps=self.getFrameTrajectoryFromSolver(solver),
+            dts=self.getDurationSequenceFromSolver(solver),
+            factor=factor,
+            fps=fps,
+        )
+
+    # ------------------------------------------------------------------ reading a solver
+    @staticmethod
+    def _nodes_of(solver: Any) -> list[tuple[Any, Any]]:
+        problem = solver.problem
+        return list(zip(problem.runningModels, problem.runningDatas, strict=False)) + [
+            (problem.terminalModel, problem.terminalData)
+        ]
+
+    def init(self, solver: Any) -> None:
+        """Collect the frames to draw from the solver's problem (contacts and frame residuals)."""
+        names = list(self.frameNames)
+        for model, _ in self._nodes_of(solver):
+            for fid in frame_ids_of(model):
+                name = self.model.frames[fid].name
+                if name not in names:
+                    names.append(name)
+        self.frameTrajNames = names
+
+    def getDurationSequenceFromSolver(self, solver: Any) -> list[float]:
+        """Duration ``dt`` of every running node (0 for nodes without one, e.g. impulses)."""
+        return [float(getattr(m, "dt", 0.0)) for m in solver.problem.runningModels]
+
+    def getTimeSequenceFromSolver(self, solver: Any) -> list[float]:
+        """Start time of every node, terminal included."""
+        return [0.0, *np.cumsum(self.getDurationSequenceFromSolver(solver)).tolist()]
+
+    def getJointTorquesTrajectoryFromSolver(self, solver: Any) -> list[np.ndarray]:
+        """The controls ``us`` of the solver (copies)."""
+        return [np.array(u, dtype=float) for u in solver.us]
+
+    def getThrustTrajectoryFromSolver(self, solver: Any) -> list[Any]:
+        """Thrust trajectories are not extracted (empty list)."""
+        return []
+
+    def getFrameTrajectoryFromSolver(self, solver: Any) -> dict[str, list[list[float]]]:
+        """Positions of the frames found by :meth:`init`: ``{frame name: [[x, y, z], ...]}``."""
+        if not hasattr(self, "frameTrajNames"):
+            self.init(solver)
+        ids = {name: self.model.getFrameId(name) for name in self.frameTrajNames}
+        ps: dict[str, list[list[float]]] = {name: [] for name in ids}
+        for q in self.configurations(solver.xs):
+            pin.framesForwardKinematics(self.model, self.data, q)
+            for name, fid in ids.items():
+                ps[name].append(self.data.oMf[fid].translation.tolist())
+        return ps
+
+    def getForceTrajectoryFromSolver(self, solver: Any) -> list[list[dict]]:
+        """Contact (and impulse) forces of every node, read from the solver's data.
+
+        Each node gives a list of records ``{"key", "oMf", "f", "R", "mu", "type"}``; nodes with
+        free dynamics give an empty list. Friction-cone orientation and coefficient come from
+        friction-cone residuals on the same frame, else ``R = I``, ``mu = 0.7``.
+        """
+        qs = self.configurations(solver.xs)
+        fs: list[list[dict]] = []
+        for i, (model, data) in enumerate(self._nodes_of(solver)):
+            records = []
+            contacts = active_contacts(model, data)
+            if contacts:
+                pin.framesForwardKinematics(self.model, self.data, qs[min(i, len(qs) - 1)])
+                cones = friction_cones(model)
+            for fid, force, ftype in contacts:
+                R, mu = cones.get(fid, (np.eye(3), 0.7))
+                records.append(
+                    {
+                        "key": self.model.frames[fid].name,
+                        "oMf": self.data.oMf[fid].copy(),
+                        "f": force,
+                        "R": R,
+                        "mu": mu,
+                        "type": ftype,
+                    }
+                )
+            fs.append(records)
+        return fs
+
+    # ------------------------------------------------------------------ helpers and lifetime
+    def configurations(self, xs: Sequence[np.ndarray]) -> list[np.ndarray]:
+        """The configurations ``q`` (first ``nq`` entries) of the states ``xs``, checked."""
+        nq = self.model.nq
+        qs = []
+        for i, x in enumerate(xs):
+            x = np.asarray(x, dtype=float).reshape(-1)
+            if x.shape[0] < nq:
+                raise ValueError(f"xs[{i}] must have at least nq={nq} entries, got shape {x.shape}")
+            qs.append(x[:nq])
+        if not qs:
+            raise ValueError("xs must contain at least one state")
+        return qs
+
+    def url(self) -> str:
+        """Address of the live viewer."""
+        return self.viewer.url()
+
+    def close(self) -> None:
+        """End the meshcat server started by this display (no-op for a viewer passed in)."""
+        if self._owns_viewer and self.viewer is not None:
+            stop_meshcat_server(self.viewer)
+            self.viewer = None
+
+    def __enter__(self) -> MeshcatDisplay:
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
