@@ -60,7 +60,8 @@ def private_imports(source: str) -> list[str]:
     found = []
     for node in ast.walk(ast.parse(source)):
         if isinstance(node, ast.ImportFrom) and (node.level or (node.module or "").startswith("crocopy")):
-            found += [f"{'.' * node.level}{node.module or ''}.{a.name}" for a in node.names if a.name.startswith("_") and not a.name.startswith("__")]
+            private = [a.name for a in node.names if a.name.startswith("_") and not a.name.startswith("__")]
+            found += [f"{'.' * node.level}{node.module or ''}.{name}" for name in private]
     return found
 
 
