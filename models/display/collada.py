@@ -6,7 +6,7 @@ three times; storing the numbers as integers compresses it about five times. The
 :func:`unpack` rebuilds the same text, token for token. Only the whitespace between the numbers of
 a packed array is rewritten (single spaces), which Collada readers treat alike.
 
-A decimal token ``[-]D[.F][eE]`` (no ``+``, no leading zeros in ``E``) becomes
+A decimal token ``[-]D[.F][eE]`` (``D`` and ``E`` without leading zeros, no ``+``) becomes
 
 * ``digits`` (uint32): the integer ``DF`` (integer and fraction digits run together);
 * ``flags`` (uint8): the number of fraction digits (bits 0-4), ``-`` (bit 5), has ``e`` (bit 6);
@@ -16,7 +16,8 @@ It is written back as ``digits`` padded with zeros to ``fraction + 1`` digits, w
 before the last ``fraction`` digits. An index list ``<p>`` of a primitive with ``k`` inputs
 (``k = 1 + max offset``) is read as ``m x k`` integers; each column is stored as its first
 differences in zig-zag form (``2d`` for ``d >= 0``, ``-2d - 1`` otherwise), columns one after the
-other, in ``indices`` (uint32). Arrays that do not read back exactly this way stay text.
+other, in ``indices`` (uint32; at most 9 digits per index). The token grammar admits exactly the
+tokens that are written back as they were; arrays with any other token stay text.
 """
 
 from __future__ import annotations
@@ -32,7 +33,10 @@ _FLOAT_ARRAY = re.compile(r"(<float_array\b[^>]*>)([^<]*)(</float_array>)")
 _PRIMITIVE = re.compile(r"<(triangles|polylist|polygons|lines|linestrips|tristrips|trifans)\b.*?</\1>", re.S)
 _INDEX_LIST = re.compile(r"(<p>)([^<]*)(</p>)")
 _OFFSET = re.compile(r"<input\b[^>]*\boffset=\"(\d+)\"")
-_DECIMAL = re.compile(r"(-?)(\d+)(?:\.(\d+))?(?:e(-?\d+))?")
+_NUMBER = r"(?:0|[1-9]\d*)"
+_DECIMAL = re.compile(rf"(-?)({_NUMBER})(?:\.(\d+))?(?:e(-?{_NUMBER}))?")
+_DECIMAL_LIST = re.compile(rf"(?:-?{_NUMBER}(?:\.\d+)?(?:e-?{_NUMBER})?(?:\s+|$))*")
+_INDEX_LIST_TOKENS = re.compile(rf"(?:{_NUMBER}(?:\s+|$))*")
 _MAX_FRACTION = 31
 _NEGATIVE, _EXPONENT = 32, 64
 
@@ -76,27 +80,26 @@ def _format_decimals(digits: np.ndarray, flags: np.ndarray, exponents: np.ndarra
     return out
 
 
-def _pack_decimals(tokens: list[str]) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    digits, flags, exponents = [], [], []
-    for token in tokens:
-        m = _DECIMAL.fullmatch(token)
-        if m is None:
-            return None
-        sign, whole, fraction, exponent = m.groups()
-        fraction = fraction or ""
-        value = int(whole + fraction)
-        if len(fraction) > _MAX_FRACTION or value >= 2**32:
-            return None
-        flag = len(fraction) | (_NEGATIVE if sign else 0)
-        if exponent is not None:
-            if not -128 <= int(exponent) < 128:
-                return None
-            flag |= _EXPONENT
-            exponents.append(int(exponent))
-        digits.append(value)
-        flags.append(flag)
-    packed = np.array(digits, np.uint32), np.array(flags, np.uint8), np.array(exponents, np.int8)
-    return packed if _format_decimals(*packed) == tokens else None
+def _pack_decimals(content: str) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Digits, flags and exponents of a whitespace-separated decimal list, or None if one would not
+    read back exactly (the grammar admits only tokens :func:`_format_decimals` writes back as they are)."""
+    if _DECIMAL_LIST.fullmatch(content) is None:
+        return None
+    parts = _DECIMAL.findall(content)
+    if not parts:
+        return np.zeros(0, np.uint32), np.zeros(0, np.uint8), np.zeros(0, np.int8)
+    signs, wholes, fractions, exponents = (np.array(p) for p in zip(*parts))
+    fraction_digits = np.char.str_len(fractions)
+    digit_strings = np.char.add(wholes, fractions)
+    if fraction_digits.max() > _MAX_FRACTION or np.char.str_len(digit_strings).max() > 19:
+        return None
+    digits = digit_strings.astype(np.uint64)
+    has_exponent = exponents != ""
+    values = exponents[has_exponent].astype(np.int64)
+    if digits.max() >= 2**32 or np.any(values < -128) or np.any(values > 127):
+        return None
+    flags = fraction_digits | np.where(signs == "-", _NEGATIVE, 0) | np.where(has_exponent, _EXPONENT, 0)
+    return digits.astype(np.uint32), flags.astype(np.uint8), values.astype(np.int8)
 
 
 def _zigzag_columns(values: np.ndarray, k: int) -> np.ndarray:
@@ -111,14 +114,15 @@ def _unzigzag_columns(z: np.ndarray, n: int, k: int) -> np.ndarray:
     return np.cumsum(d, axis=1).T.reshape(-1)
 
 
-def _pack_indices(tokens: list[str], k: int) -> np.ndarray | None:
-    if not all(t.isdigit() for t in tokens):
+def _pack_indices(content: str, k: int) -> tuple[np.ndarray, int] | None:
+    """Zig-zag column differences of a whitespace-separated list of ``k``-column indices, and its length."""
+    if _INDEX_LIST_TOKENS.fullmatch(content) is None:
         return None
-    values = np.array([int(t) for t in tokens], dtype=np.int64)
-    if len(values) % k or (len(values) and values.max() >= 2**31):
+    tokens = np.array(content.split())
+    if tokens.size % k or (tokens.size and np.char.str_len(tokens).max() > 9):
         return None
-    z = _zigzag_columns(values, k)
-    return z if [str(v) for v in _unzigzag_columns(z, len(values), k).tolist()] == tokens else None
+    values = tokens.astype(np.int64)
+    return _zigzag_columns(values, k), values.size
 
 
 def _trimmed(text: str, start: int, end: int) -> tuple[int, int]:
@@ -144,21 +148,20 @@ def pack(text: str) -> PackedCollada:
     digits, flags, exponents, indices = [], [], [], []
     last = 0
     for start, end, k in _array_spans(text):
-        tokens = text[start:end].split()
         if k == 0:
-            packed = _pack_decimals(tokens)
+            packed = _pack_decimals(text[start:end])
             if packed is None:
                 continue
             digits.append(packed[0])
             flags.append(packed[1])
             exponents.append(packed[2])
-            arrays.append(("f", len(tokens)))
+            arrays.append(("f", len(packed[0])))
         else:
-            z = _pack_indices(tokens, k)
+            z = _pack_indices(text[start:end], k)
             if z is None:
                 continue
-            indices.append(z)
-            arrays.append(("i", len(tokens), k))
+            indices.append(z[0])
+            arrays.append(("i", z[1], k))
         pieces.append(text[last:start])
         last = end
     pieces.append(text[last:])

@@ -43,7 +43,6 @@ triangles taken from the collision library's mesh instead.
 
 from __future__ import annotations
 
-import re
 import time
 from collections.abc import Sequence
 from typing import Any
@@ -53,91 +52,14 @@ import meshcat.geometry as mg
 import numpy as np
 import pinocchio as pin
 import zmq
-from meshcat.visualizer import ViewerWindow
 from pinocchio.visualize import MeshcatVisualizer
 
 from .framing import box_corners, camera_placement, floor_extent, motion_bounds, motion_points, robot_size
+from .meshes import has_mixed_texcoords, plain_mesh
 from .scene import active_contacts, frame_ids_of, friction_cones
+from .server import DEFAULT_TIMEOUT, start_meshcat_server, stop_meshcat_server
 
 __all__ = ["MeshcatDisplay", "start_meshcat_server", "stop_meshcat_server"]
-
-_DEFAULT_TIMEOUT = 60.0
-_PLAIN_MESH_CACHE: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-
-
-def start_meshcat_server(zmq_url: str | None = None, timeout: float = _DEFAULT_TIMEOUT) -> meshcat.Visualizer:
-    """Start (or connect to) a meshcat server and return a visualizer with request timeouts.
-
-    Parameters
-    ----------
-    zmq_url : str, optional
-        Address of an already running ``meshcat-server``; ``None`` starts a local server
-        subprocess on 127.0.0.1.
-    timeout : float
-        Seconds a request may wait for the server's answer before :class:`TimeoutError`.
-    """
-    if timeout <= 0:
-        raise ValueError(f"timeout must be positive, got {timeout}")
-    # Sockets take their options from the context when created: set them for the duration of the
-    # construction only, so that even the first request (the web URL) cannot hang.
-    context = ViewerWindow.context
-    saved = dict(context.sockopts)
-    context.setsockopt(zmq.RCVTIMEO, int(timeout * 1000))
-    context.setsockopt(zmq.SNDTIMEO, int(timeout * 1000))
-    context.setsockopt(zmq.LINGER, 0)
-    try:
-        return meshcat.Visualizer(zmq_url=zmq_url)
-    except zmq.error.Again as e:
-        raise TimeoutError(f"no meshcat server answered at {zmq_url} within {timeout} s") from e
-    finally:
-        context.sockopts.clear()
-        context.sockopts.update(saved)
-
-
-def stop_meshcat_server(vis: meshcat.Visualizer) -> None:
-    """Close the visualizer's socket and end the server subprocess it started (if any)."""
-    window = vis.window
-    window.zmq_socket.close(linger=0)
-    proc = getattr(window, "server_proc", None)
-    if proc is None:
-        return
-    if proc.poll() is None:
-        proc.terminate()
-        try:
-            proc.wait(timeout=5)
-        except Exception:
-            proc.kill()
-            proc.wait(timeout=5)
-    for stream in (proc.stdout, proc.stderr):
-        if stream is not None:
-            stream.close()
-
-
-def _has_mixed_texcoords(path: str) -> bool:
-    """Whether a Collada file mixes primitives with and without texture coordinates."""
-    if not path.lower().endswith(".dae"):
-        return False
-    with open(path, encoding="utf-8", errors="replace") as f:
-        text = f.read()
-    blocks = re.findall(r"<(?:triangles|polylist|polygons)\b.*?</(?:triangles|polylist|polygons)>", text, re.S)
-    textured = sum('semantic="TEXCOORD"' in b for b in blocks)
-    return 0 < textured < len(blocks)
-
-
-def _plain_mesh(geometry_object: pin.GeometryObject) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices (unscaled) and triangles of a mesh geometry, read from its collision mesh."""
-    key = geometry_object.meshPath
-    if key not in _PLAIN_MESH_CACHE:
-        bvh = geometry_object.geometry
-        scale = np.where(np.abs(geometry_object.meshScale) > 0, geometry_object.meshScale, 1.0)
-        vertices = np.asarray(bvh.vertices(), dtype=np.float32) / scale.astype(np.float32)
-        faces = np.empty((bvh.num_tris, 3), dtype=np.uint32)
-        for i in range(bvh.num_tris):
-            tri = bvh.tri_indices(i)
-            faces[i] = (tri[0], tri[1], tri[2])
-        _PLAIN_MESH_CACHE[key] = (vertices, faces)
-    return _PLAIN_MESH_CACHE[key]
-
 
 def _rgb_int(rgba: Sequence[float]) -> int:
     return int(rgba[0] * 255) * 65536 + int(rgba[1] * 255) * 256 + int(rgba[2] * 255)
@@ -216,7 +138,7 @@ class MeshcatDisplay:
         visibility: bool = True,
         openDisplay: bool = True,
         viewer: meshcat.Visualizer | None = None,
-        timeout: float = _DEFAULT_TIMEOUT,
+        timeout: float = DEFAULT_TIMEOUT,
     ) -> None:
         if int(freq) < 1:
             raise ValueError(f"freq must be a positive integer, got {freq}")
@@ -271,8 +193,8 @@ class MeshcatDisplay:
         for gid, go in enumerate(self.visual_model.geometryObjects):
             parent = viz.getViewerNodeName(go, pin.GeometryType.VISUAL)
             child = parent + "/shape"
-            if go.meshPath and _has_mixed_texcoords(go.meshPath) and hasattr(go.geometry, "num_tris"):
-                vertices, faces = _plain_mesh(go)
+            if go.meshPath and has_mixed_texcoords(go.meshPath) and hasattr(go.geometry, "num_tris"):
+                vertices, faces = plain_mesh(go)
                 material = mg.MeshPhongMaterial(color=_rgb_int(go.meshColor))
                 self.viewer[child].set_object(mg.TriangularMeshGeometry(vertices, faces), material)
             else:

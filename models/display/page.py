@@ -169,7 +169,7 @@ def write_page(commands: list[dict], path: str | os.PathLike, title: str = "croc
     viewer = bundle.add(_viewer_js())
     packed = [umsgpack.packb(bundle.take_payloads(compact_animation(c))) for c in commands]
     index = {"viewer": viewer, "commands": [bundle.add(p) for p in packed], "blobs": bundle.blobs, "mark": BLOB_MARK}
-    data = base64.b64encode(zlib.compress(b"".join(bundle.chunks), 9)).decode("ascii")
+    data = base64.b64encode(zlib.compress(b"".join(bundle.chunks), 6)).decode("ascii")
     page = _TEMPLATE.format(
         title=html_module.escape(title), index=json.dumps(index, separators=(",", ":")), data=data, loader=_LOADER
     )
