@@ -12,6 +12,7 @@ import os
 import shutil
 import signal
 import subprocess
+from concurrent.futures import ThreadPoolExecutor
 from types import SimpleNamespace
 
 import example_robot_data as erd
@@ -131,7 +132,9 @@ def _fitted_shots(robot, xs, tmp_path, name, dts=()):
             pages.append(display.exportHTML(xs, str(tmp_path / f"{name}_played.html"), dts=dts, repetitions=1))
         display.setVisibility("robot", False)
         pages.append(display.exportHTML([xs[0]], str(tmp_path / f"{name}_hidden.html")))
-    shots = [_screenshot(p, p[:-5] + ".png", str(tmp_path / "profile")) for p in pages]
+    with ThreadPoolExecutor(max_workers=2) as pool:  # two browsers at a time, each with its own profile
+        shots = list(pool.map(lambda k: _screenshot(pages[k], pages[k][:-5] + ".png", str(tmp_path / f"p{k}")),
+                              range(len(pages))))
     return shots[:-1], shots[-1]
 
 

@@ -237,6 +237,13 @@ def test_forces_and_cones_from_solver_data(anymal, anymal_display, tmp_path):
     assert any(c["type"] == "set_object" and c["path"] == "/meshcat/trajectories/LF_FOOT" for c in cmds)
     _, scale = _animation(cmds)["/meshcat/forces/LF_FOOT"][".scale"]
     assert scale[0, 1] == pytest.approx(d.forceFraction * d.robot_size) and scale[-1, 1] < 1e-5
+    for name in ("forces", "cones"):  # an inactive contact shrinks where it was, it does not slide to the origin
+        _, positions = _animation(cmds)[f"/meshcat/{name}/LF_FOOT"][".position"]
+        np.testing.assert_allclose(positions[-1], rec["oMf"].translation, atol=1e-6)
+    d.forceScale = 0.01
+    d.exportHTMLFromSolver(solver, str(tmp_path / "fixed.html"))
+    assert d.force_scale == 0.01  # a scale set by the user is kept
+    d.forceScale = None
 
 
 def test_local_force_is_rotated_to_world(anymal_display):

@@ -168,6 +168,7 @@ class MeshcatDisplay:
             self.close()
             raise
         self._forceKeys: list[str] = []
+        self._force_rest: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self._trajNames: list[str] = []
         if openDisplay:
             self.viewer.open()
@@ -319,6 +320,9 @@ class MeshcatDisplay:
             norms = [float(np.linalg.norm(self._force_world(item)[1])) for node in fs for item in node]
             longest = max(norms, default=0.0)
             self.force_scale = self.forceFraction * self.robot_size / longest if longest > 1e-9 else 0.0
+        for node in reversed(fs):  # a contact is first drawn where it starts (see set_forces)
+            for key, (arrow_T, _, cone_T, _) in self._force_poses(node).items():
+                self._force_rest[key] = (arrow_T, cone_T)
         for key in keys:
             if key in self._forceKeys:
                 continue
@@ -352,11 +356,19 @@ class MeshcatDisplay:
         return poses
 
     def set_forces(self, target: Any, node: Sequence[dict], animation: bool) -> None:
-        """Place the force arrows of one node's contacts (``target``: viewer or animation frame)."""
+        """Place the force arrows of one node's contacts (``target``: viewer or animation frame).
+
+        A contact that is not active at this node shrinks to nothing where it was last drawn (or
+        where it starts), so that animations do not slide it in from elsewhere.
+        """
         poses = self._force_poses(node)
         tiny = np.full(3, 1e-6)
         for key in self._forceKeys:
-            arrow_T, arrow_s, cone_T, cone_s = poses.get(key, (np.eye(4), tiny, np.eye(4), tiny))
+            if key in poses:
+                arrow_T, arrow_s, cone_T, cone_s = poses[key]
+                self._force_rest[key] = (arrow_T, cone_T)
+            else:
+                (arrow_T, cone_T), arrow_s, cone_s = self._force_rest.get(key, (np.eye(4), np.eye(4))), tiny, tiny
             for name, T, s in (("forces", arrow_T, arrow_s), ("cones", cone_T, cone_s)):
                 if animation:
                     target[name][key].set_transform(T)
