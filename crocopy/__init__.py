@@ -22,7 +22,7 @@ from .activations import (
     ActivationModelWeightedQuadraticBarrier,
 )
 from .actuation_base import ActuationDataAbstract, ActuationModelAbstract, JointDataAbstract
-from .batch import SolveManyError, SolveResult, solve_many
+from .batch import SolveManyError, SolveResult, WorkerDiedError, solve_many
 from .callbacks.base import CallbackAbstract, CallbackLogger, CallbackVerbose
 from .callbacks.display import CallbackDisplay
 from .callbacks.plotting import plotConvergence, plotFeasibility, plotOCSolution
