@@ -175,7 +175,7 @@ class IntegratedActionModelAbstract(ActionModelAbstract):
         elif cdata is None:
             out[:] = 0.0
         else:
-            self._control.multiplyByJacobian(cdata, A, out=out)
+            out[:] = self._control.multiplyByJacobian(cdata, A)
 
     def _copy_constraints(
         self, data: ActionDataAbstract, ddata, diff: bool, cdata: ControlParametrizationDataAbstract | None = None
@@ -231,9 +231,9 @@ class ControlChainData:
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Fill and return ``(Fw dw_du, dw_duᵀ Lw, Lxw dw_du, dw_duᵀ Lww dw_du)`` (``calc`` ran at ``t``)."""
         control.calcDiff(cdata, t, u)
-        control.multiplyByJacobian(cdata, ddata.Fu, out=self.Fu)
-        control.multiplyJacobianTransposeBy(cdata, ddata.Lu[:, None], out=self.Lu[:, None])
-        control.multiplyByJacobian(cdata, ddata.Lxu, out=self.Lxu)
-        control.multiplyByJacobian(cdata, ddata.Luu, out=self.Lwu)
-        control.multiplyJacobianTransposeBy(cdata, self.Lwu, out=self.Luu)
+        self.Fu[:] = control.multiplyByJacobian(cdata, ddata.Fu)
+        self.Lu[:] = control.multiplyJacobianTransposeBy(cdata, ddata.Lu[:, None])[:, 0]
+        self.Lxu[:] = control.multiplyByJacobian(cdata, ddata.Lxu)
+        self.Lwu[:] = control.multiplyByJacobian(cdata, ddata.Luu)
+        self.Luu[:] = control.multiplyJacobianTransposeBy(cdata, self.Lwu)
         return self.Fu, self.Lu, self.Lxu, self.Luu

@@ -13,10 +13,12 @@ end) and of ``u``::
     multiplyJacobianTransposeBy(A) = dw_duᵀ A     A (nw, na) -> (nu, na)
 
 The two products are what the integrators' chain rule uses (``Fu = Fw dw_du``,
-``Lu = dw_duᵀ Lw``, ``Luu = dw_duᵀ Lww dw_du``, ``Lxu = Lxw dw_du``); ``multiplyByJacobian`` and
-``multiplyJacobianTransposeBy`` assume ``calc`` (and, for this base class's defaults, which use
-``data.dw_du``, ``calcDiff``) ran at the same ``t``.  ``op`` (:class:`~crocopy.enums.AssignmentOp`)
-sets, adds or subtracts the product into ``out``.
+``Lu = dw_duᵀ Lw``, ``Luu = dw_duᵀ Lww dw_du``, ``Lxu = Lxw dw_du``), calling them as
+``multiplyByJacobian(data, A)`` (Crocoddyl's abstract signature, so a Python subclass may override
+them with it); they assume ``calc`` (and, for this base class's defaults, which use ``data.dw_du``,
+``calcDiff``) ran at the same ``t``.  Subclasses with a structured Jacobian override the hooks
+``_multiply_by_jacobian``/``_multiply_jacobian_transpose_by`` instead.  ``op``
+(:class:`~crocopy.enums.AssignmentOp`) sets, adds or subtracts the product into ``out``.
 """
 
 from __future__ import annotations
@@ -95,7 +97,7 @@ class ControlParametrizationModelAbstract:
     ) -> np.ndarray:
         """``A dw_du`` for ``A`` of shape ``(na, nw)``: shape ``(na, nu)``, written into ``out`` by ``op``."""
         self._check_operand(A, 1, "A", "(na, nw)")
-        return write_product(A @ data.dw_du, op, out, "multiplyByJacobian")
+        return _write_product(self._multiply_by_jacobian(data, A), op, out, "multiplyByJacobian")
 
     def multiplyJacobianTransposeBy(
         self,
@@ -106,7 +108,15 @@ class ControlParametrizationModelAbstract:
     ) -> np.ndarray:
         """``dw_duᵀ A`` for ``A`` of shape ``(nw, na)``: shape ``(nu, na)``, written into ``out`` by ``op``."""
         self._check_operand(A, 0, "A", "(nw, na)")
-        return write_product(data.dw_du.T @ A, op, out, "multiplyJacobianTransposeBy")
+        return _write_product(self._multiply_jacobian_transpose_by(data, A), op, out, "multiplyJacobianTransposeBy")
+
+    def _multiply_by_jacobian(self, data: "ControlParametrizationDataAbstract", A: np.ndarray) -> np.ndarray:
+        """A new array ``A dw_du`` (subclasses with a structured Jacobian override this)."""
+        return A @ data.dw_du
+
+    def _multiply_jacobian_transpose_by(self, data: "ControlParametrizationDataAbstract", A: np.ndarray) -> np.ndarray:
+        """A new array ``dw_duᵀ A`` (subclasses with a structured Jacobian override this)."""
+        return data.dw_du.T @ A
 
     def _check_operand(self, A: np.ndarray, axis: int, name: str, expected: str) -> None:
         if A.ndim != 2 or A.shape[axis] != self._nw:
@@ -122,7 +132,7 @@ class ControlParametrizationModelAbstract:
         return f"{type(self).__name__} {{nw={self._nw}}}"
 
 
-def write_product(value: np.ndarray, op: AssignmentOp, out: np.ndarray | None, caller: str) -> np.ndarray:
+def _write_product(value: np.ndarray, op: AssignmentOp, out: np.ndarray | None, caller: str) -> np.ndarray:
     """Return ``value`` (``out is None``, ``op`` must be ``setto``) or write it into ``out`` by ``op``."""
     if out is None:
         if op != AssignmentOp.setto:

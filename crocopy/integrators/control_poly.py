@@ -22,13 +22,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..enums import AssignmentOp, RKType
+from ..enums import RKType
 from ..validation import as_vector
 from .control_base import (
     ControlParametrizationDataAbstract,
     ControlParametrizationModelAbstract,
     as_dimension,
-    write_product,
 )
 
 
@@ -71,25 +70,11 @@ class ControlParametrizationModelPolyZero(_PolynomialControl):
     def calcDiff(self, data: ControlParametrizationDataAbstract, t: float, u: np.ndarray) -> None:
         """Nothing to do: ``data.dw_du`` is the identity from ``createData``."""
 
-    def multiplyByJacobian(
-        self,
-        data: ControlParametrizationDataAbstract,
-        A: np.ndarray,
-        op: AssignmentOp = AssignmentOp.setto,
-        out: np.ndarray | None = None,
-    ) -> np.ndarray:
-        self._check_operand(A, 1, "A", "(na, nw)")
-        return write_product(A.copy() if out is None else A, op, out, "multiplyByJacobian")
+    def _multiply_by_jacobian(self, data: ControlParametrizationDataAbstract, A: np.ndarray) -> np.ndarray:
+        return A.copy()
 
-    def multiplyJacobianTransposeBy(
-        self,
-        data: ControlParametrizationDataAbstract,
-        A: np.ndarray,
-        op: AssignmentOp = AssignmentOp.setto,
-        out: np.ndarray | None = None,
-    ) -> np.ndarray:
-        self._check_operand(A, 0, "A", "(nw, na)")
-        return write_product(A.copy() if out is None else A, op, out, "multiplyJacobianTransposeBy")
+    def _multiply_jacobian_transpose_by(self, data: ControlParametrizationDataAbstract, A: np.ndarray) -> np.ndarray:
+        return A.copy()
 
 
 class _LagrangeControl(_PolynomialControl):
@@ -117,27 +102,11 @@ class _LagrangeControl(_PolynomialControl):
         self._basis(t, data.c)
         data.dw_du.reshape(-1)[self._diagonal] = np.repeat(data.c, self._nw)
 
-    def multiplyByJacobian(
-        self,
-        data: "_LagrangeControlData",
-        A: np.ndarray,
-        op: AssignmentOp = AssignmentOp.setto,
-        out: np.ndarray | None = None,
-    ) -> np.ndarray:
-        self._check_operand(A, 1, "A", "(na, nw)")
-        product = (A[:, None, :] * data.c[:, None]).reshape(A.shape[0], self._nu)
-        return write_product(product, op, out, "multiplyByJacobian")
+    def _multiply_by_jacobian(self, data: "_LagrangeControlData", A: np.ndarray) -> np.ndarray:
+        return (A[:, None, :] * data.c[:, None]).reshape(A.shape[0], self._nu)
 
-    def multiplyJacobianTransposeBy(
-        self,
-        data: "_LagrangeControlData",
-        A: np.ndarray,
-        op: AssignmentOp = AssignmentOp.setto,
-        out: np.ndarray | None = None,
-    ) -> np.ndarray:
-        self._check_operand(A, 0, "A", "(nw, na)")
-        product = (data.c[:, None, None] * A).reshape(self._nu, A.shape[1])
-        return write_product(product, op, out, "multiplyJacobianTransposeBy")
+    def _multiply_jacobian_transpose_by(self, data: "_LagrangeControlData", A: np.ndarray) -> np.ndarray:
+        return (data.c[:, None, None] * A).reshape(self._nu, A.shape[1])
 
 
 class _LagrangeControlData(ControlParametrizationDataAbstract):
