@@ -14,8 +14,8 @@ of degree ``K - 1`` through them (Lagrange form)::
 The coefficients ``c = (cₖ(t))`` of the last ``calc``/``calcDiff`` are kept in ``data.c``; the
 Jacobian products use them.  ``params(t, w)`` returns the constant polynomial ``uₖ = w`` (exact at
 every ``t``, since the ``cₖ`` sum to one), and ``convertBounds`` repeats the bounds on ``w`` for each
-block: they bound ``w`` at the nodes only (a quadratic, or the line of ``PolyOne`` past ``t = ½``,
-may leave them in between).
+block: they bound ``w`` at the nodes only (between the nodes a quadratic may leave them, and so may
+the line of ``PolyOne`` on ``(½, 1]``).
 """
 
 from __future__ import annotations
