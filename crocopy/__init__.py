@@ -34,6 +34,14 @@ from .data_collector import DataCollectorAbstract
 from .diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
 from .enums import AssignmentOp, Jcomponent, RKType, VerboseLevel
 from .integrators.base import IntegratedActionModelAbstract
+from .integrators.control_base import ControlParametrizationDataAbstract, ControlParametrizationModelAbstract
+from .integrators.control_poly import (
+    ControlParametrizationDataPolyOne,
+    ControlParametrizationDataPolyTwoRK,
+    ControlParametrizationModelPolyOne,
+    ControlParametrizationModelPolyTwoRK,
+    ControlParametrizationModelPolyZero,
+)
 from .integrators.euler import IntegratedActionDataEuler, IntegratedActionModelEuler
 from .integrators.rk import IntegratedActionDataRK, IntegratedActionModelRK
 from .numdiff import (
