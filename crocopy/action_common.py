@@ -83,18 +83,8 @@ class ControlLimitsMixin(ControlBounds):
 class ActionModelBase(ControlLimitsMixin):
     """Constructor, stubs and quasi-static solve of Crocoddyl's two action-model abstractions.
 
-    Parameters
-    ----------
-    state : StateAbstract
-        State manifold.
-    nu : int
-        Control dimension (0 for autonomous systems).
-    nr : int, optional
-        Cost-residual dimension (default 1, as Crocoddyl).
-    ng, nh : int, optional
-        Number of inequality / equality constraints of running nodes (default 0).
-    ng_T, nh_T : int, optional
-        Number of inequality / equality constraints when used as terminal node (default 0).
+    The parameters ``(state, nu, nr=1, ng=0, nh=0, ng_T=0, nh_T=0)`` are described by
+    :class:`~crocopy.action_base.ActionModelAbstract`; they are stored under the same names.
 
     Attributes
     ----------
