@@ -35,6 +35,13 @@ def check_state_and_nu(state: StateAbstract, nu: int) -> int:
     return int(nu)
 
 
+def constraint_arrays(ng: int, nh: int, ndx: int, nu: int) -> tuple[np.ndarray, ...]:
+    """Zero ``g (ng,)``, ``Gx (ng, ndx)``, ``Gu (ng, nu)``, ``h (nh,)``, ``Hx (nh, ndx)``, ``Hu (nh, nu)``: the
+    constraint values and Jacobians of action, constraint and constraint-manager data."""
+    return (np.zeros(ng), np.zeros((ng, ndx)), np.zeros((ng, nu)),
+            np.zeros(nh), np.zeros((nh, ndx)), np.zeros((nh, nu)))
+
+
 class ControlBounds:
     """Control bounds ``u_lb``/``u_ub`` (shape ``(nu,)``, default unbounded) checked on assignment."""
 
@@ -164,9 +171,4 @@ class ActionDataBase:
         self.Lxx = np.zeros((ndx, ndx))
         self.Lxu = np.zeros((ndx, nu))
         self.Luu = np.zeros((nu, nu))
-        self.g = np.zeros(ng)
-        self.Gx = np.zeros((ng, ndx))
-        self.Gu = np.zeros((ng, nu))
-        self.h = np.zeros(nh)
-        self.Hx = np.zeros((nh, ndx))
-        self.Hu = np.zeros((nh, nu))
+        self.g, self.Gx, self.Gu, self.h, self.Hx, self.Hu = constraint_arrays(ng, nh, ndx, nu)

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..action_common import constraint_arrays
 from ..data_collector import DataCollectorAbstract
 from ..named_items import ModelItems
 from .base import ConstraintModelAbstract
@@ -147,12 +148,7 @@ class ConstraintDataManager:
         ndx, nu = model.state.ndx, model.nu
         self.shared = data
         self.constraints = {name: item.constraint.createData(data) for name, item in model.constraints.items()}
-        self.g = np.zeros(model.ng)
-        self.Gx = np.zeros((model.ng, ndx))
-        self.Gu = np.zeros((model.ng, nu))
-        self.h = np.zeros(model.nh)
-        self.Hx = np.zeros((model.nh, ndx))
-        self.Hu = np.zeros((model.nh, nu))
+        self.g, self.Gx, self.Gu, self.h, self.Hx, self.Hu = constraint_arrays(model.ng, model.nh, ndx, nu)
 
     def shareMemory(self, data) -> None:
         """Write straight into ``data``'s ``g, Gx, Gu, h, Hx, Hu`` (an action or differential data).
