@@ -26,6 +26,7 @@ from .data_collectors import (
     DataCollectorMultibodyInContact,
     DataCollectorMultibodyInImpulse,
 )
+from .force_base import ForceDataAbstract
 from .free_fwd_dynamics import DifferentialActionDataFreeFwdDynamics, DifferentialActionModelFreeFwdDynamics
 from .impulse_base import ImpulseDataAbstract, ImpulseModelAbstract
 from .impulse_fwd_dynamics import ActionDataImpulseFwdDynamics, ActionModelImpulseFwdDynamics
@@ -72,6 +73,7 @@ __all__ = [
     "ContactData6D",
     "ContactModel3D",
     "ContactModel6D",
+    "ForceDataAbstract",
     "ImpulseDataAbstract",
     "ImpulseModelAbstract",
     "ActionDataImpulseFwdDynamics",

@@ -24,7 +24,7 @@ from crocopy.residuals.base import ResidualDataAbstract, ResidualModelAbstract
 from crocopy.state import StateAbstract
 
 from .cones import CoPSupport, FrictionCone, WrenchCone
-from .contact_base import frame_id
+from .force_base import frame_id
 
 
 def _force_data(shared: DataCollectorAbstract | None, fid: int, name: str, nc: int):

@@ -10,27 +10,6 @@ from __future__ import annotations
 import numpy as np
 
 
-class ParametersVersion:
-    """Counter bumped whenever a parameter that cost sums cache changes.
-
-    Activation weights and bounds, and the weight or status of a cost item, go through setters that
-    call :meth:`bump`; a :class:`~crocopy.costs.stack.CostStack` re-reads them when the value moved.
-    """
-
-    value = 0
-
-    @classmethod
-    def bump(cls) -> None:
-        cls.value += 1
-
-
-def frozen_copy(values: np.ndarray) -> np.ndarray:
-    """A read-only copy of ``values`` (parameters change through setters only)."""
-    out = np.array(values, dtype=float)
-    out.setflags(write=False)
-    return out
-
-
 class ActivationModelAbstract:
     """Abstract activation of a residual of dimension ``nr``."""
 

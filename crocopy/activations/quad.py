@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..validation import as_vector
-from .base import ActivationDataAbstract, ActivationModelAbstract, ParametersVersion, frozen_copy
+from ..versioning import frozen_copy, touch
+from .base import ActivationDataAbstract, ActivationModelAbstract
 
 
 class ActivationModelQuad(ActivationModelAbstract):
@@ -22,13 +23,12 @@ class ActivationModelQuad(ActivationModelAbstract):
         data.Arr_diag[:] = 1.0
 
 
-class ActivationModelWeightedQuad(ActivationModelAbstract):
-    """``a(r) = ½ Σ wᵢ rᵢ²`` with ``weights`` of shape ``(nr,)``."""
+class ActivationWeights:
+    """The weights ``w`` (shape ``(nr,)``) of a weighted activation: a read-only array; assigning new
+    ones re-checks them and touches the activation (:mod:`crocopy.versioning`)."""
 
-    def __init__(self, weights: np.ndarray) -> None:
-        weights = np.asarray(weights, dtype=float).reshape(-1)
-        super().__init__(weights.size)
-        self._weights = frozen_copy(as_vector(weights, self.nr, "weights"))
+    nr: int
+    _weights: np.ndarray
 
     @property
     def weights(self) -> np.ndarray:
@@ -38,7 +38,16 @@ class ActivationModelWeightedQuad(ActivationModelAbstract):
     @weights.setter
     def weights(self, value: np.ndarray) -> None:
         self._weights = frozen_copy(as_vector(value, self.nr, "weights"))
-        ParametersVersion.bump()
+        touch(self)
+
+
+class ActivationModelWeightedQuad(ActivationWeights, ActivationModelAbstract):
+    """``a(r) = ½ Σ wᵢ rᵢ²`` with ``weights`` of shape ``(nr,)``."""
+
+    def __init__(self, weights: np.ndarray) -> None:
+        weights = np.asarray(weights, dtype=float).reshape(-1)
+        super().__init__(weights.size)
+        self._weights = frozen_copy(as_vector(weights, self.nr, "weights"))
 
     def barrier_form(self) -> tuple:
         return 0.0, 0.0, self._weights

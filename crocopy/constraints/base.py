@@ -15,6 +15,7 @@ import enum
 
 import numpy as np
 
+from ..action_common import constraint_arrays
 from ..data_collector import DataCollectorAbstract
 from ..residuals.base import ResidualModelAbstract
 from ..state import StateAbstract
@@ -119,12 +120,7 @@ class ConstraintDataAbstract:
         ndx, nu = model.state.ndx, model.nu
         self.shared = data
         self.residual = model.residual.createData(data) if model.residual is not None else None
-        self.g = np.zeros(model.ng)
-        self.Gx = np.zeros((model.ng, ndx))
-        self.Gu = np.zeros((model.ng, nu))
-        self.h = np.zeros(model.nh)
-        self.Hx = np.zeros((model.nh, ndx))
-        self.Hu = np.zeros((model.nh, nu))
+        self.g, self.Gx, self.Gu, self.h, self.Hx, self.Hu = constraint_arrays(model.ng, model.nh, ndx, nu)
 
 
 class ConstraintModelResidual(ConstraintModelAbstract):
