@@ -33,6 +33,7 @@ from .impulse_multiple import ImpulseDataMultiple, ImpulseItem, ImpulseModelMult
 from .impulses import ImpulseModel3D, ImpulseModel6D
 from .residuals_contact import (
     ResidualDataContactControlGrav,
+    ResidualDataContactCoPPosition,
     ResidualDataContactForce,
     ResidualDataImpulseCoM,
     ResidualModelContactControlGrav,
@@ -43,6 +44,7 @@ from .residuals_contact import (
     ResidualModelImpulseCoM,
 )
 from .residuals_dynamics import (
+    ResidualDataCentroidalMomentum,
     ResidualModelCentroidalMomentum,
     ResidualModelCoMPosition,
     ResidualModelControlGrav,
@@ -82,6 +84,7 @@ __all__ = [
     "ImpulseModel3D",
     "ImpulseModel6D",
     "ResidualDataContactControlGrav",
+    "ResidualDataContactCoPPosition",
     "ResidualDataContactForce",
     "ResidualDataImpulseCoM",
     "ResidualModelContactControlGrav",
@@ -107,6 +110,7 @@ __all__ = [
     "DataCollectorMultibodyInImpulse",
     "DifferentialActionDataFreeFwdDynamics",
     "DifferentialActionModelFreeFwdDynamics",
+    "ResidualDataCentroidalMomentum",
     "ResidualModelCentroidalMomentum",
     "ResidualModelCoMPosition",
     "ResidualModelControlGrav",

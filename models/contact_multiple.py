@@ -161,7 +161,7 @@ class ContactModelMultiple(NamedItems):
                 cms.append(rigid)
                 cds.append(rigid.createData())
             pin.initConstraintDynamics(self.state.pinocchio, pinocchio, cms, cds)
-            data.rigid, data.rigid_key = (cms, cds), key
+            data.rigid, data.rigid_key = RigidConstraintCache((cms, cds)), key
         return data.rigid
 
     def updateAcceleration(self, data: "ContactDataMultiple", dv: np.ndarray) -> None:
@@ -238,6 +238,18 @@ class ContactModelMultiple(NamedItems):
         return "ContactModelMultiple(" + ", ".join(f"{n}: {c.contact!r}" for n, c in self._items.items()) + ")"
 
 
+def _no_cache() -> None:
+    return None
+
+
+class RigidConstraintCache(tuple):
+    """``(models, datas)`` of Pinocchio constraints: a cache that copies and pickles as ``None``
+    (Pinocchio cannot pickle them; their holders rebuild them on the next ``calc``)."""
+
+    def __reduce__(self) -> tuple:
+        return _no_cache, ()
+
+
 class ContactDataMultiple:
     """Data of :class:`ContactModelMultiple`: ``contacts`` (name → data), ``Jc (nc_total, nv)``,
     ``a0 (nc_total,)``, ``da0_dx (nc_total, ndx)``, ``dv (nv,)``, ``ddv_dx (nv, ndx)`` and ``fext``
@@ -266,6 +278,10 @@ class ContactDataMultiple:
         self.touched = sorted({cd.joint for cd in self.contacts.values()})
         self.rigid = None
         self.rigid_key = None
+
+    def __getstate__(self) -> dict:
+        """Copy or pickle without the Pinocchio constraint cache (``rigid``, rebuilt on first use)."""
+        return {**self.__dict__, "rigid": None, "rigid_key": None}
 
     @property
     def fext(self) -> pin.StdVec_Force:

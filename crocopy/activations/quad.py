@@ -11,6 +11,8 @@ from .base import ActivationDataAbstract, ActivationModelAbstract, ParametersVer
 class ActivationModelQuad(ActivationModelAbstract):
     """``a(r) = ½‖r‖²``; ``Ar = r``; ``Arr = I``."""
 
+    diagonal = True
+
     def barrier_form(self) -> tuple:
         return 0.0, 0.0, 1.0
 
@@ -24,6 +26,8 @@ class ActivationModelQuad(ActivationModelAbstract):
 
 class ActivationModelWeightedQuad(ActivationModelAbstract):
     """``a(r) = ½ Σ wᵢ rᵢ²`` with ``weights`` of shape ``(nr,)``."""
+
+    diagonal = True
 
     def __init__(self, weights: np.ndarray) -> None:
         weights = np.asarray(weights, dtype=float).reshape(-1)

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..activations.base import ParametersVersion
+from ..array_views import share_arrays
 from ..data_collector import DataCollectorAbstract
 from ..named_items import NamedItems
 from ..state import StateAbstract
@@ -43,7 +44,6 @@ class CostModelSum(NamedItems):
     """
 
     _kind = "cost"
-    _sorted = False
 
     def __init__(self, state: StateAbstract, nu: int | None = None) -> None:
         self.state = state
@@ -54,7 +54,7 @@ class CostModelSum(NamedItems):
 
     @property
     def costs(self) -> dict[str, CostItem]:
-        """All items (active or not), in insertion order."""
+        """All items (active or not), ordered by name as in Crocoddyl."""
         return self._items
 
     def _recount(self) -> None:
@@ -139,3 +139,14 @@ class CostDataSum:
         self.stack = CostStack(stackable, ndx, nu)
         stacked = {name for name, _, _ in stackable}
         self.generic = [name for name in model.costs if name not in stacked]
+
+    def shareMemory(self, data) -> None:
+        """Write the derivatives straight into ``data``'s ``Lx, Lu, Lxx, Lxu, Luu`` (an action or
+        differential action data), as Crocoddyl's ``CostDataSum.shareMemory``.
+
+        Raises
+        ------
+        ValueError
+            If ``data``'s arrays do not have this cost data's shapes.
+        """
+        share_arrays(self, data, ("Lx", "Lu", "Lxx", "Lxu", "Luu"))
