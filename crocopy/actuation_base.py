@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .action_common import ControlBounds, check_state_and_nu
+from .array_views import KeepsViews, tolerate_python_model
 from .state import StateAbstract
 
 
@@ -59,7 +60,7 @@ class ActuationModelAbstract(ControlBounds):
         return f"{type(self).__name__}(nu={self.nu})"
 
 
-class ActuationDataAbstract:
+class ActuationDataAbstract(KeepsViews):
     """Actuation data: ``tau (nv,)``, ``u (nu,)``, ``dtau_dx (nv, ndx)``, ``dtau_du (nv, nu)``,
     ``Mtau (nu, nv)`` and ``tau_set`` (bool ``(nv,)``, rows reachable by the actuation)."""
 
@@ -71,6 +72,7 @@ class ActuationDataAbstract:
         self.dtau_du = np.zeros((nv, nu))
         self.Mtau = np.zeros((nu, nv))
         self.tau_set = np.ones(nv, dtype=bool)
+        tolerate_python_model(model, self, ("tau", "u", "dtau_dx", "dtau_du", "Mtau"))
 
 
 class JointDataAbstract:

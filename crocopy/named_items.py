@@ -3,8 +3,8 @@
 A registry keeps ``self._items`` (name → item with an ``active`` attribute), reports
 ``active_set``/``inactive_set``, and calls ``_recount()`` after every change so it can refresh its
 dimensions; every change also touches the registry (:func:`crocopy.versioning.touch`) for the data
-that cache what it holds.  ``_kind`` names the items in error messages; ``_sorted`` keeps them
-ordered by name.
+that cache what it holds.  ``_kind`` names the items in error messages; items are kept ordered by
+name, as in Crocoddyl.
 """
 
 from __future__ import annotations
@@ -24,7 +24,6 @@ class NamedItems:
     """Shared bookkeeping of Crocoddyl's ``CostModelSum``/``ConstraintModelManager``/``Contact...Multiple``."""
 
     _kind = "item"
-    _sorted = True
     _items: dict[str, Any]
 
     @property
@@ -54,8 +53,7 @@ class NamedItems:
     def _insert(self, name: str, item: Any) -> None:
         self._check_new_name(name)
         self._items[name] = item
-        if self._sorted:
-            self._items = dict(sorted(self._items.items()))
+        self._items = dict(sorted(self._items.items()))
         self._changed()
 
     def _remove(self, name: str) -> None:

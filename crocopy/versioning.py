@@ -49,6 +49,10 @@ class ParametersSeen:
     def __init__(self) -> None:
         self.value = -1
 
+    def __reduce__(self) -> tuple:
+        """Copy and pickle as never filled: a clock value means nothing in another process or object."""
+        return ParametersSeen, ()
+
     def stale(self, sources: Callable[[], Iterable[object]]) -> bool:
         """True if the cache must be filled again: never filled, or one of ``sources()`` was touched since.
 

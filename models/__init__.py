@@ -34,6 +34,7 @@ from .impulse_multiple import ImpulseDataMultiple, ImpulseItem, ImpulseModelMult
 from .impulses import ImpulseModel3D, ImpulseModel6D
 from .residuals_contact import (
     ResidualDataContactControlGrav,
+    ResidualDataContactCoPPosition,
     ResidualDataContactForce,
     ResidualDataImpulseCoM,
     ResidualModelContactControlGrav,
@@ -44,6 +45,7 @@ from .residuals_contact import (
     ResidualModelImpulseCoM,
 )
 from .residuals_dynamics import (
+    ResidualDataCentroidalMomentum,
     ResidualModelCentroidalMomentum,
     ResidualModelCoMPosition,
     ResidualModelControlGrav,
@@ -84,6 +86,7 @@ __all__ = [
     "ImpulseModel3D",
     "ImpulseModel6D",
     "ResidualDataContactControlGrav",
+    "ResidualDataContactCoPPosition",
     "ResidualDataContactForce",
     "ResidualDataImpulseCoM",
     "ResidualModelContactControlGrav",
@@ -109,6 +112,7 @@ __all__ = [
     "DataCollectorMultibodyInImpulse",
     "DifferentialActionDataFreeFwdDynamics",
     "DifferentialActionModelFreeFwdDynamics",
+    "ResidualDataCentroidalMomentum",
     "ResidualModelCentroidalMomentum",
     "ResidualModelCoMPosition",
     "ResidualModelControlGrav",

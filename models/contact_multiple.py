@@ -140,7 +140,7 @@ class ContactModelMultiple(ForceModelMultiple):
             cms.append(rigid)
             cds.append(rigid.createData())
         pin.initConstraintDynamics(self.state.pinocchio, pinocchio, cms, cds)
-        return cms, cds
+        return RigidConstraintCache((cms, cds))
 
     def updateAcceleration(self, data: "ContactDataMultiple", dv: np.ndarray) -> None:
         """Store the constrained acceleration ``dv (nv,)``."""
@@ -196,6 +196,18 @@ class ContactModelMultiple(ForceModelMultiple):
         self._split(data.items, "updateForceDiff", (df_dx, df_du), "setZeroForceDiff")
 
 
+def _no_cache() -> None:
+    return None
+
+
+class RigidConstraintCache(tuple):
+    """``(models, datas)`` of Pinocchio constraints: a cache that copies and pickles as ``None``
+    (Pinocchio cannot pickle them; their holders rebuild them on the next ``calc``)."""
+
+    def __reduce__(self) -> tuple:
+        return _no_cache, ()
+
+
 class ContactDataMultiple(ForceDataMultiple):
     """Data of :class:`ContactModelMultiple`: ``contacts`` (name → data), ``Jc (nc_total, nv)``,
     ``a0 (nc_total,)``, ``da0_dx (nc_total, ndx)``, ``dv (nv,)``, ``ddv_dx (nv, ndx)`` and ``fext``
@@ -218,6 +230,10 @@ class ContactDataMultiple(ForceDataMultiple):
         self._model = model
         self.rigid = None
         self.rigid_seen = ParametersSeen()
+
+    def __getstate__(self) -> dict:
+        """Copy or pickle without the Pinocchio constraint cache (``rigid``, rebuilt on first use)."""
+        return {**self.__dict__, "rigid": None}
 
     @property
     def fext(self) -> pin.StdVec_Force:

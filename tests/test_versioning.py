@@ -7,6 +7,9 @@ parameter after the data exist and compares with a data created afterwards (whic
 
 from __future__ import annotations
 
+import copy
+import pickle
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -222,3 +225,13 @@ def test_contact_parameters_change_through_their_setters_only():
     frame.reference.translation = np.ones(3)
     np.testing.assert_array_equal(frame.reference.translation, np.zeros(3))
     np.testing.assert_array_equal(_xout(dam, data, x, u), first)
+
+
+def test_a_copied_or_pickled_cache_mark_is_never_filled():
+
+
+    seen = ParametersSeen()
+    seen.filled()
+    assert not seen.stale(list)
+    for other in (copy.deepcopy(seen), pickle.loads(pickle.dumps(seen))):
+        assert other.value == -1 and other.stale(list)

@@ -64,6 +64,8 @@ class ActivationBounds:
 class ActivationModelQuadraticBarrier(ActivationModelAbstract):
     """``a = ½‖r - clip(r, lb, ub)‖²``."""
 
+    diagonal = True
+
     def __init__(self, bounds: ActivationBounds) -> None:
         super().__init__(bounds.lb.size)
         self._bounds = bounds

@@ -12,6 +12,8 @@ from .base import ActivationDataAbstract, ActivationModelAbstract
 class ActivationModelQuad(ActivationModelAbstract):
     """``a(r) = ½‖r‖²``; ``Ar = r``; ``Arr = I``."""
 
+    diagonal = True
+
     def barrier_form(self) -> tuple:
         return 0.0, 0.0, 1.0
 
@@ -43,6 +45,8 @@ class ActivationWeights:
 
 class ActivationModelWeightedQuad(ActivationWeights, ActivationModelAbstract):
     """``a(r) = ½ Σ wᵢ rᵢ²`` with ``weights`` of shape ``(nr,)``."""
+
+    diagonal = True
 
     def __init__(self, weights: np.ndarray) -> None:
         weights = np.asarray(weights, dtype=float).reshape(-1)

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..action_common import constraint_arrays
+from ..array_views import share_arrays
 from ..data_collector import DataCollectorAbstract
 from ..named_items import ModelItems
 from .base import ConstraintModelAbstract
@@ -158,8 +159,4 @@ class ConstraintDataManager:
         ValueError
             If ``data``'s arrays do not have this manager data's shapes.
         """
-        for name in ("g", "Gx", "Gu", "h", "Hx", "Hu"):
-            mine, theirs = getattr(self, name), getattr(data, name)
-            if theirs.shape != mine.shape:
-                raise ValueError(f"data.{name} has shape {theirs.shape}, expected {mine.shape}")
-            setattr(self, name, theirs)
+        share_arrays(self, data, ("g", "Gx", "Gu", "h", "Hx", "Hu"))

@@ -78,16 +78,20 @@ class CostStack:
         self.active: list = []
         self.unfused: list = []
 
+    def __getstate__(self) -> dict:
+        """Copy or pickle without the per-evaluation lists (they hold views; :meth:`refresh` rebuilds them)."""
+        return {**self.__dict__, "active": [], "unfused": []}
+
     def _share(self, item, cdata, rows: slice, k: int) -> None:
         """Make the item's residual and activation arrays views into the stack."""
         rdata, adata = cdata.residual, cdata.activation
         for name, stacked in (("r", self.r), ("Rx", self.Jx)):
             stacked[rows] = getattr(rdata, name)
-            setattr(rdata, name, stacked[rows])
+            setattr(rdata, name, stacked[rows].view(type(getattr(rdata, name))))
         if item.cost.residual.u_dependent:
             urows = slice(rows.start - self.u_start, rows.stop - self.u_start)
             self.Ju[urows] = rdata.Ru
-            rdata.Ru = self.Ju[urows]
+            rdata.Ru = self.Ju[urows].view(type(rdata.Ru))
         for name, stacked in (("Ar", self.Ar), ("Arr_diag", self.Arr)):
             stacked[rows] = getattr(adata, name)
             setattr(adata, name, stacked[rows])

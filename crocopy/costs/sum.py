@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..array_views import share_arrays
 from ..data_collector import DataCollectorAbstract
 from ..named_items import ModelItems
 from ..versioning import touch
@@ -42,12 +43,11 @@ class CostModelSum(ModelItems):
     """
 
     _kind = "cost"
-    _sorted = False
     _model_type = CostModelAbstract
 
     @property
     def costs(self) -> dict[str, CostItem]:
-        """All items (active or not), in insertion order."""
+        """All items (active or not), ordered by name as in Crocoddyl."""
         return self._items
 
     def _recount(self) -> None:
@@ -136,3 +136,14 @@ class CostDataSum:
         self.stack = CostStack(stackable, ndx, nu)
         stacked = {name for name, _, _ in stackable}
         self.generic = [name for name in model.costs if name not in stacked]
+
+    def shareMemory(self, data) -> None:
+        """Write the derivatives straight into ``data``'s ``Lx, Lu, Lxx, Lxu, Luu`` (an action or
+        differential action data), as Crocoddyl's ``CostDataSum.shareMemory``.
+
+        Raises
+        ------
+        ValueError
+            If ``data``'s arrays do not have this cost data's shapes.
+        """
+        share_arrays(self, data, ("Lx", "Lu", "Lxx", "Lxu", "Luu"))

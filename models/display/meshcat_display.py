@@ -43,6 +43,8 @@ import zmq
 from meshcat.visualizer import ViewerWindow
 from pinocchio.visualize import MeshcatVisualizer
 
+from crocopy.display_base import DisplayAbstract
+
 from .scene import active_contacts, frame_ids_of, friction_cones
 
 __all__ = ["MeshcatDisplay", "start_meshcat_server", "stop_meshcat_server"]
@@ -146,7 +148,7 @@ def _homogeneous(rotation: np.ndarray, translation: np.ndarray) -> np.ndarray:
     return T
 
 
-class MeshcatDisplay:
+class MeshcatDisplay(DisplayAbstract):
     """Display robot trajectories in meshcat, with Crocoddyl's ``MeshcatDisplay`` interface.
 
     Parameters
@@ -489,14 +491,6 @@ class MeshcatDisplay:
                 if name not in names:
                     names.append(name)
         self.frameTrajNames = names
-
-    def getDurationSequenceFromSolver(self, solver: Any) -> list[float]:
-        """Duration ``dt`` of every running node (0 for nodes without one, e.g. impulses)."""
-        return [float(getattr(m, "dt", 0.0)) for m in solver.problem.runningModels]
-
-    def getTimeSequenceFromSolver(self, solver: Any) -> list[float]:
-        """Start time of every node, terminal included."""
-        return [0.0, *np.cumsum(self.getDurationSequenceFromSolver(solver)).tolist()]
 
     def getJointTorquesTrajectoryFromSolver(self, solver: Any) -> list[np.ndarray]:
         """The controls ``us`` of the solver (copies)."""
