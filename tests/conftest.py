@@ -1,14 +1,17 @@
-"""Shared test requirements: the real-browser tests need Chromium.
+"""Shared test requirements: the real-browser tests need Chromium, the Dask test the ``distributed`` extra.
 
-Outside CI a missing Chromium skips those tests with the reason in the summary (``-rs`` is in the
-pytest options); in CI (environment variable ``CI`` set to ``true`` or ``1``, as ``.ci/run`` does)
-it fails them, because ``.ci/run`` installs Chromium and the browser checks must run there.
+Outside CI a missing requirement skips those tests with the reason in the summary (``-rs`` is in
+the pytest options); in CI (environment variable ``CI`` set to ``true`` or ``1``, as ``.ci/run``
+does) it fails them, because ``.ci/run`` installs Chromium and the extras and these checks must
+run there.
 """
 
 from __future__ import annotations
 
+import importlib
 import os
 import shutil
+from types import ModuleType
 
 import pytest
 
@@ -38,6 +41,17 @@ def require_chromium() -> str:
     if in_ci():
         pytest.fail(f"chromium not found (required in CI; .ci/run installs it): {INSTALL_HINT}")
     pytest.skip(f"chromium not found, real-browser test skipped: {INSTALL_HINT} (CI requires it)")
+
+
+def require_module(name: str, extra: str) -> ModuleType:
+    """Import ``name``; without it skip the calling test (fail it in CI), naming the extra that installs it."""
+    try:
+        return importlib.import_module(name)
+    except ImportError as exc:
+        hint = f'{name} not importable ({exc}): pip install ".[{extra}]"'
+        if in_ci():
+            pytest.fail(f"{hint} (required in CI; .ci/run installs it)")
+        pytest.skip(f"{hint} (CI requires it)")
 
 
 @pytest.fixture(scope="session")
