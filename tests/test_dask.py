@@ -9,11 +9,10 @@ failed in CI (see ``conftest.py``).
 from __future__ import annotations
 
 import os
-import sys
 
 import numpy as np
 import pytest
-from conftest import require_module
+from conftest import require_module, spawn_safe_main
 
 import crocopy
 from crocopy.experiments.box_fddp import initial_positions
@@ -25,17 +24,9 @@ MAXITER = 15
 
 @pytest.fixture(scope="module")
 def dask_client():
-    """A client of a 2-process ``LocalCluster``, one thread per worker.
-
-    Dask spawns its workers, and a spawned child runs the parent's main script again unless that
-    script is guarded by ``if __name__ == "__main__"``; some ``pytest`` launchers are not, so the
-    main script's path is hidden while the workers start (they then start as from ``python -c``).
-    """
+    """A client of a 2-process ``LocalCluster``, one thread per worker."""
     distributed = require_module("distributed", "distributed")
-    with pytest.MonkeyPatch.context() as patch:
-        main = sys.modules["__main__"]
-        if getattr(main, "__spec__", None) is None and hasattr(main, "__file__"):
-            patch.delattr(main, "__file__")
+    with spawn_safe_main():
         cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
     with cluster, distributed.Client(cluster) as client:
         yield client
