@@ -19,7 +19,6 @@ extensions = [
 ]
 
 exclude_patterns = ["_build", "DEVELOPING.md"]
-templates_path = ["_templates"]
 root_doc = "index"
 
 autosummary_generate = True
