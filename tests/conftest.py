@@ -8,12 +8,9 @@ run there.
 
 from __future__ import annotations
 
-import contextlib
 import importlib
 import os
 import shutil
-import sys
-from collections.abc import Iterator
 from types import ModuleType
 
 import pytest
@@ -55,21 +52,6 @@ def require_module(name: str, extra: str) -> ModuleType:
         if in_ci():
             pytest.fail(f"{hint} (required in CI; .ci/run installs it)")
         pytest.skip(f"{hint} (CI requires it)")
-
-
-@contextlib.contextmanager
-def spawn_safe_main() -> Iterator[None]:
-    """Hide the main script's path while Dask spawns its workers.
-
-    A spawned child runs the parent's main script again unless that script is guarded by
-    ``if __name__ == "__main__"``; some ``pytest`` launchers are not, so the path is hidden and the
-    workers start as from ``python -c``.
-    """
-    with pytest.MonkeyPatch.context() as patch:
-        main = sys.modules["__main__"]
-        if getattr(main, "__spec__", None) is None and hasattr(main, "__file__"):
-            patch.delattr(main, "__file__")
-        yield
 
 
 @pytest.fixture(scope="session")

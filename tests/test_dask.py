@@ -12,7 +12,7 @@ import os
 
 import numpy as np
 import pytest
-from conftest import require_module, spawn_safe_main
+from conftest import require_module
 
 import crocopy
 from crocopy.experiments.box_fddp import initial_positions
@@ -26,8 +26,7 @@ MAXITER = 15
 def dask_client():
     """A client of a 2-process ``LocalCluster``, one thread per worker."""
     distributed = require_module("distributed", "distributed")
-    with spawn_safe_main():
-        cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
     with cluster, distributed.Client(cluster) as client:
         yield client
 

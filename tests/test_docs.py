@@ -12,7 +12,6 @@ import sys
 from pathlib import Path
 
 import pytest
-from conftest import spawn_safe_main
 
 SNIPPETS = Path(__file__).resolve().parents[1] / "docs" / "snippets"
 
@@ -44,8 +43,7 @@ def test_snippet_runs(script, expected, tmp_path, monkeypatch, capsys):
         pytest.importorskip("distributed")
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr(sys, "argv", [script])
-    with spawn_safe_main():
-        runpy.run_path(str(SNIPPETS / script), run_name="__main__")
+    runpy.run_path(str(SNIPPETS / script), run_name="__main__")
     out = capsys.readouterr().out
     assert re.search(expected, out), out[-2000:]
     if script == "first_solve.py":
