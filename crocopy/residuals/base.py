@@ -28,8 +28,9 @@ class ResidualModelAbstract:
     q_dependent, v_dependent, u_dependent : bool
         Which arguments the residual depends on.
 
-    As in Crocoddyl, ``nu`` may be left out positionally: ``ResidualModelAbstract(state, nr,
-    q_dependent, v_dependent, u_dependent)`` (a bool in third place is ``q_dependent``).
+    As in Crocoddyl, ``nu`` may be left out positionally:
+    ``ResidualModelAbstract(state, nr, q_dependent, v_dependent, u_dependent)`` (a bool in third
+    place is ``q_dependent``).
     """
 
     def __init__(
