@@ -17,6 +17,10 @@ from ..state import StateAbstract
 class ResidualModelAbstract:
     """Abstract residual (Crocoddyl's ``ResidualModelAbstract``).
 
+    As in Crocoddyl, ``nu`` may be left out positionally:
+    ``ResidualModelAbstract(state, nr, q_dependent, v_dependent, u_dependent)`` (a bool in third
+    place is ``q_dependent``).
+
     Parameters
     ----------
     state : StateAbstract
@@ -27,10 +31,6 @@ class ResidualModelAbstract:
         Control dimension (default ``state.nv``).
     q_dependent, v_dependent, u_dependent : bool
         Which arguments the residual depends on.
-
-    As in Crocoddyl, ``nu`` may be left out positionally:
-    ``ResidualModelAbstract(state, nr, q_dependent, v_dependent, u_dependent)`` (a bool in third
-    place is ``q_dependent``).
     """
 
     def __init__(
