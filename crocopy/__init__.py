@@ -28,8 +28,9 @@ from .activations.numdiff import ActivationDataNumDiff, ActivationModelNumDiff
 from .actuation_base import ActuationDataAbstract, ActuationModelAbstract, JointDataAbstract
 from .batch import SolveManyError, SolveResult, WorkerDiedError, solve_many
 from .callbacks.base import CallbackAbstract, CallbackLogger, CallbackVerbose
-from .callbacks.display import CallbackDisplay
+from .callbacks.display import CallbackDisplay, DisplayAbstract
 from .callbacks.plotting import plotConvergence, plotFeasibility, plotOCSolution
+from .callbacks.save import saveConvergence, saveLogfile, saveOCSolution
 from .constraints.base import ConstraintDataAbstract, ConstraintModelAbstract, ConstraintModelResidual, ConstraintType
 from .constraints.manager import ConstraintDataManager, ConstraintItem, ConstraintModelManager
 from .costs.base import CostDataAbstract, CostDataResidual, CostModelAbstract, CostModelResidual
@@ -38,7 +39,6 @@ from .crocoddyl_names import CROCODDYL_NAMES as _CROCODDYL_NAMES
 from .crocoddyl_names import CROCODDYL_VERSION as _CROCODDYL_VERSION
 from .data_collector import DataCollectorAbstract
 from .diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
-from .display_base import DisplayAbstract
 from .enums import AssignmentOp, FeasibilityNorm, Jcomponent, RKType, VerboseLevel
 from .integrators.base import IntegratedActionModelAbstract
 from .integrators.control_base import ControlParametrizationDataAbstract, ControlParametrizationModelAbstract
@@ -57,9 +57,9 @@ from .numdiff import (
     DifferentialActionDataNumDiff,
     DifferentialActionModelNumDiff,
 )
+from .numdiff.state import StateNumDiff
 from .residuals import ResidualModelControl, ResidualModelState
 from .residuals.base import ResidualDataAbstract, ResidualModelAbstract
-from .save import saveConvergence, saveLogfile, saveOCSolution
 from .shooting import ShootingProblem
 from .solvers import SolverAbstract, SolverDDP, SolverFDDP
 from .solvers.box_ddp import SolverBoxDDP
@@ -68,17 +68,8 @@ from .solvers.box_qp import BoxQP, BoxQPSolution
 from .solvers.clamping import SolverClampedDDP
 from .solvers.hddp import CallbackHDDPLogger, CallbackHDDPVerbose, SolverHDDP
 from .solvers.projection import ConstraintRankError, SolverProjection
-from .squashing.action import ActionModelSquashed
-from .squashing.smooth_sat import (
-    ActuationSquashingModel,
-    SquashingDataAbstract,
-    SquashingModelAbstract,
-    SquashingModelSmoothSat,
-)
-from .state import StateAbstract, StateVector
-from .state_numdiff import StateNumDiff
-from .std_vector import StdVec_VectorXs
-from .stopwatch import (
+from .solvers.std_vector import StdVec_VectorXs
+from .solvers.stopwatch import (
     disable_profiler,
     enable_profiler,
     stop_watch_get_average_time,
@@ -88,6 +79,14 @@ from .stopwatch import (
     stop_watch_report,
     stop_watch_reset_all,
 )
+from .squashing.action import ActionModelSquashed
+from .squashing.smooth_sat import (
+    ActuationSquashingModel,
+    SquashingDataAbstract,
+    SquashingModelAbstract,
+    SquashingModelSmoothSat,
+)
+from .state import StateAbstract, StateVector
 
 try:
     __version__ = _version("crocopy")

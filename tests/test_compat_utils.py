@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import crocopy
-from crocopy import stopwatch
 from crocopy.crocoddyl_names import CROCODDYL_NAMES
+from crocopy.solvers import stopwatch
 
 
 def _solved():

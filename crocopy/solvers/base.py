@@ -14,8 +14,8 @@ import numpy as np
 
 from ..enums import FeasibilityNorm
 from ..shooting import ShootingProblem
-from ..std_vector import StdVecAttribute
-from ..stopwatch import profiled
+from .std_vector import StdVecAttribute
+from .stopwatch import profiled
 
 
 class BackwardPassError(RuntimeError):
@@ -36,12 +36,12 @@ class SolverAbstract:
     """
 
     #: State trajectory (T+1 arrays), controls (T arrays) and gaps (T+1 arrays), each a
-    #: :class:`~crocopy.std_vector.StdVec_VectorXs` (a list with Crocoddyl's ``tolist()``).
+    #: :class:`~crocopy.solvers.std_vector.StdVec_VectorXs` (a list with Crocoddyl's ``tolist()``).
     xs = StdVecAttribute()
     us = StdVecAttribute()
     fs = StdVecAttribute()
 
-    #: Methods timed by the profiler (:mod:`crocopy.stopwatch`) as ``"ClassName::method"``.
+    #: Methods timed by the profiler (:mod:`crocopy.solvers.stopwatch`) as ``"ClassName::method"``.
     _profiled = ("solve", "computeDirection", "calcDiff", "backwardPass", "tryStep", "forwardPass")
 
     def __init_subclass__(cls, **kwargs) -> None:

@@ -43,7 +43,7 @@ import zmq
 from meshcat.visualizer import ViewerWindow
 from pinocchio.visualize import MeshcatVisualizer
 
-from crocopy.display_base import DisplayAbstract
+from crocopy.callbacks.display import DisplayAbstract
 
 from .scene import active_contacts, frame_ids_of, friction_cones
 

@@ -16,8 +16,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .enums import Jcomponent
-from .state import StateAbstract
+from ..enums import Jcomponent
+from ..state import StateAbstract
 
 _EPS = np.finfo(float).eps
 
