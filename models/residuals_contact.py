@@ -24,7 +24,7 @@ from crocopy.residuals.base import ResidualDataAbstract, ResidualModelAbstract
 from crocopy.state import StateAbstract
 
 from .cones import CoPSupport, FrictionCone, WrenchCone
-from .contact_base import frame_id
+from .force_base import frame_id
 
 
 def _force_data(shared: DataCollectorAbstract | None, fid: int, name: str, nc: int):
@@ -171,8 +171,20 @@ class ResidualModelContactCoPPosition(_ForceResidual):
         super().__init__(state, id, 4, nu, fwddyn)
         self.reference = cref
 
+    def createData(self, data: DataCollectorAbstract | None = None) -> "ResidualDataContactCoPPosition":
+        return ResidualDataContactCoPPosition(self, data)
+
     def _matrix(self) -> np.ndarray:
         return self.reference.A
+
+
+class ResidualDataContactCoPPosition(ResidualDataContactForce):
+    """Data of :class:`ResidualModelContactCoPPosition`: ``contact`` (the 6D contact or impulse data
+    on the residual's frame) and ``pinocchio`` (the node's Pinocchio data)."""
+
+    def __init__(self, model: ResidualModelContactCoPPosition, data: DataCollectorAbstract | None) -> None:
+        super().__init__(model, data)
+        self.pinocchio = self.contact.pinocchio
 
 
 class ResidualModelContactControlGrav(ResidualModelAbstract):

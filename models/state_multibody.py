@@ -21,6 +21,8 @@ from crocopy.enums import Jcomponent
 from crocopy.integrators.euler_kernel import add_integrate_jacobian
 from crocopy.state import StateAbstract
 
+from .pinocchio_pickle import remember_model
+
 _HUGE = 1e300  # URDF "no limit" values (numeric_limits::max) are mapped to inf
 
 
@@ -80,6 +82,7 @@ class StateMultibody(StateAbstract):
             raise ValueError(f"model must be a pinocchio.Model, got {type(model).__name__}")
         super().__init__(model.nq + model.nv, 2 * model.nv)
         self.pinocchio = model
+        remember_model(model)
         self.nq, self.nv = model.nq, model.nv
         lq = _finite_or_inf(model.lowerPositionLimit, -1.0)
         uq = _finite_or_inf(model.upperPositionLimit, 1.0)
@@ -201,6 +204,10 @@ class StateMultibody(StateAbstract):
         q, dq = x[: self.nq], dx[:nv]
         rows = pin.dIntegrateTransport(model, q, dq, np.hstack((Fx[:nv], Fu[:nv])), pin.ARG1)
         add_integrate_jacobian(np.reshape(rows, (nv, -1)), pin.dIntegrate(model, q, dq, pin.ARG0), Fx, Fu)
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        remember_model(self.pinocchio)
 
     def __repr__(self) -> str:
         return f"StateMultibody(nq={self.nq}, nv={self.nv})"

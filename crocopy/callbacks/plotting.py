@@ -177,9 +177,9 @@ def plotConvergence(
 
     Parameters
     ----------
-    costs : cost; muLM, muV : primal and dual regularisation; gamma : gradient ``|d[0]|``;
-    theta : stopping criterion; alpha : step length (e.g. a logger's ``costs, pregs, dregs,
-    grads, stops, steps``).
+    costs, muLM, muV, gamma, theta, alpha : sequence of float
+        Cost, primal and dual regularisation, gradient ``|d[0]|``, stopping criterion and step
+        length (e.g. a logger's ``costs, pregs, dregs, grads, stops, steps``).
     """
     values = {
         "cost": _series("costs", costs),

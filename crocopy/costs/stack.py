@@ -17,14 +17,15 @@ rows at once; other diagonal activations are called item by item.
 
 Rows are ordered with the control-independent residuals first: ``Ju`` holds only the rows of the
 control-dependent residuals (the tail of ``Jx``), so their zero ``Ru`` never enters a product.
-Weights, bounds and activity are cached and re-read when :class:`ParametersVersion` moves.
+Weights, bounds and activity are cached and re-read when an item, its activation or the
+activation's bounds were touched since (:mod:`crocopy.versioning`), or the node kind changed.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..activations.base import ParametersVersion
+from ..versioning import ParametersSeen
 from . import stack_kernel as cost_stack_kernel
 
 
@@ -72,20 +73,25 @@ class CostStack:
         self.Jc, self.Juc = np.zeros_like(self.Jx), np.zeros_like(self.Ju)
         for k, ((_, item, cdata), rows) in enumerate(zip(self.items, self.slices)):
             self._share(item, cdata, rows, k)
-        self._seen: tuple[int, bool] | None = None
+        self._seen = ParametersSeen()
+        self._terminal: bool | None = None
         self.active: list = []
         self.unfused: list = []
+
+    def __getstate__(self) -> dict:
+        """Copy or pickle without the per-evaluation lists (they hold views; :meth:`refresh` rebuilds them)."""
+        return {**self.__dict__, "active": [], "unfused": []}
 
     def _share(self, item, cdata, rows: slice, k: int) -> None:
         """Make the item's residual and activation arrays views into the stack."""
         rdata, adata = cdata.residual, cdata.activation
         for name, stacked in (("r", self.r), ("Rx", self.Jx)):
             stacked[rows] = getattr(rdata, name)
-            setattr(rdata, name, stacked[rows])
+            setattr(rdata, name, stacked[rows].view(type(getattr(rdata, name))))
         if item.cost.residual.u_dependent:
             urows = slice(rows.start - self.u_start, rows.stop - self.u_start)
             self.Ju[urows] = rdata.Ru
-            rdata.Ru = self.Ju[urows]
+            rdata.Ru = self.Ju[urows].view(type(rdata.Ru))
         for name, stacked in (("Ar", self.Ar), ("Arr_diag", self.Arr)):
             stacked[rows] = getattr(adata, name)
             setattr(adata, name, stacked[rows])
@@ -114,7 +120,15 @@ class CostStack:
             else:
                 self.r[rows] = 0.0
                 self.Jx[rows] = 0.0
-        self._seen = (ParametersVersion.value, terminal)
+        self._seen.filled()
+        self._terminal = terminal
+
+    def _parameter_owners(self):
+        """Every object whose parameters :meth:`refresh` reads: items, activations, activation bounds."""
+        for _, item, _ in self.items:
+            yield item
+            yield item.cost.activation
+            yield getattr(item.cost.activation, "bounds", None)
 
     def _excess(self) -> np.ndarray:
         e = self.excess
@@ -125,7 +139,7 @@ class CostStack:
 
     def calc(self, x: np.ndarray, u: np.ndarray | None) -> float:
         """Residuals and activation values of every active item; returns ``Σ weight · cost``."""
-        if self._seen != (ParametersVersion.value, u is None):
+        if self._terminal != (u is None) or self._seen.stale(self._parameter_owners):
             self.refresh(u is None)
         for residual, rdata in self.active:
             residual.calc(rdata, x, u)
@@ -151,7 +165,7 @@ class CostStack:
 
     def calcDiff(self, data, x: np.ndarray, u: np.ndarray | None) -> None:
         """Residual Jacobians, activation derivatives and the weighted sums into ``data``."""
-        if self._seen != (ParametersVersion.value, u is None):
+        if self._terminal != (u is None) or self._seen.stale(self._parameter_owners):
             self.refresh(u is None)
         for residual, rdata in self.active:
             residual.calcDiff(rdata, x, u)

@@ -1,4 +1,5 @@
-"""Compiled Box-DDP node step (numba), twin of the numpy path of :mod:`.box_ddp` and :mod:`crocopy.solvers.box_qp`.
+"""Compiled Box-DDP node step (numba), twin of the numpy path of :mod:`~crocopy.solvers.box_ddp` and
+:mod:`crocopy.solvers.box_qp`.
 
 For node t with next value function ``(V'x, V'xx)`` (Crocoddyl's signs) it computes the Q terms
 (as :mod:`.riccati_kernel`), solves the box QP ``min ½ δuᵀ Quu δu + Quᵀ δu, lb ≤ δu ≤ ub`` by the

@@ -54,12 +54,15 @@ import pinocchio as pin
 import zmq
 from pinocchio.visualize import MeshcatVisualizer
 
+from crocopy.callbacks.display import DisplayAbstract
+
 from .framing import box_corners, camera_placement, floor_extent, motion_bounds, motion_points, robot_size
 from .meshes import has_mixed_texcoords, plain_mesh
 from .scene import active_contacts, frame_ids_of, friction_cones
 from .server import DEFAULT_TIMEOUT, start_meshcat_server, stop_meshcat_server
 
 __all__ = ["MeshcatDisplay", "start_meshcat_server", "stop_meshcat_server"]
+
 
 def _rgb_int(rgba: Sequence[float]) -> int:
     return int(rgba[0] * 255) * 65536 + int(rgba[1] * 255) * 256 + int(rgba[2] * 255)
@@ -82,7 +85,7 @@ def _homogeneous(rotation: np.ndarray, translation: np.ndarray) -> np.ndarray:
     return T
 
 
-class MeshcatDisplay:
+class MeshcatDisplay(DisplayAbstract):
     """Display robot trajectories in meshcat, with Crocoddyl's ``MeshcatDisplay`` interface.
 
     Parameters
@@ -518,14 +521,6 @@ class MeshcatDisplay:
                 if name not in names:
                     names.append(name)
         self.frameTrajNames = names
-
-    def getDurationSequenceFromSolver(self, solver: Any) -> list[float]:
-        """Duration ``dt`` of every running node (0 for nodes without one, e.g. impulses)."""
-        return [float(getattr(m, "dt", 0.0)) for m in solver.problem.runningModels]
-
-    def getTimeSequenceFromSolver(self, solver: Any) -> list[float]:
-        """Start time of every node, terminal included."""
-        return [0.0, *np.cumsum(self.getDurationSequenceFromSolver(solver)).tolist()]
 
     def getJointTorquesTrajectoryFromSolver(self, solver: Any) -> list[np.ndarray]:
         """The controls ``us`` of the solver (copies)."""
