@@ -13,7 +13,9 @@ contact forces as external forces, ``∂ID/∂x``) and the contact constraint (`
     ∂λ/∂x = -Bᵀ (∂τ/∂x - ∂ID/∂x) + C da0_dx,   ∂λ/∂u = -Bᵀ ∂τ/∂u
 
 The force Jacobians are written to every contact's data (``df_dx``, ``df_du``) when
-``enable_force`` is True, so that force residuals can use them.
+``enable_force`` is True, so that force residuals can use them.  The joint data collector
+(``data.multibody.joint``) exposes ``tau = u``, ``a = xout`` and their derivatives (``∂τ/∂u = I``,
+``da_dx = Fx``, ``da_du = Fu``) for the joint-effort/acceleration residuals, as under free dynamics.
 """
 
 from __future__ import annotations
@@ -159,6 +161,7 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         nc = self.contacts.nc
         pd = data.pinocchio
         self.actuation.calc(mb.actuation, x, u)
+        mb.joint.tau[:] = u
         data.rigid = None
         if nc and self.use_pinocchio_constraints and not self._with_armature and self._damping == 0.0:
             data.rigid = self.contacts.rigidConstraints(mb.contacts, pd)
@@ -310,6 +313,8 @@ class DifferentialActionDataContactFwdDynamics(DifferentialActionDataAbstract):
         actuation = model.actuation.createData()
         contacts = model.contacts.createData(self.pinocchio)
         joint = JointDataAbstract(model.state, model.actuation, nu)
+        joint.a, joint.da_dx, joint.da_du = self.xout, self.Fx, self.Fu
+        np.fill_diagonal(joint.dtau_du, 1.0)
         self.multibody = DataCollectorJointActMultibodyInContact(self.pinocchio, actuation, joint, contacts)
         self.costs = model.costs.createData(self.multibody)
         link_cost_data(self, self.costs)
