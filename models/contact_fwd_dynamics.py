@@ -16,6 +16,8 @@ The force Jacobians are written to every contact's data (``df_dx``, ``df_du``) w
 ``enable_force`` is True, so that force residuals can use them.  The joint data collector
 (``data.multibody.joint``) exposes ``tau = u``, ``a = xout`` and their derivatives (``∂τ/∂u = I``,
 ``da_dx = Fx``, ``da_du = Fu``) for the joint-effort/acceleration residuals, as under free dynamics.
+On a terminal node (no control) the contact forces and their Jacobians are set to zero, so that no
+residual reads the forces of an earlier evaluation.
 """
 
 from __future__ import annotations
@@ -152,6 +154,7 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         if u is None:
             pin.computeForwardKinematicsDerivatives(self.pinocchio, data.pinocchio, q, v, data.zero_a)
             pin.updateFramePlacements(self.pinocchio, data.pinocchio)
+            self.contacts.updateForce(mb.contacts, data.zero_force)
             self.costs.calc(data.costs, x)
             data.cost = data.costs.cost
             if self.constraints is not None:
@@ -199,6 +202,9 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         state = self.state
         check_vector_shape(x, state.nx, "x")
         if u is None:
+            data.df_dx[:] = 0.0
+            data.df_du[:] = 0.0
+            self.contacts.updateForceDiff(data.multibody.contacts, data.df_dx, data.df_du)
             self.costs.calcDiff(data.costs, x)
             if self.constraints is not None:
                 self.constraints.calcDiff(data.constraints, x)
@@ -328,6 +334,7 @@ class DifferentialActionDataContactFwdDynamics(DifferentialActionDataAbstract):
         self.rhs = np.zeros((nv + nc, ndx))
         self.KinvRhs = np.zeros((nv + nc, ndx))
         self.no_force = np.zeros(0)
+        self.zero_force = np.zeros(nc)
         self.diag = np.arange(nv)
         self.zero_a = np.zeros(nv)
         self.rigid = None

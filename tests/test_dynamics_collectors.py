@@ -30,6 +30,7 @@ COLLECTOR_RESIDUALS = {
     "frame_velocity": KINDS,
     "contact_force": ("contact-pinocchio", "contact-kkt", "impulse"),
     "impulse_com": ("impulse",),
+    "contact_control_grav": ("contact-pinocchio", "contact-kkt"),
 }
 CASES = [(name, kind) for name, kinds in COLLECTOR_RESIDUALS.items() for kind in kinds]
 
@@ -50,6 +51,8 @@ def make_residual(name: str, state, actuation, nu: int, rng: np.random.Generator
         return crocopy.ResidualModelFrameVelocity(state, fid, pin.Motion(rng.normal(size=6)), pin.WORLD, nu)
     if name == "contact_force":
         return crocopy.ResidualModelContactForce(state, fid, pin.Force(rng.normal(size=6)), 3, nu)
+    if name == "contact_control_grav":
+        return crocopy.ResidualModelContactControlGrav(state, nu)
     return crocopy.ResidualModelImpulseCoM(state)
 
 
@@ -104,7 +107,7 @@ def expected(name: str, residual, dam, data, x: np.ndarray, u: np.ndarray) -> np
     if name == "frame_velocity":
         pin.forwardKinematics(model, pd, q, v)
         return (pin.getFrameVelocity(model, pd, residual.id, pin.WORLD) - residual.reference).vector
-    # contact_force: the first foot's force (LOCAL frame) from Pinocchio's own contact solver
+    # the contact forces (LOCAL frames) from Pinocchio's own contact solver
     fid = model.getFrameId(FEET[0])
     cms = [pin.RigidConstraintModel(pin.ContactType.CONTACT_3D, model, model.frames[model.getFrameId(f)].parentJoint,
                                     model.frames[model.getFrameId(f)].placement, pin.LOCAL) for f in FEET]
@@ -123,6 +126,11 @@ def expected(name: str, residual, dam, data, x: np.ndarray, u: np.ndarray) -> np
         pin.constraintDynamics(model, pd, q, v, tau, cms, cds, prox)
         force = pd.lambda_c[:3]
     assert model.frames[fid].parentJoint == cms[0].joint1_id
+    if name == "contact_control_grav":  # u - (g(q) - Σ Jcᵀ f): the contact forces as joint forces
+        fext = [pin.Force.Zero() for _ in range(model.njoints)]
+        for i, c in enumerate(cms):
+            fext[c.joint1_id] += c.joint1_placement.act(pin.Force(pd.lambda_c[3 * i : 3 * i + 3], np.zeros(3)))
+        return tau - pin.computeStaticTorque(model, model.createData(), q, fext)
     return np.concatenate([force, np.zeros(3)])[: residual.nr] - residual.reference.vector[: residual.nr]
 
 
