@@ -186,3 +186,10 @@ def test_collector_residual_jacobians(name, kind):
     assert np.abs(J).max() > 1e-3, f"{name} under {kind} has a constant value"
     scale = max(1.0, np.abs(J).max())
     assert np.abs(np.hstack([Rx, Ru]) - J).max() <= RTOL * scale, f"{name} under {kind}: Jacobian off"
+
+
+@pytest.mark.parametrize("name", ["joint_effort", "joint_acceleration", "control_grav", "contact_control_grav"])
+def test_residuals_needing_joints_or_actuation_are_refused_under_impulse_dynamics(name):
+    """An impulse node has no control, actuation or joint data (as in Crocoddyl): a clear error."""
+    with pytest.raises(ValueError, match="collector"):
+        make_model(name, "impulse").createData()
