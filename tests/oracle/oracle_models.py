@@ -7,9 +7,10 @@ evaluates both models at the same random states and controls and compares every 
 - :data:`RESIDUALS`: residual name → ``builder(lib, ctx)`` and the dynamics kinds it applies to.
 - :data:`ACTIVATIONS`: activation name → ``builder(lib, nr)``.
 - :data:`DYNAMICS`: dynamics kind → robot, contact/impulse set-up and model builder.
-- :data:`INTEGRATORS`: integrator name → ``builder(lib, dam)``.  Control parametrizations are new
-  entries of this list (``lib.IntegratedActionModelEuler(dam, lib.ControlParametrizationModelPolyOne(dam.nu),
-  DT)``); everything else in the suite crosses with whatever the list holds.
+- :data:`INTEGRATORS`: integrator name → ``builder(lib, dam)``: Euler and RK2/3/4, and the same with
+  the control parametrizations of :data:`CONTROLS` (``lib.IntegratedActionModelEuler(dam,
+  lib.ControlParametrizationModelPolyOne(dam.nu), DT)``); a new entry is crossed with every residual
+  (with :data:`CONTROLLED_RESIDUALS` when its name holds a ``-``, to keep the suite fast).
 
 A builder whose class crocopy does not export yet is left out of the crossing (see
 :func:`implemented`); :mod:`test_oracle_coverage` asserts the converse, that every residual,
@@ -298,12 +299,42 @@ def _rk(rk: str) -> Callable:
     return lambda lib, dam: lib.IntegratedActionModelRK(dam, getattr(lib.RKType, rk), DT)
 
 
+def _controlled(rk: str | None, control: Callable) -> Callable:
+    """An integrator taking a control parametrization (``rk``: None for Euler, else the RKType name)."""
+    def build(lib, dam):
+        if rk is None:
+            return lib.IntegratedActionModelEuler(dam, control(lib, dam.nu), DT)
+        return lib.IntegratedActionModelRK(dam, control(lib, dam.nu), getattr(lib.RKType, rk), DT)
+
+    return build
+
+
+CONTROLS: dict[str, Callable] = {
+    "poly0": lambda lib, nw: lib.ControlParametrizationModelPolyZero(nw),
+    "poly1": lambda lib, nw: lib.ControlParametrizationModelPolyOne(nw),
+    "poly2rk3": lambda lib, nw: lib.ControlParametrizationModelPolyTwoRK(nw, lib.RKType.three),
+    "poly2rk4": lambda lib, nw: lib.ControlParametrizationModelPolyTwoRK(nw, lib.RKType.four),
+}
 INTEGRATORS: dict[str, Callable] = {
     "euler": lambda lib, dam: lib.IntegratedActionModelEuler(dam, DT),
     "rk2": _rk("two"),
     "rk3": _rk("three"),
     "rk4": _rk("four"),
+    "euler-poly0": _controlled(None, CONTROLS["poly0"]),
+    "euler-poly1": _controlled(None, CONTROLS["poly1"]),
+    "rk2-poly1": _controlled("two", CONTROLS["poly1"]),
+    "rk3-poly2rk3": _controlled("three", CONTROLS["poly2rk3"]),
+    "rk4-poly2rk4": _controlled("four", CONTROLS["poly2rk4"]),
 }
+#: the integrators with a control parametrization are crossed with these residuals only (the
+#: parametrization acts between the integrator and the differential model, whatever the cost)
+CONTROLLED_RESIDUALS = ("state", "control", "joint_effort", "joint_acceleration", "com", "frame_velocity_world",
+                        "contact_force", "friction_cone")
+
+
+def crossed(integrator: str, residual: str) -> bool:
+    """Whether the node suite crosses ``integrator`` with ``residual``."""
+    return "-" not in integrator or residual in CONTROLLED_RESIDUALS
 
 
 # ---------------------------------------------------------------------------------------- the node
