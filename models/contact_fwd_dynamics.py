@@ -183,7 +183,10 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
             lam = pd.lambda_c
         else:
             self._kinematics(data, q, v)
-            data.xout[:] = np.linalg.solve(np.triu(pd.M) + np.triu(pd.M, 1).T, mb.actuation.tau - pd.nle)
+            try:
+                data.xout[:] = np.linalg.solve(np.triu(pd.M) + np.triu(pd.M, 1).T, mb.actuation.tau - pd.nle)
+            except np.linalg.LinAlgError:  # a diverged trial state (non-finite inertia): no acceleration
+                data.xout[:] = np.nan
             lam = data.no_force
         self.contacts.updateAcceleration(mb.contacts, data.xout)
         self.contacts.updateForce(mb.contacts, lam)

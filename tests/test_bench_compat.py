@@ -42,15 +42,15 @@ def test_row_of_a_failing_script_names_its_first_error_and_escapes_pipes():
     assert relative_difference(mine, row.crocoddyl) is None
 
 
-def test_several_solves_are_compared_pairwise_or_by_their_last_cost():
+def test_several_solves_are_compared_pairwise_in_order():
     many = RunResult(True, solves=solves(*[(i, 1.0 + i) for i in range(1, 7)]))
     ref = RunResult(True, solves=solves(*[(i, 1.0 + i) for i in range(1, 6)], (6, 7.7)))
     assert relative_difference(many, ref) == pytest.approx(0.7 / 7.7)
     c = cells(format_row(Row("gaits", many, ref)))
     assert c[2] == "21 in 6 solves" and c[3] == "7"
-    fewer = RunResult(True, solves=solves((3, 7.0)))
-    assert relative_difference(fewer, ref) == pytest.approx(0.7 / 7.7)
-    assert cells(format_row(Row("gaits", fewer, ref)))[6].endswith("(1 vs 6 solves)")
+    stopped = RunResult(False, error="LinAlgError: Singular matrix", solves=solves((1, 2.0), (2, 3.3)))
+    assert relative_difference(stopped, ref) == pytest.approx(0.3 / 3.0)
+    assert cells(format_row(Row("gaits", stopped, ref)))[6].endswith("(2 vs 6 solves)")
     assert cells(format_row(Row("gaits", many, ref)))[2] == "21 in 6 solves"
     assert cells(format_row(Row("short", RunResult(True, solves=solves((1, 1.0), (2, 2.0))), None)))[2] == "1, 2"
 

@@ -164,9 +164,19 @@ def solve_gait(name: str) -> None:
 
 
 def _where(exc: BaseException, inside: pathlib.Path) -> str | None:
-    """``file:line`` of the innermost frame of the traceback that lies in the crocoddyl wheel."""
-    frames = [f for f in traceback.extract_tb(exc.__traceback__) if f.filename.startswith(str(inside))]
-    return f"{pathlib.Path(frames[-1].filename).name}:{frames[-1].lineno}" if frames else None
+    """``file:line`` of the innermost frame of the traceback in the crocoddyl wheel (the script's line),
+    then ``raised in file:line`` of the innermost crocopy frame below it, if any."""
+    frames = traceback.extract_tb(exc.__traceback__)
+    script = [f for f in frames if f.filename.startswith(str(inside))]
+    if not script:
+        return None
+    where = f"{pathlib.Path(script[-1].filename).name}:{script[-1].lineno}"
+    below = [f for f in frames[frames.index(script[-1]) + 1:] if "crocopy" in pathlib.Path(f.filename).parts
+             or pathlib.Path(f.filename).parent.name == "models"]
+    if below:
+        raised = pathlib.Path(below[-1].filename)
+        where += f"; raised in {raised.parent.name}/{raised.name}:{below[-1].lineno}"
+    return where
 
 
 def first_error_line(exc: BaseException) -> str:
@@ -258,12 +268,11 @@ def _cost(result: RunResult | None) -> str:
 
 
 def relative_difference(mine: RunResult, theirs: RunResult | None) -> float | None:
-    """Largest ``|c - c_ref| / |c_ref|`` over the solves both runs made (same count), else over the last."""
+    """Largest ``|c - c_ref| / |c_ref|`` over the solves both runs made, in order (a run that stopped
+    early is compared on the solves it finished)."""
     if theirs is None or not mine.solves or not theirs.solves:
         return None
-    pairs = list(zip(mine.solves, theirs.solves)) if len(mine.solves) == len(theirs.solves) else [
-        (mine.solves[-1], theirs.solves[-1])]
-    diffs = [abs(a["cost"] - b["cost"]) / max(abs(b["cost"]), 1e-300) for a, b in pairs]
+    diffs = [abs(a["cost"] - b["cost"]) / max(abs(b["cost"]), 1e-300) for a, b in zip(mine.solves, theirs.solves)]
     return max(diffs) if all(math.isfinite(d) for d in diffs) else math.inf
 
 
