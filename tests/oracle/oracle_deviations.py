@@ -92,11 +92,14 @@ DEVIATIONS: tuple[Deviation, ...] = (
               "documentation includes, u - (g(q) - Σ Jcᵀ f)",
               lambda c: c.residual == "contact_control_grav" and not c.terminal),
     Deviation("activation-hessians", "activation",
-              "Smooth1Norm, Smooth2Norm, 2NormBarrier(true_hessian=True), WeightedQuadraticBarrier (and "
-              "QuadFlatExp/QuadFlatLog): Crocoddyl's Arr is not the derivative of its Ar",
+              "Smooth1Norm, Smooth2Norm, 2NormBarrier(true_hessian=True), WeightedQuadraticBarrier: Crocoddyl's "
+              "Arr is not the derivative of its Ar",
               lambda c: True,
-              ("smooth1", "smooth2", "norm_barrier_true_hessian", "weighted_quad_barrier", "quad_flat_exp",
-               "quad_flat_log")),
+              ("smooth1", "smooth2", "norm_barrier_true_hessian", "weighted_quad_barrier")),
+    Deviation("quad-flat-hessian", "activation",
+              "QuadFlatExp, QuadFlatLog: Crocoddyl's Arr is neither the Hessian of its value nor its diagonal; "
+              "crocopy's is the diagonal of the Hessian (the whole of it with true_hessian=True)",
+              lambda c: True, ("quad_flat_exp", "quad_flat_log")),
     Deviation("norm-barrier-gauss-newton", "activation",
               "2NormBarrier(true_hessian=False): Crocoddyl keeps the diagonal of the Gauss-Newton Hessian "
               "∇s∇sᵀ (s = ‖r‖ - alpha); crocopy the whole of it",
