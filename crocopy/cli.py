@@ -8,6 +8,8 @@
   final costs next to Crocoddyl's, each library's self-sensitivity to a perturbed guess, a one-step
   replay of Crocoddyl's iterations and a verdict per row, and the box-QP backward-pass overhead
   (:mod:`crocopy.bench.box_parity`)
+* ``crocopy bench --compat [--problems ...] [--out FILE]``: Crocoddyl's shipped example scripts and gait
+  builders run with ``crocoddyl`` bound to crocopy, next to Crocoddyl's own runs (:mod:`crocopy.bench.compat`)
 * ``crocopy bench --models [--problems ...]``: calc + calcDiff time and per-model-kind differences of
   every node against Crocoddyl (:mod:`crocopy.bench.node_eval`)
 * ``crocopy bench --batch`` / ``--scaling``: :func:`crocopy.solve_many` speed-up on the quadrotor
@@ -91,6 +93,10 @@ def _bench_models(args: argparse.Namespace) -> int:
 
 
 def _bench(args: argparse.Namespace) -> int:
+    if args.compat:
+        from .bench.compat import run_compat_cli
+
+        return run_compat_cli(args.problems, args.out)
     if args.models:
         return _bench_models(args)
     if args.floor:
@@ -411,7 +417,8 @@ def check_args(args: argparse.Namespace) -> str | None:
             error = error or _unwritable(args.plot, "--plot")
         return error
     if args.command in ("table1", "bench"):
-        error = _unknown_problems(args.problems)
+        # with --compat, --problems names Crocoddyl's scripts and gaits, checked by crocopy.bench.compat
+        error = None if getattr(args, "compat", False) else _unknown_problems(args.problems)
         if error is None and args.command == "bench" and args.out:
             error = _unwritable(args.out, "--out")
         return error
@@ -458,6 +465,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="calc+calcDiff time and per-node differences vs Crocoddyl (crocopy.bench.node_eval)")
     bench.add_argument("--floor", action="store_true",
                        help="calc+calcDiff time inside Pinocchio's bindings vs Crocoddyl (crocopy.bench.floor)")
+    bench.add_argument("--compat", action="store_true",
+                       help="Crocoddyl's shipped example scripts and gait builders run with crocopy as crocoddyl, "
+                            "next to Crocoddyl's own runs (crocopy.bench.compat; bench extra; --problems selects)")
     bench.add_argument("--workers", type=_positive_int, default=2, help="with --batch: worker processes")
     bench.add_argument("--runs", type=_positive_int, default=3,
                        help="with --batch/--scaling: repetitions (median reported)")

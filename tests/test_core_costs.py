@@ -241,14 +241,14 @@ def test_stacked_cost_sum_reports_an_infinite_residual_without_warnings():
 
 @pytest.mark.parametrize("name", ["barrier", "wbarrier"])
 def test_barrier_curvature_counts_rows_on_their_bound_alone_and_in_a_sum(name):
-    """``Arr = w [r ≤ lb or r ≥ ub]`` (Crocoddyl's convention): a row sitting on its bound is curved."""
+    """``Arr = w² [r ≤ lb or r ≥ ub]`` (Crocoddyl's convention on the bound): a row sitting on its bound is curved."""
     model = ACTIVATIONS[name]()
     lb, ub = model.bounds.lb, model.bounds.ub
     r = np.array([lb[0], ub[1], 0.5 * (lb[2] + ub[2]), ub[3] + 1.0])
     data = model.createData()
     model.calc(data, r)
     model.calcDiff(data, r)
-    w = getattr(model, "weights", np.ones(4))
+    w = getattr(model, "weights", np.ones(4)) ** 2
     np.testing.assert_array_equal(data.Arr_diag, w * np.array([1.0, 1.0, 0.0, 1.0]))
     state = crocopy.StateVector(4)
     costs = crocopy.CostModelSum(state, 0)

@@ -1,6 +1,8 @@
 """Quadratic barrier activations: zero inside ``[lb, ub]``, quadratic outside.
 
-``a = ½‖r - clip(r, lb, ub)‖²`` (weighted: ``½ Σ wᵢ (rᵢ - clip(rᵢ))²``).
+``a = ½‖r - clip(r, lb, ub)‖²`` (weighted: ``½ Σ (wᵢ (rᵢ - clip(rᵢ)))²``, the weights applied to the
+excess before squaring, which is the value Crocoddyl computes; its ``Arr = w`` is not the Hessian
+of that value, crocopy's ``Arr = w²`` is, see docs/crocoddyl_deviations.md).
 """
 
 from __future__ import annotations
@@ -124,21 +126,22 @@ class ActivationDataQuadraticBarrier(ActivationDataAbstract):
 
 
 class ActivationModelWeightedQuadraticBarrier(ActivationWeights, ActivationModelQuadraticBarrier):
-    """``a = ½ Σ wᵢ (rᵢ - clip(rᵢ, lbᵢ, ubᵢ))²``."""
+    """``a = ½ Σ (wᵢ (rᵢ - clip(rᵢ, lbᵢ, ubᵢ)))²``; ``Ar = w² ∘ e``, ``Arr = diag(w²)`` outside the bounds."""
 
     def __init__(self, bounds: ActivationBounds, weights: np.ndarray) -> None:
         super().__init__(bounds)
         self._weights = frozen_copy(as_vector(weights, self.nr, "weights"))
 
     def barrier_form(self) -> tuple:
-        return self._bounds.lb, self._bounds.ub, self._weights
+        return self._bounds.lb, self._bounds.ub, self._weights * self._weights
 
     def calc(self, data: ActivationDataQuadraticBarrier, r: np.ndarray) -> None:
-        e = self._excess(data, r)
-        data.a_value = 0.5 * float(e @ (self.weights * e))
+        e = self._excess(data, r) * self._weights
+        data.a_value = 0.5 * float(e @ e)
 
     def calcDiff(self, data: ActivationDataQuadraticBarrier, r: np.ndarray) -> None:
         e = self._excess(data, r)
-        np.multiply(self.weights, e, out=data.Ar)
+        w2 = self._weights * self._weights
+        np.multiply(w2, e, out=data.Ar)
         self._active_rows(data, r)
-        data.Arr_diag *= self.weights
+        data.Arr_diag *= w2
