@@ -8,6 +8,14 @@
     Jintegrate = (diag(∂(q ⊕ dq)/∂q, I), diag(∂(q ⊕ dq)/∂dq, I))
 
 with the configuration blocks from ``pinocchio.dDifference``/``pinocchio.dIntegrate``.
+
+The solvers and models call in-place forms (``_diff_into``, ``_integrate_into``,
+``_Jdiff_second_into`` and the Euler chain rule ``_integrate_chain_rule``, whose last step is the
+compiled :func:`~crocopy.integrators.euler_kernel.add_integrate_jacobian`) that call Pinocchio
+directly.  A subclass that overrides ``diff``, ``integrate``, ``Jdiff``, ``Jintegrate`` or
+``JintegrateTransport`` is honoured: the in-place forms built on the overridden operation then go
+through it (the generic :class:`~crocopy.state.StateAbstract` forms), logged once per class and
+operation at DEBUG level on the ``"crocopy"`` logger.
 """
 
 from __future__ import annotations
@@ -18,11 +26,20 @@ import numpy as np
 import pinocchio as pin
 
 from crocopy.enums import Jcomponent
-from crocopy.integrators.euler_kernel import add_integrate_jacobian
+from crocopy.integrators.euler_kernel import add_integrate_jacobian, add_integrate_jacobian_numpy
+from crocopy.kernels import kernels_enabled, log_fallback, overridden
 from crocopy.state import StateAbstract
 
 _HUGE = 1e300  # URDF "no limit" values (numeric_limits::max) are mapped to inf
 
+
+_IN_PLACE = {
+    "_diff_into": ("the in-place diff", ("diff",)),
+    "_integrate_into": ("the in-place integrate", ("integrate",)),
+    "_Jdiff_second_into": ("the in-place Jdiff", ("Jdiff",)),
+    "_integrate_chain_rule": ("the compiled Euler chain rule", ("Jintegrate", "JintegrateTransport")),
+}
+"""In-place form → (what it is, the public operations it must agree with)."""
 
 _MODEL_VECTORS = ("lowerPositionLimit", "upperPositionLimit", "velocityLimit", "effortLimit", "armature")
 
@@ -96,10 +113,12 @@ class StateMultibody(StateAbstract):
         self._Jpos = np.zeros((ndx, ndx))  # templates with ±I in the velocity block
         self._Jpos[nv:, nv:] = np.eye(nv)
         self._Jneg = -self._Jpos
-        cls = type(self)
-        self._custom_operations = any(
-            getattr(cls, name) is not getattr(StateMultibody, name) for name in ("diff", "Jdiff", "integrate")
-        )
+        self._generic: set[str] = set()
+        for form, (what, operations) in _IN_PLACE.items():
+            steps = overridden(self, StateMultibody, operations)
+            if steps:
+                self._generic.add(form)
+                log_fallback(type(self), steps, what)
 
     def zero(self) -> np.ndarray:
         """Neutral configuration and zero velocity."""
@@ -175,19 +194,19 @@ class StateMultibody(StateAbstract):
         rows[...] = np.reshape(pin.dIntegrateTransport(self.pinocchio, x[: self.nq], dx[:nv], rows, arg), rows.shape)
 
     def _integrate_into(self, x: np.ndarray, dx: np.ndarray, out: np.ndarray) -> None:
-        if self._custom_operations:
+        if "_integrate_into" in self._generic:
             super()._integrate_into(x, dx, out)
             return
         self._write_integrate(x, dx, out)
 
     def _diff_into(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:
-        if self._custom_operations:
+        if "_diff_into" in self._generic:
             super()._diff_into(x0, x1, out)
             return
         self._write_diff(x0, x1, out)
 
     def _Jdiff_second_into(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:
-        if self._custom_operations:
+        if "_Jdiff_second_into" in self._generic:
             super()._Jdiff_second_into(x0, x1, out)
             return
         nq = self.nq
@@ -197,10 +216,14 @@ class StateMultibody(StateAbstract):
         """Chain rule through ``x ⊕ dx`` (see :meth:`StateAbstract._integrate_chain_rule`): Pinocchio's
         ``dIntegrateTransport`` on the configuration rows of ``[Fx Fu]`` (one call), ``dIntegrate`` on the
         configuration block and the identity on the velocity block."""
+        if "_integrate_chain_rule" in self._generic:
+            super()._integrate_chain_rule(x, dx, Fx, Fu)
+            return
         model, nv = self.pinocchio, self.nv
         q, dq = x[: self.nq], dx[:nv]
         rows = pin.dIntegrateTransport(model, q, dq, np.hstack((Fx[:nv], Fu[:nv])), pin.ARG1)
-        add_integrate_jacobian(np.reshape(rows, (nv, -1)), pin.dIntegrate(model, q, dq, pin.ARG0), Fx, Fu)
+        add = add_integrate_jacobian if kernels_enabled() else add_integrate_jacobian_numpy
+        add(np.reshape(rows, (nv, -1)), pin.dIntegrate(model, q, dq, pin.ARG0), Fx, Fu)
 
     def __repr__(self) -> str:
         return f"StateMultibody(nq={self.nq}, nv={self.nv})"
