@@ -55,7 +55,10 @@ except ImportError:  # pragma: no cover - exercised only without numba (tested i
 available: bool = numba is not None
 """True when numba could be imported."""
 
-_enabled: bool = available
+active: bool = available
+"""True while the library runs its compiled kernels.  The hot paths read this flag; change it only
+through :func:`set_kernels` / :func:`use_kernels`."""
+
 _logged: set[tuple[type, str]] = set()
 logger = logging.getLogger("crocopy")
 
@@ -67,7 +70,7 @@ def compiled(function: Callable) -> Callable:
 
 def kernels_enabled() -> bool:
     """True when the library runs its compiled kernels (numba installed and not switched off)."""
-    return _enabled and available
+    return active
 
 
 def set_kernels(enabled: bool) -> None:
@@ -80,24 +83,24 @@ def set_kernels(enabled: bool) -> None:
     RuntimeError
         If ``enabled`` is True and numba is not installed.
     """
-    global _enabled
+    global active
     if not isinstance(enabled, (bool, np.bool_)):
         raise TypeError(f"enabled must be a bool, got {type(enabled).__name__}")
     if enabled and not available:
         raise RuntimeError("crocopy.set_kernels(True): numba is not installed (pip install numba)")
-    _enabled = bool(enabled)
+    active = bool(enabled)
 
 
 @contextlib.contextmanager
 def use_kernels(enabled: bool) -> Iterator[None]:
     """Context manager: ``set_kernels(enabled)`` inside the block, the previous setting after it."""
-    global _enabled
-    previous = _enabled
+    global active
+    previous = active
     set_kernels(enabled)
     try:
         yield
     finally:
-        _enabled = previous
+        active = previous
 
 
 def overridden(obj: object, owner: type, steps: Iterable[str]) -> list[str]:

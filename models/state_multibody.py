@@ -25,9 +25,10 @@ import copyreg
 import numpy as np
 import pinocchio as pin
 
+import crocopy.kernels as kernels
 from crocopy.enums import Jcomponent
 from crocopy.integrators.euler_kernel import add_integrate_jacobian, add_integrate_jacobian_numpy
-from crocopy.kernels import kernels_enabled, log_fallback, overridden
+from crocopy.kernels import log_fallback, overridden
 from crocopy.state import StateAbstract
 
 _HUGE = 1e300  # URDF "no limit" values (numeric_limits::max) are mapped to inf
@@ -113,12 +114,13 @@ class StateMultibody(StateAbstract):
         self._Jpos = np.zeros((ndx, ndx))  # templates with ±I in the velocity block
         self._Jpos[nv:, nv:] = np.eye(nv)
         self._Jneg = -self._Jpos
-        self._generic: set[str] = set()
+        generic = []
         for form, (what, operations) in _IN_PLACE.items():
             steps = overridden(self, StateMultibody, operations)
             if steps:
-                self._generic.add(form)
+                generic.append(form)
                 log_fallback(type(self), steps, what)
+        self._generic = tuple(generic)  # in-place forms that go through the overridden operations
 
     def zero(self) -> np.ndarray:
         """Neutral configuration and zero velocity."""
@@ -222,7 +224,7 @@ class StateMultibody(StateAbstract):
         model, nv = self.pinocchio, self.nv
         q, dq = x[: self.nq], dx[:nv]
         rows = pin.dIntegrateTransport(model, q, dq, np.hstack((Fx[:nv], Fu[:nv])), pin.ARG1)
-        add = add_integrate_jacobian if kernels_enabled() else add_integrate_jacobian_numpy
+        add = add_integrate_jacobian if kernels.active else add_integrate_jacobian_numpy
         add(np.reshape(rows, (nv, -1)), pin.dIntegrate(model, q, dq, pin.ARG0), Fx, Fu)
 
     def __repr__(self) -> str:

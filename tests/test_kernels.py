@@ -209,7 +209,8 @@ def test_stack_kernels_equal_their_twins_on_random_rows():
 def test_forcing_the_availability_flag_off_uses_the_twins(monkeypatch):
     with crocopy.use_kernels(True):
         reference = _trace(_unicycle_problem, crocopy.SolverBoxFDDP, 100)
-    monkeypatch.setattr(kernels, "available", False)
+    monkeypatch.setattr(kernels, "available", False)  # the flags as an import without numba sets them
+    monkeypatch.setattr(kernels, "active", False)
     assert not crocopy.kernels_enabled()
     with pytest.raises(RuntimeError, match="numba is not installed"):
         crocopy.set_kernels(True)

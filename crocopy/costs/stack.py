@@ -27,7 +27,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kernels import kernels_enabled, log_fallback, overridden
+from .. import kernels
+from ..kernels import log_fallback, overridden
 from ..versioning import ParametersSeen
 from . import stack_kernel
 
@@ -145,7 +146,7 @@ class CostStack:
             self.refresh(u is None)
         for residual, rdata in self.active:
             residual.calc(rdata, x, u)
-        kernel = kernels_enabled()
+        kernel = kernels.active
         values = stack_kernel.activation_values if kernel else stack_kernel.activation_values_numpy
         total = values(self.r, self.lb, self.ub, self.act_weights, self.starts, self.item_costs, self.item_weights)
         if not self.unfused:
@@ -160,7 +161,7 @@ class CostStack:
             self.refresh(u is None)
         for residual, rdata in self.active:
             residual.calcDiff(rdata, x, u)
-        kernel = kernels_enabled()
+        kernel = kernels.active
         derivatives = stack_kernel.activation_derivatives if kernel else stack_kernel.activation_derivatives_numpy
         derivatives(self.r, self.lb, self.ub, self.act_weights, self.Ar, self.Arr)
         for activation, adata, r in self.unfused:

@@ -16,9 +16,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import kernels
 from ..action_base import ActionDataAbstract
 from ..enums import Jcomponent
-from ..kernels import kernels_enabled, log_fallback
+from ..kernels import log_fallback
 from ..state import StateAbstract
 from . import euler_kernel as integrator_kernel
 from .base import ControlChainData, IntegratedActionModelAbstract
@@ -53,7 +54,7 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
         self.differential.calc(ddata, x, self._control_input(data.control, 0.0, u))
         dt = self._dt
         dx = data.dx
-        step = integrator_kernel.euler_step if kernels_enabled() else integrator_kernel.euler_step_numpy
+        step = integrator_kernel.euler_step if kernels.active else integrator_kernel.euler_step_numpy
         step(ddata.xout, x, dt, dx)
         self.state._integrate_into(x, dx, data.xnext)
         data.cost = dt * ddata.cost
@@ -70,7 +71,7 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
         self.differential.calcDiff(ddata, x, self._control_input(cdata, 0.0, u))
         Fu, Lu, Lxu, Luu = self._control_derivatives(cdata, ddata, 0.0, u, data.control_chain)
         if self._euclidean or self._transport:
-            chain = integrator_kernel.euler_chain if kernels_enabled() else integrator_kernel.euler_chain_numpy
+            chain = integrator_kernel.euler_chain if kernels.active else integrator_kernel.euler_chain_numpy
             chain(
                 ddata.Fx, Fu, ddata.Lx, Lu, ddata.Lxx, Lxu, Luu, self._dt, self._euclidean,
                 data.Fx, data.Fu, data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu,

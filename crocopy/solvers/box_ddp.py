@@ -57,7 +57,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kernels import kernels_enabled
+from .. import kernels
 from ..shooting import ShootingProblem
 from ..validation import check_bounds
 from . import box_kernel
@@ -142,28 +142,39 @@ class BoxSolverMixin:
         ``computeValueFunction`` to round-off; a subclass overriding one of them gets the numpy steps
         (logged once at DEBUG level on the ``"crocopy"`` logger).
         """
-        if kernels_enabled() and self._kernel_applies(SolverBoxDDP, "the compiled box-QP node step"):
+        if kernels.active and self._kernel_applies(SolverBoxDDP, "the compiled box-QP node step"):
             self._backward_pass_kernel()
         else:
             self._backward_pass_numpy()
 
-    def _kernel_node(self, t: int, d, preg: float, gaps: bool) -> bool:
-        """Bounded nodes of a feasible iterate by :func:`.box_kernel.box_step`, the others by the Riccati step."""
-        lb = self._lb[t]
-        if lb is None or not self._box_mode():
-            self._clamped[t] = False
-            return super()._kernel_node(t, d, preg, gaps)
-        qp, compat = self._qps[lb.size], self._compat
-        ok, nfact, self._clamped[t] = box_kernel.box_step(
-            d.Fx, d.Fu, d.Lxx, d.Lxu, d.Luu, d.Lx, d.Lu, self.Vxx[t + 1], self.Vx[t + 1], preg, self.fs[t], gaps,
-            self.us[t], lb, self._ub[t], qp.th_grad, -qp.th_acceptStep if compat else qp.th_acceptStep,
-            1.0 if compat else -1.0, qp.maxiter, bool(self.general_value_update),
-            self.Qxx[t], self.Qxu[t], self.Quu[t], self.Qx[t], self.Qu[t], self.K[t], self.k[t],
-            self.Quu_inv[t], self.Vxx[t], self.Vx[t],
+    def _kernel_node(self, preg: float, gaps: bool):
+        """This pass's compiled node step: :func:`.box_kernel.box_step` at the bounded nodes of a
+        feasible iterate, the Riccati step elsewhere."""
+        riccati = super()._kernel_node(preg, gaps)
+        box_mode, compat, general = self._box_mode(), self._compat, bool(self.general_value_update)
+        warm = 1.0 if compat else -1.0
+        step = box_kernel.box_step
+        lbs, ubs, us, qps, clamped = self._lb, self._ub, self.us, self._qps, self._clamped
+        Qxx, Qxu, Quu, Qx, Qu, K, k, Quu_inv, Vxx, Vx, fs = (
+            self.Qxx, self.Qxu, self.Quu, self.Qx, self.Qu, self.K, self.k, self.Quu_inv, self.Vxx, self.Vx, self.fs
         )
-        self._kernel_fact += nfact
-        self.nqp += 1
-        return ok
+
+        def node(t: int, d) -> bool:
+            lb = lbs[t]
+            if lb is None or not box_mode:
+                clamped[t] = False
+                return riccati(t, d)
+            qp = qps[lb.size]
+            ok, nfact, clamped[t] = step(
+                d.Fx, d.Fu, d.Lxx, d.Lxu, d.Luu, d.Lx, d.Lu, Vxx[t + 1], Vx[t + 1], preg, fs[t], gaps, us[t], lb,
+                ubs[t], qp.th_grad, -qp.th_acceptStep if compat else qp.th_acceptStep, warm, qp.maxiter, general,
+                Qxx[t], Qxu[t], Quu[t], Qx[t], Qu[t], K[t], k[t], Quu_inv[t], Vxx[t], Vx[t],
+            )
+            self._kernel_fact += nfact
+            self.nqp += 1
+            return ok
+
+        return node
 
     def _box_mode(self) -> bool:
         return self.isFeasible

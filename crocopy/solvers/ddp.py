@@ -25,7 +25,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.linalg.lapack import dpotrf, dpotrs
 
-from ..kernels import kernels_enabled, log_fallback, overridden
+from .. import kernels
+from ..kernels import log_fallback, overridden
 from ..shooting import ShootingProblem
 from . import riccati_kernel
 from .base import BackwardPassError, ForwardPassError, SolverAbstract
@@ -193,7 +194,7 @@ class SolverDDP(SolverAbstract):
         Uses the compiled step of :mod:`.riccati_kernel` when :func:`crocopy.kernels_enabled` and no
         subclass overrides a node step; otherwise the numpy steps below (same numbers to round-off).
         """
-        if kernels_enabled() and self._kernel_applies(SolverDDP, "the compiled Riccati step"):
+        if kernels.active and self._kernel_applies(SolverDDP, "the compiled Riccati step"):
             self._backward_pass_kernel()
         else:
             self._backward_pass_numpy()
@@ -227,23 +228,30 @@ class SolverDDP(SolverAbstract):
         return gaps
 
     def _backward_pass_kernel(self) -> None:
-        """The recursion through the compiled node step :meth:`_kernel_node`."""
+        """The recursion through the compiled node step of :meth:`_kernel_node`."""
         problem = self.problem
         gaps = self._terminal_value_function()
-        preg = float(self.preg)
+        node = self._kernel_node(float(self.preg), gaps)
+        datas = problem.runningDatas
         for t in range(problem.T - 1, -1, -1):
-            if not self._kernel_node(t, problem.runningDatas[t], preg, gaps):
+            if not node(t, datas[t]):
                 raise BackwardPassError(f"Quu is not positive definite at node {t}")
         if not (np.isfinite(self.Vx[0]).all() and np.isfinite(self.Vxx[0]).all()):
             raise BackwardPassError("non-finite value function in the backward pass")
 
-    def _kernel_node(self, t: int, d, preg: float, gaps: bool) -> bool:
-        """Node ``t`` by :func:`.riccati_kernel.riccati_step`; False when ``Quu`` is not positive definite."""
-        return riccati_kernel.riccati_step(
-            d.Fx, d.Fu, d.Lxx, d.Lxu, d.Luu, d.Lx, d.Lu, self.Vxx[t + 1], self.Vx[t + 1], preg, self.fs[t], gaps,
-            self.Qxx[t], self.Qxu[t], self.Quu[t], self.Qx[t], self.Qu[t], self.K[t], self.k[t],
-            self.Vxx[t], self.Vx[t],
+    def _kernel_node(self, preg: float, gaps: bool):
+        """This pass's compiled node step ``node(t, data) -> ok`` (:func:`.riccati_kernel.riccati_step`;
+        ``ok`` is False when ``Quu`` is not positive definite)."""
+        step = riccati_kernel.riccati_step
+        Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx, fs = (
+            self.Qxx, self.Qxu, self.Quu, self.Qx, self.Qu, self.K, self.k, self.Vxx, self.Vx, self.fs
         )
+
+        def node(t: int, d) -> bool:
+            return step(d.Fx, d.Fu, d.Lxx, d.Lxu, d.Luu, d.Lx, d.Lu, Vxx[t + 1], Vx[t + 1], preg, fs[t], gaps,
+                        Qxx[t], Qxu[t], Quu[t], Qx[t], Qu[t], K[t], k[t], Vxx[t], Vx[t])
+
+        return node
 
     def computeActionValueFunction(self, t: int, model, data) -> None:
         """Q terms of node ``t`` from its derivatives and the next value function."""
@@ -357,7 +365,7 @@ class SolverDDP(SolverAbstract):
         if lb is None:
             lb, ub = self._unbounded[u.shape[0]]
         out = np.empty(u.shape[0])
-        feedback = riccati_kernel.feedback_control if kernels_enabled() else riccati_kernel.feedback_control_numpy
+        feedback = riccati_kernel.feedback_control if kernels.active else riccati_kernel.feedback_control_numpy
         feedback(u, self.k[t], self.K[t], dx, steplength, lb, ub, out)
         return out
 
