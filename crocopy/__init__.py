@@ -51,6 +51,7 @@ from .integrators.control_poly import (
 )
 from .integrators.euler import IntegratedActionDataEuler, IntegratedActionModelEuler
 from .integrators.rk import IntegratedActionDataRK, IntegratedActionModelRK
+from .kernels import kernels_enabled, set_kernels, use_kernels
 from .numdiff import (
     ActionDataNumDiff,
     ActionModelNumDiff,

@@ -199,9 +199,7 @@ def test_stacked_cost_sum_equals_its_items_and_follows_parameter_changes(termina
 @pytest.mark.parametrize("terminal", [False, True])
 def test_compiled_stack_steps_equal_the_numpy_steps(terminal):
     """The numba kernels of the stack give the numpy steps' cost, derivatives and activation rows."""
-    from crocopy.costs import stack_kernel as cost_stack_kernel
-
-    assert cost_stack_kernel.available
+    assert crocopy.kernels.available
     state, nu = crocopy.StateVector(4), 4
     costs = _every_activation_sum(state, nu)
     costs.changeCostStatus("wquad", False)
@@ -209,13 +207,13 @@ def test_compiled_stack_steps_equal_the_numpy_steps(terminal):
     results = []
     for use_kernel in (True, False):
         data = costs.createData(crocopy.DataCollectorAbstract())
-        data.stack.use_kernel = use_kernel
         out = []
         for _ in range(4):
             x = rng.uniform(-1.0, 1.0, 4)
             u = None if terminal else rng.uniform(-1.0, 1.0, nu)
-            costs.calc(data, x, u)
-            costs.calcDiff(data, x, u)
+            with crocopy.use_kernels(use_kernel):
+                costs.calc(data, x, u)
+                costs.calcDiff(data, x, u)
             out.append([data.cost, data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu, data.stack.Ar, data.stack.Arr])
             out[-1] = [np.array(a, copy=True) for a in out[-1]]
         rng = np.random.default_rng(3)

@@ -35,7 +35,9 @@ class ActivationModelAbstract:
         ``Arr = diag(w ∘ [r ≤ lb or r ≥ ub])`` exactly, else ``None``.
 
         The quadratic activations are the case ``lb = ub = 0``.  Cost sums evaluate such activations
-        for all their items at once.
+        for all their items at once; a subclass that overrides ``calc``/``calcDiff`` of the class
+        declaring the form is called item by item instead (logged once at DEBUG level on the
+        ``"crocopy"`` logger), unless it declares its own ``barrier_form``.
         """
         return None
 

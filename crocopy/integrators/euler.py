@@ -16,8 +16,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import kernels
 from ..action_base import ActionDataAbstract
 from ..enums import Jcomponent
+from ..kernels import log_fallback
 from ..state import StateAbstract
 from . import euler_kernel as integrator_kernel
 from .base import ControlChainData, IntegratedActionModelAbstract
@@ -26,17 +28,20 @@ from .base import ControlChainData, IntegratedActionModelAbstract
 class IntegratedActionModelEuler(IntegratedActionModelAbstract):
     """Crocoddyl's ``IntegratedActionModelEuler(diffModel, [control,] timeStep=1e-3, withCostResidual=True)``.
 
-    ``use_kernel`` (default: numba available) takes the step and applies the chain rule with
-    :mod:`~crocopy.integrators.euler_kernel`'s compiled functions instead of their numpy twins.
+    While :func:`crocopy.kernels_enabled` the step and the chain rule run
+    :mod:`~crocopy.integrators.euler_kernel`'s compiled functions, else their numpy twins.  A
+    Lie-group state without ``JintegrateTransport`` gets the dense ``Jintegrate`` product instead of
+    the compiled chain rule (logged once per state class at DEBUG level on the ``"crocopy"`` logger).
     """
-
-    use_kernel = integrator_kernel.available
 
     def __init__(self, diffModel, *args: object, **kwargs: object) -> None:
         super().__init__(diffModel, *args, **kwargs)
         self._transport = not self._euclidean and (
             type(self.state).JintegrateTransport is not StateAbstract.JintegrateTransport
         )
+        if not (self._euclidean or self._transport):
+            kernel = "the compiled Euler chain rule"
+            log_fallback(type(self.state), ["JintegrateTransport"], kernel, how="does not implement")
 
     def createData(self) -> "IntegratedActionDataEuler":
         return IntegratedActionDataEuler(self)
@@ -49,7 +54,7 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
         self.differential.calc(ddata, x, self._control_input(data.control, 0.0, u))
         dt = self._dt
         dx = data.dx
-        step = integrator_kernel.euler_step if self.use_kernel else integrator_kernel.euler_step_numpy
+        step = integrator_kernel.euler_step if kernels.active else integrator_kernel.euler_step_numpy
         step(ddata.xout, x, dt, dx)
         self.state._integrate_into(x, dx, data.xnext)
         data.cost = dt * ddata.cost
@@ -66,7 +71,7 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
         self.differential.calcDiff(ddata, x, self._control_input(cdata, 0.0, u))
         Fu, Lu, Lxu, Luu = self._control_derivatives(cdata, ddata, 0.0, u, data.control_chain)
         if self._euclidean or self._transport:
-            chain = integrator_kernel.euler_chain if self.use_kernel else integrator_kernel.euler_chain_numpy
+            chain = integrator_kernel.euler_chain if kernels.active else integrator_kernel.euler_chain_numpy
             chain(
                 ddata.Fx, Fu, ddata.Lx, Lu, ddata.Lxx, Lxu, Luu, self._dt, self._euclidean,
                 data.Fx, data.Fu, data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu,
