@@ -93,6 +93,8 @@ def test_compact_tracks_drop_only_keys_inside_runs_of_equal_values():
     values = np.frombuffer(track["values"].data, "<f4").reshape(-1, 3)
     np.testing.assert_array_equal(values, [a, a, b, b, c])
     assert kept_visible == visible  # not numeric: unchanged
+    keyed = page.keyed_animation(compact)["animations"][0]["clip"]["tracks"][0]["keys"]
+    assert [k["time"] for k in keyed] == [0, 2, 3, 4, 5] and keyed[3]["value"] == pytest.approx(b)
     assert page.compact_animation({"type": "set_transform"}) == {"type": "set_transform"}
 
 

@@ -36,7 +36,15 @@ import umsgpack
 
 from . import collada
 
-__all__ = ["MIN_PAYLOAD", "BLOB_MARK", "meshcat_commands", "compact_animation", "write_page", "read_page"]
+__all__ = [
+    "MIN_PAYLOAD",
+    "BLOB_MARK",
+    "meshcat_commands",
+    "compact_animation",
+    "keyed_animation",
+    "write_page",
+    "read_page",
+]
 
 MIN_PAYLOAD = 1024
 """Strings and binary values at least this long (bytes) are stored once, outside the commands."""
@@ -85,6 +93,25 @@ def compact_animation(command: dict) -> dict:
         clip = dict(anim["clip"])
         clip["tracks"] = [_compact_track(t) if "keys" in t else t for t in clip["tracks"]]
         animations.append({**anim, "clip": clip})
+    return {**command, "animations": animations}
+
+
+def keyed_animation(command: dict) -> dict:
+    """The inverse form of :func:`compact_animation`: tracks as meshcat's ``keys`` lists again
+    (``{"time", "value"}`` per key, values as lists of floats; the keys removed stay removed)."""
+    if command.get("type") != "set_animation":
+        return command
+    animations = []
+    for anim in command["animations"]:
+        tracks = []
+        for t in anim["clip"]["tracks"]:
+            if "times" in t:
+                times = np.frombuffer(t["times"].data, "<f4")
+                values = np.frombuffer(t["values"].data, "<f4").reshape(len(times), -1)
+                keys = [{"time": float(a), "value": v.tolist()} for a, v in zip(times, values)]
+                t = {"name": t["name"], "type": t["type"], "keys": keys}
+            tracks.append(t)
+        animations.append({**anim, "clip": {**anim["clip"], "tracks": tracks}})
     return {**command, "animations": animations}
 
 
