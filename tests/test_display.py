@@ -52,9 +52,8 @@ def _animation(commands):
     for a in anims[0]["animations"]:
         out[a["path"]] = {}
         for t in a["clip"]["tracks"]:
-            times = np.frombuffer(t["times"].data, "<f4")
-            values = np.frombuffer(t["values"].data, "<f4").reshape(len(times), -1)
-            out[a["path"]][t["name"]] = (times, values)
+            times = np.array([k["time"] for k in t["keys"]])
+            out[a["path"]][t["name"]] = (times, np.array([k["value"] for k in t["keys"]]))
     return out
 
 

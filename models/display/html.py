@@ -25,7 +25,7 @@ import numpy as np
 from meshcat.animation import Animation
 
 from .meshcat_display import MeshcatDisplay
-from .page import meshcat_commands, read_page, write_page
+from .page import keyed_animation, meshcat_commands, read_page, write_page
 
 __all__ = ["record_animation", "export_animation", "export_html", "export_html_from_solver", "static_html_commands"]
 
@@ -169,6 +169,7 @@ def static_html_commands(path: str | os.PathLike) -> list[dict]:
     Returns the list of command dicts (``type`` is ``set_object``, ``set_transform``,
     ``set_property`` or ``set_animation``; ``path`` is the meshcat path), with the meshes and
     arrays stored once in the page put back in every command that uses them. Animation tracks
-    are in three.js' compact form: ``times`` and flat ``values`` (float32 ``umsgpack.Ext``).
+    are given as meshcat writes them (``keys``: ``{"time", "value"}``), with the float32 values
+    the page stores and without the keys it dropped inside runs of equal values.
     """
-    return read_page(path)
+    return [keyed_animation(c) for c in read_page(path)]

@@ -12,7 +12,7 @@ base64 ``data:`` URL per scene command, so every mesh is stored as often as the 
 * Collada text packed by :mod:`.collada` (numbers as integers), rebuilt exactly in the browser;
 * animation tracks in three.js' ``times`` / ``values`` form as float32 arrays (the precision
   three.js plays them at), with the keys inside runs of equal values removed (the interpolation
-  between the two ends of a run gives the same value).
+  between the two ends of a run gives the same value); the animation comes after the scene.
 
 The page's script inflates the bundle with the browser's ``DecompressionStream``, evaluates the
 viewer, and replays the commands through ``viewer.handle_command_bytearray``, putting the payloads
@@ -36,7 +36,15 @@ import umsgpack
 
 from . import collada
 
-__all__ = ["MIN_PAYLOAD", "BLOB_MARK", "meshcat_commands", "compact_animation", "write_page", "read_page"]
+__all__ = [
+    "MIN_PAYLOAD",
+    "BLOB_MARK",
+    "meshcat_commands",
+    "compact_animation",
+    "keyed_animation",
+    "write_page",
+    "read_page",
+]
 
 MIN_PAYLOAD = 1024
 """Strings and binary values at least this long (bytes) are stored once, outside the commands."""
@@ -85,6 +93,25 @@ def compact_animation(command: dict) -> dict:
         clip = dict(anim["clip"])
         clip["tracks"] = [_compact_track(t) if "keys" in t else t for t in clip["tracks"]]
         animations.append({**anim, "clip": clip})
+    return {**command, "animations": animations}
+
+
+def keyed_animation(command: dict) -> dict:
+    """The inverse form of :func:`compact_animation`: tracks as meshcat's ``keys`` lists again
+    (``{"time", "value"}`` per key, values as lists of floats; the keys removed stay removed)."""
+    if command.get("type") != "set_animation":
+        return command
+    animations = []
+    for anim in command["animations"]:
+        tracks = []
+        for t in anim["clip"]["tracks"]:
+            if "times" in t:
+                times = np.frombuffer(t["times"].data, "<f4")
+                values = np.frombuffer(t["values"].data, "<f4").reshape(len(times), -1)
+                keys = [{"time": float(a), "value": v.tolist()} for a, v in zip(times, values)]
+                t = {"name": t["name"], "type": t["type"], "keys": keys}
+            tracks.append(t)
+        animations.append({**anim, "clip": {**anim["clip"], "tracks": tracks}})
     return {**command, "animations": animations}
 
 
@@ -167,7 +194,11 @@ def write_page(commands: list[dict], path: str | os.PathLike, title: str = "croc
     """Write ``commands`` (meshcat scene commands) as a compact self-contained page; return the path."""
     bundle = _Bundle()
     viewer = bundle.add(_viewer_js())
-    packed = [umsgpack.packb(bundle.take_payloads(compact_animation(c))) for c in commands]
+    # The server lists the root's animation first; it must come after the nodes it animates exist
+    # and have their static transforms, else three.js may not apply some of its tracks.
+    ordered = [c for c in commands if c.get("type") != "set_animation"]
+    ordered += [c for c in commands if c.get("type") == "set_animation"]
+    packed = [umsgpack.packb(bundle.take_payloads(compact_animation(c))) for c in ordered]
     index = {"viewer": viewer, "commands": [bundle.add(p) for p in packed], "blobs": bundle.blobs, "mark": BLOB_MARK}
     data = base64.b64encode(zlib.compress(b"".join(bundle.chunks), 6)).decode("ascii")
     page = _TEMPLATE.format(
@@ -292,10 +323,7 @@ _LOADER = r"""
     window.viewer = viewer;
     const handle = viewer.handle_command.bind(viewer);
     viewer.handle_command = (command) => handle(restore(command));
-    for (const at of index.commands) {
-      viewer.handle_command_bytearray(bytes(at));
-      await new Promise((resolve) => setTimeout(resolve, 0));  // one task per command, as meshcat's pages
-    }
+    for (const at of index.commands) viewer.handle_command_bytearray(bytes(at));
   } catch (error) {
     pane.textContent = "This page could not show the scene (it needs a browser with DecompressionStream: "
       + "Chrome 80, Firefox 113, Safari 16.4 or newer): " + error;
