@@ -3,7 +3,8 @@
 ``CallbackVerbose`` prints Crocoddyl's table: an ``iter`` column then, depending on the level,
 ``cost, merit, stop, |grad|, preg, dreg, step, ||ffeas||, ||gfeas||, ||hfeas||, dV-exp, dV,
 dPhi-exp, dPhi``; scientific fields have ``precision`` digits, ``step`` four decimals, and each
-header name is centred over its value.  The header is repeated every 10 iterations.
+header name is centred over its value.  The header is repeated every 10 iterations.  When a solve
+stops on NaN/inf it also prints ``solve stopped: <solver.reason>`` (which node, which quantity).
 """
 
 from __future__ import annotations
@@ -112,6 +113,10 @@ class CallbackVerbose(CallbackAbstract):
         if solver.iter % 10 == 0:
             print(self.header())
         print(self.line(solver), flush=True)
+
+    def stopped(self, solver) -> None:
+        """Print why ``solver`` stopped on NaN/inf (``solver.reason``); the solver calls it then (crocopy extension)."""
+        print(f"solve stopped: {solver.reason}", flush=True)
 
 
 class CallbackLogger(CallbackAbstract):

@@ -72,21 +72,32 @@ class BoxSolverMixin:
     """Box-QP gains, the general value update and the clamped rollout shared by Box-DDP/Box-FDDP."""
 
     def _init_box(self) -> None:
-        problem = self.problem
         self.th_stop = 5e-5
-        self.Quu_inv = [np.zeros((m.nu, m.nu)) for m in problem.runningModels]
         self._qps: dict[int, BoxQP] = {}
-        for m in problem.runningModels:
-            if m.nu and m.nu not in self._qps:
-                self._qps[m.nu] = BoxQP(m.nu, maxiter=100, th_acceptStep=0.1, th_grad=1e-5, reg=0.0)
         self._lb: list[np.ndarray | None] = []
         self._ub: list[np.ndarray | None] = []
-        self._clamped = [False] * problem.T
         self.nqp = 0
         self._kernel_fact = 0
         self.general_value_update = False
         self._compat = False
+        self._allocate_box()
         self._read_bounds()
+
+    def _allocate_box(self) -> None:
+        """Per-node box buffers, and one box QP per control dimension (kept across re-allocations)."""
+        problem = self.problem
+        self.Quu_inv = [np.zeros((m.nu, m.nu)) for m in problem.runningModels]
+        for m in problem.runningModels:
+            if m.nu and m.nu not in self._qps:
+                qp = self._qps[m.nu] = BoxQP(m.nu, maxiter=100, th_acceptStep=0.1, th_grad=1e-5, reg=0.0)
+                qp.compat_crocoddyl = self._compat
+        self._clamped = [False] * problem.T
+
+    def _on_problem_change(self) -> bool:
+        changed = super()._on_problem_change()
+        if changed:
+            self._allocate_box()
+        return changed
 
     def _read_bounds(self) -> None:
         """Fetch and check every running model's control bounds (called at each ``solve``)."""
@@ -192,7 +203,10 @@ class BoxSolverMixin:
         try:
             sol = qp._solve(self.Quu[t], self.Qu[t], lb - u, self._ub[t] - u, k if self._compat else -k)
         except BoxQPError as exc:
-            raise BackwardPassError(f"box QP failed at node {t}: {exc}") from exc
+            failure = self._node_failure(t)
+            if isinstance(failure, BackwardPassError):
+                failure = BackwardPassError(f"box QP failed at node {t}: {exc}")
+            raise failure from exc
         self.nqp += 1
         np.negative(sol.x, out=k)
         Quu_inv = self.Quu_inv[t]

@@ -18,6 +18,15 @@ subclass that overrides any of them gets the numpy steps for the whole recursion
 runs), logged once at DEBUG level on the ``"crocopy"`` logger.  ``forwardPass`` runs
 :meth:`SolverDDP._trial_rollout`, the rollout of the whole DDP family, parameterised by the gaps
 it keeps open and by the control bounds.
+
+NaN/inf (:mod:`.nonfinite`): one test per phase on aggregated quantities (the cost, ``d``,
+``Vx₀``/``Vxx₀``, the trial trajectory), a per-node search only when it fails.  A non-finite
+direction stops the solve (more regularisation cannot cure an overflow) with ``solve() -> False``
+and ``reason`` naming the node and quantity (also printed by :class:`~crocopy.CallbackVerbose`); a
+non-finite trial rollout is rejected like any other trial.  Every False return leaves the best
+finite iterate visited (lowest cost among the feasible ones, else the newest), with ``cost`` its
+cost.  A guess whose cost is not finite raises ValueError.  ``solve`` re-allocates the solver's
+buffers when ``problem.updateModel``/``circularAppend`` changed a node's ``nx``, ``ndx`` or ``nu``.
 """
 
 from __future__ import annotations
@@ -30,6 +39,13 @@ from ..kernels import log_fallback, overridden
 from ..shooting import ShootingProblem
 from . import riccati_kernel
 from .base import BackwardPassError, ForwardPassError, SolverAbstract
+from .nonfinite import (
+    NonFiniteError,
+    locate_in_backward_pass,
+    locate_in_derivatives,
+    locate_in_rollout,
+    trajectory_finite,
+)
 
 
 class SolverDDP(SolverAbstract):
@@ -46,7 +62,37 @@ class SolverDDP(SolverAbstract):
         self.th_grad = 1e-12
         self.alphas = [2.0 ** (-n) for n in range(10)]
         self.cost_try = 0.0
+        self._models = (*problem.runningModels, problem.terminalModel)
+        self._layout = self._shapes()
+        self._best: tuple | None = None
         self._allocate()
+
+    def _shapes(self) -> tuple:
+        return tuple((m.state.nx, m.state.ndx, m.nu) for m in self._models)
+
+    def _sync_problem(self) -> None:
+        """Follow ``updateModel``/``circularAppend``: re-allocate when a node's dimensions changed."""
+        problem = self.problem
+        models = (*problem.runningModels, problem.terminalModel)
+        if len(models) == len(self._models) and all(a is b for a, b in zip(models, self._models)):
+            return
+        self._models = models
+        self._on_problem_change()
+
+    def _on_problem_change(self) -> bool:
+        """The nodes' models were replaced: re-allocate if their dimensions changed (then True).
+
+        Subclasses extend it for what they derive from the models."""
+        layout = self._shapes()
+        if layout == self._layout:
+            return False
+        self._layout = layout
+        models = self._models
+        self.xs = [m.state.zero() for m in models]
+        self.us = [np.zeros(m.nu) for m in models[:-1]]
+        self.fs = [np.zeros(m.state.ndx) for m in models]
+        self._allocate()
+        return True
 
     def _allocate(self) -> None:
         problem = self.problem
@@ -81,6 +127,8 @@ class SolverDDP(SolverAbstract):
     # ------------------------------------------------------------------ main loop
     def _start(self, init_xs, init_us, is_feasible: bool, init_reg) -> None:
         self._check_x0()
+        self._sync_problem()
+        self._best = None
         self.setCandidate(init_xs, init_us, is_feasible)
         reg = self.reg_min if init_reg is None or np.isnan(init_reg) else float(init_reg)
         if not np.isfinite(reg) or reg < 0:
@@ -92,41 +140,56 @@ class SolverDDP(SolverAbstract):
         self.dV = self.dVexp = 0.0
         self._synced = False
 
-    def _fail(self, reason: str) -> bool:
+    def _fail(self, reason: str, nonfinite: bool = False) -> bool:
+        """Stop with False: state ``reason``, go back to the best iterate, announce a NaN/inf stop."""
         self.reason = reason
+        self._restore_best()
+        if nonfinite:
+            for callback in self._callbacks:
+                stopped = getattr(callback, "stopped", None)
+                if stopped is not None:
+                    stopped(self)
         return False
 
     def solve(self, init_xs=None, init_us=None, maxiter: int = 100, is_feasible: bool = False, init_reg=None) -> bool:
-        """Solve from the guess ``(init_xs, init_us)``; returns True on convergence (see ``reason`` otherwise)."""
+        """Solve from the guess ``(init_xs, init_us)``; returns True on convergence (see ``reason`` otherwise).
+
+        Raises
+        ------
+        ValueError
+            If the cost of the guess is not finite (the message names the node).
+        """
         self._start(init_xs, init_us, is_feasible, init_reg)
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            try:
+                return self._iterate(maxiter)
+            except NonFiniteError as exc:
+                if exc.where == "problem evaluation" and self.iter == 0:
+                    raise ValueError(f"solve: the cost of the initial guess is not finite ({exc})") from exc
+                return self._fail(f"{exc} (kept the best finite iterate)", nonfinite=True)
+
+    def _iterate(self, maxiter: int) -> bool:
+        """The iterations of :meth:`solve`; raises NonFiniteError where NaN/inf arise."""
         was_feasible = False
         for self.iter in range(maxiter):
-            recalc = True
-            while True:
-                try:
-                    self.computeDirection(recalc)
-                except BackwardPassError as exc:
-                    if not np.isfinite(self.cost):
-                        return self._fail(f"the cost of the current iterate is not finite ({exc})")
-                    recalc = False
-                    self.increaseRegularization()
-                    if self.preg >= self.reg_max:
-                        return self._fail(f"regularization reached reg_max = {self.reg_max:g} in the backward pass")
-                    continue
-                break
+            if not self._regularised_direction():
+                return self._fail(f"regularization reached reg_max = {self.reg_max:g} in the backward pass")
             self.expectedImprovement()
+            self._check_direction()
+            rollout_error = None
             for alpha in self.alphas:
                 self.stepLength = alpha
                 try:
-                    with np.errstate(over="ignore", invalid="ignore"):
-                        self.dV = self.tryStep(alpha)
+                    self.dV = self.tryStep(alpha)
                 except ForwardPassError:
                     self._synced = False
+                    rollout_error = locate_in_rollout(self.problem, self.xs_try, self.us_try)
                     continue
                 self.dVexp = alpha * (self.d[0] + 0.5 * alpha * self.d[1])
                 if self._accept(alpha):
                     was_feasible = self.isFeasible
                     self._accept_trial(alpha)
+                    rollout_error = None
                     break
                 self._synced = False
             if self.stepLength > self.th_stepDec:
@@ -136,7 +199,8 @@ class SolverDDP(SolverAbstract):
                 if self.preg >= self.reg_max:
                     self.stoppingCriteria()
                     self._run_callbacks()
-                    return self._fail(f"no step accepted and regularization reached reg_max = {self.reg_max:g}")
+                    last = f" (last trial: {rollout_error})" if rollout_error is not None else ""
+                    return self._fail(f"no step accepted and regularization reached reg_max = {self.reg_max:g}{last}")
             self.stoppingCriteria()
             self._run_callbacks()
             if was_feasible and self.stop < self.th_stop:
@@ -145,12 +209,73 @@ class SolverDDP(SolverAbstract):
         self.iter = maxiter
         return self._fail(f"maximum number of iterations ({maxiter}) reached")
 
+    def _regularised_direction(self) -> bool:
+        """``computeDirection``, raising the regularisation while ``Quu`` is not positive definite;
+        False once ``preg`` reaches ``reg_max``."""
+        recalc = True
+        while True:
+            try:
+                self.computeDirection(recalc)
+            except BackwardPassError:
+                recalc = False
+                self.increaseRegularization()
+                if self.preg >= self.reg_max:
+                    return False
+                continue
+            return True
+
+    def _check_direction(self) -> None:
+        """One finiteness test of the direction (``d``, ``Vx₀``, ``Vxx₀``); on failure, find where it arose."""
+        if np.isfinite(self.d).all() and np.isfinite(self.Vx[0]).all() and np.isfinite(self.Vxx[0]).all():
+            return
+        raise (locate_in_derivatives(self.problem) or locate_in_backward_pass(self)
+               or NonFiniteError("expected improvement", None, "backward pass"))
+
+    def _node_failure(self, t: int) -> Exception:
+        """Why the gains of node ``t`` failed: NaN/inf (located) or a ``Quu`` not positive definite."""
+        if np.isfinite(self.Quu[t]).all():
+            return BackwardPassError(f"Quu is not positive definite at node {t}")
+        return locate_in_derivatives(self.problem) or locate_in_backward_pass(self) or NonFiniteError("Quu", t,
+                                                                                                      "backward pass")
+
+    def _score(self) -> float:
+        """What the best-iterate bookkeeping minimises over feasible iterates (the cost)."""
+        return self.cost
+
+    def _score_try(self) -> float:
+        return self.cost_try
+
+    def _track_best(self) -> None:
+        """Before a trial replaces a feasible iterate: keep a copy of the iterate if the trial is worse."""
+        if not self.isFeasible:
+            return
+        trial = self._score_try()
+        if self._best is None:
+            if trial > self._score():
+                self._best = ([x.copy() for x in self.xs], [u.copy() for u in self.us], self._score())
+        elif trial <= self._best[2]:
+            self._best = None
+
+    def _restore_best(self) -> None:
+        """Make the best iterate kept by :meth:`_track_best` current again (cost and datas re-evaluated)."""
+        if self._best is None:
+            return
+        self.xs, self.us = self._best[0], self._best[1]
+        self._best = None
+        self.isFeasible = True
+        self.cost = self.problem.calc(self.xs, self.us)
+        for f in self.fs:
+            f[:] = 0.0
+        self.ffeas = 0.0
+        self._synced = False
+
     def _accept(self, alpha: float) -> bool:
         if self.dVexp >= 0:
             return abs(self.d[0]) < self.th_grad or not self.isFeasible or self.dV > self.th_acceptStep * self.dVexp
         return False
 
     def _accept_trial(self, alpha: float) -> None:
+        self._track_best()
         self.xs, self.xs_try = self.xs_try, self.xs
         self.us, self.us_try = self.us_try, self.us
         self.isFeasible = True
@@ -171,6 +296,8 @@ class SolverDDP(SolverAbstract):
             problem.calc(self.xs, self.us)
         self.cost = problem.calcDiff(self.xs, self.us)
         self._synced = True
+        if not np.isfinite(self.cost):
+            raise locate_in_derivatives(problem) or NonFiniteError("cost", None, "problem evaluation")
         if self.isFeasible:
             for f in self.fs:
                 f[:] = 0.0
@@ -210,8 +337,6 @@ class SolverDDP(SolverAbstract):
             if model.nu:
                 self.computeGains(t)
             self.computeValueFunction(t, model)
-            if not (np.isfinite(self.Vx[t]).all() and np.isfinite(self.Vxx[t]).all()):
-                raise BackwardPassError(f"non-finite value function at node {t}")
 
     def _terminal_value_function(self) -> bool:
         """``V_T`` from the terminal cost (+ ``preg`` I, gap-deflected); returns True when gaps are open."""
@@ -235,13 +360,11 @@ class SolverDDP(SolverAbstract):
         datas = problem.runningDatas
         for t in range(problem.T - 1, -1, -1):
             if not node(t, datas[t]):
-                raise BackwardPassError(f"Quu is not positive definite at node {t}")
-        if not (np.isfinite(self.Vx[0]).all() and np.isfinite(self.Vxx[0]).all()):
-            raise BackwardPassError("non-finite value function in the backward pass")
+                raise self._node_failure(t)
 
     def _kernel_node(self, preg: float, gaps: bool):
         """This pass's compiled node step ``node(t, data) -> ok`` (:func:`.riccati_kernel.riccati_step`;
-        ``ok`` is False when ``Quu`` is not positive definite)."""
+        ``ok`` is False when ``Quu`` is not positive definite or not finite)."""
         step = riccati_kernel.riccati_step
         Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx, fs = (
             self.Qxx, self.Qxu, self.Quu, self.Qx, self.Qu, self.K, self.k, self.Vxx, self.Vx, self.fs
@@ -277,7 +400,7 @@ class SolverDDP(SolverAbstract):
         """``k = Quu⁻¹ Qu`` and ``K = Quu⁻¹ Qux`` by Cholesky; raises BackwardPassError if ``Quu`` is not PD."""
         chol, info = dpotrf(self.Quu[t], lower=0, clean=0)
         if info != 0:
-            raise BackwardPassError(f"Quu is not positive definite at node {t}")
+            raise self._node_failure(t)
         rhs = self._rhs[t]
         rhs[:, 0] = self.Qu[t]
         rhs[:, 1:] = self.Qxu[t].T
@@ -355,8 +478,8 @@ class SolverDDP(SolverAbstract):
                 xs_try[t + 1] = d.xnext.copy()
         problem.terminalModel.calc(problem.terminalData, xs_try[-1])
         cost += problem.terminalData.cost
-        if not np.isfinite(cost) or not np.isfinite(xs_try[-1]).all():
-            raise ForwardPassError("the rollout produced a non-finite state or cost")
+        if not (np.isfinite(cost) and trajectory_finite(xs_try, us_try)):
+            raise ForwardPassError("the rollout produced a non-finite state, control or cost")
         self.cost_try = cost
 
     def _feedback_control(self, t: int, steplength: float, dx: np.ndarray, lb=None, ub=None) -> np.ndarray:

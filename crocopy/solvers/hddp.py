@@ -35,6 +35,7 @@ from ..shooting import ShootingProblem
 from .base import ForwardPassError
 from .ddp import SolverDDP
 from .hddp_lq import LevelDerivatives, hierarchical_backward_pass
+from .nonfinite import NonFiniteError, locate_in_derivatives, locate_in_rollout, trajectory_finite
 
 __all__ = ["CallbackHDDPLogger", "CallbackHDDPVerbose", "SolverHDDP"]
 
@@ -213,19 +214,41 @@ class SolverHDDP(SolverDDP):
         self._last_steps = np.ones(K)
         self._ff = np.zeros((K, problem.T, problem.nu_max))
 
+    def _on_problem_change(self) -> bool:
+        self._reader = _LevelReader(self.problem, self.levels)
+        changed = super()._on_problem_change()
+        self._ff = np.zeros((len(self.levels), self.problem.T, self.problem.nu_max))
+        return changed
+
     def solve(self, init_xs=None, init_us=None, maxiter: int = 100, is_feasible: bool = False, init_reg=None) -> bool:
-        """Run HDDP from the rolled-out guess; True when every level meets its tolerance."""
+        """Run HDDP from the rolled-out guess; True when every level meets its tolerance.
+
+        NaN/inf in the derivatives or gains stop it with False (``reason`` names node and quantity);
+        a guess whose rollout is not finite raises ValueError.
+        """
         self._start(init_xs, init_us, is_feasible, init_reg)
         p, K = self.problem, len(self.levels)
         self.lambdas = [self.preg if init_reg is not None else self.lambda0] * K
         self.mus = [self.mu0] * K
         self._last_steps = np.ones(K)
-        self.xs = [x.copy() for x in p.rollout(self.us)]
-        self.isFeasible = True
-        self.cost = p.calc(self.xs, self.us)
-        self.level_costs = self._reader.costs(self.xs, self.us)
-        if not np.all(np.isfinite(self.level_costs)):
-            return self._fail("the cost of the initial guess is not finite")
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            xs = p.rollout(self.us)
+            cost = p.calc(xs, self.us)
+            self.level_costs = self._reader.costs(xs, self.us)
+            if not (np.isfinite(cost) and np.all(np.isfinite(self.level_costs)) and trajectory_finite(xs, [])):
+                where = locate_in_rollout(p, xs, self.us)
+                raise ValueError(f"solve: the rollout of the initial guess is not finite ({where})")
+            self.xs = [x.copy() for x in xs]
+            self.isFeasible = True
+            self.cost = cost
+            try:
+                return self._iterate_levels(maxiter)
+            except NonFiniteError as exc:
+                return self._fail(f"{exc} (kept the best finite iterate)", nonfinite=True)
+
+    def _iterate_levels(self, maxiter: int) -> bool:
+        """The HDDP iterations of :meth:`solve`; raises NonFiniteError where NaN/inf arise."""
+        p, K = self.problem, len(self.levels)
         was_small = False
         for self.iter in range(maxiter):
             p.calcDiff(self.xs, self.us)
@@ -233,9 +256,13 @@ class SolverHDDP(SolverDDP):
             for _ in range(self.max_reg_increases + 1):
                 try:
                     self._backward(derivs)
-                except np.linalg.LinAlgError:
+                except np.linalg.LinAlgError as exc:
+                    nonfinite = locate_in_derivatives(p)
+                    if nonfinite is not None:
+                        raise nonfinite from exc
                     improved = np.zeros(K, dtype=bool)
                 else:
+                    self._check_direction()
                     improved = self._line_search()
                 if improved.any():
                     break
@@ -270,6 +297,12 @@ class SolverHDDP(SolverDDP):
             was_small = small
         self.iter = maxiter
         return self._fail(f"maximum number of iterations ({maxiter}) reached")
+
+    def _check_direction(self) -> None:
+        """One finiteness test of the gains (all feed-forwards, ``K₀``); on failure, find where it arose."""
+        if np.isfinite(self._ff).all() and (not self.K or np.isfinite(self.K[0]).all()):
+            return
+        raise locate_in_derivatives(self.problem) or NonFiniteError("gains", None, "hierarchical backward pass")
 
     def _converged(self, old: np.ndarray) -> bool:
         G = self.level_costs
@@ -353,6 +386,10 @@ class CallbackHDDPVerbose:
         steps = ",".join(f"{s:g}" for s in solver.level_steps)
         lams = ",".join(f"{lam:.0e}" for lam in solver.lambdas)
         print(f"{solver.iter:4d}  {costs}  [{steps}]  [{lams}]")
+
+    def stopped(self, solver: SolverHDDP) -> None:
+        """Print why ``solver`` stopped on NaN/inf (``solver.reason``)."""
+        print(f"solve stopped: {solver.reason}", flush=True)
 
 
 class CallbackHDDPLogger:

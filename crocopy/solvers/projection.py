@@ -18,6 +18,7 @@ import numpy as np
 from ..shooting import ShootingProblem
 from .base import BackwardPassError
 from .ddp import SolverDDP
+from .nonfinite import locate_in_derivatives
 from .projection_lq import ConstraintRankError, linear_rollout_model_change, projected_backward_pass
 
 __all__ = ["ConstraintRankError", "SolverProjection"]
@@ -61,6 +62,25 @@ class SolverProjection(SolverDDP):
         self.x0_violation = 0.0
         self._has_eq = any(m.nh for m in problem.runningModels) or bool(problem.terminalModel.nh_T)
 
+    def _on_problem_change(self) -> bool:
+        problem = self.problem
+        self._has_eq = any(m.nh for m in problem.runningModels) or bool(problem.terminalModel.nh_T)
+        return super()._on_problem_change()
+
+    def _score(self) -> float:
+        return self.cost + self.sigma * self.hfeas_l1 if self._has_eq else self.cost
+
+    def _score_try(self) -> float:
+        return self.cost_try + self.sigma * self.hfeas_l1_try if self._has_eq else self.cost_try
+
+    def _restore_best(self) -> None:
+        restored = self._best is not None
+        super()._restore_best()
+        if restored:
+            self.hfeas_l1 = self._equality_l1()
+            self.merit = self.cost + self.sigma * self.hfeas_l1
+            self.computeEqualityFeasibility()
+
     def _start(self, init_xs, init_us, is_feasible: bool, init_reg) -> None:
         """As DDP; with equality rows the guess is first rolled out from ``x0`` (the method needs it)."""
         super()._start(init_xs, init_us, is_feasible, init_reg)
@@ -97,6 +117,9 @@ class SolverProjection(SolverDDP):
                 self.preg, self.preg, self.th_rank,
             )
         except np.linalg.LinAlgError as exc:
+            nonfinite = locate_in_derivatives(p)
+            if nonfinite is not None:
+                raise nonfinite from exc
             raise BackwardPassError(f"reduced Hessian is not positive definite ({exc})") from exc
         for t in range(T):
             self.k[t][:] = res.k[t]
@@ -106,8 +129,6 @@ class SolverProjection(SolverDDP):
         for t in range(T + 1):
             self.Vx[t][:] = res.Vx[t]
             self.Vxx[t][:] = res.Vxx[t]
-            if not (np.isfinite(res.Vx[t]).all() and np.isfinite(res.Vxx[t]).all()):
-                raise BackwardPassError(f"non-finite value function at node {t}")
         if not self.isFeasible:
             return
         self.x0_violation = float(np.max(np.abs(res.d0))) if res.d0.size else 0.0

@@ -10,8 +10,9 @@ Computes, for node t with next value function ``(V'x, V'xx)`` (Crocoddyl signs):
 ``feedback_control(u, k, K, dx, α, lb, ub, out)`` writes the rollout's control
 ``clamp(u - α k - K dx, lb, ub)`` (infinite bounds for the unconstrained solvers).
 
-``riccati_step`` returns False when ``Quu`` is not positive definite (the caller raises the
-regularisation).  Its numpy twin is the chain of :class:`~crocopy.solvers.ddp.SolverDDP`'s
+``riccati_step`` returns False when ``Quu`` is not positive definite or not finite (the caller
+tells them apart: it raises the regularisation, or stops on NaN/inf, :mod:`.nonfinite`).  Its
+numpy twin is the chain of :class:`~crocopy.solvers.ddp.SolverDDP`'s
 ``computeActionValueFunction``, ``computeGains`` and ``computeValueFunction`` (Cholesky by LAPACK),
 ``feedback_control``'s is :func:`feedback_control_numpy`; :mod:`crocopy.kernels` chooses.
 """
@@ -40,12 +41,13 @@ finish_value_function = compiled(_finish_value_function)
 
 
 def _cholesky_lower(A, idx, n, L):
-    """Lower Cholesky factor of ``A[idx[:n], idx[:n]]`` into ``L[:n, :n]``; False if not positive definite."""
+    """Lower Cholesky factor of ``A[idx[:n], idx[:n]]`` into ``L[:n, :n]``; False if not positive definite
+    or not finite (the caller tells the two apart on failure)."""
     for j in range(n):
         s = A[idx[j], idx[j]]
         for p in range(j):
             s -= L[j, p] * L[j, p]
-        if not s > 0.0:
+        if not 0.0 < s < np.inf:
             return False
         L[j, j] = np.sqrt(s)
         for i in range(j + 1, n):
@@ -53,6 +55,8 @@ def _cholesky_lower(A, idx, n, L):
             for p in range(j):
                 s -= L[i, p] * L[j, p]
             L[i, j] = s / L[j, j]
+            if not abs(L[i, j]) < np.inf:
+                return False
     return True
 
 

@@ -1,0 +1,96 @@
+"""Where a solve met NaN/inf: the error, the per-node search run only after a cheap check failed.
+
+A solver tests finiteness once per phase on aggregated quantities (the cost, the expected
+improvement ``d``, ``Vx₀``/``Vxx₀`` after the backward pass, the trial trajectory after a
+rollout).  Only when such a test fails does it call the searches below, which walk the nodes and
+name the first non-finite quantity where it arose:
+
+* :func:`locate_in_derivatives`: the nodes' ``cost``, ``Fx``, ``Fu``, ``Lx``, ``Lu``, ``Lxx``,
+  ``Lxu``, ``Luu`` (t = 0..T; a model produced it);
+* :func:`locate_in_backward_pass`: the solver's ``Vxx``/``Vx`` at T, then ``Qxx, Qxu, Quu, Qx, Qu,
+  K, k, Vxx, Vx`` from t = T-1 down to 0 (the recursion's order, so the first hit is the origin);
+* :func:`locate_in_rollout`: ``xs_try``, ``us_try`` and the node costs, t = 0..T.
+
+The solver stops with ``solve() -> False``, keeps its best finite iterate and states the result in
+``solver.reason``, e.g. ``"non-finite Quu at node 9 in the backward pass"``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+_RUNNING_DERIVATIVES = ("Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu")
+_TERMINAL_DERIVATIVES = ("Lx", "Lxx")
+_BACKWARD_TERMS = ("Qxx", "Qxu", "Quu", "Qx", "Qu", "K", "k", "Vxx", "Vx")
+
+
+class NonFiniteError(RuntimeError):
+    """A solve met NaN/inf; ``node`` and ``quantity`` say where (``node`` is None if not found).
+
+    Parameters
+    ----------
+    quantity : str
+        Name of the first non-finite quantity (``"cost"``, ``"Fu"``, ``"Quu"``, ...).
+    node : int or None
+        Its node, 0..T.
+    where : str
+        Phase of the iteration (``"derivatives"``, ``"backward pass"``, ``"rollout"``, ...).
+    """
+
+    def __init__(self, quantity: str, node: int | None, where: str) -> None:
+        at = "" if node is None else f" at node {node}"
+        super().__init__(f"non-finite {quantity}{at} in the {where}")
+        self.quantity = quantity
+        self.node = node
+        self.where = where
+
+
+def _finite(value) -> bool:
+    return bool(np.isfinite(value).all())
+
+
+def locate_in_derivatives(problem) -> NonFiniteError | None:
+    """The first non-finite cost or derivative of the problem's nodes (None if all are finite)."""
+    datas = [*problem.runningDatas, problem.terminalData]
+    for t, d in enumerate(datas):
+        names = _RUNNING_DERIVATIVES if t < problem.T else _TERMINAL_DERIVATIVES
+        if not np.isfinite(d.cost):
+            return NonFiniteError("cost", t, "problem evaluation")
+        for name in names:
+            if not _finite(getattr(d, name)):
+                return NonFiniteError(name, t, "derivatives")
+    return None
+
+
+def locate_in_backward_pass(solver) -> NonFiniteError | None:
+    """The first non-finite term of the backward pass in the order it was computed (None if all are finite)."""
+    T = solver.problem.T
+    for name in ("Vxx", "Vx"):
+        if not _finite(getattr(solver, name)[T]):
+            return NonFiniteError(name, T, "backward pass")
+    for t in range(T - 1, -1, -1):
+        for name in _BACKWARD_TERMS:
+            if not _finite(getattr(solver, name)[t]):
+                return NonFiniteError(name, t, "backward pass")
+    return None
+
+
+def locate_in_rollout(problem, xs: Sequence[np.ndarray], us: Sequence[np.ndarray]) -> NonFiniteError | None:
+    """The first non-finite state, control or node cost of a rollout (None if all are finite)."""
+    datas = [*problem.runningDatas, problem.terminalData]
+    for t, (x, d) in enumerate(zip(xs, datas)):
+        if not _finite(x):
+            return NonFiniteError("state", t, "rollout")
+        if t < len(us) and not _finite(us[t]):
+            return NonFiniteError("control", t, "rollout")
+        if not np.isfinite(d.cost):
+            return NonFiniteError("cost", t, "rollout")
+    return None
+
+
+def trajectory_finite(xs: Sequence[np.ndarray], us: Sequence[np.ndarray]) -> bool:
+    """True when every state and control is finite (one test on the concatenation)."""
+    parts = [*xs, *us]
+    return bool(np.isfinite(np.concatenate(parts)).all()) if parts else True
