@@ -262,7 +262,6 @@ class SolverHDDP(SolverDDP):
                         raise nonfinite from exc
                     improved = np.zeros(K, dtype=bool)
                 else:
-                    self._check_direction()
                     improved = self._line_search()
                 if improved.any():
                     break
@@ -298,9 +297,10 @@ class SolverHDDP(SolverDDP):
         self.iter = maxiter
         return self._fail(f"maximum number of iterations ({maxiter}) reached")
 
-    def _check_direction(self) -> None:
-        """One finiteness test of the gains (all feed-forwards, ``K₀``); on failure, find where it arose."""
-        if np.isfinite(self._ff).all() and (not self.K or np.isfinite(self.K[0]).all()):
+    def _check_direction(self, res) -> None:
+        """One finiteness test of the pass (feed-forwards, every level's ``Vx₀``/``Vxx₀``); on failure,
+        find where it arose."""
+        if np.isfinite(self._ff).all() and all(np.isfinite(v[0]).all() for v in (*res.Vx, *res.Vxx)):
             return
         raise locate_in_derivatives(self.problem) or NonFiniteError("gains", None, "hierarchical backward pass")
 
@@ -322,6 +322,7 @@ class SolverHDDP(SolverDDP):
                 self._ff[k, t, : f.size] = f
         for t in range(p.T):
             self.K[t][:] = -res.K[t]
+        self._check_direction(res)
         self.rank, self.free = res.rank, res.free
 
     def _rollout(self, steps: np.ndarray) -> np.ndarray:
