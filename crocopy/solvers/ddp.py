@@ -41,6 +41,7 @@ from . import riccati_kernel
 from .base import BackwardPassError, ForwardPassError, SolverAbstract
 from .nonfinite import (
     NonFiniteError,
+    locate_cost,
     locate_in_backward_pass,
     locate_in_derivatives,
     locate_in_rollout,
@@ -297,7 +298,7 @@ class SolverDDP(SolverAbstract):
         self.cost = problem.calcDiff(self.xs, self.us)
         self._synced = True
         if not np.isfinite(self.cost):
-            raise locate_in_derivatives(problem) or NonFiniteError("cost", None, "problem evaluation")
+            raise locate_cost(problem)
         if self.isFeasible:
             for f in self.fs:
                 f[:] = 0.0

@@ -5,6 +5,7 @@ improvement ``d``, ``Vx₀``/``Vxx₀`` after the backward pass, the trial traje
 rollout).  Only when such a test fails does it call the searches below, which walk the nodes and
 name the first non-finite quantity where it arose:
 
+* :func:`locate_cost`: the first node whose cost is not finite;
 * :func:`locate_in_derivatives`: the nodes' ``cost``, ``Fx``, ``Fu``, ``Lx``, ``Lu``, ``Lxx``,
   ``Lxu``, ``Luu`` (t = 0..T; a model produced it);
 * :func:`locate_in_backward_pass`: the solver's ``Vxx``/``Vx`` at T, then ``Qxx, Qxu, Quu, Qx, Qu,
@@ -62,6 +63,13 @@ def locate_in_derivatives(problem) -> NonFiniteError | None:
             if not _finite(getattr(d, name)):
                 return NonFiniteError(name, t, "derivatives")
     return None
+
+
+def locate_cost(problem) -> NonFiniteError:
+    """The first node whose cost is not finite (after ``problem.calc``/``calcDiff`` gave a non-finite total)."""
+    datas = [*problem.runningDatas, problem.terminalData]
+    node = next((t for t, d in enumerate(datas) if not np.isfinite(d.cost)), None)
+    return NonFiniteError("cost", node, "problem evaluation")
 
 
 def locate_in_backward_pass(solver) -> NonFiniteError | None:
