@@ -6,7 +6,9 @@ actuation torques and the stacked contacts ``Jc a + a0 = 0``::
     [M  Jcᵀ] [ a ]   [τ - b]
     [Jc  0 ] [-λ ] = [ -a0 ],      K⁻¹ = [[A, B], [Bᵀ, C]]
 
-(``inv_damping`` regularises ``Jc M⁻¹ Jcᵀ``).  Differentiating ``M a + b - Jcᵀ λ = τ`` (RNEA with the
+(``inv_damping`` regularises ``Jc M⁻¹ Jcᵀ``).  Without damping, a contact set that is redundant
+(two active contacts on one body) or whose KKT solve gives NaN (a singular ``Jc``) is solved by
+least squares, :mod:`~crocopy.models.redundant_kkt`: unique accelerations, minimum-norm forces.  Differentiating ``M a + b - Jcᵀ λ = τ`` (RNEA with the
 contact forces as external forces, ``∂ID/∂x``) and the contact constraint (``da0_dx``)::
 
     ∂a/∂x = A (∂τ/∂x - ∂ID/∂x) - B da0_dx,     ∂a/∂u = A ∂τ/∂u
@@ -33,6 +35,7 @@ from crocopy.diff_action_base import DifferentialActionDataAbstract, Differentia
 from .contact_multiple import ContactModelMultiple
 from .data_collectors import DataCollectorJointActMultibodyInContact
 from .dynamics_options import ActuationStructure, ArmatureMixin, KKTDampingMixin
+from .redundant_kkt import solve_redundant_kkt
 
 
 def check_vector_shape(value: np.ndarray, size: int, name: str) -> None:
@@ -166,21 +169,31 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         self.actuation.calc(mb.actuation, x, u)
         mb.joint.tau[:] = u
         data.rigid = None
-        if nc and self.use_pinocchio_constraints and not self._with_armature and self._damping == 0.0:
+        # redundant contacts (shared body) or a singular KKT system: least squares, see redundant_kkt.py
+        data.lstsq = bool(nc) and self._damping == 0.0 and self.contacts._shared_joints
+        if nc and self.use_pinocchio_constraints and not self._with_armature and self._damping == 0.0 \
+                and not data.lstsq:
             data.rigid = self.contacts.rigidConstraints(mb.contacts, pd)
         if data.rigid is not None:
             cms, cds = data.rigid
             data.xout[:] = pin.constraintDynamics(self.pinocchio, pd, q, v, mb.actuation.tau, cms, cds, data.prox)
+            data.lstsq = not np.isfinite(data.xout).all()
+            data.rigid = None if data.lstsq else data.rigid
+        if data.rigid is not None:
             pin.forwardKinematics(self.pinocchio, pd, q, v, data.zero_a)
             pin.updateFramePlacements(self.pinocchio, pd)
             lam = pd.lambda_c
         elif nc:
             self._kinematics(data, q, v)
             self.contacts.calc(mb.contacts, x)
-            data.xout[:] = pin.forwardDynamics(
-                self.pinocchio, pd, mb.actuation.tau, mb.contacts.Jc[:nc], mb.contacts.a0[:nc], self._damping
-            )
-            lam = pd.lambda_c
+            if not data.lstsq:
+                data.xout[:] = pin.forwardDynamics(
+                    self.pinocchio, pd, mb.actuation.tau, mb.contacts.Jc[:nc], mb.contacts.a0[:nc], self._damping
+                )
+                lam = pd.lambda_c
+                data.lstsq = self._damping == 0.0 and not np.isfinite(data.xout).all()
+            if data.lstsq:
+                lam = self._redundant_dynamics(data, nc)
         else:
             self._kinematics(data, q, v)
             try:
@@ -194,6 +207,18 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         data.cost = data.costs.cost
         if self.constraints is not None:
             self.constraints.calc(data.constraints, x, u)
+
+    def _redundant_dynamics(self, data: "DifferentialActionDataContactFwdDynamics", nc: int) -> np.ndarray:
+        """Accelerations and minimum-norm forces of a rank-deficient contact set (``Kinv`` for calcDiff)."""
+        pd, mb = data.pinocchio, data.multibody
+        try:
+            data.xout[:], lam = solve_redundant_kkt(
+                pd.M, mb.actuation.tau - pd.nle, mb.contacts.Jc[:nc], mb.contacts.a0[:nc], data.Kinv
+            )
+        except np.linalg.LinAlgError:  # a diverged trial state (non-finite inertia)
+            data.xout[:] = np.nan
+            lam = np.full(nc, np.nan)
+        return lam
 
     def calcDiff(
         self, data: "DifferentialActionDataContactFwdDynamics", x: np.ndarray, u: np.ndarray | None = None
@@ -227,7 +252,8 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         np.subtract(adata.dtau_dx[:, :nv], pd.dtau_dq, out=rhs[:nv, :nv])
         np.subtract(adata.dtau_dx[:, nv:], pd.dtau_dv, out=rhs[:nv, nv:])
         if nc:
-            data.Kinv[:] = pin.getKKTContactDynamicMatrixInverse(model, pd, cdata.Jc[:nc])
+            if not data.lstsq:
+                data.Kinv[:] = pin.getKKTContactDynamicMatrixInverse(model, pd, cdata.Jc[:nc])
             self.contacts.calcDiff(cdata, x)
             np.negative(cdata.da0_dx[:nc], out=rhs[nv:])
             Kinv = data.Kinv
@@ -341,4 +367,5 @@ class DifferentialActionDataContactFwdDynamics(DifferentialActionDataAbstract):
         self.diag = np.arange(nv)
         self.zero_a = np.zeros(nv)
         self.rigid = None
+        self.lstsq = False
         self.prox = pin.ProximalSettings(1e-12, 0.0, 1)

@@ -68,7 +68,6 @@ class ContactModelMultiple(ForceModelMultiple):
         super()._recount()
         frames = self.state.pinocchio.frames
         joints = [int(frames[c.id].parentJoint) for _, c in self._active]
-        self._shared_joints = len(set(joints)) != len(joints)
         self._idle_joints = sorted({int(frames[c.id].parentJoint) for _, c in self._inactive} - set(joints))
 
     def addContact(self, name: str, contact: ContactModelAbstract, active: bool = True) -> None:

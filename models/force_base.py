@@ -224,6 +224,9 @@ class ForceModelMultiple(ModelItems):
         self._active = [(name, m) for name, m, active in models if active]
         self._inactive = [(name, m) for name, m, active in models if not active]
         self._lwa = [(name, m) for name, m in self._active if m.type != _LOCAL]
+        frames = self.state.pinocchio.frames
+        joints = [int(frames[m.id].parentJoint) for _, m in self._active]
+        self._shared_joints = len(set(joints)) != len(joints)
 
     def _add(self, name: str, model: ForceModelAbstract, item: object) -> None:
         """Insert ``item`` (holding ``model``) under ``name`` once ``_check_model`` accepts ``model``."""

@@ -6,7 +6,8 @@ stacked impulses ``Jc``::
     [M  Jcᵀ] [ v⁺]   [  M v⁻  ]
     [Jc  0 ] [-Λ ] = [-e Jc v⁻],     xnext = (q, v⁺)
 
-(``inv_damping`` regularises ``Jc M⁻¹ Jcᵀ``).  Differentiating ``M(q)(v⁺ - v⁻) - Jcᵀ Λ = 0``
+(``inv_damping`` regularises ``Jc M⁻¹ Jcᵀ``; without it, redundant impulses, i.e. two on one body, or
+a singular KKT solve are handled by least squares, :mod:`~crocopy.models.redundant_kkt`).  Differentiating ``M(q)(v⁺ - v⁻) - Jcᵀ Λ = 0``
 (``∂ID/∂q``: RNEA derivatives at zero velocity and gravity with acceleration ``v⁺ - v⁻`` and the
 impulses as external forces) and ``Jc(q)(v⁺ + e v⁻) = 0`` (``dv0_dq`` at velocity ``v⁺ + e v⁻``)::
 
@@ -28,6 +29,7 @@ from crocopy.costs.sum import CostModelSum
 from .contact_fwd_dynamics import check_vector_shape, link_cost_data
 from .data_collectors import DataCollectorMultibodyInImpulse
 from .dynamics_options import ArmatureMixin, KKTDampingMixin
+from .redundant_kkt import solve_redundant_kkt
 from .impulse_multiple import ImpulseModelMultiple
 
 
@@ -124,10 +126,21 @@ class ActionModelImpulseFwdDynamics(ArmatureMixin, KKTDampingMixin, ActionModelA
             pd.M[data.diag, data.diag] += self._armature
         self.impulses.calc(idata, x)
         data.xnext[:nq] = q
-        if nc:
+        # redundant impulses (shared body) or a singular KKT system: least squares, see redundant_kkt.py
+        data.lstsq = bool(nc) and self._damping == 0.0 and self.impulses._shared_joints
+        if nc and not data.lstsq:
             data.xnext[nq:] = pin.impulseDynamics(model, pd, v, idata.Jc[:nc], self._r_coeff, self._damping)
             lam = pd.impulse_c
-        else:
+            data.lstsq = self._damping == 0.0 and not np.isfinite(data.xnext[nq:]).all()
+        if data.lstsq:
+            Jc = idata.Jc[:nc]
+            try:
+                data.xnext[nq:], lam = solve_redundant_kkt(pd.M, np.triu(pd.M) @ v + np.triu(pd.M, 1).T @ v, Jc,
+                                                           self._r_coeff * (Jc @ v), data.Kinv)
+            except np.linalg.LinAlgError:  # a diverged trial state (non-finite inertia)
+                data.xnext[nq:] = np.nan
+                lam = np.full(nc, np.nan)
+        elif not nc:
             data.xnext[nq:] = v
             lam = data.no_force
         self.impulses.updateVelocity(idata, data.xnext[nq:])
@@ -153,7 +166,8 @@ class ActionModelImpulseFwdDynamics(ArmatureMixin, KKTDampingMixin, ActionModelA
             self.impulses.calcDiff(idata, x)
             pin.computeRNEADerivatives(self._model_nograv, pd, q, data.zero_v, vnext - v, idata.fext)
             self.impulses.updateRneaDiff(idata, pd)
-            data.Kinv[:] = pin.getKKTContactDynamicMatrixInverse(model, pd, idata.Jc[:nc])
+            if not data.lstsq:
+                data.Kinv[:] = pin.getKKTContactDynamicMatrixInverse(model, pd, idata.Jc[:nc])
             np.negative(pd.dtau_dq, out=rhs[:nv, :nv])
             np.negative(idata.dv0_dq[:nc], out=rhs[nv:, :nv])
             np.multiply(idata.Jc[:nc], -self._r_coeff, out=rhs[nv:, nv:])
@@ -201,6 +215,7 @@ class ActionDataImpulseFwdDynamics(ActionDataAbstract):
             else:
                 share_arrays(self.constraints, self, ("g", "Gx", "h", "Hx"))
         self.Kinv = np.zeros((nv + nc, nv + nc))
+        self.lstsq = False
         self.df_dx = np.zeros((nc, ndx))
         self.rhs = np.zeros((nv + nc, ndx))
         self.KinvRhs = np.zeros((nv + nc, ndx))

@@ -1,0 +1,153 @@
+"""Redundant contacts and impulses (issue 14, reproducer 2): least-squares KKT, derivatives against numdiff."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from robots import load
+from test_contacts import assert_close, fd_dam
+from test_impulses import assert_close as assert_close_impulse
+
+import crocopy
+
+LOCAL, LWA = pin.LOCAL, pin.LOCAL_WORLD_ALIGNED
+# (robot, [(name, frame, kind)], frame type, gains, contacts dropped for the reference)
+CASES = [
+    ("anymal", [("a", "LF_FOOT", "3"), ("b", "LF_FOOT", "3"), ("c", "RF_FOOT", "3")], LWA, (0.0, 0.0), ["b"]),
+    ("anymal", [("a", "LF_FOOT", "3"), ("b", "LF_FOOT", "3"), ("c", "RH_FOOT", "3")], LOCAL, (10.0, 5.0), ["b"]),
+    ("talos_legs", [("a", "left_sole_link", "6"), ("b", "left_sole_link", "3"), ("c", "right_sole_link", "6")],
+     LWA, (0.0, 0.0), ["b"]),
+    ("talos_legs", [("a", "left_sole_link", "6"), ("b", "left_sole_link", "6")], LOCAL, (2.0, 1.0), ["b"]),
+]
+IDS = ["anymal-33-LWA", "anymal-33-LOCAL-gains", "talos-6+3-LWA", "talos-6+6-LOCAL-gains"]
+
+
+def contact_dam(robot, items, typ, gains, drop=(), seed=0):
+    model = load(robot)
+    state = crocopy.StateMultibody(model)
+    act = crocopy.ActuationModelFloatingBase(state)
+    contacts = crocopy.ContactModelMultiple(state, act.nu)
+    made = {}
+    for name, frame, kind in items:
+        key = (frame, kind)
+        if key not in made:  # the same contact object when repeated, as in the reproducer
+            fid = model.getFrameId(frame)
+            made[key] = (crocopy.ContactModel3D(state, fid, np.zeros(3), typ, act.nu, np.array(gains)) if kind == "3"
+                         else crocopy.ContactModel6D(state, fid, pin.SE3.Identity(), typ, act.nu, np.array(gains)))
+        if name not in drop:
+            contacts.addContact(name, made[key])
+    costs = crocopy.CostModelSum(state, act.nu)
+    costs.addCost("u", crocopy.CostModelResidual(state, crocopy.ResidualModelControl(state, act.nu)), 0.1)
+    fid = model.getFrameId(items[0][1])
+    nc = 3 if items[0][2] == "3" else 6
+    force = crocopy.ResidualModelContactForce(state, fid, pin.Force(np.arange(6.0)), nc, act.nu)
+    costs.addCost("f", crocopy.CostModelResidual(state, force), 1e-3)
+    return crocopy.DifferentialActionModelContactFwdDynamics(state, act, contacts, costs, 0.0, True)
+
+
+def point(dam, seed=3):
+    np.random.seed(seed)
+    return dam.state.rand(), np.random.default_rng(seed).normal(size=dam.nu)
+
+
+@pytest.mark.parametrize("kkt", [False, True], ids=["pinocchio", "kkt"])
+@pytest.mark.parametrize("case", CASES, ids=IDS)
+def test_redundant_contacts_give_the_motion_of_the_independent_set(case, kkt):
+    robot, items, typ, gains, drop = case
+    dam, ref = contact_dam(robot, items, typ, gains), contact_dam(robot, items, typ, gains, drop)
+    for m in (dam, ref):
+        m.use_pinocchio_constraints = not kkt
+    x, u = point(dam)
+    if items[0][2] != items[1][2]:
+        # a 6D and a 3D contact on one frame agree only at rest: the 6D drift is the spatial
+        # acceleration, the 3D one the classical acceleration (least squares splits the difference)
+        x[dam.state.nq:] = 0.0
+    d, dr = dam.createData(), ref.createData()
+    dam.calc(d, x, u)
+    ref.calc(dr, x, u)
+    assert d.lstsq and not dr.lstsq
+    np.testing.assert_allclose(d.xout, dr.xout, rtol=1e-7, atol=1e-7)
+    forces = {n: cd.f.vector.copy() for n, cd in d.multibody.contacts.contacts.items()}
+    ref_forces = {n: cd.f.vector for n, cd in dr.multibody.contacts.contacts.items()}
+    if items[0][2] == items[1][2]:  # the same contact twice: each carries half the force
+        np.testing.assert_allclose(forces["a"], forces["b"], rtol=1e-7, atol=1e-7)
+        np.testing.assert_allclose(forces["a"] + forces["b"], ref_forces["a"], rtol=1e-7, atol=1e-6)
+
+
+@pytest.mark.parametrize("kkt", [False, True], ids=["pinocchio", "kkt"])
+@pytest.mark.parametrize("case", CASES, ids=IDS)
+def test_redundant_contact_derivatives_match_finite_differences(case, kkt):
+    dam = contact_dam(*case[:4])
+    dam.use_pinocchio_constraints = not kkt
+    x, u = point(dam)
+    d = dam.createData()
+    dam.calc(d, x, u)
+    dam.calcDiff(d, x, u)
+    assert np.isfinite(d.Fx).all() and np.isfinite(d.Fu).all()
+    J = fd_dam(dam, x, u)
+    nv, ndx = dam.state.nv, dam.state.ndx
+    assert_close(d.Fx, J[:nv, :ndx], "Fx")
+    assert_close(d.Fu, J[:nv, ndx:], "Fu")
+    assert_close(d.Lx, J[nv, :ndx], "Lx")
+    assert_close(d.Lu, J[nv, ndx:], "Lu")
+    assert_close(d.df_dx, J[nv + 1:, :ndx], "df_dx")
+    assert_close(d.df_du, J[nv + 1:, ndx:], "df_du")
+
+
+def test_an_independent_contact_set_keeps_pinocchios_path():
+    dam = contact_dam("anymal", [("a", "LF_FOOT", "3"), ("c", "RF_FOOT", "3")], LWA, (0.0, 0.0))
+    d = dam.createData()
+    dam.calc(d, *point(dam))
+    assert not d.lstsq and d.rigid is not None
+
+
+def impulse_model(robot, items, typ, r_coeff, drop=()):
+    model = load(robot)
+    state = crocopy.StateMultibody(model)
+    impulses = crocopy.ImpulseModelMultiple(state)
+    made = {}
+    for name, frame, kind in items:
+        if (frame, kind) not in made:
+            cls = crocopy.ImpulseModel3D if kind == "3" else crocopy.ImpulseModel6D
+            made[frame, kind] = cls(state, model.getFrameId(frame), typ)
+        if name not in drop:
+            impulses.addImpulse(name, made[frame, kind])
+    costs = crocopy.CostModelSum(state, 0)
+    costs.addCost("x", crocopy.CostModelResidual(state, crocopy.ResidualModelState(state, state.zero(), 0)), 0.1)
+    costs.addCost("com", crocopy.CostModelResidual(state, crocopy.ResidualModelImpulseCoM(state)), 1.0)
+    return crocopy.ActionModelImpulseFwdDynamics(state, impulses, costs, r_coeff, 0.0, True)
+
+
+IMPULSE_CASES = [
+    ("anymal", [("a", "LF_FOOT", "3"), ("b", "LF_FOOT", "3"), ("c", "RF_FOOT", "3")], LWA, 0.0),
+    ("talos_legs", [("a", "left_sole_link", "6"), ("b", "left_sole_link", "3"), ("c", "right_sole_link", "6")],
+     LOCAL, 0.5),
+]
+
+
+@pytest.mark.parametrize("case", IMPULSE_CASES, ids=["anymal-33", "talos-6+3"])
+def test_redundant_impulses_velocity_and_derivatives(case):
+    model, ref = impulse_model(*case), impulse_model(*case, drop=["b"])
+    np.random.seed(5)
+    x = model.state.rand()
+    st, d, dr = model.state, model.createData(), ref.createData()
+    u = np.zeros(0)
+    model.calc(d, x, u)
+    ref.calc(dr, x, u)
+    assert d.lstsq and not dr.lstsq
+    np.testing.assert_allclose(d.xnext, dr.xnext, rtol=1e-7, atol=1e-7)
+    model.calcDiff(d, x, u)
+    x0, H = d.xnext.copy(), 1e-6
+    J = np.zeros((st.ndx + 1, st.ndx))
+    for i in range(st.ndx):
+        e = np.zeros(st.ndx)
+        e[i] = H
+        model.calc(d, st.integrate(x, e), u)
+        plus = np.r_[st.diff(x0, d.xnext), d.cost]
+        model.calc(d, st.integrate(x, -e), u)
+        J[:, i] = (plus - np.r_[st.diff(x0, d.xnext), d.cost]) / (2 * H)
+    model.calc(d, x, u)
+    model.calcDiff(d, x, u)
+    assert_close_impulse(d.Fx, J[: st.ndx], "Fx")
+    assert_close_impulse(d.Lx, J[st.ndx], "Lx")
