@@ -8,7 +8,8 @@ actuation torques and the stacked contacts ``Jc a + a0 = 0``::
 
 (``inv_damping`` regularises ``Jc M⁻¹ Jcᵀ``).  Without damping, a contact set that is redundant
 (two active contacts on one body) or whose KKT solve gives NaN (a singular ``Jc``) is solved by
-least squares, :mod:`~crocopy.models.redundant_kkt`: unique accelerations, minimum-norm forces.  Differentiating ``M a + b - Jcᵀ λ = τ`` (RNEA with the
+least squares, :mod:`~crocopy.models.redundant_kkt`: unique accelerations, minimum-norm forces.
+Differentiating ``M a + b - Jcᵀ λ = τ`` (RNEA with the
 contact forces as external forces, ``∂ID/∂x``) and the contact constraint (``da0_dx``)::
 
     ∂a/∂x = A (∂τ/∂x - ∂ID/∂x) - B da0_dx,     ∂a/∂u = A ∂τ/∂u

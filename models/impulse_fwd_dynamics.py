@@ -7,7 +7,8 @@ stacked impulses ``Jc``::
     [Jc  0 ] [-Λ ] = [-e Jc v⁻],     xnext = (q, v⁺)
 
 (``inv_damping`` regularises ``Jc M⁻¹ Jcᵀ``; without it, redundant impulses, i.e. two on one body, or
-a singular KKT solve are handled by least squares, :mod:`~crocopy.models.redundant_kkt`).  Differentiating ``M(q)(v⁺ - v⁻) - Jcᵀ Λ = 0``
+a singular KKT solve are handled by least squares, :mod:`~crocopy.models.redundant_kkt`).
+Differentiating ``M(q)(v⁺ - v⁻) - Jcᵀ Λ = 0``
 (``∂ID/∂q``: RNEA derivatives at zero velocity and gravity with acceleration ``v⁺ - v⁻`` and the
 impulses as external forces) and ``Jc(q)(v⁺ + e v⁻) = 0`` (``dv0_dq`` at velocity ``v⁺ + e v⁻``)::
 
@@ -29,8 +30,8 @@ from crocopy.costs.sum import CostModelSum
 from .contact_fwd_dynamics import check_vector_shape, link_cost_data
 from .data_collectors import DataCollectorMultibodyInImpulse
 from .dynamics_options import ArmatureMixin, KKTDampingMixin
-from .redundant_kkt import solve_redundant_kkt
 from .impulse_multiple import ImpulseModelMultiple
+from .redundant_kkt import solve_redundant_kkt
 
 
 class ActionModelImpulseFwdDynamics(ArmatureMixin, KKTDampingMixin, ActionModelAbstract):

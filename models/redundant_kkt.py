@@ -24,7 +24,8 @@ map any consistent right-hand side to a solution of the KKT system, so the deriv
 inverse of a regular KKT matrix.  With independent rows ``S⁺ = S⁻¹`` and all of this is the usual
 KKT inverse.  Rows that are dependent *and* contradict each other (a 6D and a 3D contact on one
 frame while it moves: the 6D drift is a spatial acceleration, the 3D one a classical acceleration)
-get the minimum-norm least-squares multipliers of ``S λ = -(J M⁻¹ r + c)`` (a compromise).  Cost: one Cholesky of ``M`` and one ``nc × nc`` eigen-decomposition.
+get the minimum-norm least-squares multipliers of ``S λ = -(J M⁻¹ r + c)`` (a compromise).
+Cost: one Cholesky of ``M`` and one ``nc × nc`` eigen-decomposition.
 """
 
 from __future__ import annotations
