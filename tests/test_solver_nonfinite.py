@@ -168,3 +168,25 @@ def test_hddp_follows_a_replaced_node():
     assert solver.solve()
     np.testing.assert_allclose(solver.xs[-1][:2], goal[:2], atol=0.05)
     check_outcome(solver, problem)
+
+
+WRAPPERS = {
+    "squashed": lambda m: crocopy.ActionModelSquashed(m, "smooth-sat", -np.ones(2), np.ones(2)),
+    "penalty": lambda m: crocopy.ActionModelControlPenalty(m, 1e3, -np.ones(2), np.ones(2)),
+}
+
+
+@pytest.mark.parametrize("kernels", KERNELS)
+@pytest.mark.parametrize("wrapper", WRAPPERS)
+@pytest.mark.parametrize("name", ["DDP", "FDDP"])
+def test_squashing_and_penalty_baselines_stop_finitely(name, wrapper, kernels):
+    """The squashing and penalty baselines wrap an overflowing unicycle: same stop, same report."""
+    m = crocopy.ActionModelUnicycle()
+    m.dt = 1e300
+    w = WRAPPERS[wrapper](m)
+    problem = crocopy.ShootingProblem(np.array([-1.0, -1, 1]), [w] * 10, w)
+    solver = SOLVERS[name](problem)
+    with crocopy.use_kernels(kernels):
+        assert solver.solve() is False
+    assert solver.reason.startswith("non-finite ") and " at node " in solver.reason
+    check_outcome(solver, problem)
