@@ -190,3 +190,52 @@ def test_squashing_and_penalty_baselines_stop_finitely(name, wrapper, kernels):
         assert solver.solve() is False
     assert solver.reason.startswith("non-finite ") and " at node " in solver.reason
     check_outcome(solver, problem)
+
+
+class ResetModel(crocopy.ActionModelAbstract):
+    """``x' = u`` (the state is forgotten), cost ``½(u - 1)²``; with ``poisoned``, ``x' = NaN`` when ``u ≥ 0.4``."""
+
+    def __init__(self, poisoned: bool = False) -> None:
+        super().__init__(crocopy.StateVector(1), 1, 0)
+        self.poisoned = poisoned
+
+    def calc(self, data, x, u=None):
+        if u is None:
+            data.xnext[:] = x
+            data.cost = 0.0
+            return
+        data.xnext[:] = np.nan if self.poisoned and u[0] >= 0.4 else u
+        data.cost = 0.5 * float((u[0] - 1.0) ** 2)
+
+    def calcDiff(self, data, x, u=None):
+        data.Lx[:], data.Lxx[:] = 0.0, 0.0
+        if u is not None:
+            data.Fx[:], data.Fu[:], data.Lu[:], data.Luu[:] = 0.0, 1.0, u - 1.0, 1.0
+
+
+class ForgetModel(crocopy.ActionModelAbstract):
+    """``x' = 0`` without control or cost: whatever its state, nothing after it sees it."""
+
+    def __init__(self) -> None:
+        super().__init__(crocopy.StateVector(1), 0, 0)
+
+    def calc(self, data, x, u=None):
+        data.xnext[:] = 0.0
+        data.cost = 0.0
+
+    def calcDiff(self, data, x, u=None):
+        data.Fx[:], data.Lx[:], data.Lxx[:] = 0.0, 0.0, 0.0
+
+
+@pytest.mark.parametrize("name", ["DDP", "FDDP", "BoxFDDP"])
+def test_a_trial_with_a_nan_state_inside_is_never_accepted(name):
+    """The NaN state at node 2 leaves the cost and the last state finite; the step is still refused."""
+    models = [ResetModel(), ResetModel(True), ForgetModel(), ResetModel()]
+    problem = crocopy.ShootingProblem(np.zeros(1), models, ResetModel())
+    solver = SOLVERS[name](problem)
+    logger = crocopy.CallbackLogger()
+    solver.setCallbacks([logger])
+    us = [np.zeros(m.nu) for m in models]
+    solver.solve(problem.rollout(us), us, maxiter=1, is_feasible=True)
+    assert logger.steps[0] == 0.25
+    check_outcome(solver, problem)

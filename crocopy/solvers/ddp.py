@@ -20,7 +20,8 @@ runs), logged once at DEBUG level on the ``"crocopy"`` logger.  ``forwardPass`` 
 it keeps open and by the control bounds.
 
 NaN/inf (:mod:`.nonfinite`): one test per phase on aggregated quantities (the cost, ``d``,
-``Vx₀``/``Vxx₀``, the trial trajectory), a per-node search only when it fails.  A non-finite
+``Vx₀``/``Vxx₀``, the trial's cost and last state, the whole trajectory of a trial about to be
+accepted), a per-node search only when it fails.  A non-finite
 direction stops the solve (more regularisation cannot cure an overflow) with ``solve() -> False``
 and ``reason`` naming the node and quantity (also printed by :class:`~crocopy.CallbackVerbose`); a
 non-finite trial rollout is rejected like any other trial.  Every False return leaves the best
@@ -188,6 +189,10 @@ class SolverDDP(SolverAbstract):
                     continue
                 self.dVexp = alpha * (self.d[0] + 0.5 * alpha * self.d[1])
                 if self._accept(alpha):
+                    if not trajectory_finite(self.xs_try, self.us_try):
+                        rollout_error = locate_in_rollout(self.problem, self.xs_try, self.us_try)
+                        self._synced = False
+                        continue
                     was_feasible = self.isFeasible
                     self._accept_trial(alpha)
                     rollout_error = None
@@ -479,8 +484,8 @@ class SolverDDP(SolverAbstract):
                 xs_try[t + 1] = d.xnext.copy()
         problem.terminalModel.calc(problem.terminalData, xs_try[-1])
         cost += problem.terminalData.cost
-        if not (np.isfinite(cost) and trajectory_finite(xs_try, us_try)):
-            raise ForwardPassError("the rollout produced a non-finite state, control or cost")
+        if not np.isfinite(cost) or not np.isfinite(xs_try[-1]).all():
+            raise ForwardPassError("the rollout produced a non-finite state or cost")
         self.cost_try = cost
 
     def _feedback_control(self, t: int, steplength: float, dx: np.ndarray, lb=None, ub=None) -> np.ndarray:

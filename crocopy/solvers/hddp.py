@@ -334,6 +334,8 @@ class SolverHDDP(SolverDDP):
             self.forwardPass(1.0)
         except ForwardPassError:
             return np.full(len(steps), np.inf)
+        if not trajectory_finite(self.xs_try, self.us_try):
+            return np.full(len(steps), np.inf)
         return self._reader.costs(self.xs_try, self.us_try)
 
     def _candidates(self, k: int) -> list[float]:

@@ -1,9 +1,10 @@
 """Where a solve met NaN/inf: the error, the per-node search run only after a cheap check failed.
 
 A solver tests finiteness once per phase on aggregated quantities (the cost, the expected
-improvement ``d``, ``Vx₀``/``Vxx₀`` after the backward pass, the trial trajectory after a
-rollout).  Only when such a test fails does it call the searches below, which walk the nodes and
-name the first non-finite quantity where it arose:
+improvement ``d``, ``Vx₀``/``Vxx₀`` after the backward pass, the cost and last state of a trial
+rollout, and the whole trajectory of a trial about to be accepted).  Only when such a test fails
+does it call the searches below, which walk the nodes and name the first non-finite quantity where
+it arose:
 
 * :func:`locate_cost`: the first node whose cost is not finite;
 * :func:`locate_in_derivatives`: the nodes' ``cost``, ``Fx``, ``Fu``, ``Lx``, ``Lu``, ``Lxx``,
@@ -18,6 +19,7 @@ The solver stops with ``solve() -> False``, keeps its best finite iterate and st
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -99,6 +101,9 @@ def locate_in_rollout(problem, xs: Sequence[np.ndarray], us: Sequence[np.ndarray
 
 
 def trajectory_finite(xs: Sequence[np.ndarray], us: Sequence[np.ndarray]) -> bool:
-    """True when every state and control is finite (one test on the concatenation)."""
+    """True when every state and control is finite (the sum of all entries; entry-wise if it overflowed)."""
     parts = [*xs, *us]
-    return bool(np.isfinite(np.concatenate(parts)).all()) if parts else True
+    if not parts:
+        return True
+    flat = np.concatenate(parts)
+    return math.isfinite(flat.sum()) or bool(np.isfinite(flat).all())
