@@ -101,6 +101,18 @@ def assert_close(A, B, name):
     assert err <= RTOL * scale, f"{name}: max error {err:.3e} (scale {scale:.3e})"
 
 
+def assert_matches_fd(dam, d, x, u):
+    """``Fx, Fu, Lx, Lu, df_dx, df_du`` of ``d`` (after calc/calcDiff at ``(x, u)``) against :func:`fd_dam`."""
+    J = fd_dam(dam, x, u)
+    nv, ndx = dam.state.nv, dam.state.ndx
+    assert_close(d.Fx, J[:nv, :ndx], "Fx")
+    assert_close(d.Fu, J[:nv, ndx:], "Fu")
+    assert_close(d.Lx, J[nv, :ndx], "Lx")
+    assert_close(d.Lu, J[nv, ndx:], "Lu")
+    assert_close(d.df_dx, J[nv + 1:, :ndx], "df_dx")
+    assert_close(d.df_du, J[nv + 1:, ndx:], "df_du")
+
+
 @pytest.mark.parametrize("kkt", [False, True], ids=["pinocchio", "kkt"])
 @pytest.mark.parametrize("case", CASES, ids=IDS)
 def test_dam_derivatives(case, kkt):
@@ -110,14 +122,7 @@ def test_dam_derivatives(case, kkt):
     dam.calc(d, x, u)
     dam.calcDiff(d, x, u)
     assert (d.rigid is None) == (kkt or (case[2] == LWA and "6" in case[1] and case[3][0] != 0.0))
-    J = fd_dam(dam, x, u)
-    nv, ndx = dam.state.nv, dam.state.ndx
-    assert_close(d.Fx, J[:nv, :ndx], "Fx")
-    assert_close(d.Fu, J[:nv, ndx:], "Fu")
-    assert_close(d.Lx, J[nv, :ndx], "Lx")
-    assert_close(d.Lu, J[nv, ndx:], "Lu")
-    assert_close(d.df_dx, J[nv + 1:, :ndx], "df_dx")
-    assert_close(d.df_du, J[nv + 1:, ndx:], "df_du")
+    assert_matches_fd(dam, d, x, u)
     i = 0
     for cd in d.multibody.contacts.contacts.values():
         nc = cd.Jc.shape[0]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from solver_problems import DAMDoubleIntegrator
 
 import crocopy
 from crocopy import SolverHDDP
@@ -123,31 +124,6 @@ class ResidualPlanarEE(ResidualModelAbstract):
         return ResidualDataAbstract(self, data)
 
 
-class DAMJointIntegrator(crocopy.DifferentialActionModelAbstract):
-    """``q̈ = u`` with a cost stack (a stand-in for a fixed-base robot)."""
-
-    def __init__(self, costs):
-        super().__init__(costs.state, 3, 1)
-        self.costs = costs
-
-    def createData(self):
-        data = crocopy.DifferentialActionDataAbstract(self)
-        data.costs = self.costs.createData(crocopy.DataCollectorAbstract())
-        return data
-
-    def calc(self, data, x, u=None):
-        data.xout[:] = 0.0 if u is None else u
-        self.costs.calc(data.costs, x, u)
-        data.cost = data.costs.cost
-
-    def calcDiff(self, data, x, u=None):
-        data.Fx[:] = 0.0
-        data.Fu[:] = np.eye(3)
-        self.costs.calcDiff(data.costs, x, u)
-        for name in ("Lx", "Lxx") if u is None else ("Lx", "Lu", "Lxx", "Lxu", "Luu"):
-            getattr(data, name)[:] = getattr(data.costs, name)
-
-
 def arm_problem(tasks=("t1", "t2"), T=20, dt=0.05, effort_w=1e-3):
     state = crocopy.StateVector(6)
     specs = {
@@ -163,8 +139,8 @@ def arm_problem(tasks=("t1", "t2"), T=20, dt=0.05, effort_w=1e-3):
         crocopy.ResidualModelState(state, np.zeros(6), 3)), 1e-3)
     for name in tasks:
         terminal.addCost(name, crocopy.CostModelResidual(state, specs[name]), 1.0)
-    rm = crocopy.IntegratedActionModelEuler(DAMJointIntegrator(running), dt)
-    tm = crocopy.IntegratedActionModelEuler(DAMJointIntegrator(terminal), 0.0)
+    rm = crocopy.IntegratedActionModelEuler(DAMDoubleIntegrator(running, 3), dt)
+    tm = crocopy.IntegratedActionModelEuler(DAMDoubleIntegrator(terminal, 3), 0.0)
     return crocopy.ShootingProblem(np.array([0.3, 0.4, 0.5, 0, 0, 0]), [rm] * T, tm)
 
 
