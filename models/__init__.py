@@ -28,6 +28,7 @@ from .data_collectors import (
 )
 from .force_base import ForceDataAbstract
 from .free_fwd_dynamics import DifferentialActionDataFreeFwdDynamics, DifferentialActionModelFreeFwdDynamics
+from .free_invdyn import DifferentialActionModelFreeInvDynamics
 from .impulse_base import ImpulseDataAbstract, ImpulseModelAbstract
 from .impulse_fwd_dynamics import ActionDataImpulseFwdDynamics, ActionModelImpulseFwdDynamics
 from .impulse_multiple import ImpulseDataMultiple, ImpulseItem, ImpulseModelMultiple
@@ -112,6 +113,7 @@ __all__ = [
     "DataCollectorMultibodyInImpulse",
     "DifferentialActionDataFreeFwdDynamics",
     "DifferentialActionModelFreeFwdDynamics",
+    "DifferentialActionModelFreeInvDynamics",
     "ResidualDataCentroidalMomentum",
     "ResidualModelCentroidalMomentum",
     "ResidualModelCoMPosition",
