@@ -10,6 +10,7 @@ from .actuations import (
 from .cones import CoPSupport, FrictionCone, WrenchCone
 from .contact_base import ContactDataAbstract, ContactModelAbstract
 from .contact_fwd_dynamics import DifferentialActionDataContactFwdDynamics, DifferentialActionModelContactFwdDynamics
+from .contact_invdyn import DifferentialActionModelContactInvDynamics
 from .contact_multiple import ContactDataMultiple, ContactItem, ContactModelMultiple
 from .contacts import ContactData3D, ContactData6D, ContactModel3D, ContactModel6D
 from .data_collectors import (
@@ -69,6 +70,7 @@ __all__ = [
     "ContactModelAbstract",
     "DifferentialActionDataContactFwdDynamics",
     "DifferentialActionModelContactFwdDynamics",
+    "DifferentialActionModelContactInvDynamics",
     "ContactDataMultiple",
     "ContactItem",
     "ContactModelMultiple",
