@@ -235,7 +235,7 @@ class DifferentialActionModelContactInvDynamics(DifferentialActionModelAbstract)
     def __repr__(self) -> str:
         s = self.state
         return (f"DifferentialActionModelContactInvDynamics {{nx={s.nx}, ndx={s.ndx}, nu={self.nu}, "
-                f"nc={self.contacts.nc}}}")
+                f"nc={self.contacts.nc_total}}}")
 
 
 class DifferentialActionDataContactInvDynamics(DifferentialActionDataAbstract):
