@@ -133,9 +133,10 @@ class DifferentialActionModelContactInvDynamics(DifferentialActionModelAbstract)
         nq, nv = self.state.nq, self.state.nv
         q, v = x[:nq], x[nq:]
         model, pd, mb = self.pinocchio, data.pinocchio, data.multibody
-        if u is None:
+        if u is None:  # no forces on a terminal node (no residual reads an earlier evaluation's)
             pin.computeForwardKinematicsDerivatives(model, pd, q, v, data.zero_a)
             pin.updateFramePlacements(model, pd)
+            self.contacts.updateForce(mb.contacts, np.zeros(self.contacts.nc))
         else:
             a = u[:nv]
             data.xout[:] = a
@@ -166,7 +167,11 @@ class DifferentialActionModelContactInvDynamics(DifferentialActionModelAbstract)
     ) -> None:
         """``Fx = 0``, ``Fu = (I, 0)``; RNEA and contact derivatives, force and joint-data Jacobians, cost and
         constraint derivatives.  Assumes :meth:`calc` ran at the same ``(x, u)``."""
-        if u is not None:
+        if u is None:
+            for cd in data.multibody.contacts.contacts.values():
+                cd.df_dx[:] = 0.0
+                cd.df_du[:] = 0.0
+        else:
             nq, nv = self.state.nq, self.state.nv
             q, v = x[:nq], x[nq:]
             pd, mb = data.pinocchio, data.multibody
