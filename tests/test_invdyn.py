@@ -10,9 +10,6 @@ the joint and contact data collectors are checked through them.
 
 from __future__ import annotations
 
-import copy
-import pickle
-
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -330,15 +327,3 @@ def test_bad_arguments_name_what_is_wrong():
         constraints.addConstraint("c_acc", taken)
         crocopy.DifferentialActionModelContactInvDynamics(state, actuation, contacts, crocopy.CostModelSum(state, 21),
                                                           constraints)
-
-
-@pytest.mark.parametrize("case", ["free-anymal", "contact-anymal"])
-def test_copy_and_pickle_keep_the_numbers(case):
-    dam = BUILDERS[case]()
-    x, u = sample(dam, 8)
-    data = dam.createData()
-    dam.calc(data, x, u)
-    for other in (copy.deepcopy(dam), pickle.loads(pickle.dumps(dam))):
-        d = other.createData()
-        other.calc(d, x, u)
-        assert d.cost == pytest.approx(data.cost) and np.allclose(d.h, data.h)
