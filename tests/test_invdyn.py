@@ -14,6 +14,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from robots import frame, load
+from test_free_fwd_dynamics import finite_differences_terminal
 
 import crocopy
 
@@ -192,41 +193,25 @@ def test_terminal_node_has_no_internal_equality(case):
     dam.calc(data, x)
     dam.calcDiff(data, x)
     assert dam.nh_T == 0
-    state, grad = dam.state, np.zeros(dam.state.ndx)
-    probe = dam.createData()
-    for i in range(state.ndx):
-        e = np.zeros(state.ndx)
-        e[i] = H
-        dam.calc(probe, state.integrate(x, e))
-        cp = probe.cost
-        dam.calc(probe, state.integrate(x, -e))
-        grad[i] = (cp - probe.cost) / (2 * H)
+    _, _, grad, _ = finite_differences_terminal(dam, x)
     assert_close(data.Lx, grad, "terminal Lx")
 
 
-def test_free_invdyn_equality_is_the_unactuated_rnea_torque():
-    dam = free_dam("anymal")
+@pytest.mark.parametrize(("robot", "unset"), [("anymal", 6), ("iris", 2)])
+def test_free_invdyn_equality_is_the_unactuated_rnea_torque(robot, unset):
+    """Floating base: the 6 base rows; thrusters: the 2 horizontal forces; the commands reproduce the rest."""
+    dam = free_dam(robot)
     x, u = sample(dam, 2)
     data = dam.createData()
     dam.calc(data, x, u)
     model = dam.pinocchio
     tau = pin.rnea(model, model.createData(), x[: model.nq], x[model.nq :], u)
-    assert dam.nu == model.nv and dam.nh == 6 and list(dam.constraints.constraints) == ["box", "tau"]
-    assert np.allclose(data.constraints.constraints["tau"].residual.r, tau[:6])
-    assert np.allclose(data.xout, u)
-    assert np.allclose(data.multibody.joint.tau, tau[6:]) and np.allclose(data.multibody.joint.a, u)
-
-
-def test_thrusters_leave_the_horizontal_forces_unactuated():
-    dam = free_dam("iris")
-    x, u = sample(dam, 3)
-    data = dam.createData()
-    dam.calc(data, x, u)
-    model = dam.pinocchio
-    tau = pin.rnea(model, model.createData(), x[: model.nq], x[model.nq :], u)
-    assert dam.nh == 2 + 0 and np.allclose(data.constraints.constraints["tau"].residual.r, tau[:2])
-    actuation = data.multibody.actuation
-    assert np.allclose(actuation.tau[2:], tau[2:])  # the thrust commands reproduce the actuated rows
+    assert dam.nu == model.nv and dam.nh == unset and list(dam.constraints.constraints) == ["box", "tau"]
+    assert np.allclose(data.constraints.constraints["tau"].residual.r, tau[:unset])
+    assert np.allclose(data.xout, u) and np.allclose(data.multibody.joint.a, u)
+    assert np.allclose(data.multibody.actuation.tau[unset:], tau[unset:])
+    if robot == "anymal":
+        assert np.allclose(data.multibody.joint.tau, tau[6:])
 
 
 def test_full_actuation_has_no_equality():
