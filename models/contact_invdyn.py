@@ -114,9 +114,12 @@ class DifferentialActionModelContactInvDynamics(DifferentialActionModelAbstract)
 
     def _sync_status(self) -> None:
         """Switch each contact's ``_acc``/``_force`` equality to its current status in the contact set."""
-        layout = contact_layout(self.contacts)
-        if layout == self._layout:
+        items = self.contacts.contacts
+        if len(items) == len(self._layout) and all(
+            name in items and items[name].active == on for name, _, _, on in self._layout
+        ):
             return
+        layout = contact_layout(self.contacts)
         if [(n, o, c) for n, o, c, _ in layout] != [(n, o, c) for n, o, c, _ in self._layout]:
             raise ValueError("the contact set changed (contacts added or removed) after the model was built")
         for name, _, _, active in layout:
@@ -183,7 +186,7 @@ class DifferentialActionModelContactInvDynamics(DifferentialActionModelAbstract)
                 cd = cdata.contacts[name]
                 cd.df_dx[:] = 0.0
                 cd.df_du[:] = 0.0
-                cd.df_du[:, nv + offset : nv + offset + nc] = np.eye(nc)
+                cd.df_du[:, nv + offset : nv + offset + nc] = data.eye[:nc, :nc]
             data.dtau_dx[:, :nv] = pd.dtau_dq
             data.dtau_dx[:, nv:] = pd.dtau_dv
             data.dtau_du[:, :nv] = pd.M
@@ -273,6 +276,7 @@ class DifferentialActionDataContactInvDynamics(DifferentialActionDataAbstract):
         self.dtau_dx = np.zeros((nv, model.state.ndx))
         self.dtau_du = np.zeros((nv, nu))
         self.zero_a = np.zeros(nv)
+        self.eye = np.eye(6)
 
 
 DifferentialActionModelContactInvDynamics.DifferentialActionDataContactInvDynamics = (

@@ -312,3 +312,13 @@ def test_bad_arguments_name_what_is_wrong():
         constraints.addConstraint("c_acc", taken)
         crocopy.DifferentialActionModelContactInvDynamics(state, actuation, contacts, crocopy.CostModelSum(state, 21),
                                                           constraints)
+
+
+def test_contacts_added_after_construction_are_refused():
+    dam = contact_dam("anymal")
+    x, u = sample(dam, 9)
+    data = dam.createData()
+    extra = crocopy.ContactModel3D(dam.state, "RH_FOOT", np.zeros(3), pin.LOCAL, dam.nu)
+    dam.contacts.addContact("RH_FOOT_contact", extra)
+    with pytest.raises(ValueError, match="contact set changed"):
+        dam.calc(data, x, u)
