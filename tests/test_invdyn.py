@@ -13,6 +13,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from robots import frame, load
 from test_free_fwd_dynamics import finite_differences_terminal
 
@@ -322,3 +324,34 @@ def test_contacts_added_after_construction_are_refused():
     dam.contacts.addContact("RH_FOOT_contact", extra)
     with pytest.raises(ValueError, match="contact set changed"):
         dam.calc(data, x, u)
+
+
+_DAMS = {name: BUILDERS[name]() for name in ("free-anymal", "contact-anymal-inactive", "contact-talos_legs")}
+
+
+@settings(max_examples=30, deadline=None)
+@given(name=st.sampled_from(sorted(_DAMS)), seed=st.integers(0, 2**16), scale=st.floats(0.1, 10.0))
+def test_equalities_are_affine_in_the_control(name, seed, scale):
+    """τ is affine in (a, f) and the contact acceleration in a: ``h(x, u) = h(x, 0) + Hu u`` exactly."""
+    dam = _DAMS[name]
+    x, u = sample(dam, seed)
+    u = scale * u
+    data = dam.createData()
+    dam.calc(data, x, u)
+    dam.calcDiff(data, x, u)
+    h, Hu = data.h.copy(), data.Hu.copy()
+    dam.calc(data, x, np.zeros(dam.nu))
+    np.testing.assert_allclose(h, data.h + Hu @ u, rtol=1e-9, atol=1e-9 * max(1.0, np.abs(h).max()))
+
+
+@settings(max_examples=20, deadline=None)
+@given(na=st.integers(-5, 40), nc=st.integers(-3, 12))
+def test_actuation_residual_dimensions(na, nc):
+    state = crocopy.StateMultibody(load("anymal"))
+    residual = crocopy.DifferentialActionModelContactInvDynamics.ResidualModelActuation
+    if not 0 <= na <= state.nv or nc < 0:
+        with pytest.raises(ValueError, match="nu .the actuation dimension.|nc must be non-negative"):
+            residual(state, na, nc)
+        return
+    r = residual(state, na, nc)
+    assert (r.nr, r.nu, r.na) == (state.nv - na, state.nv + nc, na)
