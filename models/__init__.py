@@ -10,6 +10,7 @@ from .actuations import (
 from .cones import CoPSupport, FrictionCone, WrenchCone
 from .contact_base import ContactDataAbstract, ContactModelAbstract
 from .contact_fwd_dynamics import DifferentialActionDataContactFwdDynamics, DifferentialActionModelContactFwdDynamics
+from .contact_invdyn import DifferentialActionModelContactInvDynamics
 from .contact_multiple import ContactDataMultiple, ContactItem, ContactModelMultiple
 from .contacts import ContactData3D, ContactData6D, ContactModel3D, ContactModel6D
 from .data_collectors import (
@@ -28,6 +29,7 @@ from .data_collectors import (
 )
 from .force_base import ForceDataAbstract
 from .free_fwd_dynamics import DifferentialActionDataFreeFwdDynamics, DifferentialActionModelFreeFwdDynamics
+from .free_invdyn import DifferentialActionModelFreeInvDynamics
 from .impulse_base import ImpulseDataAbstract, ImpulseModelAbstract
 from .impulse_fwd_dynamics import ActionDataImpulseFwdDynamics, ActionModelImpulseFwdDynamics
 from .impulse_multiple import ImpulseDataMultiple, ImpulseItem, ImpulseModelMultiple
@@ -68,6 +70,7 @@ __all__ = [
     "ContactModelAbstract",
     "DifferentialActionDataContactFwdDynamics",
     "DifferentialActionModelContactFwdDynamics",
+    "DifferentialActionModelContactInvDynamics",
     "ContactDataMultiple",
     "ContactItem",
     "ContactModelMultiple",
@@ -112,6 +115,7 @@ __all__ = [
     "DataCollectorMultibodyInImpulse",
     "DifferentialActionDataFreeFwdDynamics",
     "DifferentialActionModelFreeFwdDynamics",
+    "DifferentialActionModelFreeInvDynamics",
     "ResidualDataCentroidalMomentum",
     "ResidualModelCentroidalMomentum",
     "ResidualModelCoMPosition",

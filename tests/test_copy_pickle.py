@@ -154,6 +154,24 @@ def _constraint_dam():
     return _free(state=state, constraints=manager)
 
 
+def _invdyn(contact: bool):
+    """ANYmal under free inverse dynamics, or on two 3D feet under contact inverse dynamics."""
+    model = load("anymal")
+    state = crocopy.StateMultibody(model)
+    act = crocopy.ActuationModelFloatingBase(state)
+    nu = state.nv + (6 if contact else 0)
+    costs = crocopy.CostModelSum(state, nu)
+    costs.addCost("x", crocopy.CostModelResidual(state, crocopy.ResidualModelState(state, state.zero(), nu)), 1.0)
+    costs.addCost("tau", crocopy.CostModelResidual(state, crocopy.ResidualModelJointEffort(state, act, nu)), 1.0)
+    if not contact:
+        return crocopy.DifferentialActionModelFreeInvDynamics(state, act, costs)
+    contacts = crocopy.ContactModelMultiple(state, nu)
+    for foot in ("LF_FOOT", "RH_FOOT"):
+        contact = crocopy.ContactModel3D(state, foot, np.zeros(3), pin.LOCAL_WORLD_ALIGNED, nu, np.array([1.0, 2.0]))
+        contacts.addContact(foot, contact)
+    return crocopy.DifferentialActionModelContactInvDynamics(state, act, contacts, costs)
+
+
 CASES: dict[str, Callable] = {
     # action and differential action models (host = the model)
     "ActionModelLQR": _itself(lambda: crocopy.ActionModelLQR.Random(4, 2, 1, 1)),
@@ -168,6 +186,8 @@ CASES: dict[str, Callable] = {
     "DifferentialActionModelNumDiff": _itself(lambda: crocopy.DifferentialActionModelNumDiff(_dlqr())),
     "DifferentialActionModelFreeFwdDynamics": _itself(_constraint_dam),
     "DifferentialActionModelContactFwdDynamics": _itself(_contact_dam),
+    "DifferentialActionModelFreeInvDynamics": _itself(lambda: _invdyn(False)),
+    "DifferentialActionModelContactInvDynamics": _itself(lambda: _invdyn(True)),
     # activations
     "ActivationModelQuad": _activation_case(crocopy.ActivationModelQuad),
     "ActivationModelWeightedQuad": _activation_case(

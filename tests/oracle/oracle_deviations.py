@@ -80,13 +80,13 @@ DEVIATIONS: tuple[Deviation, ...] = (
               "its own xnext and cost",
               lambda c: (c.integrator or "").startswith("rk") and not c.terminal),
     Deviation("com-free-dynamics", "value",
-              "ResidualModelCoMPosition under free dynamics: Crocoddyl never computes the centre of mass and "
-              "returns -cref with a zero Jacobian",
-              lambda c: c.residual == "com" and c.kind == om.FREE and not c.terminal),
+              "ResidualModelCoMPosition under free (forward or inverse) dynamics: Crocoddyl never computes the "
+              "centre of mass and returns -cref with a zero Jacobian",
+              lambda c: c.residual == "com" and c.kind in (om.FREE, om.FREE_INV) and not c.terminal),
     Deviation("centroidal-free-dynamics", "value",
-              "ResidualModelCentroidalMomentum under free dynamics: Crocoddyl never computes the momentum and "
-              "returns -href",
-              lambda c: c.residual == "centroidal" and c.kind == om.FREE and not c.terminal),
+              "ResidualModelCentroidalMomentum under free forward dynamics and every inverse dynamics: Crocoddyl "
+              "never computes the momentum and returns -href",
+              lambda c: c.residual == "centroidal" and c.kind in (om.FREE, *om.INVDYN) and not c.terminal),
     Deviation("contact-control-grav-forces", "value",
               "ResidualModelContactControlGrav: Crocoddyl computes u - g(q) and leaves out the contact forces its "
               "documentation includes, u - (g(q) - Σ Jcᵀ f)",
@@ -108,6 +108,10 @@ DEVIATIONS: tuple[Deviation, ...] = (
               "ResidualModelJointEffort on a terminal node: Crocoddyl reads the joint efforts its data last held "
               "(-uref on fresh data); crocopy's residual is 0 (no control, no effort)",
               lambda c: c.terminal and c.residual == "joint_effort"),
+    Deviation("terminal-invdyn-acceleration-jacobian", "terminal",
+              "ResidualModelJointAcceleration on a terminal node of an inverse-dynamics model: Crocoddyl's Ru is "
+              "the identity its joint data holds from creation; crocopy's is zero (no control)",
+              lambda c: c.terminal and c.residual == "joint_acceleration" and c.kind in om.INVDYN),
     Deviation("terminal-constraint-rows", "gap",
               "On terminal nodes Crocoddyl's g/h and their Jacobians hold only the ng_T/nh_T terminal rows; "
               "crocopy's keep ng/nh rows",
@@ -116,6 +120,8 @@ DEVIATIONS: tuple[Deviation, ...] = (
 
 DERIVATIVES = {jac for pair in om.JACOBIANS.values() for jac in pair}
 HESSIANS = {"Lxx", "Lxu", "Luu"}
+#: Jacobians with respect to the control (meaningless on a terminal node, which has none)
+CONTROL_JACOBIANS = {"Fu", "Lu", "Ru", "Gu", "Hu"}
 ACTIVATION_KEYS = {"Ar", "Arr"}
 _ITEM = re.compile(r"^(.*(?:cost|constraint)\[[^\]]+\]\.)")
 

@@ -148,7 +148,9 @@ def _impulse_com(lib, c: Context):
 
 
 FREE, CONTACT3, CONTACT6, IMPULSE3, IMPULSE6 = "free", "contact3d", "contact6d", "impulse3d", "impulse6d"
-ALL = (FREE, CONTACT3, CONTACT6, IMPULSE3, IMPULSE6)
+FREE_INV, CONTACT3_INV, CONTACT6_INV = "free_invdyn", "contact3d_invdyn", "contact6d_invdyn"
+INVDYN = (FREE_INV, CONTACT3_INV, CONTACT6_INV)
+ALL = (FREE, CONTACT3, CONTACT6, IMPULSE3, IMPULSE6, *INVDYN)
 ACTUATED = (FREE, CONTACT3, CONTACT6)
 CONTACTS = (CONTACT3, CONTACT6)
 CONTACT_AND_IMPULSE = (CONTACT3, CONTACT6, IMPULSE3, IMPULSE6)
@@ -165,24 +167,26 @@ class ResidualSpec:
 
 RESIDUALS: dict[str, ResidualSpec] = {
     "state": ResidualSpec("ResidualModelState", _state, ALL),
-    "control": ResidualSpec("ResidualModelControl", _control, ACTUATED),
+    "control": ResidualSpec("ResidualModelControl", _control, (*ACTUATED, *INVDYN)),
     "com": ResidualSpec("ResidualModelCoMPosition", _com, ALL),
     "centroidal": ResidualSpec("ResidualModelCentroidalMomentum", _centroidal, ALL),
     # Crocoddyl rejects the contact dynamics' data collector for this residual (crocopy accepts it)
     "control_grav": ResidualSpec("ResidualModelControlGrav", _control_grav, (FREE,)),
-    "joint_effort": ResidualSpec("ResidualModelJointEffort", _joint_effort, ACTUATED),
+    "joint_effort": ResidualSpec("ResidualModelJointEffort", _joint_effort, (*ACTUATED, *INVDYN)),
     "joint_effort_fwddyn": ResidualSpec("ResidualModelJointEffort", _joint_effort_fwddyn, ACTUATED),
-    "joint_acceleration": ResidualSpec("ResidualModelJointAcceleration", _joint_acceleration, ACTUATED),
+    "joint_acceleration": ResidualSpec("ResidualModelJointAcceleration", _joint_acceleration, (*ACTUATED, *INVDYN)),
     "frame_placement": ResidualSpec("ResidualModelFramePlacement", _placement, ALL),
     "frame_rotation": ResidualSpec("ResidualModelFrameRotation", _rotation, ALL),
     "frame_translation": ResidualSpec("ResidualModelFrameTranslation", _translation, ALL),
     "frame_velocity_local": ResidualSpec("ResidualModelFrameVelocity", _velocity(pin.LOCAL), ALL),
     "frame_velocity_world": ResidualSpec("ResidualModelFrameVelocity", _velocity(pin.WORLD), ALL),
     "frame_velocity_lwa": ResidualSpec("ResidualModelFrameVelocity", _velocity(pin.LOCAL_WORLD_ALIGNED), ALL),
-    "contact_force": ResidualSpec("ResidualModelContactForce", _contact_force, CONTACT_AND_IMPULSE),
-    "friction_cone": ResidualSpec("ResidualModelContactFrictionCone", _friction_cone, CONTACT_AND_IMPULSE),
-    "wrench_cone": ResidualSpec("ResidualModelContactWrenchCone", _wrench_cone, (CONTACT6, IMPULSE6)),
-    "cop_position": ResidualSpec("ResidualModelContactCoPPosition", _cop, (CONTACT6, IMPULSE6)),
+    "contact_force": ResidualSpec("ResidualModelContactForce", _contact_force,
+                                  (*CONTACT_AND_IMPULSE, CONTACT3_INV, CONTACT6_INV)),
+    "friction_cone": ResidualSpec("ResidualModelContactFrictionCone", _friction_cone,
+                                  (*CONTACT_AND_IMPULSE, CONTACT3_INV, CONTACT6_INV)),
+    "wrench_cone": ResidualSpec("ResidualModelContactWrenchCone", _wrench_cone, (CONTACT6, IMPULSE6, CONTACT6_INV)),
+    "cop_position": ResidualSpec("ResidualModelContactCoPPosition", _cop, (CONTACT6, IMPULSE6, CONTACT6_INV)),
     "contact_control_grav": ResidualSpec("ResidualModelContactControlGrav", _contact_control_grav, CONTACTS),
     "impulse_com": ResidualSpec("ResidualModelImpulseCoM", _impulse_com, (IMPULSE3, IMPULSE6)),
 }
@@ -228,6 +232,7 @@ class DynamicsSpec:
     impulse: bool
     inv_damping: float = 0.0
     r_coeff: float = 0.0
+    invdyn: bool = False
 
 
 _LOCAL, _LWA = pin.LOCAL, pin.LOCAL_WORLD_ALIGNED
@@ -246,6 +251,9 @@ DYNAMICS: dict[str, DynamicsSpec] = {
                            3, True),
     IMPULSE6: DynamicsSpec("talos_legs", "right_sole_link", ((_SOLES[0], _LOCAL, (0.0, 0.0)),), 6, True, r_coeff=0.3),
 }
+DYNAMICS[FREE_INV] = dataclasses.replace(DYNAMICS[FREE], invdyn=True)
+DYNAMICS[CONTACT3_INV] = dataclasses.replace(DYNAMICS[CONTACT3], invdyn=True)
+DYNAMICS[CONTACT6_INV] = dataclasses.replace(DYNAMICS[CONTACT6], invdyn=True)
 
 
 def context(lib, kind: str) -> Context:
@@ -255,6 +263,8 @@ def context(lib, kind: str) -> Context:
     state = lib.StateMultibody(model)
     actuation = lib.ActuationModelFloatingBase(state)
     nu = 0 if spec.impulse else actuation.nu
+    if spec.invdyn:  # the control is (a, f): accelerations, then every contact's force
+        nu = model.nv + spec.nc * len(spec.supports)
     contact_frame = model.getFrameId(spec.supports[0][0]) if spec.supports else model.getFrameId(spec.frame)
     return Context(lib, state, actuation, nu, model.getFrameId(spec.frame), contact_frame, spec.nc)
 
@@ -286,7 +296,11 @@ def dynamics(lib, kind: str, c: Context, costs, constraints):
     with_constraints = () if constraints is None else (constraints,)  # Crocoddyl crashes on None
     if kind == FREE:
         return lib.DifferentialActionModelFreeFwdDynamics(c.state, c.actuation, costs, *with_constraints)
+    if kind == FREE_INV:
+        return lib.DifferentialActionModelFreeInvDynamics(c.state, c.actuation, costs, *with_constraints)
     supports = _supports(lib, c, spec)
+    if spec.invdyn:
+        return lib.DifferentialActionModelContactInvDynamics(c.state, c.actuation, supports, costs, *with_constraints)
     if spec.impulse:
         return lib.ActionModelImpulseFwdDynamics(c.state, supports, costs, *with_constraints, spec.r_coeff,
                                                  spec.inv_damping, True)
@@ -332,8 +346,15 @@ CONTROLLED_RESIDUALS = ("state", "control", "joint_effort", "joint_acceleration"
                         "contact_force", "friction_cone")
 
 
-def crossed(integrator: str, residual: str) -> bool:
-    """Whether the node suite crosses ``integrator`` with ``residual``."""
+#: the inverse-dynamics kinds are crossed with these integrators only (their differential model is what
+#: is new; the Runge-Kutta cases are the slow ones, their Jacobians being proven against numdiff)
+INVDYN_INTEGRATORS = ("euler", "rk4", "euler-poly1", "rk3-poly2rk3")
+
+
+def crossed(integrator: str, residual: str, kind: str | None = None) -> bool:
+    """Whether the node suite crosses ``integrator`` with ``residual`` (under dynamics ``kind``)."""
+    if kind in INVDYN and integrator not in INVDYN_INTEGRATORS:
+        return False
     return "-" not in integrator or residual in CONTROLLED_RESIDUALS
 
 
@@ -409,9 +430,24 @@ def _stack_items(data, prefix: str, costs, constraints, out: dict[str, np.ndarra
         _grab(item.residual, RESIDUAL_FIELDS, f"{prefix}constraint[{name}].residual.", out)
 
 
-def numbers(model, data, costs: tuple[str, ...], constraints=("eq", "eq_running", "ineq")) -> dict[str, np.ndarray]:
+def active_constraints(model) -> tuple[str, ...]:
+    """Names of the active constraint items of a node's (differential) model: the node's ``eq``,
+    ``eq_running`` and ``ineq``, plus those an inverse-dynamics model adds (``tau``, ``<contact>_acc``)."""
+    dam = getattr(model, "differential", model)
+    manager = getattr(dam, "constraints", None)
+    if manager is None:
+        return ()
+    items = manager.constraints
+    names = items.todict() if hasattr(items, "todict") else items
+    return tuple(name for name in names if manager.getConstraintStatus(name))
+
+
+def numbers(model, data, costs: tuple[str, ...], constraints=None) -> dict[str, np.ndarray]:
     """Every number of an evaluated node: the action data, each differential (stage) data and every
-    active cost and constraint item's data (cost, residual, activation), keyed by a readable path."""
+    active cost and constraint item's data (cost, residual, activation), keyed by a readable path
+    (``constraints``: the item names, default :func:`active_constraints`)."""
+    if constraints is None:
+        constraints = active_constraints(model)
     out: dict[str, np.ndarray] = {}
     differential = getattr(data, "differential", None)
     if differential is None:  # an impulse model or a bare differential model

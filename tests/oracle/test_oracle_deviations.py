@@ -79,14 +79,19 @@ def _residual_values(kind: str, residual: str, seed: int) -> dict[str, np.ndarra
         lib + ".Rx": f["cost[quad].residual.Rx"] for lib, f in found.items()}
 
 
-@pytest.mark.parametrize("residual,reference", [("com", "com"), ("centroidal", "centroidal")])
-def test_crocoddyl_value_ignores_the_state_under_free_dynamics(residual, reference):
-    model = om.robot(om.DYNAMICS[om.FREE].robot)
+VALUE_PROOFS = [("com", om.FREE), ("centroidal", om.FREE), ("com", om.FREE_INV), ("centroidal", om.FREE_INV),
+                ("centroidal", om.CONTACT3_INV), ("centroidal", om.CONTACT6_INV)]
+
+
+@pytest.mark.parametrize("reference,kind", VALUE_PROOFS, ids=[f"{r}-{k}" for r, k in VALUE_PROOFS])
+def test_crocoddyl_value_ignores_the_state_under_free_dynamics(reference, kind):
+    residual = reference
+    model = om.robot(om.DYNAMICS[kind].robot)
     spec = om.RESIDUALS[residual]
-    ref = spec.build(crocopy, om.context(crocopy, om.FREE)).reference
+    ref = spec.build(crocopy, om.context(crocopy, kind)).reference
     for seed in (1, 2):
-        got = _residual_values(om.FREE, residual, seed)
-        x, _ = om.sample(om.FREE, 12, seed)
+        got = _residual_values(kind, residual, seed)
+        x, _ = om.sample(kind, 12, seed)
         q, v = x[: model.nq], x[model.nq:]
         data = model.createData()
         if reference == "com":
@@ -147,6 +152,20 @@ def test_terminal_control_dependent_residuals(residual, mine, theirs):
     np.testing.assert_allclose(fresh["crocoddyl"], expected[theirs], atol=1e-9)
     # crocopy never reads an earlier evaluation's control, forces or efforts
     np.testing.assert_allclose(_terminal_residual(crocopy, kind, residual, True), fresh["crocopy"], atol=1e-12)
+
+
+@pytest.mark.parametrize("kind", om.INVDYN)
+def test_terminal_invdyn_joint_acceleration_jacobian(kind):
+    """No control on a terminal node: crocopy's ``Ru`` is zero, Crocoddyl's the identity of its joint data;
+    both values are zero and ``Rx`` agrees."""
+    _, found, _, _ = evaluated(kind, "joint_acceleration", "euler", terminal=True)
+    mine, theirs = found["crocopy"], found["crocoddyl"]
+    key = "differential[0].cost[quad].residual."
+    nv = mine[key + "r"].size
+    np.testing.assert_allclose(mine[key + "Ru"], 0.0)
+    np.testing.assert_allclose(theirs[key + "Ru"][:, :nv], np.eye(nv))
+    np.testing.assert_allclose(mine[key + "r"], theirs[key + "r"], atol=1e-12)
+    np.testing.assert_allclose(mine[key + "Rx"], theirs[key + "Rx"], atol=1e-12)
 
 
 def test_terminal_totals_differ_by_the_joint_effort_cost_only():
