@@ -16,6 +16,8 @@
   starts; time per iteration vs horizon and peak memory (:mod:`crocopy.bench.batch`,
   :mod:`crocopy.bench.scaling`)
 * ``crocopy list``: the bundled problems
+* ``crocopy compile``: compile the numba kernels into numba's on-disk cache now (once after
+  installing), so that the first ``solve`` starts at once; exit status 1 if a kernel is left uncached
 * ``crocopy solve [PROBLEM] [--solver ...] [--maxiter N] [--html FILE] [--plot FILE]``: build a
   problem, solve it with the verbose table, print a summary and write the meshcat animation.
   With no problem it solves the ANYmal jump with Box-FDDP and writes ``jump.html``.
@@ -31,9 +33,10 @@ Exit status: ``0`` success (``solve``: the solver converged), ``1`` ``solve`` ra
 converge, ``2`` usage error (also a missing optional extra, e.g. ``bench --vs`` without Crocoddyl).
 
 Before ``solve`` times the solve, one iteration of the same solver on the same problem loads the
-compiled (numba) kernels; on the first run after installation they are compiled, which takes
-10-20 s and is announced by a ``compiling kernels (first run only) ...`` line.  The reported
-solve time excludes that warm-up.
+compiled (numba) kernels; on the first run after installation (unless ``crocopy compile`` ran) they
+are compiled, which takes 15-25 s and is announced by a ``compiling kernels (first run only) ...``
+line, printed at launch when numba's cache lacks a kernel (:func:`crocopy.kernels.cache_is_cold`)
+and otherwise as soon as a compilation starts.  The reported solve time excludes that warm-up.
 """
 
 from __future__ import annotations
@@ -183,13 +186,17 @@ def _compilations(dispatchers: list) -> int:
     return sum(sum(d.stats.cache_misses.values()) for d in dispatchers)
 
 
-def warm_up_kernels(run: Callable[[], object], dispatchers: list | None = None, poll: float = 0.2) -> float:
+COMPILING_NOTICE = "compiling kernels (first run only) ..."
+
+
+def warm_up_kernels(run: Callable[[], object], dispatchers: list | None = None, poll: float = 0.2,
+                    announced: bool = False) -> float:
     """Call ``run()`` once, announcing on stderr when it compiles kernels; return the seconds compiling took.
 
     While ``run`` executes, a thread polls ``dispatchers`` (default :func:`kernel_dispatchers`)
     every ``poll`` seconds; as soon as one of them compiles a signature instead of loading it from
-    numba's on-disk cache, ``compiling kernels (first run only) ...`` is printed.  Returns the wall
-    time of ``run`` when something was compiled, else ``0.0``.
+    numba's on-disk cache, :data:`COMPILING_NOTICE` is printed (unless ``announced``: the caller
+    printed it already).  Returns the wall time of ``run`` when something was compiled, else ``0.0``.
     """
     dispatchers = kernel_dispatchers() if dispatchers is None else dispatchers
     before = _compilations(dispatchers)
@@ -198,17 +205,19 @@ def warm_up_kernels(run: Callable[[], object], dispatchers: list | None = None, 
     def announce() -> None:
         while not done.wait(poll):
             if _compilations(dispatchers) > before:
-                print("compiling kernels (first run only) ...", file=sys.stderr, flush=True)
+                print(COMPILING_NOTICE, file=sys.stderr, flush=True)
                 return
 
     watcher = threading.Thread(target=announce, daemon=True)
     t0 = time.perf_counter()
-    watcher.start()
+    if not announced:
+        watcher.start()
     try:
         run()
     finally:
         done.set()
-        watcher.join()
+        if not announced:
+            watcher.join()
     elapsed = time.perf_counter() - t0
     if _compilations(dispatchers) == before:
         return 0.0
@@ -217,11 +226,23 @@ def warm_up_kernels(run: Callable[[], object], dispatchers: list | None = None, 
     return elapsed
 
 
+def announce_cold_cache() -> bool:
+    """Print :data:`COMPILING_NOTICE` on stderr now if numba's cache lacks some kernel
+    (:func:`crocopy.kernels.cache_is_cold`: the first solve will compile); True if printed."""
+    from . import kernels
+
+    if not kernels.cache_is_cold():
+        return False
+    print(COMPILING_NOTICE, file=sys.stderr, flush=True)
+    return True
+
+
 def _solve(args: argparse.Namespace) -> int:
     import crocopy
 
     from .problems import registry
 
+    announced = announce_cold_cache()
     spec = registry.get(args.problem)
     problem, xs, us = spec.build(crocopy)
     solver_class = getattr(crocopy, SOLVERS[args.solver])
@@ -232,7 +253,7 @@ def _solve(args: argparse.Namespace) -> int:
         first.solve(xs, us, 1, False)
         solver_class(problem).solve(first.xs, first.us, 1, True)
 
-    warm_up_kernels(one_iteration_each_way)
+    warm_up_kernels(one_iteration_each_way, announced=announced)
     solver = solver_class(problem)
     if not args.quiet:
         solver.setCallbacks([crocopy.CallbackVerbose()])
@@ -262,6 +283,42 @@ def _solve(args: argparse.Namespace) -> int:
 
             print(f"meshcat animation written to {export_html_from_solver(robot, solver, html)}")
     return EXIT_CONVERGED if converged else EXIT_NOT_CONVERGED
+
+
+COMPILE_RUNS = (("jump", ("boxfddp", "fddp", "ddp", "boxddp")), ("pend", ("fddp", "boxfddp")), ("arm", ("fddp",)))
+"""``crocopy compile``'s warm-up solves: problem → solvers (together they call every kernel, with the
+argument types the bundled problems give them)."""
+
+
+def _compile(args: argparse.Namespace) -> int:
+    import crocopy
+
+    from . import kernels
+    from .problems import registry
+
+    if not kernels.available:
+        print("numba is not installed: nothing to compile (the numpy paths run)", file=sys.stderr)
+        return 0
+    announce_cold_cache()
+    compiled_before = _compilations(kernels.KERNELS)
+    t0 = time.perf_counter()
+    for name, solvers in COMPILE_RUNS:
+        problem, xs, us = registry.get(name).build(crocopy)
+        for key in solvers:
+            solver_class = getattr(crocopy, SOLVERS[key])
+            first = solver_class(problem)
+            first.solve(xs, us, 1, False)
+            solver_class(problem).solve(first.xs, first.us, 1, True)
+    new = _compilations(kernels.KERNELS) - compiled_before
+    folders = [str(k._cache._cache_path) for k in kernels.KERNELS if getattr(k, "_cache", None)]
+    where = os.path.commonpath(folders) if folders else "none"
+    print(f"{len(kernels.KERNELS)} kernels ready in {time.perf_counter() - t0:.1f} s ({new} signatures compiled, "
+          f"the others loaded from the cache); cache under {where}")
+    missing = [k.py_func.__qualname__ for k in kernels.KERNELS if not kernels.is_cached(k)]
+    if missing:
+        print(f"not cached (the next run compiles them): {', '.join(missing)}", file=sys.stderr)
+        return 1
+    return 0
 
 
 def _table1(args: argparse.Namespace) -> int:
@@ -472,6 +529,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--runs", type=_positive_int, default=3,
                        help="with --batch/--scaling: repetitions (median reported)")
     command("list", _list, "list the bundled problems")
+    command("compile", _compile, "compile the numba kernels ahead (once after installing; solves then start at once)")
     solve = command("solve", _solve, "solve a problem and write its meshcat animation")
     solve.add_argument("problem", nargs="?", default="jump", help="problem name, see `crocopy list` (default: jump)")
     solve.add_argument("--solver", choices=sorted(SOLVERS), default="boxfddp")
