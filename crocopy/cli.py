@@ -15,6 +15,8 @@
 * ``crocopy bench --batch`` / ``--scaling``: :func:`crocopy.solve_many` speed-up on the quadrotor
   starts; time per iteration vs horizon and peak memory (:mod:`crocopy.bench.batch`,
   :mod:`crocopy.bench.scaling`)
+* ``crocopy bench --latency [--problems P] [--solver S] [--repeats N]``: seconds from launching
+  ``crocopy solve`` to its first iteration line, fresh (empty caches) and warm (:mod:`crocopy.bench.latency`)
 * ``crocopy list``: the bundled problems
 * ``crocopy compile``: compile the numba kernels into numba's on-disk cache now (once after
   installing), so that the first ``solve`` starts at once; exit status 1 if a kernel is left uncached
@@ -44,12 +46,12 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
 
 from . import __version__
+from .kernel_warmup import announce_cold_cache, compile_kernels, warm_up_kernels
 from .solvers import SOLVERS
 
 EXIT_CONVERGED, EXIT_NOT_CONVERGED, EXIT_USAGE = 0, 1, 2
@@ -102,6 +104,12 @@ def _bench(args: argparse.Namespace) -> int:
         return run_compat_cli(args.problems, args.out)
     if args.models:
         return _bench_models(args)
+    if args.latency:
+        from .bench.latency import run_latency_bench
+
+        problem = args.problems[0] if args.problems else "jump"
+        print(run_latency_bench(problem, args.solver, repeats=args.repeats or 3))
+        return 0
     if args.floor:
         from .bench.floor import FLOOR_PROBLEMS, run_floor_bench
 
@@ -166,77 +174,6 @@ def _list(args: argparse.Namespace) -> int:
     return 0
 
 
-def kernel_dispatchers() -> list:
-    """The compiled (numba) kernels of the loaded ``crocopy`` modules (empty without numba)."""
-    try:
-        from numba.core.dispatcher import Dispatcher
-    except ImportError:
-        return []
-    found = {}
-    for name, module in list(sys.modules.items()):
-        if module is not None and (name == "crocopy" or name.startswith("crocopy.")):
-            for value in list(vars(module).values()):
-                if isinstance(value, Dispatcher):
-                    found[id(value)] = value
-    return list(found.values())
-
-
-def _compilations(dispatchers: list) -> int:
-    """Signatures compiled so far (not loaded from numba's cache) by ``dispatchers``."""
-    return sum(sum(d.stats.cache_misses.values()) for d in dispatchers)
-
-
-COMPILING_NOTICE = "compiling kernels (first run only) ..."
-
-
-def warm_up_kernels(run: Callable[[], object], dispatchers: list | None = None, poll: float = 0.2,
-                    announced: bool = False) -> float:
-    """Call ``run()`` once, announcing on stderr when it compiles kernels; return the seconds compiling took.
-
-    While ``run`` executes, a thread polls ``dispatchers`` (default :func:`kernel_dispatchers`)
-    every ``poll`` seconds; as soon as one of them compiles a signature instead of loading it from
-    numba's on-disk cache, :data:`COMPILING_NOTICE` is printed (unless ``announced``: the caller
-    printed it already).  Returns the wall time of ``run`` when something was compiled, else ``0.0``.
-    """
-    dispatchers = kernel_dispatchers() if dispatchers is None else dispatchers
-    before = _compilations(dispatchers)
-    done = threading.Event()
-
-    def announce() -> None:
-        while not done.wait(poll):
-            if _compilations(dispatchers) > before:
-                print(COMPILING_NOTICE, file=sys.stderr, flush=True)
-                return
-
-    watcher = threading.Thread(target=announce, daemon=True)
-    t0 = time.perf_counter()
-    if not announced:
-        watcher.start()
-    try:
-        run()
-    finally:
-        done.set()
-        if not announced:
-            watcher.join()
-    elapsed = time.perf_counter() - t0
-    if _compilations(dispatchers) == before:
-        return 0.0
-    print(f"kernels compiled in {elapsed:.1f} s (cached for the next runs; not counted in the solve time)",
-          file=sys.stderr, flush=True)
-    return elapsed
-
-
-def announce_cold_cache() -> bool:
-    """Print :data:`COMPILING_NOTICE` on stderr now if numba's cache lacks some kernel
-    (:func:`crocopy.kernels.cache_is_cold`: the first solve will compile); True if printed."""
-    from . import kernels
-
-    if not kernels.cache_is_cold():
-        return False
-    print(COMPILING_NOTICE, file=sys.stderr, flush=True)
-    return True
-
-
 def _solve(args: argparse.Namespace) -> int:
     import crocopy
 
@@ -286,39 +223,17 @@ def _solve(args: argparse.Namespace) -> int:
 
 
 COMPILE_RUNS = (("jump", ("boxfddp", "fddp", "ddp", "boxddp")), ("pend", ("fddp", "boxfddp")), ("arm", ("fddp",)))
-"""``crocopy compile``'s warm-up solves: problem → solvers (together they call every kernel, with the
+"""``crocopy compile``'s warm-up solves: problem → solver keys (together they call every kernel, with the
 argument types the bundled problems give them)."""
 
 
 def _compile(args: argparse.Namespace) -> int:
     import crocopy
 
-    from . import kernels
     from .problems import registry
 
-    if not kernels.available:
-        print("numba is not installed: nothing to compile (the numpy paths run)", file=sys.stderr)
-        return 0
-    announce_cold_cache()
-    compiled_before = _compilations(kernels.KERNELS)
-    t0 = time.perf_counter()
-    for name, solvers in COMPILE_RUNS:
-        problem, xs, us = registry.get(name).build(crocopy)
-        for key in solvers:
-            solver_class = getattr(crocopy, SOLVERS[key])
-            first = solver_class(problem)
-            first.solve(xs, us, 1, False)
-            solver_class(problem).solve(first.xs, first.us, 1, True)
-    new = _compilations(kernels.KERNELS) - compiled_before
-    folders = [str(k._cache._cache_path) for k in kernels.KERNELS if getattr(k, "_cache", None)]
-    where = os.path.commonpath(folders) if folders else "none"
-    print(f"{len(kernels.KERNELS)} kernels ready in {time.perf_counter() - t0:.1f} s ({new} signatures compiled, "
-          f"the others loaded from the cache); cache under {where}")
-    missing = [k.py_func.__qualname__ for k in kernels.KERNELS if not kernels.is_cached(k)]
-    if missing:
-        print(f"not cached (the next run compiles them): {', '.join(missing)}", file=sys.stderr)
-        return 1
-    return 0
+    runs = [(registry.get(name).build, [getattr(crocopy, SOLVERS[k]) for k in keys]) for name, keys in COMPILE_RUNS]
+    return compile_kernels(lambda builder: builder(crocopy), runs)
 
 
 def _table1(args: argparse.Namespace) -> int:
@@ -525,6 +440,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--compat", action="store_true",
                        help="Crocoddyl's shipped example scripts and gait builders run with crocopy as crocoddyl, "
                             "next to Crocoddyl's own runs (crocopy.bench.compat; bench extra; --problems selects)")
+    bench.add_argument("--latency", action="store_true",
+                       help="seconds from launching `crocopy solve` to its first iteration line, with empty and "
+                            "with filled caches, and of `import crocopy` (crocopy.bench.latency; first --problems)")
     bench.add_argument("--workers", type=_positive_int, default=2, help="with --batch: worker processes")
     bench.add_argument("--runs", type=_positive_int, default=3,
                        help="with --batch/--scaling: repetitions (median reported)")

@@ -116,7 +116,7 @@ def is_cached(kernel: object) -> bool:
         return False
     try:
         return bool(index._load_index())
-    except (OSError, EOFError, ValueError, TypeError, AttributeError):
+    except Exception:  # noqa: BLE001 - whatever makes the index unreadable makes the cache unusable
         return False
 
 
