@@ -2,8 +2,10 @@
 
 * ``crocopy --version``
 * ``crocopy bench``: solver timings on LQR problems (and Crocoddyl's, when installed)
-* ``crocopy bench --vs crocoddyl [--problems ...] [--repeats N] [--out BENCHMARKS.md]``: crocopy and
-  Crocoddyl side by side on the bundled problems (:mod:`crocopy.bench.side_by_side`)
+* ``crocopy bench --vs crocoddyl [--problems ...] [--shipped [JOB ...]] [--repeats N] [--out BENCHMARKS.md]``:
+  crocopy and Crocoddyl side by side on the bundled problems (:mod:`crocopy.bench.side_by_side`) and on
+  Crocoddyl's own problems built by its example scripts and gait builders (:mod:`crocopy.bench.shipped`);
+  both by default, only the part named when ``--problems`` or ``--shipped`` is given
 * ``crocopy bench --box-parity [--problems ...] [--maxiter N]``: Box-DDP/Box-FDDP iterations and
   final costs next to Crocoddyl's, each library's self-sensitivity to a perturbed guess, a one-step
   replay of Crocoddyl's iterations and a verdict per row, and the box-QP backward-pass overhead
@@ -44,6 +46,7 @@ and otherwise as soon as a compilation starts.  The reported solve time excludes
 from __future__ import annotations
 
 import argparse
+import functools
 import os
 import sys
 import time
@@ -128,15 +131,28 @@ def _bench(args: argparse.Namespace) -> int:
 
 
 def _bench_vs(args: argparse.Namespace) -> int:
+    from .bench.shipped import run_shipped
     from .bench.side_by_side import BenchDependencyError, run_vs
 
+    builders = args.problems is not None or args.shipped is None
+    shipped = args.shipped is not None or args.problems is None
+    progress = functools.partial(print, file=sys.stderr, flush=True)
+    parts = []
     try:
-        report = run_vs(args.problems, solver_name=args.solver, repeats=args.repeats or 5, maxiter=args.maxiter or None,
-                        solve_budget=args.solve_budget, memory=not args.no_memory,
-                        progress=lambda line: print(line, file=sys.stderr, flush=True))
+        if shipped and args.shipped:
+            from .bench.compat import jobs
+
+            jobs(args.shipped)  # unknown names are refused before any work
+        if builders:
+            parts.append(run_vs(args.problems, solver_name=args.solver, repeats=args.repeats or 5,
+                                maxiter=args.maxiter or None, solve_budget=args.solve_budget,
+                                memory=not args.no_memory, progress=progress))
+        if shipped:
+            parts.append(run_shipped(args.shipped, repeats=args.repeats or 3, progress=progress))
     except (BenchDependencyError, KeyError) as exc:
         print(exc.args[0], file=sys.stderr)
         return 2
+    report = "\n".join(parts)
     print(report)
     if args.out:
         with open(args.out, "w", encoding="utf-8") as f:
@@ -420,6 +436,10 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--vs", choices=["crocoddyl"], default=None,
                        help="side-by-side run on the bundled problems against Crocoddyl (needs the bench extra)")
     bench.add_argument("--problems", nargs="+", default=None, help="with --vs: problems (default: Table I, walk, arm)")
+    bench.add_argument("--shipped", nargs="*", default=None, metavar="JOB",
+                       help="with --vs: Crocoddyl's own problems, built by its example scripts and utils gaits with "
+                            "crocopy in its place (crocopy.bench.shipped; default jobs without names). Without "
+                            "--problems and --shipped both parts run; with one of them, only that part")
     bench.add_argument("--solver", choices=sorted(SOLVERS), default="boxfddp", help="with --vs: the solver")
     bench.add_argument("--maxiter", type=_positive_int, default=None,
                        help="with --vs: iteration limit (default: the problem's)")

@@ -9,6 +9,8 @@ import sys
 import time
 from contextlib import redirect_stdout
 
+import pytest
+
 import crocopy
 from crocopy.bench import latency
 from crocopy.problems import registry
@@ -34,7 +36,7 @@ def test_a_launch_is_timed_to_its_first_iteration_line_then_stopped(tmp_path):
               f"pathlib.Path({str(marker)!r}).write_text('x')\n")
     launch = latency.time_first_iteration([sys.executable, "-c", script], os.environ)
     assert launch.notice is not None and launch.first_iteration is not None
-    assert launch.notice <= launch.first_iteration
+    assert launch.notice <= launch.first_iteration and launch.cpu is not None
     assert launch.output == ["compiling kernels (first run only) ...", "iter cost", "   0  1.000e+00  2.000e+00"]
     time.sleep(1.5)
     assert not marker.exists()  # killed at the line, before it could go on
@@ -60,3 +62,14 @@ def test_report_gives_medians_and_every_sample():
 def test_the_console_script_of_this_environment_is_used():
     command = latency.crocopy_command()
     assert command[0].startswith(os.path.dirname(sys.executable))
+
+
+def test_cpu_seconds_of_a_running_process_and_of_none():
+    spent = latency.cpu_seconds(os.getpid())
+    if spent is None:
+        pytest.skip("no /proc on this system")
+    burn = time.process_time() + 0.3
+    while time.process_time() < burn:
+        pass
+    assert latency.cpu_seconds(os.getpid()) >= spent + 0.25
+    assert latency.cpu_seconds(2**22 + 12345) is None

@@ -8,6 +8,9 @@ and the first line of the verbose table (iteration 0):
   (``CROCOPY_CACHE_DIR``: parsed robot models) point to new empty folders, as after installing;
 * **warm**: the same folders again, filled by the fresh run.
 
+Besides the wall time, the CPU seconds the process had used when the line came (read from
+``/proc``) are reported: on a shared machine they move less with the load.
+
 The process is stopped once the line is seen.  A third subprocess per round times
 ``python -c "import crocopy"``.  The rounds interleave the three, and the report gives their
 medians and every sample (the machine's load moves them; the load average is printed).
@@ -34,11 +37,22 @@ NOTICE = "compiling kernels"
 
 @dataclasses.dataclass
 class Launch:
-    """Seconds from a launch to the first iteration line (None if it never came) and to the compile notice."""
+    """Seconds from a launch to the first iteration line (None if it never came) and to the compile notice;
+    the CPU seconds the process had used when the line came (None where ``/proc`` does not tell)."""
 
     first_iteration: float | None
     notice: float | None
     output: list[str]
+    cpu: float | None = None
+
+
+def cpu_seconds(pid: int) -> float | None:
+    """User + system CPU seconds used so far by process ``pid`` (Linux ``/proc``; None elsewhere)."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except OSError:
+        return None
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
 def crocopy_command() -> list[str]:
@@ -62,6 +76,7 @@ def time_first_iteration(argv: Sequence[str], env: Mapping[str, str], timeout: f
                     launch.notice = elapsed
                 if ITERATION_LINE.match(line):
                     launch.first_iteration = elapsed
+                    launch.cpu = cpu_seconds(proc.pid)
                     break
                 if elapsed > timeout:
                     break
@@ -86,8 +101,8 @@ def measure(problem: str = "jump", solver: str = "boxfddp", repeats: int = 3,
     """``repeats`` rounds of (fresh launch, warm launch, import): the samples in seconds, by kind."""
     base = {**(os.environ if env is None else env), "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
     argv = [*crocopy_command(), "solve", problem, "--solver", solver, "--no-html"]
-    samples: dict[str, list[float | None]] = {"fresh": [], "fresh notice": [], "warm": [], "warm notice": [],
-                                              "import crocopy": []}
+    samples: dict[str, list[float | None]] = {"fresh": [], "fresh notice": [], "fresh CPU": [], "warm": [],
+                                              "warm notice": [], "warm CPU": [], "import crocopy": []}
     for r in range(repeats):
         with tempfile.TemporaryDirectory(prefix="crocopy-latency-cache-") as cache:
             env_r = {**base, "NUMBA_CACHE_DIR": os.path.join(cache, "numba"),
@@ -99,6 +114,7 @@ def measure(problem: str = "jump", solver: str = "boxfddp", repeats: int = 3,
                     raise RuntimeError(f"{' '.join(argv)} printed no iteration line; its output ended with:\n{tail}")
                 samples[kind].append(launch.first_iteration)
                 samples[f"{kind} notice"].append(launch.notice)
+                samples[f"{kind} CPU"].append(launch.cpu)
         samples["import crocopy"].append(time_import(base))
         if progress is not None:
             progress(f"round {r + 1}: " + ", ".join(f"{k} {_s(v[-1])}" for k, v in samples.items()))
@@ -113,7 +129,8 @@ def format_report(samples: Mapping[str, Sequence[float | None]], problem: str, s
     """Markdown table: median and samples (seconds) of each kind."""
     load = os.getloadavg()
     lines = [f"## Launch to first iteration line: `crocopy solve {problem} --solver {solver} --no-html`", "",
-             f"Seconds from the launch; medians of interleaved rounds (load average {load[0]:.2f} at the end).", "",
+             f"Seconds from the launch (CPU: seconds of CPU the process had used by then); medians of "
+             f"interleaved rounds (load average {load[0]:.2f} at the end).", "",
              "| measure | median s | samples s |", "|---|---|---|"]
     for kind, values in samples.items():
         seen = [v for v in values if v is not None]
