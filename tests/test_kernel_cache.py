@@ -105,3 +105,16 @@ def test_crocopy_compile_fills_an_empty_cache_then_solve_compiles_nothing(tmp_pa
     solve = subprocess.run([CROCOPY, "solve", "jump", "--maxiter", "2", "--quiet", "--no-html"],
                            capture_output=True, text=True, env=env, cwd=tmp_path)
     assert solve.returncode in (0, 1) and "compiling" not in solve.stderr
+
+
+def test_without_any_writable_cache_folder_the_kernel_still_compiles(monkeypatch, tmp_path, caplog):
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    monkeypatch.setattr(kernels, "KERNELS", [])
+    monkeypatch.setattr(kernels, "cache_dir", str(blocker / "numba"))  # below a file: cannot be created
+    monkeypatch.setattr(numba.config, "CACHE_LOCATOR_CLASSES", "UserProvidedCacheLocator", raising=False)
+    with caplog.at_level("WARNING", logger="crocopy"):
+        kernel = kernels.compiled(_twice)
+    assert kernel(4.0) == 8.0 and kernels.KERNELS == [kernel]
+    assert "_twice: compiled in every process, not cached" in caplog.text
+    assert not kernels.is_cached(kernel) and kernels.cache_is_cold()
