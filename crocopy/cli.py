@@ -2,8 +2,10 @@
 
 * ``crocopy --version``
 * ``crocopy bench``: solver timings on LQR problems (and Crocoddyl's, when installed)
-* ``crocopy bench --vs crocoddyl [--problems ...] [--repeats N] [--out BENCHMARKS.md]``: crocopy and
-  Crocoddyl side by side on the bundled problems (:mod:`crocopy.bench.side_by_side`)
+* ``crocopy bench --vs crocoddyl [--problems ...] [--shipped [JOB ...]] [--repeats N] [--out BENCHMARKS.md]``:
+  crocopy and Crocoddyl side by side on the bundled problems (:mod:`crocopy.bench.side_by_side`) and on
+  Crocoddyl's own problems built by its example scripts and gait builders (:mod:`crocopy.bench.shipped`);
+  both by default, only the part named when ``--problems`` or ``--shipped`` is given
 * ``crocopy bench --box-parity [--problems ...] [--maxiter N]``: Box-DDP/Box-FDDP iterations and
   final costs next to Crocoddyl's, each library's self-sensitivity to a perturbed guess, a one-step
   replay of Crocoddyl's iterations and a verdict per row, and the box-QP backward-pass overhead
@@ -15,7 +17,11 @@
 * ``crocopy bench --batch`` / ``--scaling``: :func:`crocopy.solve_many` speed-up on the quadrotor
   starts; time per iteration vs horizon and peak memory (:mod:`crocopy.bench.batch`,
   :mod:`crocopy.bench.scaling`)
+* ``crocopy bench --latency [--problems P] [--solver S] [--repeats N]``: seconds from launching
+  ``crocopy solve`` to its first iteration line, fresh (empty caches) and warm (:mod:`crocopy.bench.latency`)
 * ``crocopy list``: the bundled problems
+* ``crocopy compile``: compile the numba kernels into numba's on-disk cache now (once after
+  installing), so that the first ``solve`` starts at once; exit status 1 if a kernel is left uncached
 * ``crocopy solve [PROBLEM] [--solver ...] [--maxiter N] [--html FILE] [--plot FILE]``: build a
   problem, solve it with the verbose table, print a summary and write the meshcat animation.
   With no problem it solves the ANYmal jump with Box-FDDP and writes ``jump.html``.
@@ -31,22 +37,24 @@ Exit status: ``0`` success (``solve``: the solver converged), ``1`` ``solve`` ra
 converge, ``2`` usage error (also a missing optional extra, e.g. ``bench --vs`` without Crocoddyl).
 
 Before ``solve`` times the solve, one iteration of the same solver on the same problem loads the
-compiled (numba) kernels; on the first run after installation they are compiled, which takes
-10-20 s and is announced by a ``compiling kernels (first run only) ...`` line.  The reported
-solve time excludes that warm-up.
+compiled (numba) kernels; on the first run after installation (unless ``crocopy compile`` ran) they
+are compiled, which takes 15-25 s and is announced by a ``compiling kernels (first run only) ...``
+line, printed at launch when numba's cache lacks a kernel (:func:`crocopy.kernels.cache_is_cold`)
+and otherwise as soon as a compilation starts.  The reported solve time excludes that warm-up.
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import os
 import sys
-import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
 
 from . import __version__
+from .kernel_warmup import announce_cold_cache, compile_kernels, warm_up_kernels
 from .solvers import SOLVERS
 
 EXIT_CONVERGED, EXIT_NOT_CONVERGED, EXIT_USAGE = 0, 1, 2
@@ -99,6 +107,12 @@ def _bench(args: argparse.Namespace) -> int:
         return run_compat_cli(args.problems, args.out)
     if args.models:
         return _bench_models(args)
+    if args.latency:
+        from .bench.latency import run_latency_bench
+
+        problem = args.problems[0] if args.problems else "jump"
+        print(run_latency_bench(problem, args.solver, repeats=args.repeats or 3))
+        return 0
     if args.floor:
         from .bench.floor import FLOOR_PROBLEMS, run_floor_bench
 
@@ -117,15 +131,28 @@ def _bench(args: argparse.Namespace) -> int:
 
 
 def _bench_vs(args: argparse.Namespace) -> int:
+    from .bench.shipped import run_shipped
     from .bench.side_by_side import BenchDependencyError, run_vs
 
+    builders = args.problems is not None or args.shipped is None
+    shipped = args.shipped is not None or args.problems is None
+    progress = functools.partial(print, file=sys.stderr, flush=True)
+    parts = []
     try:
-        report = run_vs(args.problems, solver_name=args.solver, repeats=args.repeats or 5, maxiter=args.maxiter or None,
-                        solve_budget=args.solve_budget, memory=not args.no_memory,
-                        progress=lambda line: print(line, file=sys.stderr, flush=True))
+        if shipped and args.shipped:
+            from .bench.compat import jobs
+
+            jobs(args.shipped)  # unknown names are refused before any work
+        if builders:
+            parts.append(run_vs(args.problems, solver_name=args.solver, repeats=args.repeats or 5,
+                                maxiter=args.maxiter or None, solve_budget=args.solve_budget,
+                                memory=not args.no_memory, progress=progress))
+        if shipped:
+            parts.append(run_shipped(args.shipped, repeats=args.repeats or 3, progress=progress))
     except (BenchDependencyError, KeyError) as exc:
         print(exc.args[0], file=sys.stderr)
         return 2
+    report = "\n".join(parts)
     print(report)
     if args.out:
         with open(args.out, "w", encoding="utf-8") as f:
@@ -163,65 +190,12 @@ def _list(args: argparse.Namespace) -> int:
     return 0
 
 
-def kernel_dispatchers() -> list:
-    """The compiled (numba) kernels of the loaded ``crocopy`` modules (empty without numba)."""
-    try:
-        from numba.core.dispatcher import Dispatcher
-    except ImportError:
-        return []
-    found = {}
-    for name, module in list(sys.modules.items()):
-        if module is not None and (name == "crocopy" or name.startswith("crocopy.")):
-            for value in list(vars(module).values()):
-                if isinstance(value, Dispatcher):
-                    found[id(value)] = value
-    return list(found.values())
-
-
-def _compilations(dispatchers: list) -> int:
-    """Signatures compiled so far (not loaded from numba's cache) by ``dispatchers``."""
-    return sum(sum(d.stats.cache_misses.values()) for d in dispatchers)
-
-
-def warm_up_kernels(run: Callable[[], object], dispatchers: list | None = None, poll: float = 0.2) -> float:
-    """Call ``run()`` once, announcing on stderr when it compiles kernels; return the seconds compiling took.
-
-    While ``run`` executes, a thread polls ``dispatchers`` (default :func:`kernel_dispatchers`)
-    every ``poll`` seconds; as soon as one of them compiles a signature instead of loading it from
-    numba's on-disk cache, ``compiling kernels (first run only) ...`` is printed.  Returns the wall
-    time of ``run`` when something was compiled, else ``0.0``.
-    """
-    dispatchers = kernel_dispatchers() if dispatchers is None else dispatchers
-    before = _compilations(dispatchers)
-    done = threading.Event()
-
-    def announce() -> None:
-        while not done.wait(poll):
-            if _compilations(dispatchers) > before:
-                print("compiling kernels (first run only) ...", file=sys.stderr, flush=True)
-                return
-
-    watcher = threading.Thread(target=announce, daemon=True)
-    t0 = time.perf_counter()
-    watcher.start()
-    try:
-        run()
-    finally:
-        done.set()
-        watcher.join()
-    elapsed = time.perf_counter() - t0
-    if _compilations(dispatchers) == before:
-        return 0.0
-    print(f"kernels compiled in {elapsed:.1f} s (cached for the next runs; not counted in the solve time)",
-          file=sys.stderr, flush=True)
-    return elapsed
-
-
 def _solve(args: argparse.Namespace) -> int:
     import crocopy
 
     from .problems import registry
 
+    announced = announce_cold_cache()
     spec = registry.get(args.problem)
     problem, xs, us = spec.build(crocopy)
     solver_class = getattr(crocopy, SOLVERS[args.solver])
@@ -232,7 +206,7 @@ def _solve(args: argparse.Namespace) -> int:
         first.solve(xs, us, 1, False)
         solver_class(problem).solve(first.xs, first.us, 1, True)
 
-    warm_up_kernels(one_iteration_each_way)
+    warm_up_kernels(one_iteration_each_way, announced=announced)
     solver = solver_class(problem)
     if not args.quiet:
         solver.setCallbacks([crocopy.CallbackVerbose()])
@@ -262,6 +236,20 @@ def _solve(args: argparse.Namespace) -> int:
 
             print(f"meshcat animation written to {export_html_from_solver(robot, solver, html)}")
     return EXIT_CONVERGED if converged else EXIT_NOT_CONVERGED
+
+
+COMPILE_RUNS = (("jump", ("boxfddp", "fddp", "ddp", "boxddp")), ("pend", ("fddp", "boxfddp")), ("arm", ("fddp",)))
+"""``crocopy compile``'s warm-up solves: problem → solver keys (together they call every kernel, with the
+argument types the bundled problems give them)."""
+
+
+def _compile(args: argparse.Namespace) -> int:
+    import crocopy
+
+    from .problems import registry
+
+    runs = [(registry.get(name).build, [getattr(crocopy, SOLVERS[k]) for k in keys]) for name, keys in COMPILE_RUNS]
+    return compile_kernels(lambda builder: builder(crocopy), runs)
 
 
 def _table1(args: argparse.Namespace) -> int:
@@ -448,6 +436,10 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--vs", choices=["crocoddyl"], default=None,
                        help="side-by-side run on the bundled problems against Crocoddyl (needs the bench extra)")
     bench.add_argument("--problems", nargs="+", default=None, help="with --vs: problems (default: Table I, walk, arm)")
+    bench.add_argument("--shipped", nargs="*", default=None, metavar="JOB",
+                       help="with --vs: Crocoddyl's own problems, built by its example scripts and utils gaits with "
+                            "crocopy in its place (crocopy.bench.shipped; default jobs without names). Without "
+                            "--problems and --shipped both parts run; with one of them, only that part")
     bench.add_argument("--solver", choices=sorted(SOLVERS), default="boxfddp", help="with --vs: the solver")
     bench.add_argument("--maxiter", type=_positive_int, default=None,
                        help="with --vs: iteration limit (default: the problem's)")
@@ -468,10 +460,14 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--compat", action="store_true",
                        help="Crocoddyl's shipped example scripts and gait builders run with crocopy as crocoddyl, "
                             "next to Crocoddyl's own runs (crocopy.bench.compat; bench extra; --problems selects)")
+    bench.add_argument("--latency", action="store_true",
+                       help="seconds from launching `crocopy solve` to its first iteration line, with empty and "
+                            "with filled caches, and of `import crocopy` (crocopy.bench.latency; first --problems)")
     bench.add_argument("--workers", type=_positive_int, default=2, help="with --batch: worker processes")
     bench.add_argument("--runs", type=_positive_int, default=3,
                        help="with --batch/--scaling: repetitions (median reported)")
     command("list", _list, "list the bundled problems")
+    command("compile", _compile, "compile the numba kernels ahead (once after installing; solves then start at once)")
     solve = command("solve", _solve, "solve a problem and write its meshcat animation")
     solve.add_argument("problem", nargs="?", default="jump", help="problem name, see `crocopy list` (default: jump)")
     solve.add_argument("--solver", choices=sorted(SOLVERS), default="boxfddp")

@@ -30,8 +30,13 @@ by :func:`crocopy.solve_many` under the ``spawn``/``forkserver`` start methods) 
 default.  Without numba, :data:`available` is False, the kernel functions stay plain Python (never
 called by the library) and ``set_kernels(True)`` raises.
 
-Kernels are compiled with ``numba.njit(cache=True)``: the machine code is cached beside the
-sources (``__pycache__``) and loaded, not recompiled, by later processes.
+Kernels are compiled with ``numba.njit(cache=True)``: the machine code is cached on disk and
+loaded, not recompiled, by later processes.  The cache is numba's: ``NUMBA_CACHE_DIR`` when set,
+else beside the sources (``__pycache__``); when crocopy's folder is read-only (a system install) and
+``NUMBA_CACHE_DIR`` is unset, it is crocopy's user cache folder
+(:func:`crocopy.user_cache.user_cache_dir` ``/ "numba"``).  :func:`cache_is_cold` tells, without
+compiling anything, whether some kernel has nothing usable in that cache (a fresh install, a new
+numba, an edited kernel); ``crocopy compile`` fills it ahead of the first solve.
 
 A subclass that overrides a step a kernel fuses (a solver's ``computeGains``, a multibody state's
 ``integrate``, an activation's ``calc``) keeps its override: that step then runs in Python/numpy.
@@ -43,9 +48,12 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import os
 from collections.abc import Callable, Iterable, Iterator
 
 import numpy as np
+
+from .user_cache import user_cache_dir
 
 try:
     import numba
@@ -62,10 +70,60 @@ through :func:`set_kernels` / :func:`use_kernels`."""
 _logged: set[tuple[type, str]] = set()
 logger = logging.getLogger("crocopy")
 
+KERNELS: list = []
+"""Every kernel made by :func:`compiled` (numba dispatchers), in the order the modules defined them."""
+
+
+def cache_dir_fallback(package_dir: str, numba_cache_dir: str) -> str:
+    """The folder numba should cache crocopy's kernels in: ``numba_cache_dir`` (``NUMBA_CACHE_DIR``) when
+    set, else ``""`` (numba's default, beside the sources) when ``package_dir`` is writable, else
+    :func:`~crocopy.user_cache.user_cache_dir` ``/ "numba"``."""
+    if numba_cache_dir or os.access(package_dir, os.W_OK):
+        return numba_cache_dir
+    return str(user_cache_dir("numba"))
+
+
+cache_dir: str = cache_dir_fallback(os.path.dirname(__file__), numba.config.CACHE_DIR) if available else ""
+"""Where :func:`compiled` caches the kernels (``""``: beside the sources), see :func:`cache_dir_fallback`."""
+
 
 def compiled(function: Callable) -> Callable:
-    """``numba.njit(cache=True)(function)``, or ``function`` itself without numba."""
-    return numba.njit(cache=True)(function) if available else function
+    """``numba.njit(cache=True)(function)`` cached in :data:`cache_dir` and registered in :data:`KERNELS`;
+    ``function`` itself without numba.  Where no folder can be written at all, the kernel is compiled
+    in every process (uncached) and a warning is logged."""
+    if not available:
+        return function
+    previous = numba.config.CACHE_DIR
+    numba.config.CACHE_DIR = cache_dir  # read by numba when the decorator picks the cache folder
+    try:
+        kernel = numba.njit(cache=True)(function)
+    except RuntimeError as exc:  # numba found no writable cache folder
+        logger.warning("%s: compiled in every process, not cached (%s)", function.__qualname__, exc)
+        kernel = numba.njit(cache=False)(function)
+    finally:
+        numba.config.CACHE_DIR = previous
+    KERNELS.append(kernel)
+    return kernel
+
+
+def is_cached(kernel: object) -> bool:
+    """True when numba's on-disk cache holds a usable index for ``kernel``: one written by this numba
+    for the kernel's current source, listing at least one compiled signature.  Nothing is compiled
+    or loaded; a dispatcher without a cache counts as not cached."""
+    cache = getattr(kernel, "_cache", None)
+    index = getattr(cache, "_cache_file", None)
+    if index is None:
+        return False
+    try:
+        return bool(index._load_index())
+    except Exception:  # noqa: BLE001 - whatever makes the index unreadable makes the cache unusable
+        return False
+
+
+def cache_is_cold(kernels: Iterable[object] | None = None) -> bool:
+    """True when some kernel (default: every one in :data:`KERNELS`) is not :func:`is_cached`, i.e. the
+    first solve will compile.  False without numba."""
+    return available and not all(is_cached(k) for k in (KERNELS if kernels is None else kernels))
 
 
 def kernels_enabled() -> bool:

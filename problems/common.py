@@ -31,9 +31,10 @@ from collections.abc import Mapping, Sequence
 from functools import cache
 from types import ModuleType
 
-import example_robot_data
 import numpy as np
 import pinocchio as pin
+
+from .model_cache import load_model_cached
 
 DEFAULT_WEIGHTS: dict[str, float] = {
     "state": 1e1,
@@ -50,11 +51,12 @@ DEFAULT_WEIGHTS: dict[str, float] = {
 
 @cache
 def _load(name: str) -> pin.Model:
-    return example_robot_data.load(name).model
+    return load_model_cached(name)
 
 
 def load_model(name: str) -> pin.Model:
-    """A fresh copy of example-robot-data's model ``name`` (the URDF is parsed once per process)."""
+    """A fresh copy of example-robot-data's model ``name`` (read once per process, from
+    :mod:`.model_cache`'s file when there is one)."""
     return pin.Model(_load(name))
 
 

@@ -119,13 +119,18 @@ def bind_crocopy(folder: pathlib.Path) -> None:
     spec.loader.exec_module(module)
 
 
-def record_solves(lib: Any, sink: list[dict[str, Any]]) -> None:
+def record_solves(lib: Any, sink: list[dict[str, Any]], calls: list[tuple] | None = None) -> None:
     """Wrap every solver class's ``solve`` to append ``{solver, iter, cost, converged}`` to ``sink``
-    (outermost calls only, so a solver calling its base class's ``solve`` is counted once)."""
+    (outermost calls only, so a solver calling its base class's ``solve`` is counted once).
+
+    With ``calls``, also append ``(solver, args, kwargs)`` of each outermost call, the arrays among
+    the arguments (and in lists of them) copied as they were passed, so that the call can be replayed."""
     depth = [0]
 
     def wrap(original: Callable) -> Callable:
         def solve(self, *args, **kwargs):
+            if depth[0] == 0 and calls is not None:
+                calls.append((self, _copied(args), {k: _copied(v) for k, v in kwargs.items()}))
             depth[0] += 1
             try:
                 converged = original(self, *args, **kwargs)
@@ -142,6 +147,13 @@ def record_solves(lib: Any, sink: list[dict[str, Any]]) -> None:
         cls = getattr(lib, name, None)
         if name.startswith("Solver") and isinstance(cls, type) and "solve" in cls.__dict__:
             cls.solve = wrap(cls.__dict__["solve"])
+
+
+def _copied(value: Any) -> Any:
+    """``value`` with its numpy arrays copied (also inside lists and tuples)."""
+    if isinstance(value, (list, tuple)):
+        return type(value)(_copied(v) for v in value)
+    return value.copy() if hasattr(value, "copy") and hasattr(value, "shape") else value
 
 
 def solve_gait(name: str) -> None:
@@ -185,6 +197,17 @@ def first_error_line(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {message[0]}" if message else type(exc).__name__
 
 
+def execute_job(job: str, folder: pathlib.Path) -> None:
+    """Run ``job`` in this process: a gait of :data:`GAITS` (:func:`solve_gait`), else the wheel's example
+    script ``job`` as ``__main__``."""
+    if job in GAITS:
+        solve_gait(job)
+    else:
+        script = folder / "examples" / f"{job}.py"
+        sys.argv = [str(script)]
+        runpy.run_path(str(script), run_name="__main__")
+
+
 def run_child(library: str, job: str, result_file: str) -> int:
     """Run one job with one library in this process and write its :class:`RunResult` as JSON."""
     folder = crocoddyl_folder()
@@ -198,12 +221,7 @@ def run_child(library: str, job: str, result_file: str) -> int:
     record_solves(crocoddyl, result.solves)
     start = time.perf_counter()
     try:
-        if job in GAITS:
-            solve_gait(job)
-        else:
-            script = folder / "examples" / f"{job}.py"
-            sys.argv = [str(script)]
-            runpy.run_path(str(script), run_name="__main__")
+        execute_job(job, folder)
         result.ok = True
     except SystemExit as exc:
         result.ok = exc.code in (None, 0)
