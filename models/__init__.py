@@ -8,6 +8,8 @@ from .actuations import (
     ThrusterType,
 )
 from .cones import CoPSupport, FrictionCone, WrenchCone
+from .contact_1d import ContactData1D, ContactModel1D
+from .contact_2d import ContactData2D, ContactModel2D
 from .contact_base import ContactDataAbstract, ContactModelAbstract
 from .contact_fwd_dynamics import DifferentialActionDataContactFwdDynamics, DifferentialActionModelContactFwdDynamics
 from .contact_multiple import ContactDataMultiple, ContactItem, ContactModelMultiple
@@ -64,6 +66,10 @@ __all__ = [
     "CoPSupport",
     "FrictionCone",
     "WrenchCone",
+    "ContactData1D",
+    "ContactData2D",
+    "ContactModel1D",
+    "ContactModel2D",
     "ContactDataAbstract",
     "ContactModelAbstract",
     "DifferentialActionDataContactFwdDynamics",

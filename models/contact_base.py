@@ -42,7 +42,7 @@ class ContactModelAbstract(ForceModelAbstract):
     state : StateMultibody
         Multibody state.
     type : pinocchio.ReferenceFrame
-        Coordinates of ``Jc``, ``a0`` and ``f``: ``LOCAL`` or ``LOCAL_WORLD_ALIGNED``.
+        Coordinates of ``Jc``, ``a0`` and ``f``: ``LOCAL`` or ``LOCAL_WORLD_ALIGNED`` (``WORLD``: the same).
     nc : int
         Contact dimension.
     nu : int, optional

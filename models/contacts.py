@@ -6,8 +6,8 @@ gains:
 
 - 3D, LOCAL: ``Jc = Jl``, ``a0 = al + w × vl + kp Rᵀ(p - xref) + kd vl`` (classical acceleration).
 - 6D, LOCAL: ``Jc = J``, ``a0 = a + kp log6(prefᵀ oMf) + kd v``.
-- LOCAL_WORLD_ALIGNED: the same quantities rotated by ``R`` (each 3-block), so that
-  ``a0 = R a0_local`` and ``da0/dq = R da0_local/dq - R [a0_local]× Ja``.
+- LOCAL_WORLD_ALIGNED (and WORLD, which Crocoddyl treats alike): the same quantities rotated by ``R``
+  (each 3-block), so that ``a0 = R a0_local`` and ``da0/dq = R da0_local/dq - R [a0_local]× Ja``.
 
 The force maps (``f_local``, ``fext``, the RNEA correction in LOCAL_WORLD_ALIGNED) are those of
 :class:`~crocopy.models.force_base.FrameForce`.  The reference and the gains change through their
@@ -24,7 +24,7 @@ from crocopy.state import StateAbstract
 from crocopy.versioning import frozen_copy, touch
 
 from .contact_base import ContactDataAbstract, ContactModelAbstract, check_gains
-from .force_base import FrameForce, frame_id
+from .force_base import FrameForce, frame_id, world_aligned
 
 _LOCAL = pin.LOCAL
 _skew = pin.skew
@@ -71,7 +71,8 @@ class _FrameContact(FrameForce, ContactModelAbstract):
         model = self.state.pinocchio
         frame = model.frames[self.id]
         rigid = pin.RigidConstraintModel(
-            self._rigid_kind, model, frame.parentJoint, frame.placement, 0, self._reference_placement(), self.type
+            self._rigid_kind, model, frame.parentJoint, frame.placement, 0, self._reference_placement(),
+            world_aligned(self.type),
         )
         params = rigid.m_baumgarte_parameters
         params.Kp = params.Kp * 0.0 + self._gains[0]
@@ -92,7 +93,7 @@ class ContactModel3D(_FrameContact):
     xref : array_like, shape (3,)
         Contact position in the world, used by the Baumgarte position term.
     type : pinocchio.ReferenceFrame
-        ``pinocchio.LOCAL`` or ``pinocchio.LOCAL_WORLD_ALIGNED``.
+        ``pinocchio.LOCAL``, ``pinocchio.LOCAL_WORLD_ALIGNED`` or ``pinocchio.WORLD`` (as ``LOCAL_WORLD_ALIGNED``).
     nu : int, optional
         Control dimension (default ``state.nv``).
     gains : array_like, shape (2,)

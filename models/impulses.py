@@ -33,7 +33,8 @@ class _ImpulseFrame(ImpulseModelAbstract):
     frame : int or str
         Impulse frame (index or name).
     type : pinocchio.ReferenceFrame
-        ``pinocchio.LOCAL`` (default) or ``pinocchio.LOCAL_WORLD_ALIGNED``.
+        ``pinocchio.LOCAL`` (default), ``pinocchio.LOCAL_WORLD_ALIGNED`` or ``pinocchio.WORLD`` (the same
+        as ``LOCAL_WORLD_ALIGNED``, as in Crocoddyl).
     """
 
     _frame_nc: int
