@@ -134,6 +134,7 @@ class ContactModel1D(FrameForce, ContactModelAbstract):
         data.fJf[:] = point.fJf
         data.v = point.v
         data.oRf[:] = point.R
+        data.row[:] = self._row
         np.dot(self._row, point.Jc, out=data.Jc)
         np.dot(self._row, point.a0, out=data.a0)
 
@@ -147,7 +148,8 @@ class ContactModel1D(FrameForce, ContactModelAbstract):
         np.dot(self._row, point.da0_dx, out=data.da0_dx)
 
     def storeForce(self, data: "ContactData1D", force: np.ndarray) -> None:
-        """Store ``force (1,)`` as ``f = (0, 0, λ, 0, 0, 0)`` (``f_local``/``fext`` wait for :meth:`updateJointForce`)."""
+        """Store ``force (1,)`` as ``f = (0, 0, λ, 0, 0, 0)`` (``f_local``/``fext`` wait for
+        :meth:`updateJointForce`)."""
         data.f.linear = data.axis * force[0]
 
     def updateJointForce(self, data: "ContactData1D") -> None:
@@ -165,7 +167,8 @@ class ContactModel1D(FrameForce, ContactModelAbstract):
 
 class ContactData1D(ContactDataAbstract):
     """Data of :class:`ContactModel1D`: ``point`` (the data of the underlying 3D point contact, whose
-    ``a0_local``, ``da0_local_dx``, ``dp`` and ``dp_local`` are also exposed here) and ``oRf``."""
+    ``a0_local``, ``da0_local_dx``, ``dp`` and ``dp_local`` are also exposed here), ``oRf`` and ``row``
+    (``e_zᵀ Raxis`` at the last ``calc``)."""
 
     force_rows = (2,)
 
@@ -174,6 +177,11 @@ class ContactData1D(ContactDataAbstract):
         self.point = model._point.createData(data)
         self.oRf = np.eye(3)
         self.axis = np.array([0.0, 0.0, 1.0])
+        self.row = model._row.copy()
+
+    def contact_jacobian(self, J: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """``Jc (1, nv)`` from the LOCAL frame Jacobian ``J (6, nv)`` and the frame rotation ``R``."""
+        return self.row @ (J[:3] if self.type == _LOCAL else R @ J[:3])
 
     @property
     def a0_local(self) -> np.ndarray:

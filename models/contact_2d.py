@@ -148,3 +148,7 @@ class ContactData2D(ContactDataAbstract):
         super().__init__(model, data)
         self.point = model._point.createData(data)
         self.oRf = np.zeros((2, 2))
+
+    def contact_jacobian(self, J: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """``Jc (2, nv)``: the x and z rows of the LOCAL frame Jacobian ``J (6, nv)``."""
+        return J[_XZ]

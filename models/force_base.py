@@ -4,8 +4,9 @@ A contact (:mod:`~crocopy.models.contact_base`) or an impulse (:mod:`~crocopy.mo
 acts on frame ``id`` through the Jacobian ``Jc (nc, nv)``; its force ``f`` (``nc`` components in the
 coordinates given by ``type``: ``pinocchio.LOCAL`` or ``pinocchio.LOCAL_WORLD_ALIGNED``) enters the
 dynamics as ``Jcᵀ f``.  ``pinocchio.WORLD`` is accepted as Crocoddyl accepts it, and means what it
-means there (measured): the same Jacobian, drift and force coordinates as ``LOCAL_WORLD_ALIGNED``.  With ``R`` the frame orientation, ``J = (Jl; Ja)`` the LOCAL frame Jacobian
-and ``jMf`` the frame placement in its parent joint:
+means there (measured): the same Jacobian, drift and force coordinates as ``LOCAL_WORLD_ALIGNED``.
+With ``R`` the frame orientation, ``J = (Jl; Ja)`` the LOCAL frame Jacobian and ``jMf`` the frame
+placement in its parent joint:
 
 - ``f_local = f`` (LOCAL) or ``Rᵀ f`` per 3-block (LOCAL_WORLD_ALIGNED), and the joint-frame force
   ``fext = jMf.act(f_local)`` (the input of Pinocchio's RNEA);
@@ -66,7 +67,9 @@ def frame_id(state: StateAbstract, id: int | str, name: str = "id") -> int:
 def check_reference_frame(type: pin.ReferenceFrame) -> pin.ReferenceFrame:
     """Accept ``pinocchio.LOCAL``, ``pinocchio.WORLD`` and ``pinocchio.LOCAL_WORLD_ALIGNED``."""
     if type not in REFERENCE_FRAMES:
-        raise ValueError(f"type must be pinocchio.LOCAL, pinocchio.WORLD or pinocchio.LOCAL_WORLD_ALIGNED, got {type!r}")
+        raise ValueError(
+            f"type must be pinocchio.LOCAL, pinocchio.WORLD or pinocchio.LOCAL_WORLD_ALIGNED, got {type!r}"
+        )
     return type
 
 

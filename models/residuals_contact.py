@@ -153,7 +153,9 @@ class ResidualModelContactForce(_ForceResidual):
 
 class ResidualModelContactFrictionCone(_ForceResidual):
     """Crocoddyl's ``ResidualModelContactFrictionCone(state, id, fref, nu=state.nv, fwddyn=True)``
-    with ``fref`` a :class:`FrictionCone`; ``r = A f`` (``nf + 1``)."""
+    with ``fref`` a :class:`FrictionCone`; ``r = A f_linear`` (``nf + 1``; a contact of dimension 2 or more)."""
+
+    min_nc = 2
 
     def __init__(
         self, state: StateAbstract, id: int | str, fref: FrictionCone, nu: int | None = None, fwddyn: bool = True
