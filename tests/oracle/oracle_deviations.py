@@ -83,10 +83,6 @@ DEVIATIONS: tuple[Deviation, ...] = (
               "ContactModel2D with a position gain: Crocoddyl's da0_dx (so Fx and the force Jacobians) takes the "
               "derivative of the world position term kp (p_xz - xref) as if it were in the frame's coordinates",
               lambda c: c.kind == om.CONTACT2 and not c.terminal),
-    Deviation("impulse6d-world", "derivative",
-              "ImpulseModel6D in pinocchio.WORLD: Crocoddyl's Jc is the LOCAL_WORLD_ALIGNED one but its dv0_dq "
-              "(so Fx and the impulse Jacobians) is not the derivative of Jc v",
-              lambda c: c.kind == om.IMPULSE_WORLD),
     Deviation("com-free-dynamics", "value",
               "ResidualModelCoMPosition under free dynamics: Crocoddyl never computes the centre of mass and "
               "returns -cref with a zero Jacobian",
