@@ -33,11 +33,13 @@ from .free_fwd_dynamics import DifferentialActionDataFreeFwdDynamics, Differenti
 from .impulse_base import ImpulseDataAbstract, ImpulseModelAbstract
 from .impulse_fwd_dynamics import ActionDataImpulseFwdDynamics, ActionModelImpulseFwdDynamics
 from .impulse_multiple import ImpulseDataMultiple, ImpulseItem, ImpulseModelMultiple
-from .impulses import ImpulseModel3D, ImpulseModel6D
+from .impulses import ImpulseData3D, ImpulseData6D, ImpulseModel3D, ImpulseModel6D
 from .residuals_contact import (
     ResidualDataContactControlGrav,
     ResidualDataContactCoPPosition,
     ResidualDataContactForce,
+    ResidualDataContactFrictionCone,
+    ResidualDataContactWrenchCone,
     ResidualDataImpulseCoM,
     ResidualModelContactControlGrav,
     ResidualModelContactCoPPosition,
@@ -48,6 +50,8 @@ from .residuals_contact import (
 )
 from .residuals_dynamics import (
     ResidualDataCentroidalMomentum,
+    ResidualDataCoMPosition,
+    ResidualDataControlGrav,
     ResidualModelCentroidalMomentum,
     ResidualModelCoMPosition,
     ResidualModelControlGrav,
@@ -55,6 +59,10 @@ from .residuals_dynamics import (
     ResidualModelJointEffort,
 )
 from .residuals_frame import (
+    ResidualDataFramePlacement,
+    ResidualDataFrameRotation,
+    ResidualDataFrameTranslation,
+    ResidualDataFrameVelocity,
     ResidualModelFramePlacement,
     ResidualModelFrameRotation,
     ResidualModelFrameTranslation,
@@ -89,11 +97,15 @@ __all__ = [
     "ImpulseDataMultiple",
     "ImpulseItem",
     "ImpulseModelMultiple",
+    "ImpulseData3D",
+    "ImpulseData6D",
     "ImpulseModel3D",
     "ImpulseModel6D",
     "ResidualDataContactControlGrav",
     "ResidualDataContactCoPPosition",
     "ResidualDataContactForce",
+    "ResidualDataContactFrictionCone",
+    "ResidualDataContactWrenchCone",
     "ResidualDataImpulseCoM",
     "ResidualModelContactControlGrav",
     "ResidualModelContactCoPPosition",
@@ -119,9 +131,15 @@ __all__ = [
     "DifferentialActionDataFreeFwdDynamics",
     "DifferentialActionModelFreeFwdDynamics",
     "ResidualDataCentroidalMomentum",
+    "ResidualDataCoMPosition",
+    "ResidualDataControlGrav",
     "ResidualModelCentroidalMomentum",
     "ResidualModelCoMPosition",
     "ResidualModelControlGrav",
+    "ResidualDataFramePlacement",
+    "ResidualDataFrameRotation",
+    "ResidualDataFrameTranslation",
+    "ResidualDataFrameVelocity",
     "ResidualModelFramePlacement",
     "ResidualModelFrameRotation",
     "ResidualModelFrameTranslation",

@@ -103,6 +103,14 @@ class ResidualDataContactForce(ResidualDataAbstract):
         self.impulses = getattr(data, "impulses", None)
 
 
+class ResidualDataContactFrictionCone(ResidualDataContactForce):
+    """Data of :class:`ResidualModelContactFrictionCone` (the fields of :class:`ResidualDataContactForce`)."""
+
+
+class ResidualDataContactWrenchCone(ResidualDataContactForce):
+    """Data of :class:`ResidualModelContactWrenchCone` (the fields of :class:`ResidualDataContactForce`)."""
+
+
 class ResidualModelContactForce(_ForceResidual):
     """Crocoddyl's ``ResidualModelContactForce(state, id, fref, nc, nu=state.nv, fwddyn=True)``.
 
@@ -157,6 +165,9 @@ class ResidualModelContactFrictionCone(_ForceResidual):
 
     min_nc = 2
 
+    def createData(self, data: DataCollectorAbstract | None = None) -> "ResidualDataContactFrictionCone":
+        return ResidualDataContactFrictionCone(self, data)
+
     def __init__(
         self, state: StateAbstract, id: int | str, fref: FrictionCone, nu: int | None = None, fwddyn: bool = True
     ) -> None:
@@ -174,6 +185,9 @@ class ResidualModelContactWrenchCone(_ForceResidual):
     with ``fref`` a :class:`WrenchCone`; ``r = A f`` (``nf + 13``, 6D contacts)."""
 
     ncf = min_nc = 6
+
+    def createData(self, data: DataCollectorAbstract | None = None) -> "ResidualDataContactWrenchCone":
+        return ResidualDataContactWrenchCone(self, data)
 
     def __init__(
         self, state: StateAbstract, id: int | str, fref: WrenchCone, nu: int | None = None, fwddyn: bool = True

@@ -211,6 +211,11 @@ class IntegratedActionModelAbstract(ActionModelAbstract):
         self._copy_constraints(data, ddata, diff=True)
 
 
+class IntegratedActionDataAbstract(ActionDataAbstract):
+    """Crocoddyl's base of the integrated action data (Euler, Runge-Kutta): the fields of
+    :class:`~crocopy.action_base.ActionDataAbstract`."""
+
+
 class ControlChainData:
     """Buffers of the differential model's derivatives mapped from ``w`` to the parameters ``u``.
 
