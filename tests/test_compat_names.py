@@ -60,7 +60,8 @@ def test_data_classes_under_crocoddyl_names():
     assert type(crocopy.ActionModelUnicycle().createData()) is crocopy.ActionDataUnicycle
     dlqr = crocopy.DifferentialActionModelLQR(2, 2)
     assert type(dlqr.createData()) is crocopy.DifferentialActionDataLQR
-    for iam in (crocopy.IntegratedActionModelEuler(dlqr, 0.1), crocopy.IntegratedActionModelRK(dlqr, crocopy.four, 0.1)):
+    for iam in (crocopy.IntegratedActionModelEuler(dlqr, 0.1),
+                crocopy.IntegratedActionModelRK(dlqr, crocopy.four, 0.1)):
         assert isinstance(iam.createData(), crocopy.IntegratedActionDataAbstract)
     squash = crocopy.ActuationSquashingModel(act, crocopy.SquashingModelSmoothSat(-np.ones(nu), np.ones(nu), nu), nu)
     assert type(squash.createData()) is crocopy.ActuationSquashingData
