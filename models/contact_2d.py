@@ -24,7 +24,7 @@ from crocopy.state import StateAbstract
 from crocopy.versioning import frozen_copy, touch
 
 from .contact_base import ContactDataAbstract, ContactModelAbstract, check_gains
-from .contacts import ContactModel3D, _split_nu_gains
+from .contacts import ContactModel3D, split_nu_gains
 from .force_base import frame_id
 
 _XZ = np.array([0, 2])
@@ -51,7 +51,7 @@ class ContactModel2D(ContactModelAbstract):
         self, state: StateAbstract, id: int | str, xref: np.ndarray, nu: int | None = None,
         gains: np.ndarray | None = None,
     ) -> None:
-        nu, gains = _split_nu_gains(nu, gains)
+        nu, gains = split_nu_gains(nu, gains)
         fid = frame_id(state, id)
         super().__init__(state, pin.LOCAL, 2, nu)
         self.id = fid

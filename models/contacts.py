@@ -30,7 +30,7 @@ _LOCAL = pin.LOCAL
 _skew = pin.skew
 
 
-def _split_nu_gains(nu, gains):
+def split_nu_gains(nu, gains):
     """Crocoddyl accepts ``(..., type, nu, gains)`` and ``(..., type, gains)``."""
     if nu is not None and not np.isscalar(nu):
         return None, nu
@@ -45,7 +45,7 @@ class _FrameContact(FrameForce, ContactModelAbstract):
     def __init__(
         self, state: StateAbstract, id: int | str, reference, type: pin.ReferenceFrame, nc: int, nu, gains
     ) -> None:
-        nu, gains = _split_nu_gains(nu, gains)
+        nu, gains = split_nu_gains(nu, gains)
         fid = frame_id(state, id)
         super().__init__(state, type, nc, nu)
         self.id = fid
