@@ -27,7 +27,7 @@ from crocopy.state import StateAbstract
 from crocopy.versioning import frozen_copy, touch
 
 from .contact_base import ContactDataAbstract, ContactModelAbstract
-from .contacts import ContactModel3D
+from .contacts import ContactModel3D, PointContactProjection
 from .force_base import FrameForce, frame_id, world_aligned
 
 _LOCAL = pin.LOCAL
@@ -49,7 +49,7 @@ def _check_xref(xref: float) -> float:
     return value
 
 
-class ContactModel1D(FrameForce, ContactModelAbstract):
+class ContactModel1D(PointContactProjection, FrameForce, ContactModelAbstract):
     """Crocoddyl's ``ContactModel1D(state, id, xref, type, rotation, nu, gains=[0, 0])`` or
     ``ContactModel1D(state, id, xref, type, gains=[0, 0])`` (identity rotation, ``nu = state.nv``).
 
@@ -129,22 +129,14 @@ class ContactModel1D(FrameForce, ContactModelAbstract):
         return ContactData1D(self, data)
 
     def calc(self, data: "ContactData1D", x: np.ndarray) -> None:
-        point = data.point
-        self._point.calc(point, x)
-        data.fJf[:] = point.fJf
-        data.v = point.v
+        point = self._point_calc(data, x)
         data.oRf[:] = point.R
         data.row[:] = self._row
         np.dot(self._row, point.Jc, out=data.Jc)
         np.dot(self._row, point.a0, out=data.a0)
 
     def calcDiff(self, data: "ContactData1D", x: np.ndarray) -> None:
-        point = data.point
-        self._point.calcDiff(point, x)
-        data.v_partial_dq[:] = point.v_partial_dq
-        data.a_partial_dq[:] = point.a_partial_dq
-        data.a_partial_dv[:] = point.a_partial_dv
-        data.a_partial_da[:] = point.a_partial_da
+        point = self._point_calcDiff(data, x)
         np.dot(self._row, point.da0_dx, out=data.da0_dx)
 
     def storeForce(self, data: "ContactData1D", force: np.ndarray) -> None:

@@ -23,14 +23,14 @@ import pinocchio as pin
 from crocopy.state import StateAbstract
 from crocopy.versioning import frozen_copy, touch
 
-from .contact_base import ContactDataAbstract, ContactModelAbstract, check_gains
-from .contacts import ContactModel3D, split_nu_gains
+from .contact_base import ContactDataAbstract, ContactModelAbstract, check_gains, check_position
+from .contacts import ContactModel3D, PointContactProjection, split_nu_gains
 from .force_base import frame_id
 
 _XZ = np.array([0, 2])
 
 
-class ContactModel2D(ContactModelAbstract):
+class ContactModel2D(PointContactProjection, ContactModelAbstract):
     """Crocoddyl's ``ContactModel2D(state, id, xref, nu=state.nv, gains=[0, 0])`` (``type`` is LOCAL).
 
     Parameters
@@ -66,10 +66,7 @@ class ContactModel2D(ContactModelAbstract):
 
     @reference.setter
     def reference(self, value: np.ndarray) -> None:
-        ref = np.asarray(value, dtype=float).reshape(-1) if np.ndim(value) == 2 else np.asarray(value, dtype=float)
-        if ref.shape != (2,) or not np.all(np.isfinite(ref)):
-            raise ValueError(f"xref must be a finite vector of shape (2,), got shape {np.shape(value)}")
-        self._xref = frozen_copy(ref)
+        self._xref = frozen_copy(check_position(value, 2))
         touch(self)
 
     @property
@@ -87,10 +84,7 @@ class ContactModel2D(ContactModelAbstract):
         return ContactData2D(self, data)
 
     def calc(self, data: "ContactData2D", x: np.ndarray) -> None:
-        point = data.point
-        self._point.calc(point, x)
-        data.fJf[:] = point.fJf
-        data.v = point.v
+        point = self._point_calc(data, x)
         data.Jc[:] = point.Jc[_XZ]
         data.a0[:] = point.a0[_XZ]
         kp = self._gains[0]
@@ -100,12 +94,8 @@ class ContactModel2D(ContactModelAbstract):
             data.a0 += kp * (oMf.translation[_XZ] - self._xref)
 
     def calcDiff(self, data: "ContactData2D", x: np.ndarray) -> None:
-        point, nv = data.point, self.state.nv
-        self._point.calcDiff(point, x)
-        data.v_partial_dq[:] = point.v_partial_dq
-        data.a_partial_dq[:] = point.a_partial_dq
-        data.a_partial_dv[:] = point.a_partial_dv
-        data.a_partial_da[:] = point.a_partial_da
+        nv = self.state.nv
+        point = self._point_calcDiff(data, x)
         data.da0_dx[:] = point.da0_dx[_XZ]
         kp = self._gains[0]
         if kp != 0.0:

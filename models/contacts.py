@@ -23,7 +23,7 @@ import pinocchio as pin
 from crocopy.state import StateAbstract
 from crocopy.versioning import frozen_copy, touch
 
-from .contact_base import ContactDataAbstract, ContactModelAbstract, check_gains
+from .contact_base import ContactDataAbstract, ContactModelAbstract, check_gains, check_position
 from .force_base import FrameForce, frame_id, world_aligned
 
 _LOCAL = pin.LOCAL
@@ -120,10 +120,7 @@ class ContactModel3D(_FrameContact):
 
     @reference.setter
     def reference(self, value: np.ndarray) -> None:
-        ref = np.asarray(value, dtype=float).reshape(-1) if np.ndim(value) == 2 else np.asarray(value, dtype=float)
-        if ref.shape != (3,) or not np.all(np.isfinite(ref)):
-            raise ValueError(f"xref must be a finite vector of shape (3,), got shape {np.shape(value)}")
-        self._xref = frozen_copy(ref)
+        self._xref = frozen_copy(check_position(value, 3))
         touch(self)
 
     def _reference_placement(self) -> pin.SE3:
@@ -327,3 +324,26 @@ class ContactData6D(ContactDataAbstract):
         self.drift_local = np.zeros(6)
         self.da0_local_dx = np.zeros((6, model.state.ndx))
         self.rMf = pin.SE3.Identity()
+
+
+class PointContactProjection:
+    """What the 1D and 2D contacts share: a 3D point contact ``_point`` on their frame, evaluated into
+    their data's ``point``, whose frame Jacobian, velocity and acceleration derivatives they expose."""
+
+    _point: ContactModel3D
+
+    def _point_calc(self, data: ContactDataAbstract, x: np.ndarray) -> ContactData3D:
+        point = data.point
+        self._point.calc(point, x)
+        data.fJf[:] = point.fJf
+        data.v = point.v
+        return point
+
+    def _point_calcDiff(self, data: ContactDataAbstract, x: np.ndarray) -> ContactData3D:
+        point = data.point
+        self._point.calcDiff(point, x)
+        data.v_partial_dq[:] = point.v_partial_dq
+        data.a_partial_dq[:] = point.a_partial_dq
+        data.a_partial_dv[:] = point.a_partial_dv
+        data.a_partial_da[:] = point.a_partial_da
+        return point
