@@ -4,12 +4,16 @@ Everything public is re-exported here flat, as in Crocoddyl (``crocopy.SolverFDD
 ``crocopy.DifferentialActionModelFreeFwdDynamics``, ...).
 """
 
+import builtins as _builtins
 from importlib.metadata import PackageNotFoundError as _PackageNotFoundError
 from importlib.metadata import version as _version
 
 from .action_base import ActionDataAbstract, ActionModelAbstract
 from .actions import ActionModelLQR, ActionModelUnicycle, DifferentialActionModelLQR
 from .actions.control_penalty import ActionModelControlPenalty
+from .actions.diff_lqr import DifferentialActionDataLQR
+from .actions.lqr import ActionDataLQR
+from .actions.unicycle import ActionDataUnicycle
 from .activations import (
     ActivationBounds,
     ActivationDataAbstract,
@@ -24,6 +28,7 @@ from .activations import (
     ActivationModelWeightedQuad,
     ActivationModelWeightedQuadraticBarrier,
 )
+from .activations.norms import ActivationDataSmooth1Norm
 from .activations.numdiff import ActivationDataNumDiff, ActivationModelNumDiff
 from .actuation_base import ActuationDataAbstract, ActuationModelAbstract, JointDataAbstract
 from .batch import SolveManyError, SolveResult, WorkerDiedError, solve_many
@@ -31,7 +36,13 @@ from .callbacks.base import CallbackAbstract, CallbackLogger, CallbackVerbose
 from .callbacks.display import CallbackDisplay, DisplayAbstract
 from .callbacks.plotting import plotConvergence, plotFeasibility, plotOCSolution
 from .callbacks.save import saveConvergence, saveLogfile, saveOCSolution
-from .constraints.base import ConstraintDataAbstract, ConstraintModelAbstract, ConstraintModelResidual, ConstraintType
+from .constraints.base import (
+    ConstraintDataAbstract,
+    ConstraintDataResidual,
+    ConstraintModelAbstract,
+    ConstraintModelResidual,
+    ConstraintType,
+)
 from .constraints.manager import ConstraintDataManager, ConstraintItem, ConstraintModelManager
 from .costs.base import CostDataAbstract, CostDataResidual, CostModelAbstract, CostModelResidual
 from .costs.sum import CostDataSum, CostItem, CostModelSum
@@ -40,7 +51,7 @@ from .crocoddyl_names import CROCODDYL_VERSION as _CROCODDYL_VERSION
 from .data_collector import DataCollectorAbstract
 from .diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
 from .enums import AssignmentOp, FeasibilityNorm, Jcomponent, RKType, VerboseLevel
-from .integrators.base import IntegratedActionModelAbstract
+from .integrators.base import IntegratedActionDataAbstract, IntegratedActionModelAbstract
 from .integrators.control_base import ControlParametrizationDataAbstract, ControlParametrizationModelAbstract
 from .integrators.control_poly import (
     ControlParametrizationDataPolyOne,
@@ -61,6 +72,8 @@ from .numdiff import (
 from .numdiff.state import StateNumDiff
 from .residuals import ResidualModelControl, ResidualModelState
 from .residuals.base import ResidualDataAbstract, ResidualModelAbstract
+from .rotations import rotationMatrixFromTwoVectors
+from .settings import seed, sharedMemory
 from .shooting import ShootingProblem
 from .solvers import SolverAbstract, SolverDDP, SolverFDDP
 from .solvers.box_ddp import SolverBoxDDP
@@ -82,12 +95,34 @@ from .solvers.stopwatch import (
 )
 from .squashing.action import ActionModelSquashed
 from .squashing.smooth_sat import (
+    ActuationSquashingData,
     ActuationSquashingModel,
     SquashingDataAbstract,
     SquashingModelAbstract,
     SquashingModelSmoothSat,
 )
 from .state import StateAbstract, StateVector
+from .std_containers import (  # noqa: F401  (Crocoddyl's container names)
+    StdMap_ConstraintData,
+    StdMap_ConstraintItem,
+    StdMap_ContactData,
+    StdMap_ContactItem,
+    StdMap_CostData,
+    StdMap_CostItem,
+    StdMap_ImpulseData,
+    StdMap_ImpulseItem,
+    StdSet_String,
+    StdVec_ActionData,
+    StdVec_ActionModel,
+    StdVec_Callback,
+    StdVec_ControlParametrizationData,
+    StdVec_ControlParametrizationModel,
+    StdVec_DiffActionData,
+    StdVec_DiffActionModel,
+    StdVec_MatrixXs,
+    StdVec_RowMatrixX,
+    StdVec_Thruster,
+)
 
 try:
     __version__ = _version("crocopy")
@@ -106,6 +141,9 @@ LInf, L1 = FeasibilityNorm.LInf, FeasibilityNorm.L1
 CW, CCW = _ThrusterType.CW, _ThrusterType.CCW
 #: crocopy has no code generation (CppAD) back-end.
 WITH_CODEGEN = False
+#: Crocoddyl's exception type; crocopy raises Python's own (ValueError, TypeError, KeyError, ...), which
+#: ``except crocopy.Exception`` catches as ``except crocoddyl.Exception`` catches Crocoddyl's.
+Exception = _builtins.Exception  # noqa: A001
 
 
 def __getattr__(name: str):

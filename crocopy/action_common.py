@@ -107,6 +107,7 @@ class ActionModelBase(ControlLimitsMixin):
         self.nu = check_state_and_nu(state, nu)
         self.state = state
         self.nr = int(nr)
+        self._constraint_source = None
         self.ng = int(ng)
         self.nh = int(nh)
         self.ng_T = int(ng_T)
@@ -114,6 +115,47 @@ class ActionModelBase(ControlLimitsMixin):
         self.g_lb = np.full(self.ng, -np.inf)
         self.g_ub = np.full(self.ng, np.inf)
         self._init_control_limits()
+
+    def _follow_constraints(self, source: object) -> None:
+        """Read ``ng, nh, ng_T, nh_T, g_lb, g_ub`` from ``source`` (a ``ConstraintModelManager`` or the
+        wrapped model) whenever they are read, so that they follow ``changeConstraintStatus`` and
+        ``addConstraint`` as Crocoddyl's models do; a data created afterwards has the new sizes."""
+        self._constraint_source = source
+        for name in ("_g_lb", "_g_ub"):
+            self.__dict__.pop(name, None)
+
+    def _constraint_count(name: str) -> property:  # noqa: N805 (a property factory used in the class body)
+        private = "_" + name
+
+        def get(self) -> int:
+            source = self._constraint_source
+            return getattr(self, private) if source is None else getattr(source, name)
+
+        def set(self, value: int) -> None:
+            setattr(self, private, int(value))
+
+        return property(get, set, doc=f"``{name}`` (follows the constraints, if any)")
+
+    def _constraint_bound(name: str) -> property:  # noqa: N805
+        private = "_" + name
+
+        def get(self) -> np.ndarray:
+            if private in self.__dict__ or self._constraint_source is None:
+                return self.__dict__[private]
+            return getattr(self._constraint_source, name)
+
+        def set(self, value: np.ndarray) -> None:
+            self.__dict__[private] = np.array(value, dtype=float).reshape(-1)
+
+        return property(get, set, doc=f"``{name}``, shape ``(ng,)`` (the constraints' unless assigned)")
+
+    ng = _constraint_count("ng")
+    nh = _constraint_count("nh")
+    ng_T = _constraint_count("ng_T")
+    nh_T = _constraint_count("nh_T")
+    g_lb = _constraint_bound("g_lb")
+    g_ub = _constraint_bound("g_ub")
+    del _constraint_count, _constraint_bound
 
     def calc(self, data: "ActionDataBase", x: np.ndarray, u: np.ndarray | None = None) -> None:
         raise NotImplementedError(f"{type(self).__name__}.calc is not implemented")

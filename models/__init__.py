@@ -8,6 +8,8 @@ from .actuations import (
     ThrusterType,
 )
 from .cones import CoPSupport, FrictionCone, WrenchCone
+from .contact_1d import ContactData1D, ContactModel1D
+from .contact_2d import ContactData2D, ContactModel2D
 from .contact_base import ContactDataAbstract, ContactModelAbstract
 from .contact_fwd_dynamics import DifferentialActionDataContactFwdDynamics, DifferentialActionModelContactFwdDynamics
 from .contact_invdyn import DifferentialActionModelContactInvDynamics
@@ -33,11 +35,13 @@ from .free_invdyn import DifferentialActionModelFreeInvDynamics
 from .impulse_base import ImpulseDataAbstract, ImpulseModelAbstract
 from .impulse_fwd_dynamics import ActionDataImpulseFwdDynamics, ActionModelImpulseFwdDynamics
 from .impulse_multiple import ImpulseDataMultiple, ImpulseItem, ImpulseModelMultiple
-from .impulses import ImpulseModel3D, ImpulseModel6D
+from .impulses import ImpulseData3D, ImpulseData6D, ImpulseModel3D, ImpulseModel6D
 from .residuals_contact import (
     ResidualDataContactControlGrav,
     ResidualDataContactCoPPosition,
     ResidualDataContactForce,
+    ResidualDataContactFrictionCone,
+    ResidualDataContactWrenchCone,
     ResidualDataImpulseCoM,
     ResidualModelContactControlGrav,
     ResidualModelContactCoPPosition,
@@ -48,6 +52,8 @@ from .residuals_contact import (
 )
 from .residuals_dynamics import (
     ResidualDataCentroidalMomentum,
+    ResidualDataCoMPosition,
+    ResidualDataControlGrav,
     ResidualModelCentroidalMomentum,
     ResidualModelCoMPosition,
     ResidualModelControlGrav,
@@ -55,6 +61,10 @@ from .residuals_dynamics import (
     ResidualModelJointEffort,
 )
 from .residuals_frame import (
+    ResidualDataFramePlacement,
+    ResidualDataFrameRotation,
+    ResidualDataFrameTranslation,
+    ResidualDataFrameVelocity,
     ResidualModelFramePlacement,
     ResidualModelFrameRotation,
     ResidualModelFrameTranslation,
@@ -66,6 +76,10 @@ __all__ = [
     "CoPSupport",
     "FrictionCone",
     "WrenchCone",
+    "ContactData1D",
+    "ContactData2D",
+    "ContactModel1D",
+    "ContactModel2D",
     "ContactDataAbstract",
     "ContactModelAbstract",
     "DifferentialActionDataContactFwdDynamics",
@@ -86,11 +100,15 @@ __all__ = [
     "ImpulseDataMultiple",
     "ImpulseItem",
     "ImpulseModelMultiple",
+    "ImpulseData3D",
+    "ImpulseData6D",
     "ImpulseModel3D",
     "ImpulseModel6D",
     "ResidualDataContactControlGrav",
     "ResidualDataContactCoPPosition",
     "ResidualDataContactForce",
+    "ResidualDataContactFrictionCone",
+    "ResidualDataContactWrenchCone",
     "ResidualDataImpulseCoM",
     "ResidualModelContactControlGrav",
     "ResidualModelContactCoPPosition",
@@ -117,9 +135,15 @@ __all__ = [
     "DifferentialActionModelFreeFwdDynamics",
     "DifferentialActionModelFreeInvDynamics",
     "ResidualDataCentroidalMomentum",
+    "ResidualDataCoMPosition",
+    "ResidualDataControlGrav",
     "ResidualModelCentroidalMomentum",
     "ResidualModelCoMPosition",
     "ResidualModelControlGrav",
+    "ResidualDataFramePlacement",
+    "ResidualDataFrameRotation",
+    "ResidualDataFrameTranslation",
+    "ResidualDataFrameVelocity",
     "ResidualModelFramePlacement",
     "ResidualModelFrameRotation",
     "ResidualModelFrameTranslation",

@@ -34,6 +34,14 @@ def check_gains(gains: np.ndarray | None) -> np.ndarray:
     return g
 
 
+def check_position(value: np.ndarray, size: int, name: str = "xref") -> np.ndarray:
+    """A contact position as a finite float vector of shape ``(size,)`` (a column or row matrix is accepted)."""
+    ref = np.asarray(value, dtype=float).reshape(-1) if np.ndim(value) == 2 else np.asarray(value, dtype=float)
+    if ref.shape != (size,) or not np.all(np.isfinite(ref)):
+        raise ValueError(f"{name} must be a finite vector of shape ({size},), got shape {np.shape(value)}")
+    return ref
+
+
 class ContactModelAbstract(ForceModelAbstract):
     """Abstract contact model (Crocoddyl's ``ContactModelAbstract(state, type, nc, nu=state.nv)``).
 
@@ -42,7 +50,7 @@ class ContactModelAbstract(ForceModelAbstract):
     state : StateMultibody
         Multibody state.
     type : pinocchio.ReferenceFrame
-        Coordinates of ``Jc``, ``a0`` and ``f``: ``LOCAL`` or ``LOCAL_WORLD_ALIGNED``.
+        Coordinates of ``Jc``, ``a0`` and ``f``: ``LOCAL`` or ``LOCAL_WORLD_ALIGNED`` (``WORLD``: the same).
     nc : int
         Contact dimension.
     nu : int, optional

@@ -130,8 +130,7 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         self.JMinvJt_damping = inv_damping
         self.armature = np.zeros(state.nv)
         if constraints is not None:
-            self.g_lb = constraints.g_lb.copy()
-            self.g_ub = constraints.g_ub.copy()
+            self._follow_constraints(constraints)
         # as in Crocoddyl: the bounds default to the actuation's (URDF effort limits) while
         # has_control_limits stays False until they are assigned
         self._u_lb = np.array(actuation.u_lb, dtype=float)

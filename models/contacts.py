@@ -6,8 +6,8 @@ gains:
 
 - 3D, LOCAL: ``Jc = Jl``, ``a0 = al + w × vl + kp Rᵀ(p - xref) + kd vl`` (classical acceleration).
 - 6D, LOCAL: ``Jc = J``, ``a0 = a + kp log6(prefᵀ oMf) + kd v``.
-- LOCAL_WORLD_ALIGNED: the same quantities rotated by ``R`` (each 3-block), so that
-  ``a0 = R a0_local`` and ``da0/dq = R da0_local/dq - R [a0_local]× Ja``.
+- LOCAL_WORLD_ALIGNED (and WORLD, which Crocoddyl treats alike): the same quantities rotated by ``R``
+  (each 3-block), so that ``a0 = R a0_local`` and ``da0/dq = R da0_local/dq - R [a0_local]× Ja``.
 
 The force maps (``f_local``, ``fext``, the RNEA correction in LOCAL_WORLD_ALIGNED) are those of
 :class:`~crocopy.models.force_base.FrameForce`.  The reference and the gains change through their
@@ -23,14 +23,14 @@ import pinocchio as pin
 from crocopy.state import StateAbstract
 from crocopy.versioning import frozen_copy, touch
 
-from .contact_base import ContactDataAbstract, ContactModelAbstract, check_gains
-from .force_base import FrameForce, frame_id
+from .contact_base import ContactDataAbstract, ContactModelAbstract, check_gains, check_position
+from .force_base import FrameForce, frame_id, world_aligned
 
 _LOCAL = pin.LOCAL
 _skew = pin.skew
 
 
-def _split_nu_gains(nu, gains):
+def split_nu_gains(nu, gains):
     """Crocoddyl accepts ``(..., type, nu, gains)`` and ``(..., type, gains)``."""
     if nu is not None and not np.isscalar(nu):
         return None, nu
@@ -45,7 +45,7 @@ class _FrameContact(FrameForce, ContactModelAbstract):
     def __init__(
         self, state: StateAbstract, id: int | str, reference, type: pin.ReferenceFrame, nc: int, nu, gains
     ) -> None:
-        nu, gains = _split_nu_gains(nu, gains)
+        nu, gains = split_nu_gains(nu, gains)
         fid = frame_id(state, id)
         super().__init__(state, type, nc, nu)
         self.id = fid
@@ -71,7 +71,8 @@ class _FrameContact(FrameForce, ContactModelAbstract):
         model = self.state.pinocchio
         frame = model.frames[self.id]
         rigid = pin.RigidConstraintModel(
-            self._rigid_kind, model, frame.parentJoint, frame.placement, 0, self._reference_placement(), self.type
+            self._rigid_kind, model, frame.parentJoint, frame.placement, 0, self._reference_placement(),
+            world_aligned(self.type),
         )
         params = rigid.m_baumgarte_parameters
         params.Kp = params.Kp * 0.0 + self._gains[0]
@@ -92,7 +93,7 @@ class ContactModel3D(_FrameContact):
     xref : array_like, shape (3,)
         Contact position in the world, used by the Baumgarte position term.
     type : pinocchio.ReferenceFrame
-        ``pinocchio.LOCAL`` or ``pinocchio.LOCAL_WORLD_ALIGNED``.
+        ``pinocchio.LOCAL``, ``pinocchio.LOCAL_WORLD_ALIGNED`` or ``pinocchio.WORLD`` (as ``LOCAL_WORLD_ALIGNED``).
     nu : int, optional
         Control dimension (default ``state.nv``).
     gains : array_like, shape (2,)
@@ -119,10 +120,7 @@ class ContactModel3D(_FrameContact):
 
     @reference.setter
     def reference(self, value: np.ndarray) -> None:
-        ref = np.asarray(value, dtype=float).reshape(-1) if np.ndim(value) == 2 else np.asarray(value, dtype=float)
-        if ref.shape != (3,) or not np.all(np.isfinite(ref)):
-            raise ValueError(f"xref must be a finite vector of shape (3,), got shape {np.shape(value)}")
-        self._xref = frozen_copy(ref)
+        self._xref = frozen_copy(check_position(value, 3))
         touch(self)
 
     def _reference_placement(self) -> pin.SE3:
@@ -326,3 +324,26 @@ class ContactData6D(ContactDataAbstract):
         self.drift_local = np.zeros(6)
         self.da0_local_dx = np.zeros((6, model.state.ndx))
         self.rMf = pin.SE3.Identity()
+
+
+class PointContactProjection:
+    """What the 1D and 2D contacts share: a 3D point contact ``_point`` on their frame, evaluated into
+    their data's ``point``, whose frame Jacobian, velocity and acceleration derivatives they expose."""
+
+    _point: ContactModel3D
+
+    def _point_calc(self, data: ContactDataAbstract, x: np.ndarray) -> ContactData3D:
+        point = data.point
+        self._point.calc(point, x)
+        data.fJf[:] = point.fJf
+        data.v = point.v
+        return point
+
+    def _point_calcDiff(self, data: ContactDataAbstract, x: np.ndarray) -> ContactData3D:
+        point = data.point
+        self._point.calcDiff(point, x)
+        data.v_partial_dq[:] = point.v_partial_dq
+        data.a_partial_dq[:] = point.a_partial_dq
+        data.a_partial_dv[:] = point.a_partial_dv
+        data.a_partial_da[:] = point.a_partial_da
+        return point

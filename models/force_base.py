@@ -3,8 +3,10 @@
 A contact (:mod:`~crocopy.models.contact_base`) or an impulse (:mod:`~crocopy.models.impulse_base`)
 acts on frame ``id`` through the Jacobian ``Jc (nc, nv)``; its force ``f`` (``nc`` components in the
 coordinates given by ``type``: ``pinocchio.LOCAL`` or ``pinocchio.LOCAL_WORLD_ALIGNED``) enters the
-dynamics as ``Jcᵀ f``.  With ``R`` the frame orientation, ``J = (Jl; Ja)`` the LOCAL frame Jacobian
-and ``jMf`` the frame placement in its parent joint:
+dynamics as ``Jcᵀ f``.  ``pinocchio.WORLD`` is accepted as Crocoddyl accepts it, and means what it
+means there (measured): the same Jacobian, drift and force coordinates as ``LOCAL_WORLD_ALIGNED``.
+With ``R`` the frame orientation, ``J = (Jl; Ja)`` the LOCAL frame Jacobian and ``jMf`` the frame
+placement in its parent joint:
 
 - ``f_local = f`` (LOCAL) or ``Rᵀ f`` per 3-block (LOCAL_WORLD_ALIGNED), and the joint-frame force
   ``fext = jMf.act(f_local)`` (the input of Pinocchio's RNEA);
@@ -26,7 +28,7 @@ import pinocchio as pin
 from crocopy.named_items import ModelItems
 from crocopy.state import StateAbstract
 
-REFERENCE_FRAMES = (pin.LOCAL, pin.LOCAL_WORLD_ALIGNED)
+REFERENCE_FRAMES = (pin.LOCAL, pin.WORLD, pin.LOCAL_WORLD_ALIGNED)
 _LOCAL = pin.LOCAL
 _skew = pin.skew
 
@@ -63,10 +65,17 @@ def frame_id(state: StateAbstract, id: int | str, name: str = "id") -> int:
 
 
 def check_reference_frame(type: pin.ReferenceFrame) -> pin.ReferenceFrame:
-    """Accept ``pinocchio.LOCAL`` and ``pinocchio.LOCAL_WORLD_ALIGNED`` only."""
+    """Accept ``pinocchio.LOCAL``, ``pinocchio.WORLD`` and ``pinocchio.LOCAL_WORLD_ALIGNED``."""
     if type not in REFERENCE_FRAMES:
-        raise ValueError(f"type must be pinocchio.LOCAL or pinocchio.LOCAL_WORLD_ALIGNED, got {type!r}")
+        raise ValueError(
+            f"type must be pinocchio.LOCAL, pinocchio.WORLD or pinocchio.LOCAL_WORLD_ALIGNED, got {type!r}"
+        )
     return type
+
+
+def world_aligned(type: pin.ReferenceFrame) -> pin.ReferenceFrame:
+    """The coordinates ``type`` stands for: ``LOCAL`` or ``LOCAL_WORLD_ALIGNED`` (``WORLD``, as in Crocoddyl)."""
+    return pin.LOCAL if type == pin.LOCAL else pin.LOCAL_WORLD_ALIGNED
 
 
 class ForceModelAbstract:
@@ -77,7 +86,8 @@ class ForceModelAbstract:
     state : StateMultibody
         Multibody state.
     type : pinocchio.ReferenceFrame
-        Coordinates of ``Jc`` and ``f``: ``LOCAL`` or ``LOCAL_WORLD_ALIGNED``.
+        Coordinates of ``Jc`` and ``f``: ``LOCAL``, ``LOCAL_WORLD_ALIGNED`` or ``WORLD`` (the same as
+        ``LOCAL_WORLD_ALIGNED``).
     nc : int
         Force dimension.
     nu : int
@@ -160,7 +170,7 @@ class FrameForce:
             return
         Jl, Ja = data.fJf[:3], data.fJf[3:]
         fl = data.f_local
-        if self.nc == 3:
+        if self.nc != 6:
             np.dot(Jl.T, _skew(fl.linear) @ Ja, out=data.dtau_dq)
         else:
             np.dot(Jl.T @ _skew(fl.linear) + Ja.T @ _skew(fl.angular), Ja, out=data.dtau_dq)
@@ -174,8 +184,11 @@ class ForceDataAbstract:
     ``jMf``/``fXj`` (frame placement in its joint and its inverse action matrix), ``Jc (nc, nv)``,
     ``f``/``f_local``/``fext`` (``pinocchio.Force``: force coordinates, local frame, parent joint),
     ``df_dx (nc, ndx)``, ``df_du (nc, nu)``, ``fJf (6, nv)`` (LOCAL frame Jacobian), ``dtau_dq (nv, nv)``
-    and ``v_partial_dq (6, nv)``.
+    and ``v_partial_dq (6, nv)``; ``force_rows`` (crocopy's): the components of ``f.vector`` that the ``nc``
+    force rows are (``0..nc-1`` here; ``(2,)`` for a 1D contact, ``(0, 2)`` for a 2D one).
     """
+
+    force_rows: tuple[int, ...] = ()
 
     def __init__(self, model: ForceModelAbstract, data: pin.Data) -> None:
         nc, nv, ndx = model.nc, model.state.nv, model.state.ndx
@@ -195,6 +208,14 @@ class ForceDataAbstract:
         self.fJf = np.zeros((6, nv))
         self.dtau_dq = np.zeros((nv, nv))
         self.v_partial_dq = np.zeros((6, nv))
+        self.force_rows = self.force_rows or tuple(range(nc))
+
+    def contact_jacobian(self, J: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """``Jc (nc, nv)`` from the LOCAL frame Jacobian ``J (6, nv)`` and the frame rotation ``R``."""
+        nc = self.Jc.shape[0]
+        if self.type == _LOCAL:
+            return J[:nc]
+        return np.vstack([R @ J[:3], R @ J[3:]])[:nc]
 
 
 class ForceModelMultiple(ModelItems):

@@ -80,8 +80,7 @@ class DifferentialActionModelFreeFwdDynamics(ArmatureMixin, DifferentialActionMo
             ng, nh, ng_T, nh_T = constraints.ng, constraints.nh, constraints.ng_T, constraints.nh_T
         super().__init__(state, actuation.nu, costs.nr, ng, nh, ng_T, nh_T)
         if constraints is not None:
-            self.g_lb = np.array(constraints.g_lb, dtype=float)
-            self.g_ub = np.array(constraints.g_ub, dtype=float)
+            self._follow_constraints(constraints)
         self.actuation = actuation
         self.costs = costs
         self.constraints = constraints

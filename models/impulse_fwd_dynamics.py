@@ -96,8 +96,7 @@ class ActionModelImpulseFwdDynamics(ArmatureMixin, KKTDampingMixin, ActionModelA
         self._model_nograv = state.pinocchio.copy()
         self._model_nograv.gravity.setZero()
         if constraints is not None:
-            self.g_lb = constraints.g_lb.copy()
-            self.g_ub = constraints.g_ub.copy()
+            self._follow_constraints(constraints)
 
     @property
     def r_coeff(self) -> float:

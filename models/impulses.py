@@ -33,10 +33,12 @@ class _ImpulseFrame(ImpulseModelAbstract):
     frame : int or str
         Impulse frame (index or name).
     type : pinocchio.ReferenceFrame
-        ``pinocchio.LOCAL`` (default) or ``pinocchio.LOCAL_WORLD_ALIGNED``.
+        ``pinocchio.LOCAL`` (default), ``pinocchio.LOCAL_WORLD_ALIGNED`` or ``pinocchio.WORLD`` (the same
+        as ``LOCAL_WORLD_ALIGNED``, as in Crocoddyl).
     """
 
     _frame_nc: int
+    _data_class: type
 
     def __init__(self, state: StateAbstract, frame: int | str, type: pin.ReferenceFrame = pin.LOCAL) -> None:
         fid = frame_id(state, frame, "frame")
@@ -44,7 +46,7 @@ class _ImpulseFrame(ImpulseModelAbstract):
         self.id = fid
 
     def createData(self, data: pin.Data) -> ImpulseDataAbstract:
-        return ImpulseDataAbstract(self, data)
+        return self._data_class(self, data)
 
     def calc(self, data: ImpulseDataAbstract, x: np.ndarray) -> None:
         model, pd, fid = self.state.pinocchio, data.pinocchio, self.id
@@ -74,13 +76,23 @@ class _ImpulseFrame(ImpulseModelAbstract):
             data.dv0_dq[k:k + 3] -= (R @ _skew(w[k:k + 3])) @ Ja
 
 
+class ImpulseData3D(ImpulseDataAbstract):
+    """Data of :class:`ImpulseModel3D` (the fields of :class:`~crocopy.models.impulse_base.ImpulseDataAbstract`)."""
+
+
+class ImpulseData6D(ImpulseDataAbstract):
+    """Data of :class:`ImpulseModel6D` (the fields of :class:`~crocopy.models.impulse_base.ImpulseDataAbstract`)."""
+
+
 class ImpulseModel3D(_ImpulseFrame):
     """Crocoddyl's ``ImpulseModel3D(state, frame, type=pinocchio.LOCAL)``: a point impulse (``nc = 3``)."""
 
     _frame_nc = 3
+    _data_class = ImpulseData3D
 
 
 class ImpulseModel6D(_ImpulseFrame):
     """Crocoddyl's ``ImpulseModel6D(state, frame, type=pinocchio.LOCAL)``: a rigid-frame impulse (``nc = 6``)."""
 
     _frame_nc = 6
+    _data_class = ImpulseData6D

@@ -32,8 +32,9 @@ from .cones import CoPSupport, FrictionCone, WrenchCone
 from .force_base import frame_id
 
 
-def _force_data(shared: DataCollectorAbstract | None, fid: int, name: str, nc: int):
-    """The contact/impulse data on frame ``fid`` in the collector (``ValueError`` if there is none)."""
+def _force_data(shared: DataCollectorAbstract | None, fid: int, name: str, nc: int, exact: bool = False):
+    """The contact/impulse data on frame ``fid`` in the collector, of dimension at least ``nc`` (exactly
+    ``nc`` if ``exact``); ``ValueError`` if there is none."""
     group = getattr(shared, "contacts", None)
     items = getattr(group, "contacts", None)
     if items is None:
@@ -43,16 +44,29 @@ def _force_data(shared: DataCollectorAbstract | None, fid: int, name: str, nc: i
         raise ValueError(f"{name} needs a data collector with contacts or impulses, got {type(shared).__name__}")
     for cd in items.values():
         if cd.frame == fid:
-            if cd.Jc.shape[0] < nc:
-                raise ValueError(f"{name}: the contact on frame {fid} has dimension {cd.Jc.shape[0]} < nc = {nc}")
+            size = cd.Jc.shape[0]
+            if size < nc or (exact and size != nc):
+                expected = f"= {nc}" if exact else f">= {nc}"
+                raise ValueError(f"{name}: the contact on frame {fid} has dimension {size}, expected {expected}")
             return cd
     raise ValueError(f"{name}: no contact or impulse on frame {fid} in the data collector")
 
 
+def _force_blocks(cd, ncf: int) -> tuple:
+    """``(cols, rows)``: the components ``cols`` of ``f[:ncf]`` that the contact's force rows ``rows`` are
+    (slices when they are the first ``ncf`` of both, as for 3D and 6D contacts)."""
+    pairs = [(c, i) for i, c in enumerate(cd.force_rows) if c < ncf]
+    if [c for c, _ in pairs] == list(range(ncf)) and [i for _, i in pairs] == list(range(ncf)):
+        return slice(0, ncf), slice(0, ncf)
+    return np.array([c for c, _ in pairs]), np.array([i for _, i in pairs])
+
+
 class _ForceResidual(ResidualModelAbstract):
-    """Residual ``r = A f[:ncf] + b`` of the force of the contact on frame ``id``."""
+    """Residual ``r = A f[:ncf]`` of the force of the contact on frame ``id`` (a contact of dimension at
+    least ``min_nc``; a 1D or 2D contact fills only some components of ``f``, its ``force_rows``)."""
 
     ncf = 3
+    min_nc = 3
 
     def __init__(self, state: StateAbstract, id: int | str, nr: int, nu: int | None, fwddyn: bool) -> None:
         fid = frame_id(state, id)
@@ -71,19 +85,30 @@ class _ForceResidual(ResidualModelAbstract):
         np.dot(self._matrix(), f, out=data.r)
 
     def calcDiff(self, data: "ResidualDataContactForce", x: np.ndarray, u: np.ndarray | None = None) -> None:
-        A, cd = self._matrix(), data.contact
-        np.dot(A, cd.df_dx[: self.ncf], out=data.Rx)
+        cd, cols, rows = data.contact, data.cols, data.rows
+        A = self._matrix()[:, cols]
+        np.dot(A, cd.df_dx[rows], out=data.Rx)
         if data.Ru.shape[1] and cd.df_du.shape[1] == data.Ru.shape[1]:
-            np.dot(A, cd.df_du[: self.ncf], out=data.Ru)
+            np.dot(A, cd.df_du[rows], out=data.Ru)
 
 
 class ResidualDataContactForce(ResidualDataAbstract):
-    """Residual data with ``contact`` (the contact or impulse data on the residual's frame)."""
+    """Residual data with ``contact`` (the contact or impulse data on the residual's frame) and, from
+    its ``force_rows``, the components ``cols`` of ``f[:ncf]`` that its force rows ``rows`` are."""
 
     def __init__(self, model: _ForceResidual, data: DataCollectorAbstract | None) -> None:
         super().__init__(model, data)
-        self.contact = _force_data(data, model.id, type(model).__name__, model.ncf)
+        self.contact = _force_data(data, model.id, type(model).__name__, model.min_nc, model.min_nc == 1)
+        self.cols, self.rows = _force_blocks(self.contact, model.ncf)
         self.impulses = getattr(data, "impulses", None)
+
+
+class ResidualDataContactFrictionCone(ResidualDataContactForce):
+    """Data of :class:`ResidualModelContactFrictionCone` (the fields of :class:`ResidualDataContactForce`)."""
+
+
+class ResidualDataContactWrenchCone(ResidualDataContactForce):
+    """Data of :class:`ResidualModelContactWrenchCone` (the fields of :class:`ResidualDataContactForce`)."""
 
 
 class ResidualModelContactForce(_ForceResidual):
@@ -94,16 +119,19 @@ class ResidualModelContactForce(_ForceResidual):
     fref : pinocchio.Force
         Reference force in the contact coordinates.
     nc : int
-        3 (linear force) or 6 (wrench).
+        3 (linear force of a 3D or 6D contact), 6 (wrench of a 6D contact) or 1 (the force of a 1D
+        contact, which it stores as the z component: ``r = f_z - fref_z``, as Crocoddyl).
     """
 
     def __init__(
         self, state: StateAbstract, id: int | str, fref: pin.Force, nc: int, nu: int | None = None, fwddyn: bool = True
     ) -> None:
-        if nc not in (3, 6):
-            raise ValueError(f"nc must be 3 or 6, got {nc}")
-        self.ncf = int(nc)
-        super().__init__(state, id, self.ncf, nu, fwddyn)
+        if nc not in (1, 3, 6):
+            raise ValueError(f"nc must be 1, 3 or 6, got {nc}")
+        self.min_nc = int(nc)
+        self.ncf = 3 if nc == 1 else int(nc)
+        self._components = slice(2, 3) if nc == 1 else slice(0, self.ncf)
+        super().__init__(state, id, self.min_nc, nu, fwddyn)
         self.reference = fref
 
     @property
@@ -116,24 +144,29 @@ class ResidualModelContactForce(_ForceResidual):
         if not isinstance(value, pin.Force):
             raise ValueError(f"fref must be a pinocchio.Force, got {type(value).__name__}")
         self._fref = value.copy()
-        self._fref_vec = value.vector[: self.ncf].copy()
+        self._fref_vec = value.vector[self._components].copy()
 
     def calc(self, data: ResidualDataContactForce, x: np.ndarray, u: np.ndarray | None = None) -> None:
         if u is None and data.impulses is None:  # terminal node of contact dynamics: no force, as Crocoddyl
             data.r[:] = 0.0
             return
-        np.subtract(data.contact.f.vector[: self.ncf], self._fref_vec, out=data.r)
+        np.subtract(data.contact.f.vector[self._components], self._fref_vec, out=data.r)
 
     def calcDiff(self, data: ResidualDataContactForce, x: np.ndarray, u: np.ndarray | None = None) -> None:
-        cd = data.contact
-        data.Rx[:] = cd.df_dx[: self.ncf]
+        cd, nr = data.contact, self.nr
+        data.Rx[:] = cd.df_dx[:nr]
         if data.Ru.shape[1] and cd.df_du.shape[1] == data.Ru.shape[1]:
-            data.Ru[:] = cd.df_du[: self.ncf]
+            data.Ru[:] = cd.df_du[:nr]
 
 
 class ResidualModelContactFrictionCone(_ForceResidual):
     """Crocoddyl's ``ResidualModelContactFrictionCone(state, id, fref, nu=state.nv, fwddyn=True)``
-    with ``fref`` a :class:`FrictionCone`; ``r = A f`` (``nf + 1``)."""
+    with ``fref`` a :class:`FrictionCone`; ``r = A f_linear`` (``nf + 1``; a contact of dimension 2 or more)."""
+
+    min_nc = 2
+
+    def createData(self, data: DataCollectorAbstract | None = None) -> "ResidualDataContactFrictionCone":
+        return ResidualDataContactFrictionCone(self, data)
 
     def __init__(
         self, state: StateAbstract, id: int | str, fref: FrictionCone, nu: int | None = None, fwddyn: bool = True
@@ -151,7 +184,10 @@ class ResidualModelContactWrenchCone(_ForceResidual):
     """Crocoddyl's ``ResidualModelContactWrenchCone(state, id, fref, nu=state.nv, fwddyn=True)``
     with ``fref`` a :class:`WrenchCone`; ``r = A f`` (``nf + 13``, 6D contacts)."""
 
-    ncf = 6
+    ncf = min_nc = 6
+
+    def createData(self, data: DataCollectorAbstract | None = None) -> "ResidualDataContactWrenchCone":
+        return ResidualDataContactWrenchCone(self, data)
 
     def __init__(
         self, state: StateAbstract, id: int | str, fref: WrenchCone, nu: int | None = None, fwddyn: bool = True
@@ -169,7 +205,7 @@ class ResidualModelContactCoPPosition(_ForceResidual):
     """Crocoddyl's ``ResidualModelContactCoPPosition(state, id, cref, nu=state.nv, fwddyn=True)``
     with ``cref`` a :class:`CoPSupport`; ``r = A f`` (4, 6D contacts)."""
 
-    ncf = 6
+    ncf = min_nc = 6
 
     def __init__(
         self, state: StateAbstract, id: int | str, cref: CoPSupport, nu: int | None = None, fwddyn: bool = True
@@ -235,15 +271,12 @@ class ResidualModelContactControlGrav(ResidualModelAbstract):
         model, pdi, nv = self.state.pinocchio, data.pinocchio, self.state.nv
         pin.computeJointJacobians(model, pdi, q)
         for cd in data.contacts.contacts.values():
-            nc = cd.df_dx.shape[0]
             J = pin.getFrameJacobian(model, pdi, cd.frame, pin.LOCAL)
-            if cd.type == pin.LOCAL:
-                Jc = J[:nc]
-            else:
-                R = (pdi.oMi[cd.joint] * cd.jMf).rotation
-                Jc = np.vstack([R @ J[:3], R @ J[3:]])[:nc]
+            R = (pdi.oMi[cd.joint] * cd.jMf).rotation
+            Jc = cd.contact_jacobian(J, R)
+            if cd.type != pin.LOCAL:
                 turn = J[:3].T @ pin.skew(cd.f_local.linear)
-                if nc == 6:
+                if cd.Jc.shape[0] == 6:
                     turn += J[3:].T @ pin.skew(cd.f_local.angular)
                 data.Rx[:, :nv] += turn @ J[3:]
             data.Rx += Jc.T @ cd.df_dx

@@ -38,6 +38,14 @@ def _split_ref_nu(ref: np.ndarray | int | None, nu: int | None, default_size: in
     return (np.zeros(default_size) if ref is None else ref), nu
 
 
+class ResidualDataCoMPosition(ResidualDataAbstract):
+    """Data of :class:`ResidualModelCoMPosition`: ``pinocchio`` (the collector's)."""
+
+
+class ResidualDataControlGrav(ResidualDataAbstract):
+    """Data of :class:`ResidualModelControlGrav`: ``pinocchio`` (a private one) and ``actuation`` (the collector's)."""
+
+
 class ResidualModelCoMPosition(ResidualModelAbstract):
     """``ResidualModelCoMPosition(state, cref, nu=state.nv)``: ``r = com(q) - cref``."""
 
@@ -54,8 +62,8 @@ class ResidualModelCoMPosition(ResidualModelAbstract):
     def reference(self, value: np.ndarray) -> None:
         self._cref = as_vector(value, 3, "cref").copy()
 
-    def createData(self, data: DataCollectorAbstract | None = None) -> ResidualDataAbstract:
-        d = ResidualDataAbstract(self, data)
+    def createData(self, data: DataCollectorAbstract | None = None) -> ResidualDataCoMPosition:
+        d = ResidualDataCoMPosition(self, data)
         d.pinocchio = shared_pinocchio(data, self.state, type(self).__name__)
         return d
 
@@ -130,8 +138,8 @@ class ResidualModelControlGrav(ResidualModelAbstract):
     def __init__(self, state: StateMultibody, nu: int | None = None) -> None:
         super().__init__(check_state(state), state.nv, nu, True, False, True)
 
-    def createData(self, data: DataCollectorAbstract | None = None) -> ResidualDataAbstract:
-        d = ResidualDataAbstract(self, data)
+    def createData(self, data: DataCollectorAbstract | None = None) -> ResidualDataControlGrav:
+        d = ResidualDataControlGrav(self, data)
         shared_pinocchio(data, self.state, type(self).__name__)
         act = getattr(data, "actuation", None)
         if act is None or act.tau.shape != (self.state.nv,) or act.dtau_du.shape != (self.state.nv, self.nu):

@@ -68,7 +68,9 @@ def shared_pinocchio(shared: DataCollectorAbstract | None, state: StateMultibody
 
 
 class _FrameResidual(ResidualModelAbstract):
-    """Shared construction of the frame residuals."""
+    """Shared construction of the frame residuals (``_data_class``: the data's class, by Crocoddyl's name)."""
+
+    _data_class: type
 
     def __init__(self, state: StateMultibody, id: int | str, nr: int, nu: int | None, v_dependent: bool) -> None:
         check_state(state)
@@ -86,14 +88,32 @@ class _FrameResidual(ResidualModelAbstract):
         self._id = frame_id(self.state, value)
 
     def createData(self, data: DataCollectorAbstract | None = None) -> ResidualDataAbstract:
-        d = ResidualDataAbstract(self, data)
+        d = self._data_class(self, data)
         d.pinocchio = shared_pinocchio(data, self.state, type(self).__name__)
         d.fJf = np.zeros((6, self.state.nv))
         return d
 
 
+class ResidualDataFramePlacement(ResidualDataAbstract):
+    """Data of :class:`ResidualModelFramePlacement`: ``pinocchio`` (the collector's) and ``fJf (6, nv)``."""
+
+
+class ResidualDataFrameRotation(ResidualDataAbstract):
+    """Data of :class:`ResidualModelFrameRotation`: ``pinocchio`` (the collector's) and ``fJf (6, nv)``."""
+
+
+class ResidualDataFrameTranslation(ResidualDataAbstract):
+    """Data of :class:`ResidualModelFrameTranslation`: ``pinocchio`` (the collector's)."""
+
+
+class ResidualDataFrameVelocity(ResidualDataAbstract):
+    """Data of :class:`ResidualModelFrameVelocity`: ``pinocchio`` (the collector's) and ``fJf (6, nv)``."""
+
+
 class ResidualModelFramePlacement(_FrameResidual):
     """``ResidualModelFramePlacement(state, id, pref, nu=state.nv)``: ``r = log6(pref⁻¹ oMf)``."""
+
+    _data_class = ResidualDataFramePlacement
 
     def __init__(self, state: StateMultibody, id: int | str, pref: pin.SE3, nu: int | None = None) -> None:
         super().__init__(state, id, 6, nu, False)
@@ -139,8 +159,8 @@ class ResidualModelFrameTranslation(_FrameResidual):
     def reference(self, value: np.ndarray) -> None:
         self._xref = as_vector(value, 3, "xref").copy()
 
-    def createData(self, data: DataCollectorAbstract | None = None) -> ResidualDataAbstract:
-        d = ResidualDataAbstract(self, data)
+    def createData(self, data: DataCollectorAbstract | None = None) -> "ResidualDataFrameTranslation":
+        d = ResidualDataFrameTranslation(self, data)
         d.pinocchio = shared_pinocchio(data, self.state, type(self).__name__)
         return d
 
@@ -156,6 +176,8 @@ class ResidualModelFrameTranslation(_FrameResidual):
 
 class ResidualModelFrameRotation(_FrameResidual):
     """``ResidualModelFrameRotation(state, id, Rref, nu=state.nv)``: ``r = log3(Rrefᵀ oMf.rotation)``."""
+
+    _data_class = ResidualDataFrameRotation
 
     def __init__(self, state: StateMultibody, id: int | str, Rref: np.ndarray, nu: int | None = None) -> None:
         super().__init__(state, id, 3, nu, False)
@@ -196,6 +218,8 @@ class ResidualModelFrameVelocity(_FrameResidual):
     the derivative of the frame rotation is included (Pinocchio's LOCAL_WORLD_ALIGNED output, used
     as is by Crocoddyl 3.2, omits it from the linear rows).
     """
+
+    _data_class = ResidualDataFrameVelocity
 
     def __init__(
         self, state: StateMultibody, id: int | str, vref: pin.Motion, type: pin.ReferenceFrame, nu: int | None = None
@@ -251,3 +275,4 @@ class ResidualModelFrameVelocity(_FrameResidual):
         data.Rx[3:, :nv] = R @ (dv_dq[3:] - pin.skew(vl.angular) @ Jw)
         data.Rx[:3, nv:] = R @ dv_dv[:3]
         data.Rx[3:, nv:] = R @ dv_dv[3:]
+

@@ -154,7 +154,7 @@ def test_contact_and_impulse_abstracts_have_crocoddyl_signatures():
     assert (point.id, point.nc, point.type) == (fid, 3, pin.LOCAL_WORLD_ALIGNED)
     assert crocopy.ImpulseModel6D(state, "LF_FOOT").nc == 6
     with pytest.raises(ValueError, match="type"):
-        crocopy.ContactModelAbstract(state, pin.WORLD, 3)
+        crocopy.ContactModelAbstract(state, "LOCAL", 3)
     with pytest.raises(ValueError, match="StateMultibody"):
         crocopy.ImpulseModelAbstract(crocopy.StateVector(4), pin.LOCAL, 3)
     with pytest.raises(ValueError, match="nu must be non-negative"):

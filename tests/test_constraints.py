@@ -189,3 +189,40 @@ def test_share_memory_with_action_data_and_integrators(state):
     data = crocopy.DifferentialActionDataAbstract(crocopy.DifferentialActionModelLQR(2, 2))
     with pytest.raises(ValueError, match="data.g has shape"):
         m.createData().shareMemory(data)
+
+
+def test_models_follow_their_manager():
+    """As in Crocoddyl, a model's ng, nh, ng_T, nh_T and bounds follow its manager after a status change
+    (running-only items leave the terminal counts); a data created afterwards has the new rows."""
+    from robots import load
+
+    model = load("talos_arm")
+    ms = crocopy.StateMultibody(model)
+    act = crocopy.ActuationModelFull(ms)
+    m = ConstraintModelManager(ms, act.nu)
+    m.addConstraint("a_run", ConstraintModelResidual(ms, crocopy.ResidualModelControl(ms, act.nu),
+                                                     -np.ones(act.nu), np.ones(act.nu), False))
+    m.addConstraint("b_both", ConstraintModelResidual(ms, crocopy.ResidualModelCoMPosition(ms, np.zeros(3), act.nu),
+                                                      -2 * np.ones(3), 2 * np.ones(3)))
+    m.addConstraint("c_eq", ConstraintModelResidual(ms, crocopy.ResidualModelCoMPosition(ms, np.ones(3), act.nu)))
+    dam = crocopy.DifferentialActionModelFreeFwdDynamics(ms, act, crocopy.CostModelSum(ms, act.nu), m)
+    models = (dam, crocopy.IntegratedActionModelEuler(dam, 1e-2), crocopy.IntegratedActionModelRK(dam, crocopy.four,
+                                                                                                    1e-2))
+    nu = act.nu
+    for mod in models:
+        assert (mod.ng, mod.nh, mod.ng_T, mod.nh_T) == (nu + 3, 3, 3, 3)
+        np.testing.assert_array_equal(mod.g_lb, np.r_[-np.ones(nu), -2 * np.ones(3)])
+    m.changeConstraintStatus("a_run", False)
+    for mod in models:
+        assert (mod.ng, mod.nh, mod.ng_T, mod.nh_T) == (3, 3, 3, 3)
+        np.testing.assert_array_equal(mod.g_ub, 2 * np.ones(3))
+        d = mod.createData()
+        x = ms.zero()
+        mod.calc(d, x, np.zeros(nu))
+        assert d.g.shape == (3,) and d.h.shape == (3,)
+    m.changeConstraintStatus("b_both", False)
+    assert (dam.ng, dam.ng_T, dam.g_lb.shape) == (0, 0, (0,))
+    m.changeConstraintStatus("b_both", True)
+    dam.g_lb = -3 * np.ones(3)  # an assigned bound stays
+    np.testing.assert_array_equal(dam.g_lb, -3 * np.ones(3))
+    np.testing.assert_array_equal(m.g_lb, -2 * np.ones(3))

@@ -285,7 +285,7 @@ def test_bad_input():
     with pytest.raises(ValueError, match="gains"):
         crocopy.ContactModel3D(state, fid, np.zeros(3), LOCAL, 12, np.zeros(3))
     with pytest.raises(ValueError, match="type"):
-        crocopy.ContactModel3D(state, fid, np.zeros(3), pin.WORLD, 12)
+        crocopy.ContactModel3D(state, fid, np.zeros(3), "LOCAL", 12)
     with pytest.raises(ValueError, match="pref"):
         crocopy.ContactModel6D(state, fid, np.zeros(3), LOCAL, 12)
     contacts = crocopy.ContactModelMultiple(state, 12)

@@ -74,7 +74,7 @@ _BOX = np.array([0.2, 0.1])
 
 
 def _contact_dam(extra: Callable | None = None, nc: int = 6):
-    """Talos legs on one 6D (or anymal on one 3D) contact with contact residual costs."""
+    """Talos legs on one 6D (or anymal on one 3D, 2D or 1D) contact with contact residual costs."""
     robot, foot = ("talos_legs", "left_sole_link") if nc == 6 else ("anymal", "LF_FOOT")
     model = load(robot)
     state = crocopy.StateMultibody(model)
@@ -83,6 +83,10 @@ def _contact_dam(extra: Callable | None = None, nc: int = 6):
     contacts = crocopy.ContactModelMultiple(state, act.nu)
     if nc == 6:
         contact = crocopy.ContactModel6D(state, fid, pin.SE3.Identity(), pin.LOCAL, act.nu, np.array([0.0, 2.0]))
+    elif nc == 2:
+        contact = crocopy.ContactModel2D(state, fid, np.zeros(2), act.nu, np.array([1.0, 2.0]))
+    elif nc == 1:
+        contact = crocopy.ContactModel1D(state, fid, 0.1, pin.WORLD, _ROT, act.nu, np.array([1.0, 2.0]))
     else:
         contact = crocopy.ContactModel3D(state, fid, np.zeros(3), pin.LOCAL_WORLD_ALIGNED, act.nu, np.array([1.0, 2.0]))
     contacts.addContact("foot", contact)
@@ -286,6 +290,14 @@ CASES: dict[str, Callable] = {
         (dam := _contact_dam(nc=3)), dam.contacts.contacts["foot"].contact,
         lambda d: d.multibody.contacts.contacts["foot"],
     ),
+    "ContactModel2D": lambda: (
+        (dam := _contact_dam(nc=2)), dam.contacts.contacts["foot"].contact,
+        lambda d: d.multibody.contacts.contacts["foot"],
+    ),
+    "ContactModel1D": lambda: (
+        (dam := _contact_dam(nc=1)), dam.contacts.contacts["foot"].contact,
+        lambda d: d.multibody.contacts.contacts["foot"],
+    ),
     "ContactModelMultiple": lambda: ((dam := _contact_dam()), dam.contacts, lambda d: d.multibody.contacts),
     "ImpulseModel6D": lambda: (
         (m := _impulse()), m.impulses.impulses["foot"].impulse, lambda d: d.multibody.impulses.impulses["foot"]
@@ -338,6 +350,8 @@ def test_every_public_model_class_has_a_case():
     public = {
         name for name in dir(crocopy)
         if isinstance(getattr(crocopy, name), type) and _MODEL_CLASS.search(name) and not name.endswith("Abstract")
+        and getattr(crocopy, name).__module__.startswith("crocopy")  # not the container names (list, dict)
+        and "Data" not in name
     }
     assert public - set(CASES) - set(STANDALONE) == set()
 

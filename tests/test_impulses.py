@@ -140,7 +140,7 @@ def test_bad_input():
     with pytest.raises(ValueError, match="no frame named"):
         crocopy.ImpulseModel6D(state, "NO_FOOT")
     with pytest.raises(ValueError, match="type"):
-        crocopy.ImpulseModel3D(state, "LF_FOOT", pin.WORLD)
+        crocopy.ImpulseModel3D(state, "LF_FOOT", "LOCAL")
     impulses = crocopy.ImpulseModelMultiple(state)
     impulses.addImpulse("lf", crocopy.ImpulseModel3D(state, "LF_FOOT"))
     with pytest.raises(ValueError, match="already exists"):

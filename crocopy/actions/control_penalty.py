@@ -47,7 +47,7 @@ class ActionModelControlPenalty(ActionModelAbstract):
         if not isinstance(model, ActionModelAbstract):
             raise ValueError(f"model must be an ActionModelAbstract, got {type(model).__name__}")
         super().__init__(model.state, model.nu, model.nr, model.ng, model.nh, model.ng_T, model.nh_T)
-        self.g_lb, self.g_ub = model.g_lb, model.g_ub
+        self._follow_constraints(model)
         if not weight >= 0.0:
             raise ValueError(f"weight must be non-negative, got {weight}")
         self.model = model

@@ -57,6 +57,9 @@ class DifferentialActionModelLQR(LQTermsAccess, DifferentialActionModelAbstract)
             rng.standard_normal(nx), rng.standard_normal(nu), rng.standard_normal(ng), rng.standard_normal(nh),
         )
 
+    def createData(self) -> "DifferentialActionDataLQR":
+        return DifferentialActionDataLQR(self)
+
     def calc(self, data: DifferentialActionDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
         nq = self.Aq.shape[0]
         if u is None:
@@ -72,3 +75,8 @@ class DifferentialActionModelLQR(LQTermsAccess, DifferentialActionModelAbstract)
             data.Fu[:] = self.B
         self._lq.fill_cost_derivatives(data, x, u)
         self._lq.fill_constraints(data, x, u, diff=True)
+
+
+class DifferentialActionDataLQR(DifferentialActionDataAbstract):
+    """Data of :class:`DifferentialActionModelLQR` (the fields of
+    :class:`~crocopy.diff_action_base.DifferentialActionDataAbstract`)."""

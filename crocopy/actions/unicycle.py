@@ -20,6 +20,9 @@ class ActionModelUnicycle(ActionModelAbstract):
         self.costWeights = np.array([10.0, 1.0])
         self.dt = 0.1
 
+    def createData(self) -> "ActionDataUnicycle":
+        return ActionDataUnicycle(self)
+
     def calc(self, data: ActionDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
         w = self.costWeights
         data.r[:3] = w[0] * x
@@ -50,3 +53,7 @@ class ActionModelUnicycle(ActionModelAbstract):
         data.Fu[0, 0] = c * self.dt
         data.Fu[1, 0] = s * self.dt
         data.Fu[2, 1] = self.dt
+
+
+class ActionDataUnicycle(ActionDataAbstract):
+    """Data of :class:`ActionModelUnicycle` (the fields of :class:`~crocopy.action_base.ActionDataAbstract`)."""

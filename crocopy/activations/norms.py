@@ -13,6 +13,10 @@ import numpy as np
 from .base import ActivationDataAbstract, ActivationModelAbstract
 
 
+class ActivationDataSmooth1Norm(ActivationDataAbstract):
+    """Data of :class:`ActivationModelSmooth1Norm` (the fields of :class:`ActivationDataAbstract`)."""
+
+
 class ActivationModelSmooth1Norm(ActivationModelAbstract):
     """``a(r) = Σ sqrt(eps + rᵢ²)``."""
 
@@ -23,6 +27,9 @@ class ActivationModelSmooth1Norm(ActivationModelAbstract):
             raise ValueError(f"eps must be non-negative, got {eps}")
         super().__init__(nr)
         self.eps = float(eps)
+
+    def createData(self) -> ActivationDataSmooth1Norm:
+        return ActivationDataSmooth1Norm(self)
 
     def calc(self, data: ActivationDataAbstract, r: np.ndarray) -> None:
         data.a_value = float(np.sum(np.sqrt(self.eps + r * r)))

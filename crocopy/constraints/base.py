@@ -165,6 +165,10 @@ class ConstraintDataAbstract:
         tolerate_python_model(model, self, ("g", "Gx", "Gu", "h", "Hx", "Hu"))
 
 
+class ConstraintDataResidual(ConstraintDataAbstract):
+    """Data of :class:`ConstraintModelResidual` (the fields of :class:`ConstraintDataAbstract`)."""
+
+
 class ConstraintModelResidual(ConstraintModelAbstract):
     """A residual as a constraint (Crocoddyl's ``ConstraintModelResidual``).
 
@@ -195,6 +199,10 @@ class ConstraintModelResidual(ConstraintModelAbstract):
             raise ValueError("ConstraintModelResidual takes (state, residual[, T_constraint]) or "
                              "(state, residual, lower, upper[, T_constraint])")
         self.T_constraint = bool(T_constraint) and (residual.q_dependent or residual.v_dependent)
+
+    def createData(self, data: DataCollectorAbstract | None = None) -> ConstraintDataResidual:
+        """Allocate the data this constraint writes into (``data`` is the node's data collector)."""
+        return ConstraintDataResidual(self, data)
 
     def calc(self, data: ConstraintDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
         """Evaluate the residual into ``g`` (inequality) or ``h`` (equality)."""

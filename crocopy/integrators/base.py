@@ -109,7 +109,7 @@ class IntegratedActionModelAbstract(ActionModelAbstract):
         self._identity_control = type(control) is ControlParametrizationModelPolyZero
         self.dt = timeStep
         self.withCostResidual = bool(withCostResidual)
-        self.g_lb, self.g_ub = diffModel.g_lb, diffModel.g_ub
+        self._follow_constraints(diffModel)
         if diffModel.nu:
             self._set_control_limits(*control.convertBounds(diffModel.u_lb, diffModel.u_ub))
         self._euclidean = type(diffModel.state) is StateVector
@@ -209,6 +209,11 @@ class IntegratedActionModelAbstract(ActionModelAbstract):
         data.Lx[:] = ddata.Lx
         data.Lxx[:] = ddata.Lxx
         self._copy_constraints(data, ddata, diff=True)
+
+
+class IntegratedActionDataAbstract(ActionDataAbstract):
+    """Crocoddyl's base of the integrated action data (Euler, Runge-Kutta): the fields of
+    :class:`~crocopy.action_base.ActionDataAbstract`."""
 
 
 class ControlChainData:

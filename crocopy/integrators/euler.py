@@ -17,12 +17,11 @@ from __future__ import annotations
 import numpy as np
 
 from .. import kernels
-from ..action_base import ActionDataAbstract
 from ..enums import Jcomponent
 from ..kernels import log_fallback
 from ..state import StateAbstract
 from . import euler_kernel as integrator_kernel
-from .base import ControlChainData, IntegratedActionModelAbstract
+from .base import ControlChainData, IntegratedActionDataAbstract, IntegratedActionModelAbstract
 
 
 class IntegratedActionModelEuler(IntegratedActionModelAbstract):
@@ -99,7 +98,7 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
         self._copy_constraints(data, ddata, diff=True, cdata=cdata)
 
 
-class IntegratedActionDataEuler(ActionDataAbstract):
+class IntegratedActionDataEuler(IntegratedActionDataAbstract):
     """Data of :class:`IntegratedActionModelEuler`: ``differential`` and ``control`` data, ``dx`` and the
     chain-rule blocks (``control_chain``: the differential derivatives mapped to the parameters)."""
 

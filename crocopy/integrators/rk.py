@@ -15,10 +15,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..action_base import ActionDataAbstract
 from ..diff_action_base import DifferentialActionModelAbstract
 from ..enums import Jcomponent, RKType
-from .base import ControlChainData, IntegratedActionModelAbstract, bind_arguments
+from .base import ControlChainData, IntegratedActionDataAbstract, IntegratedActionModelAbstract, bind_arguments
 
 _TABLEAUX = {
     RKType.two: ((0.0, 0.5), (0.0, 1.0)),
@@ -132,7 +131,7 @@ class IntegratedActionModelRK(IntegratedActionModelAbstract):
         self._copy_constraints(data, data.differential[0], diff=True, cdata=data.control[0])
 
 
-class IntegratedActionDataRK(ActionDataAbstract):
+class IntegratedActionDataRK(IntegratedActionDataAbstract):
     """Data of :class:`IntegratedActionModelRK`: one differential and one control data per stage
     (``differential``, ``control``); ``control_chain`` holds a stage's derivatives mapped to the parameters."""
 

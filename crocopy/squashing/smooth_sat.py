@@ -155,6 +155,11 @@ class SquashingModelSmoothSat(SquashingModelAbstract):
         d *= 0.5
 
 
+class ActuationSquashingData(ActuationDataAbstract):
+    """Data of :class:`ActuationSquashingModel`: the actuation fields plus ``squashing`` and ``actuation``
+    (the data of the squashing and of the inner actuation)."""
+
+
 class ActuationSquashingModel(ActuationModelAbstract):
     """Crocoddyl's ``ActuationSquashingModel(actuation, squashing, nu)``: ``tau = actuation(x, squashing(u))``.
 
@@ -181,8 +186,8 @@ class ActuationSquashingModel(ActuationModelAbstract):
         self.actuation = actuation
         self.squashing = squashing
 
-    def createData(self) -> ActuationDataAbstract:
-        data = ActuationDataAbstract(self)
+    def createData(self) -> ActuationSquashingData:
+        data = ActuationSquashingData(self)
         data.squashing = self.squashing.createData()
         data.actuation = self.actuation.createData()
         data.tau_set[:] = data.actuation.tau_set

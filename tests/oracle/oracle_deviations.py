@@ -79,6 +79,10 @@ DEVIATIONS: tuple[Deviation, ...] = (
               "IntegratedActionModelRK: Crocoddyl's Fx (and, for RK3, Lx) are approximations of the derivative of "
               "its own xnext and cost",
               lambda c: (c.integrator or "").startswith("rk") and not c.terminal),
+    Deviation("contact2d-position-gain", "derivative",
+              "ContactModel2D with a position gain: Crocoddyl's da0_dx (so Fx and the force Jacobians) takes the "
+              "derivative of the world position term kp (p_xz - xref) as if it were in the frame's coordinates",
+              lambda c: c.kind == om.CONTACT2 and not c.terminal),
     Deviation("com-free-dynamics", "value",
               "ResidualModelCoMPosition under free (forward or inverse) dynamics: Crocoddyl never computes the "
               "centre of mass and returns -cref with a zero Jacobian",

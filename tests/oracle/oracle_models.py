@@ -148,12 +148,17 @@ def _impulse_com(lib, c: Context):
 
 
 FREE, CONTACT3, CONTACT6, IMPULSE3, IMPULSE6 = "free", "contact3d", "contact6d", "impulse3d", "impulse6d"
+CONTACT1, CONTACT2, CONTACT_WORLD, IMPULSE_WORLD = "contact1d", "contact2d", "contact-world", "impulse-world"
 FREE_INV, CONTACT3_INV, CONTACT6_INV = "free_invdyn", "contact3d_invdyn", "contact6d_invdyn"
 INVDYN = (FREE_INV, CONTACT3_INV, CONTACT6_INV)
-ALL = (FREE, CONTACT3, CONTACT6, IMPULSE3, IMPULSE6, *INVDYN)
-ACTUATED = (FREE, CONTACT3, CONTACT6)
-CONTACTS = (CONTACT3, CONTACT6)
-CONTACT_AND_IMPULSE = (CONTACT3, CONTACT6, IMPULSE3, IMPULSE6)
+ALL = (FREE, CONTACT3, CONTACT6, IMPULSE3, IMPULSE6, CONTACT1, CONTACT2, CONTACT_WORLD, IMPULSE_WORLD, *INVDYN)
+ACTUATED = (FREE, CONTACT3, CONTACT6, CONTACT1, CONTACT2, CONTACT_WORLD)
+CONTACTS = (CONTACT3, CONTACT6, CONTACT1, CONTACT2, CONTACT_WORLD)
+#: a force residual needs a 3D or 6D force on its frame (or, for contact_force, a 1D contact; Crocoddyl
+#: refuses the 2D contact there), the friction cone a 2D contact or more, the wrench cone and CoP a 6D one
+CONTACT_AND_IMPULSE = (CONTACT3, CONTACT6, IMPULSE3, IMPULSE6, CONTACT_WORLD, IMPULSE_WORLD)
+SIX_D = (CONTACT6, IMPULSE6, CONTACT_WORLD, IMPULSE_WORLD)
+IMPULSES = (IMPULSE3, IMPULSE6, IMPULSE_WORLD)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -182,13 +187,13 @@ RESIDUALS: dict[str, ResidualSpec] = {
     "frame_velocity_world": ResidualSpec("ResidualModelFrameVelocity", _velocity(pin.WORLD), ALL),
     "frame_velocity_lwa": ResidualSpec("ResidualModelFrameVelocity", _velocity(pin.LOCAL_WORLD_ALIGNED), ALL),
     "contact_force": ResidualSpec("ResidualModelContactForce", _contact_force,
-                                  (*CONTACT_AND_IMPULSE, CONTACT3_INV, CONTACT6_INV)),
+                                  (*CONTACT_AND_IMPULSE, CONTACT1, CONTACT3_INV, CONTACT6_INV)),
     "friction_cone": ResidualSpec("ResidualModelContactFrictionCone", _friction_cone,
-                                  (*CONTACT_AND_IMPULSE, CONTACT3_INV, CONTACT6_INV)),
-    "wrench_cone": ResidualSpec("ResidualModelContactWrenchCone", _wrench_cone, (CONTACT6, IMPULSE6, CONTACT6_INV)),
-    "cop_position": ResidualSpec("ResidualModelContactCoPPosition", _cop, (CONTACT6, IMPULSE6, CONTACT6_INV)),
+                                  (*CONTACT_AND_IMPULSE, CONTACT2, CONTACT3_INV, CONTACT6_INV)),
+    "wrench_cone": ResidualSpec("ResidualModelContactWrenchCone", _wrench_cone, (*SIX_D, CONTACT6_INV)),
+    "cop_position": ResidualSpec("ResidualModelContactCoPPosition", _cop, (*SIX_D, CONTACT6_INV)),
     "contact_control_grav": ResidualSpec("ResidualModelContactControlGrav", _contact_control_grav, CONTACTS),
-    "impulse_com": ResidualSpec("ResidualModelImpulseCoM", _impulse_com, (IMPULSE3, IMPULSE6)),
+    "impulse_com": ResidualSpec("ResidualModelImpulseCoM", _impulse_com, IMPULSES),
 }
 
 
@@ -223,7 +228,11 @@ ACTIVATIONS: dict[str, tuple[str, Callable]] = {
 # ---------------------------------------------------------------------------------------- dynamics
 @dataclasses.dataclass(frozen=True)
 class DynamicsSpec:
-    """Robot, frames and contact set-up of a dynamics kind (``supports``: ``(frame, type, gains)``)."""
+    """Robot, frames and contact set-up of a dynamics kind (``supports``: ``(frame, type, gains)``).
+
+    ``nc`` is the dimension of every support unless ``dims`` gives one per support (the residuals read
+    the first); ``integrators`` restricts the integrators crossed with the kind (None: all).
+    """
 
     robot: str
     frame: str
@@ -233,9 +242,12 @@ class DynamicsSpec:
     inv_damping: float = 0.0
     r_coeff: float = 0.0
     invdyn: bool = False
+    dims: tuple[int, ...] = ()
+    integrators: tuple[str, ...] | None = None
 
 
-_LOCAL, _LWA = pin.LOCAL, pin.LOCAL_WORLD_ALIGNED
+_LOCAL, _LWA, _WORLD = pin.LOCAL, pin.LOCAL_WORLD_ALIGNED, pin.WORLD
+_FEW = ("euler", "rk4")
 _FEET = ("LF_FOOT", "RF_FOOT", "LH_FOOT", "RH_FOOT")
 _SOLES = ("left_sole_link", "right_sole_link")
 DYNAMICS: dict[str, DynamicsSpec] = {
@@ -250,10 +262,24 @@ DYNAMICS: dict[str, DynamicsSpec] = {
                                                                                          (_LOCAL, _LWA, _LWA))),
                            3, True),
     IMPULSE6: DynamicsSpec("talos_legs", "right_sole_link", ((_SOLES[0], _LOCAL, (0.0, 0.0)),), 6, True, r_coeff=0.3),
+    CONTACT1: DynamicsSpec("anymal", "RF_KFE",
+                           tuple((f, t, g) for f, t, g in zip(_FEET, (_LOCAL, _LWA, _WORLD, _LOCAL),
+                                                              ((5.0, 3.0), (0.0, 10.0), (2.0, 0.0), (0.0, 0.0)))),
+                           1, False, dims=(1, 1, 1, 3), integrators=_FEW),
+    CONTACT2: DynamicsSpec("anymal", "RF_KFE",
+                           tuple((f, _LOCAL, g) for f, g in zip(_FEET, ((5.0, 3.0), (0.0, 10.0), (2.0, 0.0),
+                                                                        (0.0, 0.0)))),
+                           2, False, integrators=_FEW),
+    CONTACT_WORLD: DynamicsSpec("talos_legs", "right_sole_link",
+                                ((_SOLES[0], _WORLD, (5.0, 10.0)), (_SOLES[1], _WORLD, (3.0, 30.0))), 6, False,
+                                dims=(6, 3), integrators=_FEW),
+    IMPULSE_WORLD: DynamicsSpec("talos_legs", "right_sole_link", ((_SOLES[0], _WORLD, (0.0, 0.0)),
+                                                                   (_SOLES[1], _WORLD, (0.0, 0.0))), 6, True,
+                                dims=(6, 3)),
 }
-DYNAMICS[FREE_INV] = dataclasses.replace(DYNAMICS[FREE], invdyn=True)
-DYNAMICS[CONTACT3_INV] = dataclasses.replace(DYNAMICS[CONTACT3], invdyn=True)
-DYNAMICS[CONTACT6_INV] = dataclasses.replace(DYNAMICS[CONTACT6], invdyn=True)
+DYNAMICS[FREE_INV] = dataclasses.replace(DYNAMICS[FREE], invdyn=True, integrators=INVDYN_INTEGRATORS)
+DYNAMICS[CONTACT3_INV] = dataclasses.replace(DYNAMICS[CONTACT3], invdyn=True, integrators=INVDYN_INTEGRATORS)
+DYNAMICS[CONTACT6_INV] = dataclasses.replace(DYNAMICS[CONTACT6], invdyn=True, integrators=INVDYN_INTEGRATORS)
 
 
 def context(lib, kind: str) -> Context:
@@ -269,24 +295,30 @@ def context(lib, kind: str) -> Context:
     return Context(lib, state, actuation, nu, model.getFrameId(spec.frame), contact_frame, spec.nc)
 
 
+def _contact(lib, c: Context, fid: int, typ, gains: np.ndarray, dim: int, r: np.random.Generator):
+    if dim == 1:
+        return lib.ContactModel1D(c.state, fid, float(r.normal()), typ, pin.exp3(r.normal(size=3)), c.nu, gains)
+    if dim == 2:
+        return lib.ContactModel2D(c.state, fid, r.normal(size=2), c.nu, gains)
+    if dim == 3:
+        return lib.ContactModel3D(c.state, fid, r.normal(size=3), typ, c.nu, gains)
+    ref = pin.SE3(pin.exp3(0.3 * r.normal(size=3)), r.normal(size=3))
+    return lib.ContactModel6D(c.state, fid, ref, typ, c.nu, gains)
+
+
 def _supports(lib, c: Context, spec: DynamicsSpec):
     model = c.state.pinocchio
+    dims = spec.dims or (spec.nc,) * len(spec.supports)
     if spec.impulse:
         stack = lib.ImpulseModelMultiple(c.state)
-        cls = lib.ImpulseModel3D if spec.nc == 3 else lib.ImpulseModel6D
-        for name, typ, _ in spec.supports:
+        for (name, typ, _), dim in zip(spec.supports, dims):
+            cls = lib.ImpulseModel3D if dim == 3 else lib.ImpulseModel6D
             stack.addImpulse(name, cls(c.state, model.getFrameId(name), typ))
         return stack
     stack = lib.ContactModelMultiple(c.state, c.nu)
     r = _rng("supports")
-    for name, typ, gains in spec.supports:
-        fid = model.getFrameId(name)
-        if spec.nc == 3:
-            contact = lib.ContactModel3D(c.state, fid, r.normal(size=3), typ, c.nu, np.array(gains))
-        else:
-            ref = pin.SE3(pin.exp3(0.3 * r.normal(size=3)), r.normal(size=3))
-            contact = lib.ContactModel6D(c.state, fid, ref, typ, c.nu, np.array(gains))
-        stack.addContact(name, contact)
+    for (name, typ, gains), dim in zip(spec.supports, dims):
+        stack.addContact(name, _contact(lib, c, model.getFrameId(name), typ, np.array(gains), dim, r))
     return stack
 
 
@@ -351,9 +383,10 @@ CONTROLLED_RESIDUALS = ("state", "control", "joint_effort", "joint_acceleration"
 INVDYN_INTEGRATORS = ("euler", "rk4", "euler-poly1", "rk3-poly2rk3")
 
 
-def crossed(integrator: str, residual: str, kind: str | None = None) -> bool:
-    """Whether the node suite crosses ``integrator`` with ``residual`` (under dynamics ``kind``)."""
-    if kind in INVDYN and integrator not in INVDYN_INTEGRATORS:
+def crossed(integrator: str, residual: str, kind: str = FREE) -> bool:
+    """Whether the node suite crosses ``integrator`` with ``residual`` under dynamics ``kind``."""
+    chosen = DYNAMICS[kind].integrators
+    if chosen is not None and integrator not in chosen:
         return False
     return "-" not in integrator or residual in CONTROLLED_RESIDUALS
 
@@ -505,6 +538,8 @@ def split_key(key: str) -> tuple[str, str]:
 def value_key(key: str) -> str | None:
     """The value whose Jacobian ``key`` is (``...Rx`` → ``...r``), or None for a value or a Hessian."""
     head, last = split_key(key)
+    if last in JACOBIANS["xout"]:  # a stage's dynamics (differential data) or the node's (action data)
+        return head + ("xout" if head.startswith("differential[") else "xnext")
     for value, jacobians in JACOBIANS.items():
         if last in jacobians:
             return head + value

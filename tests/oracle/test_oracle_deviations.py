@@ -44,6 +44,8 @@ JACOBIAN_PROOFS = [
     ("impulse-frame-velocity", om.IMPULSE3, "frame_velocity_world", None, "cost[quad].residual.Rx"),
     ("impulse-restitution", om.IMPULSE6, "state", None, "Fx"),
     ("impulse-restitution", om.IMPULSE6, "contact_force", None, "cost[quad].residual.Rx"),
+    ("contact2d-position-gain", om.CONTACT2, "state", "euler", "Fx"),
+    ("contact2d-position-gain", om.CONTACT2, "friction_cone", None, "cost[quad].residual.Rx"),
     ("runge-kutta-jacobians", om.FREE, "state", "rk2", "Fx"),
     ("runge-kutta-jacobians", om.FREE, "state", "rk3", "Fx"),
     ("runge-kutta-jacobians", om.FREE, "state", "rk4", "Fx"),

@@ -1,0 +1,119 @@
+"""Crocoddyl names crocopy provides for scripts: data classes under their names, containers, helpers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from robots import load
+
+import crocopy
+
+
+def _collector():
+    model = load("anymal")
+    state = crocopy.StateMultibody(model)
+    act = crocopy.ActuationModelFloatingBase(state)
+    pd = model.createData()
+    contacts = crocopy.ContactModelMultiple(state, act.nu)
+    contacts.addContact("lf", crocopy.ContactModel3D(state, "LF_FOOT", np.zeros(3), pin.LOCAL, act.nu))
+    joint = crocopy.JointDataAbstract(state, act, act.nu)
+    shared = crocopy.DataCollectorJointActMultibodyInContact(pd, act.createData(), joint, contacts.createData(pd))
+    return state, act, shared
+
+
+def test_data_classes_under_crocoddyl_names():
+    state, act, shared = _collector()
+    nu, fid = act.nu, state.pinocchio.getFrameId("LF_FOOT")
+    cone = crocopy.FrictionCone(np.eye(3), 0.7)
+    wrench = crocopy.WrenchCone(np.eye(3), 0.7, np.array([0.1, 0.1]))
+    cases = [
+        (crocopy.ResidualModelFramePlacement(state, fid, pin.SE3.Identity(), nu), crocopy.ResidualDataFramePlacement),
+        (crocopy.ResidualModelFrameRotation(state, fid, np.eye(3), nu), crocopy.ResidualDataFrameRotation),
+        (crocopy.ResidualModelFrameTranslation(state, fid, np.zeros(3), nu), crocopy.ResidualDataFrameTranslation),
+        (crocopy.ResidualModelFrameVelocity(state, fid, pin.Motion.Zero(), pin.LOCAL, nu),
+         crocopy.ResidualDataFrameVelocity),
+        (crocopy.ResidualModelCoMPosition(state, np.zeros(3), nu), crocopy.ResidualDataCoMPosition),
+        (crocopy.ResidualModelControlGrav(state, nu), crocopy.ResidualDataControlGrav),
+        (crocopy.ResidualModelContactFrictionCone(state, fid, cone, nu), crocopy.ResidualDataContactFrictionCone),
+    ]
+    for model, cls in cases:
+        data = model.createData(shared)
+        assert type(data) is cls and isinstance(data, crocopy.ResidualDataAbstract)
+    six = load("talos_legs")
+    s6 = crocopy.StateMultibody(six)
+    a6 = crocopy.ActuationModelFloatingBase(s6)
+    contacts = crocopy.ContactModelMultiple(s6, a6.nu)
+    contacts.addContact("l", crocopy.ContactModel6D(s6, "left_sole_link", pin.SE3.Identity(), pin.LOCAL, a6.nu))
+    pd = six.createData()
+    sh6 = crocopy.DataCollectorMultibodyInContact(pd, contacts.createData(pd))
+    wrench_res = crocopy.ResidualModelContactWrenchCone(s6, "left_sole_link", wrench, a6.nu)
+    assert type(wrench_res.createData(sh6)) is crocopy.ResidualDataContactWrenchCone
+    assert type(crocopy.ImpulseModel3D(state, fid).createData(state.pinocchio.createData())) is crocopy.ImpulseData3D
+    assert type(crocopy.ImpulseModel6D(state, fid).createData(state.pinocchio.createData())) is crocopy.ImpulseData6D
+    res = crocopy.ConstraintModelResidual(state, crocopy.ResidualModelControl(state, nu))
+    assert type(res.createData(shared)) is crocopy.ConstraintDataResidual
+    assert type(crocopy.ActivationModelSmooth1Norm(3).createData()) is crocopy.ActivationDataSmooth1Norm
+    assert type(crocopy.ActionModelLQR(2, 2).createData()) is crocopy.ActionDataLQR
+    assert type(crocopy.ActionModelUnicycle().createData()) is crocopy.ActionDataUnicycle
+    dlqr = crocopy.DifferentialActionModelLQR(2, 2)
+    assert type(dlqr.createData()) is crocopy.DifferentialActionDataLQR
+    for iam in (crocopy.IntegratedActionModelEuler(dlqr, 0.1),
+                crocopy.IntegratedActionModelRK(dlqr, crocopy.four, 0.1)):
+        assert isinstance(iam.createData(), crocopy.IntegratedActionDataAbstract)
+    squash = crocopy.ActuationSquashingModel(act, crocopy.SquashingModelSmoothSat(-np.ones(nu), np.ones(nu), nu), nu)
+    assert type(squash.createData()) is crocopy.ActuationSquashingData
+
+
+def test_containers_are_python_containers():
+    models = crocopy.StdVec_ActionModel()
+    models.append(crocopy.ActionModelUnicycle())
+    assert len(models) == 1
+    xs = crocopy.StdVec_MatrixXs([np.eye(2)])
+    copies = xs.tolist()
+    assert np.array_equal(copies[0], np.eye(2)) and copies[0] is not xs[0]
+    costs = crocopy.CostModelSum(crocopy.StateVector(3), 2)
+    assert isinstance(costs.costs, crocopy.StdMap_CostItem)
+    assert isinstance(costs.active_set, crocopy.StdSet_String)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.floats(-10, 10), min_size=3, max_size=3), st.lists(st.floats(-10, 10), min_size=3, max_size=3))
+def test_rotation_from_two_vectors(a, b):
+    a, b = np.array(a), np.array(b)
+    R = crocopy.rotationMatrixFromTwoVectors(a, b)
+    np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-9)
+    assert np.linalg.det(R) == pytest.approx(1.0, abs=1e-9)
+    na, nb = np.linalg.norm(a), np.linalg.norm(b)
+    axis = np.cross(a, b)
+    if na > 1e-6 and nb > 1e-6 and np.linalg.norm(axis) > 1e-6 * na * nb:
+        np.testing.assert_allclose(R @ (a / na), b / nb, atol=1e-9)
+        np.testing.assert_allclose(R @ axis, axis, atol=1e-9 * max(1.0, np.linalg.norm(axis)))  # smallest angle
+
+
+def test_rotation_from_two_vectors_degenerate_and_bad_input():
+    ez = np.array([0.0, 0.0, 1.0])
+    for b in (ez, -ez, 2 * ez, np.zeros(3)):
+        np.testing.assert_array_equal(crocopy.rotationMatrixFromTwoVectors(ez, b), np.eye(3))
+    np.testing.assert_allclose(crocopy.rotationMatrixFromTwoVectors([0, 0, 2], [0, 3, 0]),
+                               [[1, 0, 0], [0, 0, 1], [0, -1, 0]], atol=1e-15)
+    with pytest.raises(ValueError, match=r"a has shape \(2,\), expected \(3,\)"):
+        crocopy.rotationMatrixFromTwoVectors(np.ones(2), ez)
+
+
+def test_seed_shared_memory_and_exception():
+    state = crocopy.StateMultibody(load("anymal"))
+    crocopy.seed(7)
+    x1 = state.rand()
+    crocopy.seed(7)
+    np.testing.assert_array_equal(state.rand(), x1)
+    with pytest.raises(ValueError, match="seed_value"):
+        crocopy.seed(-1)
+    assert crocopy.sharedMemory() is True
+    crocopy.sharedMemory(True)
+    with pytest.raises(ValueError, match="always share"):
+        crocopy.sharedMemory(False)
+    with pytest.raises(crocopy.Exception):
+        crocopy.ContactModel1D(state, "LF_FOOT", np.zeros(3), pin.LOCAL)
