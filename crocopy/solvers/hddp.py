@@ -187,6 +187,11 @@ class SolverHDDP(SolverDDP):
     th_worse : float
         Relative increase of a higher level tolerated by the line search (default 1e-10); a level
         may also rise up to its ``th_abs`` (set ``th_abs`` to 0 for strict priorities).
+    th_model : float
+        A trial whose largest state deviation exceeds ``th_model`` times that of its linear
+        prediction is rejected as a blow-up (default 100; 0 disables).  Crocopy extension: in the
+        hierarchical-DDP experiment such full steps sent the effort to 1e40..1e266 (the terminal
+        reach costs stay bounded on spinning joints) and left the solver stuck.
     warm_steps : bool
         Per level, try the full step and then only steps up to twice the level's last accepted one
         (default True; False tries every ``alphas`` value from 1 down, the paper's schedule being
@@ -209,6 +214,7 @@ class SolverHDDP(SolverDDP):
         self.th_rel = [1e-4] * K
         self.th_rank = 1e-9
         self.th_worse = 1e-10
+        self.th_model = 100.0
         self.max_reg_increases = 6
         self.lambda0 = 1e-9
         self.mu0 = 0.0
@@ -321,7 +327,21 @@ class SolverHDDP(SolverDDP):
             self.forwardPass(1.0)
         except ForwardPassError:
             return np.full(len(steps), np.inf)
+        if self.th_model and self._deviation_ratio() > self.th_model:
+            return np.full(len(steps), np.inf)
         return self._reader.costs(self.xs_try, self.us_try)
+
+    def _deviation_ratio(self) -> float:
+        """``max‖x̂ₜ ⊖ xₜ‖∞`` of the trial over that of its linear prediction
+        ``δxₜ₊₁ = Fx δxₜ - Fu (k + K δxₜ)`` (derivatives of the current iterate)."""
+        p = self.problem
+        dx = np.zeros(p.ndx)
+        predicted = actual = 0.0
+        for t, (m, d) in enumerate(zip(p.runningModels, p.runningDatas)):
+            dx = d.Fx @ dx - d.Fu @ (self.k[t] + self.K[t] @ dx)
+            predicted = max(predicted, float(np.abs(dx).max()))
+            actual = max(actual, float(np.abs(m.state.diff(self.xs[t + 1], self.xs_try[t + 1])).max()))
+        return actual / max(predicted, 1e-12)
 
     def _candidates(self, k: int) -> list[float]:
         """Steps tried for level ``k``: all ``alphas``, or with ``warm_steps`` the full step then those
