@@ -338,3 +338,19 @@ def test_table1_bars_on_ten_trials():
     assert res[3]["errors"]["left"] <= 1e-7 and res[3]["errors"]["right"] <= 1e-7
     assert res[3]["met"]["left"] == res[3]["met"]["right"] == 10
     assert res["priority"]["relative"] <= 1e-8
+
+
+def test_linear_prediction_of_a_trial_is_exact_on_linear_dynamics():
+    """``q̈ = u`` under Euler is linear: the blow-up guard's prediction matches every trial exactly."""
+    problem = arm_problem(("t1", "t2"))
+    solver = SolverHDDP(problem, [["t1"], ["t2"], ["velocity", "effort"]])
+    solver.us = [np.full(3, 0.2) for _ in range(problem.T)]
+    solver.xs = problem.rollout(solver.us)
+    problem.calc(solver.xs, solver.us)
+    problem.calcDiff(solver.xs, solver.us)
+    solver._backward(solver._reader.derivatives(solver.xs, solver.us))
+    for steps in ([1.0, 0.0, 0.0], [0.5, 1.0, 0.25]):
+        solver._rollout(np.array(steps))
+        dx = problem.runningModels[0].state.diff(solver.xs[-1], solver.xs_try[-1])
+        assert np.abs(dx).max() > 1e-3
+        assert solver._deviation_ratio() == pytest.approx(1.0, rel=1e-9)
