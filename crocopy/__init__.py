@@ -4,7 +4,8 @@ Everything public is re-exported here flat, as in Crocoddyl (``crocopy.SolverFDD
 ``crocopy.DifferentialActionModelFreeFwdDynamics``, ...).
 """
 
-from importlib.metadata import PackageNotFoundError, version
+from importlib.metadata import PackageNotFoundError as _PackageNotFoundError
+from importlib.metadata import version as _version
 
 from .action_base import ActionDataAbstract, ActionModelAbstract
 from .actions import ActionModelLQR, ActionModelUnicycle, DifferentialActionModelLQR
@@ -15,33 +16,49 @@ from .activations import (
     ActivationModel2NormBarrier,
     ActivationModelAbstract,
     ActivationModelQuad,
+    ActivationModelQuadFlatExp,
+    ActivationModelQuadFlatLog,
     ActivationModelQuadraticBarrier,
     ActivationModelSmooth1Norm,
     ActivationModelSmooth2Norm,
     ActivationModelWeightedQuad,
     ActivationModelWeightedQuadraticBarrier,
 )
+from .activations.numdiff import ActivationDataNumDiff, ActivationModelNumDiff
 from .actuation_base import ActuationDataAbstract, ActuationModelAbstract, JointDataAbstract
-from .batch import SolveManyError, SolveResult, solve_many
+from .batch import SolveManyError, SolveResult, WorkerDiedError, solve_many
 from .callbacks.base import CallbackAbstract, CallbackLogger, CallbackVerbose
-from .callbacks.display import CallbackDisplay
+from .callbacks.display import CallbackDisplay, DisplayAbstract
 from .callbacks.plotting import plotConvergence, plotFeasibility, plotOCSolution
+from .callbacks.save import saveConvergence, saveLogfile, saveOCSolution
 from .constraints.base import ConstraintDataAbstract, ConstraintModelAbstract, ConstraintModelResidual, ConstraintType
 from .constraints.manager import ConstraintDataManager, ConstraintItem, ConstraintModelManager
 from .costs.base import CostDataAbstract, CostDataResidual, CostModelAbstract, CostModelResidual
 from .costs.sum import CostDataSum, CostItem, CostModelSum
+from .crocoddyl_names import CROCODDYL_NAMES as _CROCODDYL_NAMES
+from .crocoddyl_names import CROCODDYL_VERSION as _CROCODDYL_VERSION
 from .data_collector import DataCollectorAbstract
 from .diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
-from .enums import AssignmentOp, Jcomponent, RKType, VerboseLevel
+from .enums import AssignmentOp, FeasibilityNorm, Jcomponent, RKType, VerboseLevel
 from .integrators.base import IntegratedActionModelAbstract
+from .integrators.control_base import ControlParametrizationDataAbstract, ControlParametrizationModelAbstract
+from .integrators.control_poly import (
+    ControlParametrizationDataPolyOne,
+    ControlParametrizationDataPolyTwoRK,
+    ControlParametrizationModelPolyOne,
+    ControlParametrizationModelPolyTwoRK,
+    ControlParametrizationModelPolyZero,
+)
 from .integrators.euler import IntegratedActionDataEuler, IntegratedActionModelEuler
 from .integrators.rk import IntegratedActionDataRK, IntegratedActionModelRK
+from .kernels import kernels_enabled, set_kernels, use_kernels
 from .numdiff import (
     ActionDataNumDiff,
     ActionModelNumDiff,
     DifferentialActionDataNumDiff,
     DifferentialActionModelNumDiff,
 )
+from .numdiff.state import StateNumDiff
 from .residuals import ResidualModelControl, ResidualModelState
 from .residuals.base import ResidualDataAbstract, ResidualModelAbstract
 from .shooting import ShootingProblem
@@ -52,6 +69,17 @@ from .solvers.box_qp import BoxQP, BoxQPSolution
 from .solvers.clamping import SolverClampedDDP
 from .solvers.hddp import CallbackHDDPLogger, CallbackHDDPVerbose, SolverHDDP
 from .solvers.projection import ConstraintRankError, SolverProjection
+from .solvers.std_vector import StdVec_VectorXs
+from .solvers.stopwatch import (
+    disable_profiler,
+    enable_profiler,
+    stop_watch_get_average_time,
+    stop_watch_get_max_time,
+    stop_watch_get_min_time,
+    stop_watch_get_total_time,
+    stop_watch_report,
+    stop_watch_reset_all,
+)
 from .squashing.action import ActionModelSquashed
 from .squashing.smooth_sat import (
     ActuationSquashingModel,
@@ -62,15 +90,35 @@ from .squashing.smooth_sat import (
 from .state import StateAbstract, StateVector
 
 try:
-    __version__ = version("crocopy")
-except PackageNotFoundError:
+    __version__ = _version("crocopy")
+except _PackageNotFoundError:
     __version__ = "0.0.0"
 
 from .models import *  # noqa: E402,F403  (Pinocchio models, re-exported flat)
+from .models import ThrusterType as _ThrusterType  # noqa: E402
+
+#: Crocoddyl exports its enumerations' values flat too (``crocoddyl.LInf``, ``crocoddyl.four``, ...).
+both, first = Jcomponent.both, Jcomponent.first
+setto, addto, rmfrom = AssignmentOp.setto, AssignmentOp.addto, AssignmentOp.rmfrom
+two, three, four = RKType.two, RKType.three, RKType.four
+Inequality, Equality, Both = ConstraintType.Inequality, ConstraintType.Equality, ConstraintType.Both
+LInf, L1 = FeasibilityNorm.LInf, FeasibilityNorm.L1
+CW, CCW = _ThrusterType.CW, _ThrusterType.CCW
+#: crocopy has no code generation (CppAD) back-end.
+WITH_CODEGEN = False
 
 
 def __getattr__(name: str):
-    """``crocopy.MeshcatDisplay`` and the HTML export helpers load lazily from ``crocopy.models``."""
+    """Names that load lazily (``MeshcatDisplay``, HTML export) come from ``crocopy.models``; a name
+    of Crocoddyl's API that crocopy lacks raises an ``AttributeError`` saying so."""
     from . import models
 
-    return getattr(models, name)
+    try:
+        return getattr(models, name)
+    except AttributeError:
+        pass
+    if name in _CROCODDYL_NAMES:
+        raise AttributeError(
+            f"crocopy does not implement Crocoddyl's {name} (a public name of Crocoddyl {_CROCODDYL_VERSION})"
+        )
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

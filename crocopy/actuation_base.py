@@ -10,11 +10,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from .action_common import ControlBounds, check_state_and_nu
+from .array_views import KeepsViews, tolerate_python_model
 from .state import StateAbstract
-from .validation import as_vector, check_bounds
 
 
-class ActuationModelAbstract:
+class ActuationModelAbstract(ControlBounds):
     """Abstract actuation model (Crocoddyl's ``ActuationModelAbstract(state, nu)``).
 
     Parameters
@@ -23,39 +24,17 @@ class ActuationModelAbstract:
         State manifold (``state.nv`` gives the dimension of ``tau``).
     nu : int
         Control dimension.
+
+    Attributes
+    ----------
+    u_lb, u_ub : numpy.ndarray
+        Control bounds, shape ``(nu,)``, default unbounded.
     """
 
     def __init__(self, state: StateAbstract, nu: int) -> None:
-        if not isinstance(state, StateAbstract):
-            raise ValueError(f"state must be a StateAbstract, got {type(state).__name__}")
-        if nu < 0:
-            raise ValueError(f"nu must be non-negative, got {nu}")
+        self.nu = check_state_and_nu(state, nu)
         self.state = state
-        self.nu = int(nu)
-        self._u_lb = np.full(self.nu, -np.inf)
-        self._u_ub = np.full(self.nu, np.inf)
-
-    @property
-    def u_lb(self) -> np.ndarray:
-        """Lower control bound, shape ``(nu,)``."""
-        return self._u_lb
-
-    @u_lb.setter
-    def u_lb(self, value: np.ndarray) -> None:
-        lb = as_vector(value, self.nu, "u_lb", allow_nonfinite=True)
-        check_bounds(lb, self._u_ub, "u_lb", "u_ub")
-        self._u_lb = lb
-
-    @property
-    def u_ub(self) -> np.ndarray:
-        """Upper control bound, shape ``(nu,)``."""
-        return self._u_ub
-
-    @u_ub.setter
-    def u_ub(self, value: np.ndarray) -> None:
-        ub = as_vector(value, self.nu, "u_ub", allow_nonfinite=True)
-        check_bounds(self._u_lb, ub, "u_lb", "u_ub")
-        self._u_ub = ub
+        self._init_control_limits()
 
     def createData(self) -> "ActuationDataAbstract":
         """Allocate the actuation data."""
@@ -81,7 +60,7 @@ class ActuationModelAbstract:
         return f"{type(self).__name__}(nu={self.nu})"
 
 
-class ActuationDataAbstract:
+class ActuationDataAbstract(KeepsViews):
     """Actuation data: ``tau (nv,)``, ``u (nu,)``, ``dtau_dx (nv, ndx)``, ``dtau_du (nv, nu)``,
     ``Mtau (nu, nv)`` and ``tau_set`` (bool ``(nv,)``, rows reachable by the actuation)."""
 
@@ -93,6 +72,7 @@ class ActuationDataAbstract:
         self.dtau_du = np.zeros((nv, nu))
         self.Mtau = np.zeros((nu, nv))
         self.tau_set = np.ones(nv, dtype=bool)
+        tolerate_python_model(model, self, ("tau", "u", "dtau_dx", "dtau_du", "Mtau"))
 
 
 class JointDataAbstract:

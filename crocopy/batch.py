@@ -30,15 +30,24 @@ module among its arguments: a registry entry's ``ProblemSpec.build`` is picklabl
 Errors.  If a task raises, :func:`solve_many` cancels the tasks not yet started and raises
 :class:`SolveManyError` naming the task index and its ``params``, chained to the worker's
 exception; with ``return_exceptions=True`` the exception takes the task's place in the list.
+
+A worker that dies (a segfault, an out-of-memory kill, ``os._exit``) breaks a process pool and every
+task still in it.  :func:`solve_many` then keeps the results already returned and reruns each
+unfinished task in a process of its own (as many at once as the pool had workers): the task whose
+process dies again is the one that killed the pool, and it alone fails, with a
+:class:`WorkerDiedError` giving its exit code or signal; the others complete.
 """
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 import pickle
+import signal
 import time
 from collections.abc import Callable, Iterable, Mapping
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -46,7 +55,7 @@ import numpy as np
 from .shooting import ShootingProblem
 from .solvers.box_fddp import SolverBoxFDDP
 
-__all__ = ["SolveManyError", "SolveResult", "solve_many", "solve_one"]
+__all__ = ["SolveManyError", "SolveResult", "WorkerDiedError", "solve_many", "solve_one"]
 
 _PROBLEM_KEYS = frozenset({"x0", "init_xs", "init_us"})
 
@@ -59,6 +68,22 @@ class SolveManyError(RuntimeError):
         super().__init__(f"solve {index} with params {dict(params)!r} failed: {type(error).__name__}: {error}")
         self.index = index
         self.params = params
+
+
+class WorkerDiedError(RuntimeError):
+    """The process running a task died before returning (``exitcode``: its exit status, or minus the
+    signal number that killed it, as :attr:`multiprocessing.Process.exitcode`)."""
+
+    def __init__(self, exitcode: int | None) -> None:
+        if exitcode is not None and exitcode < 0:
+            try:
+                how = f"killed by signal {signal.Signals(-exitcode).name}"
+            except ValueError:
+                how = f"killed by signal {-exitcode}"
+        else:
+            how = f"exit code {exitcode}"
+        super().__init__(f"the worker process died ({how})")
+        self.exitcode = exitcode
 
 
 @dataclass
@@ -216,8 +241,16 @@ def solve_many(
     try:
         if isinstance(executor, ProcessPoolExecutor):
             _check_picklable(builder=builder, solver=solver, solver_options=solver_options)
-        futures = [executor.submit(solve_one, builder, p, solver, maxiter, isFeasible, solver_options) for p in params]
-        return _collect(futures, params, return_exceptions)
+        task = (solver, maxiter, isFeasible, solver_options)
+        futures = [executor.submit(solve_one, builder, p, *task) for p in params]
+        outcomes = _collect(futures, params, return_exceptions)
+        if any(isinstance(o, BrokenProcessPool) for o in outcomes):
+            executor.shutdown(wait=True, cancel_futures=True)
+            broken = [i for i, o in enumerate(outcomes) if isinstance(o, BrokenProcessPool)]
+            workers = getattr(executor, "_max_workers", None) or available_cores()
+            for i, outcome in zip(broken, _run_isolated(builder, [params[i] for i in broken], task, workers)):
+                outcomes[i] = outcome
+        return _results(outcomes, params, return_exceptions)
     finally:
         if own:
             executor.shutdown(wait=True, cancel_futures=True)
@@ -235,15 +268,58 @@ def _check_picklable(**objects: object) -> None:
 
 
 def _collect(futures: list[Future], params: list[Mapping], return_exceptions: bool) -> list:
-    results = []
+    """Each future's result or exception, in order.  A task's own exception is raised at once (the tasks
+    not yet started are cancelled) unless ``return_exceptions``; a broken pool's are kept for a rerun."""
+    outcomes: list = []
     for i, (future, p) in enumerate(zip(futures, params, strict=True)):
         try:
-            results.append(future.result())
+            outcomes.append(future.result())
+        except BrokenProcessPool as exc:
+            outcomes.append(exc)
         except Exception as exc:
-            if return_exceptions:
-                results.append(exc)
-                continue
-            for f in futures[i + 1 :]:
-                f.cancel()
-            raise SolveManyError(i, p, exc) from exc
-    return results
+            if not return_exceptions:
+                for f in futures[i + 1 :]:
+                    f.cancel()
+                raise SolveManyError(i, p, exc) from exc
+            outcomes.append(exc)
+    return outcomes
+
+
+def _results(outcomes: list, params: list[Mapping], return_exceptions: bool) -> list:
+    for i, (outcome, p) in enumerate(zip(outcomes, params, strict=True)):
+        if isinstance(outcome, BaseException) and not return_exceptions:
+            raise SolveManyError(i, p, outcome) from outcome
+    return outcomes
+
+
+def _isolated_task(conn, builder, params, task) -> None:
+    try:
+        conn.send(solve_one(builder, params, *task))
+    except Exception as exc:
+        conn.send(exc)
+    finally:
+        conn.close()
+
+
+def _run_isolated(builder, params: list[Mapping], task: tuple, workers: int) -> list:
+    """Run each task in a process of its own, ``workers`` at a time; a dead process is its task's failure."""
+    context = multiprocessing.get_context()
+    outcomes: list = [None] * len(params)
+    for start in range(0, len(params), max(1, workers)):
+        running = []
+        for i in range(start, min(start + max(1, workers), len(params))):
+            receive, send = context.Pipe(duplex=False)
+            process = context.Process(target=_isolated_task, args=(send, builder, params[i], task))
+            process.start()
+            send.close()
+            running.append((i, process, receive))
+        for i, process, receive in running:
+            try:
+                outcomes[i] = receive.recv()
+            except EOFError:
+                outcomes[i] = None
+            process.join()
+            receive.close()
+            if outcomes[i] is None:
+                outcomes[i] = WorkerDiedError(process.exitcode)
+    return outcomes

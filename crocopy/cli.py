@@ -8,6 +8,8 @@
   final costs next to Crocoddyl's, each library's self-sensitivity to a perturbed guess, a one-step
   replay of Crocoddyl's iterations and a verdict per row, and the box-QP backward-pass overhead
   (:mod:`crocopy.bench.box_parity`)
+* ``crocopy bench --compat [--problems ...] [--out FILE]``: Crocoddyl's shipped example scripts and gait
+  builders run with ``crocoddyl`` bound to crocopy, next to Crocoddyl's own runs (:mod:`crocopy.bench.compat`)
 * ``crocopy bench --models [--problems ...]``: calc + calcDiff time and per-model-kind differences of
   every node against Crocoddyl (:mod:`crocopy.bench.node_eval`)
 * ``crocopy bench --batch`` / ``--scaling``: :func:`crocopy.solve_many` speed-up on the quadrotor
@@ -20,16 +22,38 @@
 * ``crocopy table1``: Box-FDDP paper Table I next to the paper's figures
 * ``crocopy paper box-ddp lq|car``, ``paper box-fddp quadrotor``, ``paper projection arm``,
   ``paper hddp table1|table2``: the papers' experiments
+
+Arguments are checked before any work: unknown problem or experiment names, non-positive counts
+(``--maxiter 0``) and output files that cannot be written (``--html``, ``--plot``, ``--out``) are
+usage errors, reported with the subcommand's usage line and the valid choices.
+
+Exit status: ``0`` success (``solve``: the solver converged), ``1`` ``solve`` ran but did not
+converge, ``2`` usage error (also a missing optional extra, e.g. ``bench --vs`` without Crocoddyl).
+
+Before ``solve`` times the solve, one iteration of the same solver on the same problem loads the
+compiled (numba) kernels; on the first run after installation they are compiled, which takes
+10-20 s and is announced by a ``compiling kernels (first run only) ...`` line.  The reported
+solve time excludes that warm-up.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+import threading
 import time
+from collections.abc import Callable
+from pathlib import Path
 
 from . import __version__
 from .solvers import SOLVERS
+
+EXIT_CONVERGED, EXIT_NOT_CONVERGED, EXIT_USAGE = 0, 1, 2
+EXIT_STATUS_HELP = (
+    "exit status: 0 success (solve: converged), 1 solve did not converge, "
+    "2 usage error (bad flag or value, unknown name, unwritable output, missing extra)"
+)
 
 
 def _bench_batch_scaling(args: argparse.Namespace) -> int:
@@ -69,6 +93,10 @@ def _bench_models(args: argparse.Namespace) -> int:
 
 
 def _bench(args: argparse.Namespace) -> int:
+    if args.compat:
+        from .bench.compat import run_compat_cli
+
+        return run_compat_cli(args.problems, args.out)
     if args.models:
         return _bench_models(args)
     if args.floor:
@@ -135,18 +163,77 @@ def _list(args: argparse.Namespace) -> int:
     return 0
 
 
+def kernel_dispatchers() -> list:
+    """The compiled (numba) kernels of the loaded ``crocopy`` modules (empty without numba)."""
+    try:
+        from numba.core.dispatcher import Dispatcher
+    except ImportError:
+        return []
+    found = {}
+    for name, module in list(sys.modules.items()):
+        if module is not None and (name == "crocopy" or name.startswith("crocopy.")):
+            for value in list(vars(module).values()):
+                if isinstance(value, Dispatcher):
+                    found[id(value)] = value
+    return list(found.values())
+
+
+def _compilations(dispatchers: list) -> int:
+    """Signatures compiled so far (not loaded from numba's cache) by ``dispatchers``."""
+    return sum(sum(d.stats.cache_misses.values()) for d in dispatchers)
+
+
+def warm_up_kernels(run: Callable[[], object], dispatchers: list | None = None, poll: float = 0.2) -> float:
+    """Call ``run()`` once, announcing on stderr when it compiles kernels; return the seconds compiling took.
+
+    While ``run`` executes, a thread polls ``dispatchers`` (default :func:`kernel_dispatchers`)
+    every ``poll`` seconds; as soon as one of them compiles a signature instead of loading it from
+    numba's on-disk cache, ``compiling kernels (first run only) ...`` is printed.  Returns the wall
+    time of ``run`` when something was compiled, else ``0.0``.
+    """
+    dispatchers = kernel_dispatchers() if dispatchers is None else dispatchers
+    before = _compilations(dispatchers)
+    done = threading.Event()
+
+    def announce() -> None:
+        while not done.wait(poll):
+            if _compilations(dispatchers) > before:
+                print("compiling kernels (first run only) ...", file=sys.stderr, flush=True)
+                return
+
+    watcher = threading.Thread(target=announce, daemon=True)
+    t0 = time.perf_counter()
+    watcher.start()
+    try:
+        run()
+    finally:
+        done.set()
+        watcher.join()
+    elapsed = time.perf_counter() - t0
+    if _compilations(dispatchers) == before:
+        return 0.0
+    print(f"kernels compiled in {elapsed:.1f} s (cached for the next runs; not counted in the solve time)",
+          file=sys.stderr, flush=True)
+    return elapsed
+
+
 def _solve(args: argparse.Namespace) -> int:
     import crocopy
 
     from .problems import registry
 
-    try:
-        spec = registry.get(args.problem)
-    except KeyError as exc:
-        print(exc.args[0], file=sys.stderr)
-        return 2
+    spec = registry.get(args.problem)
     problem, xs, us = spec.build(crocopy)
-    solver = getattr(crocopy, SOLVERS[args.solver])(problem)
+    solver_class = getattr(crocopy, SOLVERS[args.solver])
+
+    def one_iteration_each_way() -> None:
+        """One iteration from the guess (gaps open), one from its result flagged feasible (box steps)."""
+        first = solver_class(problem)
+        first.solve(xs, us, 1, False)
+        solver_class(problem).solve(first.xs, first.us, 1, True)
+
+    warm_up_kernels(one_iteration_each_way)
+    solver = solver_class(problem)
     if not args.quiet:
         solver.setCallbacks([crocopy.CallbackVerbose()])
     logger = crocopy.CallbackLogger()
@@ -163,8 +250,9 @@ def _solve(args: argparse.Namespace) -> int:
     if args.plot:
         from .callbacks.plotting import plot_convergence_from_logger
 
-        print(f"convergence plot written to {plot_convergence_from_logger(logger, args.plot)}")
-    html = None if args.no_html else (args.html or f"{args.problem}.html")
+        plot_convergence_from_logger(logger, args.plot)
+        print(f"convergence plot written to {args.plot}")
+    html = None if args.no_html else args.html
     if html:
         robot = _display_robot(problem)
         if robot is None:
@@ -173,7 +261,7 @@ def _solve(args: argparse.Namespace) -> int:
             from .models.display.html import export_html_from_solver
 
             print(f"meshcat animation written to {export_html_from_solver(robot, solver, html)}")
-    return 0
+    return EXIT_CONVERGED if converged else EXIT_NOT_CONVERGED
 
 
 def _table1(args: argparse.Namespace) -> int:
@@ -189,8 +277,6 @@ def _table1(args: argparse.Namespace) -> int:
         "|---|---|---|---|---|---|---|---|---|",
     ]
     for name in args.problems or registry.TABLE1:
-        if name not in registry.PROBLEMS:
-            continue
         spec = registry.get(name)
         cells = [name]
         for key, solver_name in (("boxddp", "SolverBoxDDP"), ("boxfddp", "SolverBoxFDDP")):
@@ -233,14 +319,10 @@ def _paper(args: argparse.Namespace) -> int:
         from .experiments.hddp import run_hddp
 
         run_hddp(trials=args.trials or 100, jobs=args.jobs or 1)
-    elif key == ("hddp", "table2"):
+    else:
         from .experiments.hddp import run_hddp_weighted
 
         run_hddp_weighted()
-    else:
-        known = ", ".join(" ".join(k) for k in PAPER_EXPERIMENTS)
-        print(f"unknown experiment {args.paper} {args.experiment}; known: {known}", file=sys.stderr)
-        return 2
     return 0
 
 
@@ -250,20 +332,126 @@ PAPER_EXPERIMENTS = (
 )
 
 
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a positive integer (1 or more), got {value}")
+    return value
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be positive, got {value}")
+    return value
+
+
+def _unwritable(path: str, what: str) -> str | None:
+    """Why ``path`` cannot be written (``None`` if it can): tried by opening it for appending."""
+    target = Path(path)
+    if target.is_dir():
+        return f"{what} {path} is a folder, not a file"
+    if not target.parent.is_dir():
+        return f"{what} {path}: folder {str(target.parent)!r} does not exist"
+    existed = target.exists()
+    try:
+        with open(target, "ab"):
+            pass
+    except OSError as exc:
+        return f"{what} {path} cannot be written: {exc.strerror}"
+    if not existed:
+        target.unlink()
+    return None
+
+
+def _unwritable_folder(path: str, what: str) -> str | None:
+    folder = Path(path)
+    if not folder.is_dir():
+        return f"{what} {path} is not an existing folder"
+    if not os.access(folder, os.W_OK | os.X_OK):
+        return f"{what} {path} cannot be written"
+    return None
+
+
+def _unknown_problems(names: list[str] | None) -> str | None:
+    from .problems import registry
+
+    unknown = [n for n in names or () if n not in registry.PROBLEMS]
+    if unknown:
+        return f"unknown problem {unknown[0]!r}; known problems: {', '.join(registry.names())}"
+    return None
+
+
+def _plot_file(path: str) -> tuple[str, str | None]:
+    """``path`` with ``.png`` added when it has no suffix, or an error for a format matplotlib cannot write."""
+    suffix = Path(path).suffix.lower().lstrip(".")
+    if not suffix:
+        return f"{path}.png", None
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    formats = FigureCanvasBase.get_supported_filetypes()
+    if suffix not in formats:
+        return path, f"--plot {path}: unknown image format {suffix!r}; use one of {', '.join(sorted(formats))}"
+    return path, None
+
+
+def check_args(args: argparse.Namespace) -> str | None:
+    """What is wrong with the parsed ``args`` of a subcommand (``None`` if nothing): names and output paths.
+
+    Also fills in the output names that depend on other arguments: ``solve``'s default
+    ``--html <problem>.html`` and a ``.png`` suffix for a ``--plot`` file without one.
+    """
+    if args.command == "solve":
+        error = _unknown_problems([args.problem])
+        if error is None and not args.no_html:
+            args.html = args.html or f"{args.problem}.html"
+            error = _unwritable(args.html, "--html")
+        if error is None and args.plot:
+            args.plot, error = _plot_file(args.plot)
+            error = error or _unwritable(args.plot, "--plot")
+        return error
+    if args.command in ("table1", "bench"):
+        # with --compat, --problems names Crocoddyl's scripts and gaits, checked by crocopy.bench.compat
+        error = None if getattr(args, "compat", False) else _unknown_problems(args.problems)
+        if error is None and args.command == "bench" and args.out:
+            error = _unwritable(args.out, "--out")
+        return error
+    if args.command == "paper":
+        known = [e for p, e in PAPER_EXPERIMENTS if p == args.paper]
+        if args.experiment not in known:
+            return f"unknown experiment {args.paper} {args.experiment!r}; known: {', '.join(known)}"
+        return _unwritable_folder(args.out, "--out")
+    return None
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="crocopy", description="Optimal control for robots, Crocoddyl-compatible.")
+    parser = argparse.ArgumentParser(prog="crocopy", description="Optimal control for robots, Crocoddyl-compatible.",
+                                     epilog=EXIT_STATUS_HELP)
     parser.add_argument("--version", action="version", version=f"crocopy {__version__}")
     sub = parser.add_subparsers(dest="command")
-    bench = sub.add_parser("bench", help="time the solvers (and Crocoddyl, if installed) on benchmark problems")
-    bench.add_argument("--repeats", type=int, default=0,
+
+    def command(name: str, func: Callable[[argparse.Namespace], int], text: str) -> argparse.ArgumentParser:
+        p = sub.add_parser(name, help=text, description=text[:1].upper() + text[1:] + ".", epilog=EXIT_STATUS_HELP)
+        p.set_defaults(func=func, subparser=p)
+        return p
+
+    bench = command("bench", _bench, "time the solvers (and Crocoddyl, if installed) on benchmark problems")
+    bench.add_argument("--repeats", type=_positive_int, default=None,
                        help="runs per measurement, median reported (default 20; 5 with --vs)")
-    bench.add_argument("--T", type=int, default=100, help="horizon of the LQR problems")
+    bench.add_argument("--T", type=_positive_int, default=100, help="horizon of the LQR problems")
     bench.add_argument("--vs", choices=["crocoddyl"], default=None,
                        help="side-by-side run on the bundled problems against Crocoddyl (needs the bench extra)")
     bench.add_argument("--problems", nargs="+", default=None, help="with --vs: problems (default: Table I, walk, arm)")
     bench.add_argument("--solver", choices=sorted(SOLVERS), default="boxfddp", help="with --vs: the solver")
-    bench.add_argument("--maxiter", type=int, default=0, help="with --vs: iteration limit (default: the problem's)")
-    bench.add_argument("--solve-budget", type=float, default=30.0,
+    bench.add_argument("--maxiter", type=_positive_int, default=None,
+                       help="with --vs: iteration limit (default: the problem's)")
+    bench.add_argument("--solve-budget", type=_positive_float, default=30.0,
                        help="with --vs: no further full-solve round starts after this many seconds per problem")
     bench.add_argument("--no-memory", action="store_true", help="with --vs: skip the peak-memory subprocesses")
     bench.add_argument("--out", default=None, help="with --vs: also write the markdown report to this file")
@@ -277,38 +465,57 @@ def build_parser() -> argparse.ArgumentParser:
                        help="calc+calcDiff time and per-node differences vs Crocoddyl (crocopy.bench.node_eval)")
     bench.add_argument("--floor", action="store_true",
                        help="calc+calcDiff time inside Pinocchio's bindings vs Crocoddyl (crocopy.bench.floor)")
-    bench.add_argument("--workers", type=int, default=2, help="with --batch: worker processes")
-    bench.add_argument("--runs", type=int, default=3, help="with --batch/--scaling: repetitions (median reported)")
-    bench.set_defaults(func=_bench)
-    sub.add_parser("list", help="list the bundled problems").set_defaults(func=_list)
-    solve = sub.add_parser("solve", help="solve a problem and write its meshcat animation")
-    solve.add_argument("problem", nargs="?", default="jump", help="problem name (default: jump)")
+    bench.add_argument("--compat", action="store_true",
+                       help="Crocoddyl's shipped example scripts and gait builders run with crocopy as crocoddyl, "
+                            "next to Crocoddyl's own runs (crocopy.bench.compat; bench extra; --problems selects)")
+    bench.add_argument("--workers", type=_positive_int, default=2, help="with --batch: worker processes")
+    bench.add_argument("--runs", type=_positive_int, default=3,
+                       help="with --batch/--scaling: repetitions (median reported)")
+    command("list", _list, "list the bundled problems")
+    solve = command("solve", _solve, "solve a problem and write its meshcat animation")
+    solve.add_argument("problem", nargs="?", default="jump", help="problem name, see `crocopy list` (default: jump)")
     solve.add_argument("--solver", choices=sorted(SOLVERS), default="boxfddp")
-    solve.add_argument("--maxiter", type=int, default=0, help="iteration limit (default: the problem's)")
+    solve.add_argument("--maxiter", type=_positive_int, default=None, help="iteration limit (default: the problem's)")
     solve.add_argument("--html", default=None, help="animation file (default: <problem>.html)")
     solve.add_argument("--no-html", action="store_true", help="do not write the animation")
-    solve.add_argument("--plot", default=None, help="write the convergence plot (PNG) to this file")
+    solve.add_argument("--plot", default=None,
+                       help="write the convergence plot to this file (format from the suffix; .png added if none)")
     solve.add_argument("--quiet", action="store_true", help="no verbose table")
-    solve.set_defaults(func=_solve)
-    table1 = sub.add_parser("table1", help="Box-FDDP paper Table I: Box-DDP vs Box-FDDP on the bundled problems")
-    table1.add_argument("problems", nargs="*", help="rows to run (default: all of Table I)")
-    table1.set_defaults(func=_table1)
-    paper = sub.add_parser("paper", help="reproduce a paper experiment (prints its metric, writes plots)")
+    table1 = command("table1", _table1, "Box-FDDP paper Table I: Box-DDP vs Box-FDDP on the bundled problems")
+    table1.add_argument("problems", nargs="*", help="rows to run, see `crocopy list` (default: all of Table I)")
+    paper = command("paper", _paper, "reproduce a paper experiment (prints its metric, writes plots)")
     paper.add_argument("paper", choices=sorted({p for p, _ in PAPER_EXPERIMENTS}))
-    paper.add_argument("experiment")
-    paper.add_argument("--out", default=".", help="folder for the plots")
-    paper.add_argument("--trials", type=int, default=None, help="hddp table1: perturbed targets per test (100)")
-    paper.add_argument("--jobs", type=int, default=None, help="hddp table1: worker processes for the trials (1)")
-    paper.set_defaults(func=_paper)
+    paper.add_argument("experiment", help="; ".join(f"{p}: {e}" for p, e in PAPER_EXPERIMENTS))
+    paper.add_argument("--out", default=".", help="existing folder for the plots")
+    paper.add_argument("--trials", type=_positive_int, default=None,
+                       help="hddp table1: perturbed targets per test (100)")
+    paper.add_argument("--jobs", type=_positive_int, default=None,
+                       help="hddp table1: worker processes for the trials (1)")
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run the ``crocopy`` command on ``argv`` (default ``sys.argv[1:]``) and return its exit status.
+
+    Usage errors print the subcommand's usage and the reason on stderr and return ``2`` (argparse's
+    own exits, ``--help`` and ``--version`` included, are turned into their return value too).
+    """
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args, extra = parser.parse_known_args(argv)
+        owner = getattr(args, "subparser", parser)
+        if extra:
+            owner.error(f"unrecognized arguments: {' '.join(extra)}")
+    except SystemExit as exc:
+        return exc.code if isinstance(exc.code, int) else EXIT_USAGE
     if not getattr(args, "func", None):
         parser.print_help()
         return 0
+    problem = check_args(args)
+    if problem is not None:
+        owner.print_usage(sys.stderr)
+        print(f"{owner.prog}: error: {problem}", file=sys.stderr)
+        return EXIT_USAGE
     return args.func(args)
 
 

@@ -37,3 +37,10 @@ class VerboseLevel(enum.IntEnum):
     _2 = 2
     _3 = 3
     _4 = 4
+
+
+class FeasibilityNorm(enum.IntEnum):
+    """Norm of a solver's ``ffeas``/``gfeas``/``hfeas`` (``solver.feasNorm``): max-abs or sum-abs."""
+
+    LInf = 0
+    L1 = 1

@@ -1,4 +1,4 @@
-"""Argument checks that raise clear ``ValueError``s naming the argument and expected shape."""
+"""Argument checks that raise a clear ``ValueError`` naming the argument and expected shape."""
 
 from __future__ import annotations
 

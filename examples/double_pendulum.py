@@ -12,4 +12,4 @@ for name in ("SolverBoxFDDP", "SolverBoxDDP"):
     converged = solver.solve(xs, us, 500, False)
     print(f"{name}: converged={converged} iterations={solver.iter} cost={solver.cost:.6g}")
 
-print("animation:", export_html_from_solver(example_robot_data.load("double_pendulum"), solver, "pendulum.html"))
+print("animation:", export_html_from_solver(example_robot_data.load("double_pendulum"), solver, "pend.html"))

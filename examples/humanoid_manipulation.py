@@ -2,7 +2,8 @@
 
 60 nodes of 20 ms in double support (wrench cones, joint limits), solved with Box-FDDP.
 Run ``python examples/humanoid_manipulation.py [--target X Y Z] [--maxiter N] [--live]``; the
-animation is written to ``manipulation.html`` (``--live`` also plays it in a meshcat viewer).
+animation is written to ``man.html``, as by ``crocopy solve man`` (``--live`` also plays it in a meshcat
+viewer).
 """
 
 import argparse
@@ -32,6 +33,6 @@ model, data = robot.model, robot.model.createData()
 pin.framesForwardKinematics(model, data, solver.xs[-1][: model.nq])
 hand = data.oMf[model.getFrameId(HANDS[1])].translation
 print(f"right hand ends {1e3 * np.linalg.norm(hand - np.array(args.target)):.1f} mm from the target")
-print("animation:", export_html_from_solver(robot, solver, "manipulation.html"))
+print("animation:", export_html_from_solver(robot, solver, "man.html"))
 if args.live:
     crocopy.MeshcatDisplay(robot).displayFromSolver(solver)

@@ -3,7 +3,7 @@
 The arms' torque limits are ten times Talos' (as in the paper) and the hands have no friction
 cone while they hold the bar; solved with Box-FDDP, whose controls stay within those limits.
 Run ``python examples/monkey_bar.py [--maxiter N] [--live]``; the animation is written to
-``monkey_bar.html`` (``--live`` also plays it in a meshcat viewer).
+``bar.html``, as by ``crocopy solve bar`` (``--live`` also plays it in a meshcat viewer).
 """
 
 import argparse
@@ -29,6 +29,6 @@ excess = max(np.max(np.r_[u - m.u_ub, m.u_lb - u]) for m, u in zip(problem.runni
 print(f"largest torque above its limit: {max(excess, 0.0):.3g} N m")
 
 robot = example_robot_data.load("talos")
-print("animation:", export_html_from_solver(robot, solver, "monkey_bar.html"))
+print("animation:", export_html_from_solver(robot, solver, "bar.html"))
 if args.live:
     crocopy.MeshcatDisplay(robot).displayFromSolver(solver)

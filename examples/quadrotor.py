@@ -2,7 +2,8 @@
 
 Each of the four thrusts is bounded to 0.1-10.3 N; solved with Box-FDDP from a cold start.
 Run ``python examples/quadrotor.py [goal|loop|narrow] [--maxiter N] [--live]``; the animation is
-written to ``quadrotor_<task>.html`` (``--live`` also plays it in a meshcat viewer).
+written to ``quad-<task>.html``, as by ``crocopy solve quad-<task>`` (``--live`` also plays it in a
+meshcat viewer).
 """
 
 import argparse
@@ -31,6 +32,6 @@ print("final position", np.round(solver.xs[-1][:3], 3), "m")
 
 robot = example_robot_data.load("iris")
 camera = [0.0, -3.0, 1.5, 0.0, 0.0, 0.0, 1.0]  # camera rig moved back: the flights span metres
-print("animation:", export_html_from_solver(robot, solver, f"quadrotor_{args.task}.html", cameraTF=camera))
+print("animation:", export_html_from_solver(robot, solver, f"quad-{args.task}.html", cameraTF=camera))
 if args.live:
     crocopy.MeshcatDisplay(robot, cameraTF=camera).displayFromSolver(solver)

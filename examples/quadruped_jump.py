@@ -1,4 +1,7 @@
-"""ANYmal's 30 cm jump (Box-FDDP paper): 32 N m torque limits, solved with Box-FDDP, shown in meshcat.
+"""ANYmal's jump (Box-FDDP paper): 32 N m torque limits, solved with Box-FDDP, shown in meshcat.
+
+The cost asks for the base 30 cm up at mid-flight; with 32 N m the solution lifts the base by 13 cm
+and the centre of mass by 18 cm (a 400 ms flight rises at most about 20 cm).
 
 Run ``python examples/quadruped_jump.py`` (add ``--live`` to open the meshcat viewer in a browser);
 the animation is written to ``jump.html``.

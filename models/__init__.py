@@ -26,6 +26,7 @@ from .data_collectors import (
     DataCollectorMultibodyInContact,
     DataCollectorMultibodyInImpulse,
 )
+from .force_base import ForceDataAbstract
 from .free_fwd_dynamics import DifferentialActionDataFreeFwdDynamics, DifferentialActionModelFreeFwdDynamics
 from .impulse_base import ImpulseDataAbstract, ImpulseModelAbstract
 from .impulse_fwd_dynamics import ActionDataImpulseFwdDynamics, ActionModelImpulseFwdDynamics
@@ -33,6 +34,7 @@ from .impulse_multiple import ImpulseDataMultiple, ImpulseItem, ImpulseModelMult
 from .impulses import ImpulseModel3D, ImpulseModel6D
 from .residuals_contact import (
     ResidualDataContactControlGrav,
+    ResidualDataContactCoPPosition,
     ResidualDataContactForce,
     ResidualDataImpulseCoM,
     ResidualModelContactControlGrav,
@@ -43,6 +45,7 @@ from .residuals_contact import (
     ResidualModelImpulseCoM,
 )
 from .residuals_dynamics import (
+    ResidualDataCentroidalMomentum,
     ResidualModelCentroidalMomentum,
     ResidualModelCoMPosition,
     ResidualModelControlGrav,
@@ -72,6 +75,7 @@ __all__ = [
     "ContactData6D",
     "ContactModel3D",
     "ContactModel6D",
+    "ForceDataAbstract",
     "ImpulseDataAbstract",
     "ImpulseModelAbstract",
     "ActionDataImpulseFwdDynamics",
@@ -82,6 +86,7 @@ __all__ = [
     "ImpulseModel3D",
     "ImpulseModel6D",
     "ResidualDataContactControlGrav",
+    "ResidualDataContactCoPPosition",
     "ResidualDataContactForce",
     "ResidualDataImpulseCoM",
     "ResidualModelContactControlGrav",
@@ -107,6 +112,7 @@ __all__ = [
     "DataCollectorMultibodyInImpulse",
     "DifferentialActionDataFreeFwdDynamics",
     "DifferentialActionModelFreeFwdDynamics",
+    "ResidualDataCentroidalMomentum",
     "ResidualModelCentroidalMomentum",
     "ResidualModelCoMPosition",
     "ResidualModelControlGrav",

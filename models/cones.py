@@ -99,7 +99,11 @@ def _cop_rows(box: np.ndarray) -> np.ndarray:
 
 
 class CoPSupport:
-    """Crocoddyl's ``CoPSupport(R, box)``: ``A (4, 6)``, ``lb = -inf``, ``ub = 0``; ``box = (length, width)``."""
+    """Crocoddyl's ``CoPSupport(R, box)``: ``A (4, 6)``, ``lb = -inf``, ``ub = 0``; ``box = (length, width)``.
+
+    ``CoPSupport()`` is Crocoddyl's default: ``R = I`` and an unbounded box (its force columns of
+    ``A`` are then not finite).  Call :meth:`update` after changing ``R`` or ``box``.
+    """
 
     def __init__(self, R: np.ndarray | None = None, box: np.ndarray | None = None) -> None:
         self.R = np.eye(3) if R is None else R
@@ -112,8 +116,11 @@ class CoPSupport:
         self.box = np.asarray(self.box, dtype=float).reshape(-1)
         if self.box.shape != (2,):
             raise ValueError(f"box must be (length, width), got shape {self.box.shape}")
-        Rb = np.kron(np.eye(2), self.R)
-        self.A = _cop_rows(self.box) @ Rb.T
+        rows = _cop_rows(self.box)
+        self.A = np.zeros((4, 6))
+        with np.errstate(invalid="ignore"):
+            self.A[:, :3] = rows[:, :3] @ self.R.T
+        self.A[:, 3:] = rows[:, 3:] @ self.R.T
         self.lb = np.full(4, -np.inf)
         self.ub = np.zeros(4)
 

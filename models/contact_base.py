@@ -4,7 +4,8 @@ A contact of dimension ``nc`` on frame ``id`` constrains the frame acceleration,
 ``Jc(q) a + a0(q, v) = 0``, where ``Jc (nc, nv)`` is the contact Jacobian and ``a0 (nc,)`` the
 drift (the frame acceleration at zero joint acceleration, plus Baumgarte stabilisation terms).
 The contact force ``f`` (``nc`` components, in the coordinates given by ``type``:
-``pinocchio.LOCAL`` or ``pinocchio.LOCAL_WORLD_ALIGNED``) enters the dynamics as ``Jcᵀ f``.
+``pinocchio.LOCAL`` or ``pinocchio.LOCAL_WORLD_ALIGNED``) enters the dynamics as ``Jcᵀ f``.  What
+contacts share with impulses lives in :mod:`~crocopy.models.force_base`.
 
 Preconditions (filled once per node by the differential action model):
 
@@ -22,38 +23,7 @@ import pinocchio as pin
 
 from crocopy.state import StateAbstract
 
-REFERENCE_FRAMES = (pin.LOCAL, pin.LOCAL_WORLD_ALIGNED)
-
-
-def frame_id(state: StateAbstract, id: int | str, name: str = "id") -> int:
-    """Return a valid frame index of ``state.pinocchio`` from an index or a frame name.
-
-    Raises
-    ------
-    ValueError
-        If the model has no such frame.
-    """
-    model = getattr(state, "pinocchio", None)
-    if not isinstance(model, pin.Model):
-        raise ValueError(f"state must be a StateMultibody (with a pinocchio model), got {type(state).__name__}")
-    if isinstance(id, str):
-        if not model.existFrame(id):
-            raise ValueError(f"{name}: the model has no frame named {id!r}")
-        return int(model.getFrameId(id))
-    try:
-        fid = int(id)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a frame index or a frame name, got {id!r}") from exc
-    if fid != id or not 0 <= fid < model.nframes:
-        raise ValueError(f"{name} = {id!r} is not a frame index of the model (0 <= id < {model.nframes})")
-    return fid
-
-
-def check_reference_frame(type: pin.ReferenceFrame) -> pin.ReferenceFrame:
-    """Accept ``pinocchio.LOCAL`` and ``pinocchio.LOCAL_WORLD_ALIGNED`` only."""
-    if type not in REFERENCE_FRAMES:
-        raise ValueError(f"type must be pinocchio.LOCAL or pinocchio.LOCAL_WORLD_ALIGNED, got {type!r}")
-    return type
+from .force_base import ForceDataAbstract, ForceModelAbstract
 
 
 def check_gains(gains: np.ndarray | None) -> np.ndarray:
@@ -64,7 +34,7 @@ def check_gains(gains: np.ndarray | None) -> np.ndarray:
     return g
 
 
-class ContactModelAbstract:
+class ContactModelAbstract(ForceModelAbstract):
     """Abstract contact model (Crocoddyl's ``ContactModelAbstract(state, type, nc, nu=state.nv)``).
 
     Parameters
@@ -80,25 +50,11 @@ class ContactModelAbstract:
     """
 
     def __init__(self, state: StateAbstract, type: pin.ReferenceFrame, nc: int, nu: int | None = None) -> None:
-        if not isinstance(getattr(state, "pinocchio", None), pin.Model):
-            raise ValueError(f"state must be a StateMultibody, got {state.__class__.__name__}")
-        self.state = state
-        self.type = check_reference_frame(type)
-        self.nc = int(nc)
-        self.nu = state.nv if nu is None else int(nu)
-        if self.nu < 0:
-            raise ValueError(f"nu must be non-negative, got {self.nu}")
-        self.id = 0
+        super().__init__(state, type, nc, getattr(state, "nv", 0) if nu is None else nu)
 
     def createData(self, data: pin.Data) -> "ContactDataAbstract":
         """Allocate the contact data; ``data`` is the node's ``pinocchio.Data``."""
         return ContactDataAbstract(self, data)
-
-    def calc(self, data: "ContactDataAbstract", x: np.ndarray) -> None:
-        raise NotImplementedError(f"{type(self).__name__}.calc is not implemented")
-
-    def calcDiff(self, data: "ContactDataAbstract", x: np.ndarray) -> None:
-        raise NotImplementedError(f"{type(self).__name__}.calcDiff is not implemented")
 
     def updateForce(self, data: "ContactDataAbstract", force: np.ndarray) -> None:
         """Store the contact force (shape ``(nc,)``) in ``data.f`` and its joint-frame image in ``data.fext``."""
@@ -119,50 +75,21 @@ class ContactModelAbstract:
         data.df_dx[:] = df_dx
         data.df_du[:] = df_du
 
-    def setZeroForce(self, data: "ContactDataAbstract") -> None:
-        """Zero force (inactive contact)."""
-        data.f.setZero()
-        data.fext.setZero()
-
-    def setZeroForceDiff(self, data: "ContactDataAbstract") -> None:
-        """Zero force Jacobians (inactive contact)."""
-        data.df_dx[:] = 0.0
-        data.df_du[:] = 0.0
-
     def addRneaDiff(self, data: "ContactDataAbstract", dtau_dq: np.ndarray) -> None:
         """Add to ``dtau_dq`` the term RNEA derivatives miss when ``f`` is not expressed in the local frame."""
 
-    def __repr__(self) -> str:
-        return f"{self.__class__.__name__}(id={self.id}, nc={self.nc}, type={self.type})"
 
-
-class ContactDataAbstract:
-    """Contact data: ``Jc (nc, nv)``, ``a0 (nc,)``, ``da0_dx (nc, ndx)``, ``f``/``fext`` (``pinocchio.Force``,
-    contact and parent-joint coordinates), ``df_dx (nc, ndx)``, ``df_du (nc, nu)``, ``fJf (6, nv)`` (local
-    frame Jacobian), ``jMf``/``fXj`` (frame placement in its joint and its inverse action matrix),
-    ``dtau_dq (nv, nv)`` and the frame-acceleration derivatives ``v_partial_dq``, ``a_partial_dq``,
-    ``a_partial_dv``, ``a_partial_da`` (each ``(6, nv)``)."""
+class ContactDataAbstract(ForceDataAbstract):
+    """Contact data: the fields of :class:`~crocopy.models.force_base.ForceDataAbstract`, the drift
+    ``a0 (nc,)`` and its Jacobian ``da0_dx (nc, ndx)``, the LOCAL frame velocity ``v`` and the
+    frame-acceleration derivatives ``a_partial_dq``, ``a_partial_dv``, ``a_partial_da`` (each ``(6, nv)``)."""
 
     def __init__(self, model: ContactModelAbstract, data: pin.Data) -> None:
-        nc, nv, ndx, nu = model.nc, model.state.nv, model.state.ndx, model.nu
-        pmodel = model.state.pinocchio
-        self.pinocchio = data
-        self.frame = model.id
-        self.type = model.type
-        self.joint = int(pmodel.frames[model.id].parentJoint)
-        self.jMf = pmodel.frames[model.id].placement.copy()
-        self.fXj = self.jMf.inverse().toActionMatrix()
-        self.Jc = np.zeros((nc, nv))
+        super().__init__(model, data)
+        nc, nv, ndx = model.nc, model.state.nv, model.state.ndx
         self.a0 = np.zeros(nc)
         self.da0_dx = np.zeros((nc, ndx))
-        self.f = pin.Force.Zero()
-        self.fext = pin.Force.Zero()
-        self.df_dx = np.zeros((nc, ndx))
-        self.df_du = np.zeros((nc, nu))
-        self.fJf = np.zeros((6, nv))
         self.v = pin.Motion.Zero()
-        self.dtau_dq = np.zeros((nv, nv))
-        self.v_partial_dq = np.zeros((6, nv))
         self.a_partial_dq = np.zeros((6, nv))
         self.a_partial_dv = np.zeros((6, nv))
         self.a_partial_da = np.zeros((6, nv))

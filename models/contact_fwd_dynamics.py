@@ -13,7 +13,11 @@ contact forces as external forces, ``∂ID/∂x``) and the contact constraint (`
     ∂λ/∂x = -Bᵀ (∂τ/∂x - ∂ID/∂x) + C da0_dx,   ∂λ/∂u = -Bᵀ ∂τ/∂u
 
 The force Jacobians are written to every contact's data (``df_dx``, ``df_du``) when
-``enable_force`` is True, so that force residuals can use them.
+``enable_force`` is True, so that force residuals can use them.  The joint data collector
+(``data.multibody.joint``) exposes ``tau = u``, ``a = xout`` and their derivatives (``∂τ/∂u = I``,
+``da_dx = Fx``, ``da_du = Fu``) for the joint-effort/acceleration residuals, as under free dynamics.
+On a terminal node (no control) the contact forces and their Jacobians are set to zero, so that no
+residual reads the forces of an earlier evaluation.
 """
 
 from __future__ import annotations
@@ -150,6 +154,7 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         if u is None:
             pin.computeForwardKinematicsDerivatives(self.pinocchio, data.pinocchio, q, v, data.zero_a)
             pin.updateFramePlacements(self.pinocchio, data.pinocchio)
+            self.contacts.updateForce(mb.contacts, data.zero_force)
             self.costs.calc(data.costs, x)
             data.cost = data.costs.cost
             if self.constraints is not None:
@@ -159,6 +164,7 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         nc = self.contacts.nc
         pd = data.pinocchio
         self.actuation.calc(mb.actuation, x, u)
+        mb.joint.tau[:] = u
         data.rigid = None
         if nc and self.use_pinocchio_constraints and not self._with_armature and self._damping == 0.0:
             data.rigid = self.contacts.rigidConstraints(mb.contacts, pd)
@@ -177,7 +183,10 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
             lam = pd.lambda_c
         else:
             self._kinematics(data, q, v)
-            data.xout[:] = np.linalg.solve(np.triu(pd.M) + np.triu(pd.M, 1).T, mb.actuation.tau - pd.nle)
+            try:
+                data.xout[:] = np.linalg.solve(np.triu(pd.M) + np.triu(pd.M, 1).T, mb.actuation.tau - pd.nle)
+            except np.linalg.LinAlgError:  # a diverged trial state (non-finite inertia): no acceleration
+                data.xout[:] = np.nan
             lam = data.no_force
         self.contacts.updateAcceleration(mb.contacts, data.xout)
         self.contacts.updateForce(mb.contacts, lam)
@@ -196,6 +205,9 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         state = self.state
         check_vector_shape(x, state.nx, "x")
         if u is None:
+            data.df_dx[:] = 0.0
+            data.df_du[:] = 0.0
+            self.contacts.updateForceDiff(data.multibody.contacts, data.df_dx, data.df_du)
             self.costs.calcDiff(data.costs, x)
             if self.constraints is not None:
                 self.constraints.calcDiff(data.constraints, x)
@@ -310,6 +322,8 @@ class DifferentialActionDataContactFwdDynamics(DifferentialActionDataAbstract):
         actuation = model.actuation.createData()
         contacts = model.contacts.createData(self.pinocchio)
         joint = JointDataAbstract(model.state, model.actuation, nu)
+        joint.a, joint.da_dx, joint.da_du = self.xout, self.Fx, self.Fu
+        np.fill_diagonal(joint.dtau_du, 1.0)
         self.multibody = DataCollectorJointActMultibodyInContact(self.pinocchio, actuation, joint, contacts)
         self.costs = model.costs.createData(self.multibody)
         link_cost_data(self, self.costs)
@@ -323,6 +337,7 @@ class DifferentialActionDataContactFwdDynamics(DifferentialActionDataAbstract):
         self.rhs = np.zeros((nv + nc, ndx))
         self.KinvRhs = np.zeros((nv + nc, ndx))
         self.no_force = np.zeros(0)
+        self.zero_force = np.zeros(nc)
         self.diag = np.arange(nv)
         self.zero_a = np.zeros(nv)
         self.rigid = None

@@ -3,7 +3,8 @@
 Active contacts are stacked in name order (as Crocoddyl's ordered map does) into the first ``nc``
 rows of ``Jc (nc_total, nv)``, ``a0 (nc_total,)`` and ``da0_dx (nc_total, ndx)``; the rows of the
 force vector ``λ (nc,)`` follow the same order.  ``fext`` holds, per joint, the sum of the forces
-of the contacts attached to it, in the joint frame (the input of Pinocchio's RNEA).
+of the contacts attached to it, in the joint frame (the input of Pinocchio's RNEA).  The
+bookkeeping shared with impulse sets lives in :mod:`~crocopy.models.force_base`.
 """
 
 from __future__ import annotations
@@ -13,10 +14,11 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from crocopy.named_items import NamedItems
 from crocopy.state import StateAbstract
+from crocopy.versioning import ParametersSeen
 
 from .contact_base import ContactDataAbstract, ContactModelAbstract
+from .force_base import ForceDataMultiple, ForceModelMultiple
 
 
 @dataclass
@@ -31,7 +33,7 @@ class ContactItem:
         return f"{{{self.name}, {self.contact!r}, active={self.active}}}"
 
 
-class ContactModelMultiple(NamedItems):
+class ContactModelMultiple(ForceModelMultiple):
     """Crocoddyl's ``ContactModelMultiple(state, nu=state.nv)``.
 
     Parameters
@@ -52,28 +54,18 @@ class ContactModelMultiple(NamedItems):
     """
 
     _kind = "contact"
+    _model_type = ContactModelAbstract
 
     def __init__(self, state: StateAbstract, nu: int | None = None) -> None:
-        if not isinstance(getattr(state, "pinocchio", None), pin.Model):
-            raise ValueError(f"state must be a StateMultibody, got {type(state).__name__}")
-        self.state = state
-        self.nu = state.nv if nu is None else int(nu)
-        if self.nu < 0:
-            raise ValueError(f"nu must be non-negative, got {self.nu}")
+        super().__init__(state, nu)
         self.computeAllContacts = False
-        self._items: dict[str, ContactItem] = {}
-        self._recount()
 
     @property
     def contacts(self) -> dict[str, ContactItem]:
         return self._items
 
     def _recount(self) -> None:
-        self.nc = sum(c.contact.nc for c in self._items.values() if c.active)
-        self.nc_total = sum(c.contact.nc for c in self._items.values())
-        self._active = [(n, c.contact) for n, c in self._items.items() if c.active]
-        self._inactive = [(n, c.contact) for n, c in self._items.items() if not c.active]
-        self._lwa = [(n, c) for n, c in self._active if c.type != pin.LOCAL]
+        super()._recount()
         frames = self.state.pinocchio.frames
         joints = [int(frames[c.id].parentJoint) for _, c in self._active]
         self._shared_joints = len(set(joints)) != len(joints)
@@ -85,18 +77,10 @@ class ContactModelMultiple(NamedItems):
         Raises
         ------
         ValueError
-            If ``name`` is already used, or ``contact`` has another ``nu`` or another robot.
+            If ``contact`` is not a ``ContactModelAbstract``, ``name`` is already used, or ``contact``
+            has another ``nu`` or another robot.
         """
-        if not isinstance(contact, ContactModelAbstract):
-            raise ValueError(f"contact must be a ContactModelAbstract, got {type(contact).__name__}")
-        self._check_new_name(name)
-        if contact.nu != self.nu:
-            raise ValueError(f"contact {name!r} has nu = {contact.nu}, expected nu = {self.nu}")
-        if contact.state.pinocchio is not self.state.pinocchio and (
-            contact.state.nx != self.state.nx or contact.state.pinocchio.nframes != self.state.pinocchio.nframes
-        ):
-            raise ValueError(f"contact {name!r} was built on the model of another robot")
-        self._insert(name, ContactItem(name, contact, bool(active)))
+        self._add(name, contact, ContactItem(name, contact, bool(active)))
 
     def removeContact(self, name: str) -> None:
         """Remove the contact ``name`` (``KeyError`` if unknown)."""
@@ -116,28 +100,17 @@ class ContactModelMultiple(NamedItems):
 
     def calc(self, data: "ContactDataMultiple", x: np.ndarray) -> None:
         """Evaluate the active contacts and stack ``Jc``/``a0`` (inactive rows are zero)."""
-        i = 0
-        for name, c in self._active:
-            cd = data.contacts[name]
-            c.calc(cd, x)
-            data.Jc[i:i + c.nc] = cd.Jc
-            data.a0[i:i + c.nc] = cd.a0
-            i += c.nc
+        self._stack(data.items, x, False, ((data.Jc, "Jc"), (data.a0, "a0")))
         if self.computeAllContacts:
             for name, c in self._inactive:
-                c.calc(data.contacts[name], x)
+                c.calc(data.items[name], x)
 
     def calcDiff(self, data: "ContactDataMultiple", x: np.ndarray) -> None:
         """Evaluate the drift Jacobians of the active contacts and stack ``da0_dx``."""
-        i = 0
-        for name, c in self._active:
-            cd = data.contacts[name]
-            c.calcDiff(cd, x)
-            data.da0_dx[i:i + c.nc] = cd.da0_dx
-            i += c.nc
+        self._stack(data.items, x, True, ((data.da0_dx, "da0_dx"),))
         if self.computeAllContacts:
             for name, c in self._inactive:
-                c.calcDiff(data.contacts[name], x)
+                c.calcDiff(data.items[name], x)
 
     def rigidConstraints(self, data: "ContactDataMultiple", pinocchio: pin.Data):
         """Pinocchio ``RigidConstraintModel``/``Data`` vectors of the active contacts, or ``None``.
@@ -145,24 +118,29 @@ class ContactModelMultiple(NamedItems):
         They reproduce these contacts exactly (same drift, Baumgarte terms and coordinates) when every
         active contact is a 3D contact, a LOCAL 6D contact or a 6D contact without position gain;
         ``None`` otherwise.  They are rebuilt (and ``initConstraintDynamics`` called) only when the
-        active set, a reference or a gain changed.
+        active set, a reference or a gain changed (:mod:`crocopy.versioning`).
         """
-        key = []
-        for name, c in self._active:
-            rigid = getattr(c, "rigidConstraintModel", None)
-            if rigid is None or (c.nc == 6 and c.type != pin.LOCAL and c.gains[0] != 0.0):
-                return None
-            key.append((name, c._version))
-        key = tuple(key)
-        if data.rigid_key != key:
-            cms, cds = pin.StdVec_RigidConstraintModel(), pin.StdVec_RigidConstraintData()
-            for _, c in self._active:
-                rigid = c.rigidConstraintModel()
-                cms.append(rigid)
-                cds.append(rigid.createData())
-            pin.initConstraintDynamics(self.state.pinocchio, pinocchio, cms, cds)
-            data.rigid, data.rigid_key = (cms, cds), key
+        if data.rigid_seen.stale(self._rigid_sources):
+            data.rigid = self._build_rigid(pinocchio)
+            data.rigid_seen.filled()
         return data.rigid
+
+    def _rigid_sources(self) -> list:
+        return [self, *(c for _, c in self._active)]
+
+    def _build_rigid(self, pinocchio: pin.Data):
+        for _, c in self._active:
+            if getattr(c, "rigidConstraintModel", None) is None or (
+                c.nc == 6 and c.type != pin.LOCAL and c.gains[0] != 0.0
+            ):
+                return None
+        cms, cds = pin.StdVec_RigidConstraintModel(), pin.StdVec_RigidConstraintData()
+        for _, c in self._active:
+            rigid = c.rigidConstraintModel()
+            cms.append(rigid)
+            cds.append(rigid.createData())
+        pin.initConstraintDynamics(self.state.pinocchio, pinocchio, cms, cds)
+        return RigidConstraintCache((cms, cds))
 
     def updateAcceleration(self, data: "ContactDataMultiple", dv: np.ndarray) -> None:
         """Store the constrained acceleration ``dv (nv,)``."""
@@ -184,12 +162,7 @@ class ContactModelMultiple(NamedItems):
             force = np.asarray(force, dtype=float)
             if force.shape != (self.nc,):
                 raise ValueError(f"force has shape {force.shape}, expected ({self.nc},)")
-        i = 0
-        for name, c in self._active:
-            c.storeForce(data.contacts[name], force[i:i + c.nc])
-            i += c.nc
-        for name, c in self._inactive:
-            c.setZeroForce(data.contacts[name])
+        self._split(data.items, "storeForce", (force,), "setZeroForce")
         data.joint_forces_pending = True
 
     def updateJointForces(self, data: "ContactDataMultiple") -> None:
@@ -201,7 +174,7 @@ class ContactModelMultiple(NamedItems):
         for j in data.touched if shared else self._idle_joints:
             fext[j] = data.zero_force
         for name, c in self._active:
-            cd = data.contacts[name]
+            cd = data.items[name]
             c.updateJointForce(cd)
             fext[cd.joint] = fext[cd.joint] + cd.fext if shared else cd.fext
         data.joint_forces_pending = False
@@ -220,52 +193,47 @@ class ContactModelMultiple(NamedItems):
                 f"df_dx, df_du have shapes {np.shape(df_dx)}, {np.shape(df_du)}, "
                 f"expected ({self.nc}, {self.state.ndx}), ({self.nc}, {self.nu})"
             )
-        i = 0
-        for name, c in self._active:
-            c.updateForceDiff(data.contacts[name], df_dx[i:i + c.nc], df_du[i:i + c.nc])
-            i += c.nc
-        for name, c in self._inactive:
-            c.setZeroForceDiff(data.contacts[name])
-
-    def updateRneaDiff(self, data: "ContactDataMultiple", pinocchio: pin.Data) -> None:
-        """Add to ``pinocchio.dtau_dq`` the terms of the contacts whose forces are not in local coordinates."""
-        if self._lwa:
-            dtau_dq = pinocchio.dtau_dq
-            for name, c in self._lwa:
-                c.addRneaDiff(data.contacts[name], dtau_dq)
-
-    def __repr__(self) -> str:
-        return "ContactModelMultiple(" + ", ".join(f"{n}: {c.contact!r}" for n, c in self._items.items()) + ")"
+        self._split(data.items, "updateForceDiff", (df_dx, df_du), "setZeroForceDiff")
 
 
-class ContactDataMultiple:
+def _no_cache() -> None:
+    return None
+
+
+class RigidConstraintCache(tuple):
+    """``(models, datas)`` of Pinocchio constraints: a cache that copies and pickles as ``None``
+    (Pinocchio cannot pickle them; their holders rebuild them on the next ``calc``)."""
+
+    def __reduce__(self) -> tuple:
+        return _no_cache, ()
+
+
+class ContactDataMultiple(ForceDataMultiple):
     """Data of :class:`ContactModelMultiple`: ``contacts`` (name → data), ``Jc (nc_total, nv)``,
     ``a0 (nc_total,)``, ``da0_dx (nc_total, ndx)``, ``dv (nv,)``, ``ddv_dx (nv, ndx)`` and ``fext``
     (one ``pinocchio.Force`` per joint).
 
     ``fext`` and the contacts' ``f_local``/``fext`` are brought up to date with the forces when
-    ``fext`` is read (the constrained dynamics do not need them).
+    ``fext`` is read (the constrained dynamics do not need them).  ``rigid`` caches
+    :meth:`ContactModelMultiple.rigidConstraints` (filled at the clock value ``rigid_seen``).
     """
 
     def __init__(self, model: ContactModelMultiple, data: pin.Data) -> None:
+        super().__init__(model, data)
         nv, ndx, nct = model.state.nv, model.state.ndx, model.nc_total
-        self.contacts: dict[str, ContactDataAbstract] = {
-            name: item.contact.createData(data) for name, item in model.contacts.items()
-        }
-        self.Jc = np.zeros((nct, nv))
+        self.contacts: dict[str, ContactDataAbstract] = self.items
         self.a0 = np.zeros(nct)
         self.da0_dx = np.zeros((nct, ndx))
         self.dv = np.zeros(nv)
         self.ddv_dx = np.zeros((nv, ndx))
-        self.fext_by_joint = pin.StdVec_Force()
-        for _ in range(model.state.pinocchio.njoints):
-            self.fext_by_joint.append(pin.Force.Zero())
         self.joint_forces_pending = False
         self._model = model
-        self.zero_force = pin.Force.Zero()
-        self.touched = sorted({cd.joint for cd in self.contacts.values()})
         self.rigid = None
-        self.rigid_key = None
+        self.rigid_seen = ParametersSeen()
+
+    def __getstate__(self) -> dict:
+        """Copy or pickle without the Pinocchio constraint cache (``rigid``, rebuilt on first use)."""
+        return {**self.__dict__, "rigid": None}
 
     @property
     def fext(self) -> pin.StdVec_Force:

@@ -9,8 +9,10 @@ gains:
 - LOCAL_WORLD_ALIGNED: the same quantities rotated by ``R`` (each 3-block), so that
   ``a0 = R a0_local`` and ``da0/dq = R da0_local/dq - R [a0_local]× Ja``.
 
-The LOCAL-WORLD-ALIGNED force ``f`` maps to the local force ``Rᵀ f``; as that rotates with ``q``,
-``addRneaDiff`` adds ``-Jlᵀ [Rᵀ f_l]× Ja (- Jaᵀ [Rᵀ f_a]× Ja for 6D)`` to the RNEA derivative.
+The force maps (``f_local``, ``fext``, the RNEA correction in LOCAL_WORLD_ALIGNED) are those of
+:class:`~crocopy.models.force_base.FrameForce`.  The reference and the gains change through their
+setters only (read-only arrays), which :func:`~crocopy.versioning.touch` the contact so that contact
+sets rebuild what they derived from them.
 """
 
 from __future__ import annotations
@@ -19,8 +21,10 @@ import numpy as np
 import pinocchio as pin
 
 from crocopy.state import StateAbstract
+from crocopy.versioning import frozen_copy, touch
 
-from .contact_base import ContactDataAbstract, ContactModelAbstract, check_gains, frame_id
+from .contact_base import ContactDataAbstract, ContactModelAbstract, check_gains
+from .force_base import FrameForce, frame_id
 
 _LOCAL = pin.LOCAL
 _skew = pin.skew
@@ -33,19 +37,50 @@ def _split_nu_gains(nu, gains):
     return nu, gains
 
 
-def _rigid(contact: ContactModelAbstract, kind: pin.ContactType, placement: pin.SE3) -> pin.RigidConstraintModel:
-    """Pinocchio constraint of ``contact``: same frame, reference placement, coordinates and Baumgarte gains."""
-    model = contact.state.pinocchio
-    frame = model.frames[contact.id]
-    rigid = pin.RigidConstraintModel(kind, model, frame.parentJoint, frame.placement, 0, placement, contact.type)
-    params = rigid.m_baumgarte_parameters
-    params.Kp = params.Kp * 0.0 + contact.gains[0]
-    params.Kd = params.Kd * 0.0 + contact.gains[1]
-    rigid.m_baumgarte_parameters = params
-    return rigid
+class _FrameContact(FrameForce, ContactModelAbstract):
+    """What the 3D and 6D contacts share: frame, reference, Baumgarte gains, force maps, Pinocchio twin."""
+
+    _rigid_kind: pin.ContactType
+
+    def __init__(
+        self, state: StateAbstract, id: int | str, reference, type: pin.ReferenceFrame, nc: int, nu, gains
+    ) -> None:
+        nu, gains = _split_nu_gains(nu, gains)
+        fid = frame_id(state, id)
+        super().__init__(state, type, nc, nu)
+        self.id = fid
+        self.reference = reference
+        self.gains = gains
+
+    @property
+    def gains(self) -> np.ndarray:
+        """Baumgarte gains ``(kp, kd)`` (read-only; assign a new array to change them)."""
+        return self._gains
+
+    @gains.setter
+    def gains(self, value: np.ndarray | None) -> None:
+        self._gains = frozen_copy(check_gains(value))
+        touch(self)
+
+    def _reference_placement(self) -> pin.SE3:
+        raise NotImplementedError
+
+    def rigidConstraintModel(self) -> pin.RigidConstraintModel:
+        """The same contact as a Pinocchio ``RigidConstraintModel`` (used by the fast contact dynamics):
+        same frame, reference placement, coordinates and Baumgarte gains."""
+        model = self.state.pinocchio
+        frame = model.frames[self.id]
+        rigid = pin.RigidConstraintModel(
+            self._rigid_kind, model, frame.parentJoint, frame.placement, 0, self._reference_placement(), self.type
+        )
+        params = rigid.m_baumgarte_parameters
+        params.Kp = params.Kp * 0.0 + self._gains[0]
+        params.Kd = params.Kd * 0.0 + self._gains[1]
+        rigid.m_baumgarte_parameters = params
+        return rigid
 
 
-class ContactModel3D(ContactModelAbstract):
+class ContactModel3D(_FrameContact):
     """Crocoddyl's ``ContactModel3D(state, id, xref, type, nu=state.nv, gains=[0, 0])``.
 
     Parameters
@@ -64,6 +99,8 @@ class ContactModel3D(ContactModelAbstract):
         Baumgarte gains ``(kp, kd)`` (default zeros).
     """
 
+    _rigid_kind = pin.ContactType.CONTACT_3D
+
     def __init__(
         self,
         state: StateAbstract,
@@ -73,16 +110,11 @@ class ContactModel3D(ContactModelAbstract):
         nu: int | None = None,
         gains: np.ndarray | None = None,
     ) -> None:
-        nu, gains = _split_nu_gains(nu, gains)
-        fid = frame_id(state, id)
-        super().__init__(state, type, 3, nu)
-        self.id = fid
-        self.reference = xref
-        self.gains = gains
+        super().__init__(state, id, xref, type, 3, nu, gains)
 
     @property
     def reference(self) -> np.ndarray:
-        """Contact position ``xref``, shape ``(3,)``."""
+        """Contact position ``xref``, shape ``(3,)`` (read-only; assign a new array to change it)."""
         return self._xref
 
     @reference.setter
@@ -90,22 +122,11 @@ class ContactModel3D(ContactModelAbstract):
         ref = np.asarray(value, dtype=float).reshape(-1) if np.ndim(value) == 2 else np.asarray(value, dtype=float)
         if ref.shape != (3,) or not np.all(np.isfinite(ref)):
             raise ValueError(f"xref must be a finite vector of shape (3,), got shape {np.shape(value)}")
-        self._xref = ref.copy()
-        self._version = getattr(self, "_version", 0) + 1
+        self._xref = frozen_copy(ref)
+        touch(self)
 
-    @property
-    def gains(self) -> np.ndarray:
-        """Baumgarte gains ``(kp, kd)``."""
-        return self._gains
-
-    @gains.setter
-    def gains(self, value: np.ndarray | None) -> None:
-        self._gains = check_gains(value)
-        self._version = getattr(self, "_version", 0) + 1
-
-    def rigidConstraintModel(self) -> pin.RigidConstraintModel:
-        """The same contact as a Pinocchio ``RigidConstraintModel`` (used by the fast contact dynamics)."""
-        return _rigid(self, pin.ContactType.CONTACT_3D, pin.SE3(np.eye(3), self._xref))
+    def _reference_placement(self) -> pin.SE3:
+        return pin.SE3(np.eye(3), self._xref)
 
     def createData(self, data: pin.Data) -> "ContactData3D":
         return ContactData3D(self, data)
@@ -177,35 +198,12 @@ class ContactModel3D(ContactModelAbstract):
             dq += K @ J
         data.da0_dx[:] = data.da0_local_dx
 
-    def updateForce(self, data: "ContactData3D", force: np.ndarray) -> None:
-        if force.shape != (3,):
-            raise ValueError(f"force has shape {np.shape(force)}, expected (3,)")
-        self.storeForce(data, force)
-        self.updateJointForce(data)
-
-    def storeForce(self, data: "ContactData3D", force: np.ndarray) -> None:
-        """Store ``force (3,)`` in ``data.f`` only (``f_local``/``fext`` wait for :meth:`updateJointForce`)."""
-        data.f.linear = force
-
-    def updateJointForce(self, data: "ContactData3D") -> None:
-        """``f_local`` and ``fext`` (the force at the parent joint) from ``data.f``."""
-        force = data.f.linear
-        data.f_local.linear = force if self.type == _LOCAL else force @ data.pinocchio.oMf[self.id].rotation
-        data.fext = data.jMf.act(data.f_local)
-
-    def addRneaDiff(self, data: "ContactData3D", dtau_dq: np.ndarray) -> None:
-        if self.type == _LOCAL:
-            return
-        J = data.fJf
-        np.dot(J[:3].T, _skew(data.f_local.linear) @ J[3:], out=data.dtau_dq)
-        dtau_dq -= data.dtau_dq
-
     def __repr__(self) -> str:
         return f"ContactModel3D(id={self.id}, type={self.type}, xref={self._xref}, gains={self._gains})"
 
 
 class ContactData3D(ContactDataAbstract):
-    """Data of :class:`ContactModel3D`; adds ``a0_local``, ``da0_local_dx``, ``dp``, ``dp_local`` and ``f_local``."""
+    """Data of :class:`ContactModel3D`; adds ``a0_local``, ``da0_local_dx``, ``dp``, ``dp_local`` and work arrays."""
 
     def __init__(self, model: ContactModel3D, data: pin.Data) -> None:
         super().__init__(model, data)
@@ -221,27 +219,20 @@ class ContactData3D(ContactDataAbstract):
         self.da0_local_dx = np.zeros((3, model.state.ndx))
         self.dp = np.zeros(3)
         self.dp_local = np.zeros(3)
-        self.f_local = pin.Force.Zero()
 
 
-class ContactModel6D(ContactModelAbstract):
+class ContactModel6D(_FrameContact):
     """Crocoddyl's ``ContactModel6D(state, id, pref, type, nu=state.nv, gains=[0, 0])``.
 
     Parameters
     ----------
-    state : StateMultibody
-        Multibody state.
-    id : int or str
-        Contact frame (index or name).
     pref : pinocchio.SE3
         Contact placement used by the Baumgarte position term.
-    type : pinocchio.ReferenceFrame
-        ``pinocchio.LOCAL`` or ``pinocchio.LOCAL_WORLD_ALIGNED``.
-    nu : int, optional
-        Control dimension (default ``state.nv``).
-    gains : array_like, shape (2,)
-        Baumgarte gains ``(kp, kd)`` (default zeros).
+    state, id, type, nu, gains
+        As for :class:`ContactModel3D`.
     """
+
+    _rigid_kind = pin.ContactType.CONTACT_6D
 
     def __init__(
         self,
@@ -252,39 +243,23 @@ class ContactModel6D(ContactModelAbstract):
         nu: int | None = None,
         gains: np.ndarray | None = None,
     ) -> None:
-        nu, gains = _split_nu_gains(nu, gains)
-        fid = frame_id(state, id)
-        super().__init__(state, type, 6, nu)
-        self.id = fid
-        self.reference = pref
-        self.gains = gains
+        super().__init__(state, id, pref, type, 6, nu, gains)
 
     @property
     def reference(self) -> pin.SE3:
-        """Contact placement ``pref``."""
-        return self._pref
+        """Contact placement ``pref`` (a copy; assign a new placement to change it)."""
+        return self._pref.copy()
 
     @reference.setter
     def reference(self, value: pin.SE3) -> None:
         if not isinstance(value, pin.SE3):
             raise ValueError(f"pref must be a pinocchio.SE3, got {type(value).__name__}")
         self._pref = value.copy()
-        self._version = getattr(self, "_version", 0) + 1
         self._prefinv = value.inverse()
+        touch(self)
 
-    @property
-    def gains(self) -> np.ndarray:
-        """Baumgarte gains ``(kp, kd)``."""
-        return self._gains
-
-    @gains.setter
-    def gains(self, value: np.ndarray | None) -> None:
-        self._gains = check_gains(value)
-        self._version = getattr(self, "_version", 0) + 1
-
-    def rigidConstraintModel(self) -> pin.RigidConstraintModel:
-        """The same contact as a Pinocchio ``RigidConstraintModel`` (used by the fast contact dynamics)."""
-        return _rigid(self, pin.ContactType.CONTACT_6D, self._pref)
+    def _reference_placement(self) -> pin.SE3:
+        return self._pref
 
     def createData(self, data: pin.Data) -> "ContactData6D":
         return ContactData6D(self, data)
@@ -338,40 +313,12 @@ class ContactModel6D(ContactModelAbstract):
             data.da0_dx[:3, :nv] -= (R @ _skew(acc[:3])) @ Ja
             data.da0_dx[3:, :nv] -= (R @ _skew(acc[3:])) @ Ja
 
-    def updateForce(self, data: "ContactData6D", force: np.ndarray) -> None:
-        if np.shape(force) != (6,):
-            raise ValueError(f"force has shape {np.shape(force)}, expected (6,)")
-        self.storeForce(data, force)
-        self.updateJointForce(data)
-
-    def storeForce(self, data: "ContactData6D", force: np.ndarray) -> None:
-        """Store ``force (6,)`` in ``data.f`` only (``f_local``/``fext`` wait for :meth:`updateJointForce`)."""
-        data.f.vector = force
-
-    def updateJointForce(self, data: "ContactData6D") -> None:
-        """``f_local`` and ``fext`` (the force at the parent joint) from ``data.f``."""
-        if self.type == _LOCAL:
-            data.f_local.vector = data.f.vector
-        else:
-            Rt = data.pinocchio.oMf[self.id].rotation.T
-            data.f_local.linear = Rt @ data.f.linear
-            data.f_local.angular = Rt @ data.f.angular
-        data.fext = data.jMf.act(data.f_local)
-
-    def addRneaDiff(self, data: "ContactData6D", dtau_dq: np.ndarray) -> None:
-        if self.type == _LOCAL:
-            return
-        Jl, Ja = data.fJf[:3], data.fJf[3:]
-        fl = data.f_local
-        np.dot(Jl.T @ _skew(fl.linear) + Ja.T @ _skew(fl.angular), Ja, out=data.dtau_dq)
-        dtau_dq -= data.dtau_dq
-
     def __repr__(self) -> str:
         return f"ContactModel6D(id={self.id}, type={self.type}, gains={self._gains})"
 
 
 class ContactData6D(ContactDataAbstract):
-    """Data of :class:`ContactModel6D`; adds ``a0_local``, ``da0_local_dx``, ``rMf`` and ``f_local``."""
+    """Data of :class:`ContactModel6D`; adds ``a0_local``, ``drift_local``, ``da0_local_dx`` and ``rMf``."""
 
     def __init__(self, model: ContactModel6D, data: pin.Data) -> None:
         super().__init__(model, data)
@@ -379,4 +326,3 @@ class ContactData6D(ContactDataAbstract):
         self.drift_local = np.zeros(6)
         self.da0_local_dx = np.zeros((6, model.state.ndx))
         self.rMf = pin.SE3.Identity()
-        self.f_local = pin.Force.Zero()

@@ -21,6 +21,7 @@ import numpy as np
 import pinocchio as pin
 
 from crocopy.action_base import ActionDataAbstract, ActionModelAbstract
+from crocopy.array_views import share_arrays
 from crocopy.constraints.manager import ConstraintModelManager
 from crocopy.costs.sum import CostModelSum
 
@@ -41,10 +42,12 @@ class ActionModelImpulseFwdDynamics(ArmatureMixin, KKTDampingMixin, ActionModelA
     impulses : ImpulseModelMultiple
         Impulses of the impact.
     costs : CostModelSum
-        Cost of the impact node (``nu = 0``).
+        Cost of the impact node.  The node has no control: costs built with ``nu > 0`` (as
+        Crocoddyl accepts, e.g. ``CostModelSum(state)``) are evaluated without one, like a
+        terminal node's.
     constraints : ConstraintModelManager, optional
         Constraints (the overload ``(state, impulses, costs, r_coeff, inv_damping, enable_force)`` is
-        also accepted).
+        also accepted); evaluated without control if built with ``nu > 0``.
     r_coeff : float
         Restitution coefficient ``e >= 0``.
     inv_damping : float
@@ -76,8 +79,6 @@ class ActionModelImpulseFwdDynamics(ArmatureMixin, KKTDampingMixin, ActionModelA
                 continue
             if part.state.nx != state.nx or part.state.ndx != state.ndx:
                 raise ValueError(f"{name} was built on a state of another dimension than state")
-        if costs.nu != 0 or (constraints is not None and constraints.nu != 0):
-            raise ValueError("costs and constraints of an impulse model must have nu = 0")
         c = constraints
         dims = (c.ng, c.nh, c.ng_T, c.nh_T) if c is not None else (0, 0, 0, 0)
         super().__init__(state, 0, costs.nr, *dims)
@@ -131,10 +132,10 @@ class ActionModelImpulseFwdDynamics(ArmatureMixin, KKTDampingMixin, ActionModelA
             lam = data.no_force
         self.impulses.updateVelocity(idata, data.xnext[nq:])
         self.impulses.updateForce(idata, lam)
-        self.costs.calc(data.costs, x, u)
+        self.costs.calc(data.costs, x, u if self.costs.nu == 0 else None)
         data.cost = data.costs.cost
         if self.constraints is not None:
-            self.constraints.calc(data.constraints, x, u)
+            self.constraints.calc(data.constraints, x, u if self.constraints.nu == 0 else None)
 
     def calcDiff(self, data: "ActionDataImpulseFwdDynamics", x: np.ndarray, u: np.ndarray | None = None) -> None:
         """``Fx``, impulse Jacobians (``enable_force``), cost and constraint derivatives (after :meth:`calc`)."""
@@ -168,9 +169,9 @@ class ActionModelImpulseFwdDynamics(ArmatureMixin, KKTDampingMixin, ActionModelA
             data.Fx[nv:, nv:][data.diag, data.diag] = 1.0
             pin.computeForwardKinematicsDerivatives(model, pd, q, v, data.zero_v)
             self.impulses.updateVelocityDiff(idata, data.Fx[nv:])
-        self.costs.calcDiff(data.costs, x, u)
+        self.costs.calcDiff(data.costs, x, u if self.costs.nu == 0 else None)
         if self.constraints is not None:
-            self.constraints.calcDiff(data.constraints, x, u)
+            self.constraints.calcDiff(data.constraints, x, u if self.constraints.nu == 0 else None)
 
     def __repr__(self) -> str:
         return f"ActionModelImpulseFwdDynamics(nx={self.state.nx}, nc={self.impulses.nc}, r_coeff={self._r_coeff})"
@@ -188,11 +189,17 @@ class ActionDataImpulseFwdDynamics(ActionDataAbstract):
         impulses = model.impulses.createData(self.pinocchio)
         self.multibody = DataCollectorMultibodyInImpulse(self.pinocchio, impulses)
         self.costs = model.costs.createData(self.multibody)
-        link_cost_data(self, self.costs)
+        if model.costs.nu == 0:
+            link_cost_data(self, self.costs)
+        else:
+            share_arrays(self.costs, self, ("Lx", "Lxx"))
         self.constraints = None
         if model.constraints is not None:
             self.constraints = model.constraints.createData(self.multibody)
-            self.constraints.shareMemory(self)
+            if model.constraints.nu == 0:
+                self.constraints.shareMemory(self)
+            else:
+                share_arrays(self.constraints, self, ("g", "Gx", "h", "Hx"))
         self.Kinv = np.zeros((nv + nc, nv + nc))
         self.df_dx = np.zeros((nc, ndx))
         self.rhs = np.zeros((nv + nc, ndx))

@@ -16,7 +16,7 @@ import pinocchio as pin
 
 from crocopy.state import StateAbstract
 
-from .contact_base import frame_id
+from .force_base import frame_id
 from .impulse_base import ImpulseDataAbstract, ImpulseModelAbstract
 
 _LOCAL = pin.LOCAL
@@ -24,9 +24,23 @@ _skew = pin.skew
 
 
 class _ImpulseFrame(ImpulseModelAbstract):
-    def __init__(self, state: StateAbstract, id: int | str, type: pin.ReferenceFrame, nc: int) -> None:
-        fid = frame_id(state, id)
-        super().__init__(state, type, nc)
+    """An impulse of dimension ``_frame_nc`` (3: point, 6: rigid frame) on a frame.
+
+    Parameters
+    ----------
+    state : StateMultibody
+        Multibody state.
+    frame : int or str
+        Impulse frame (index or name).
+    type : pinocchio.ReferenceFrame
+        ``pinocchio.LOCAL`` (default) or ``pinocchio.LOCAL_WORLD_ALIGNED``.
+    """
+
+    _frame_nc: int
+
+    def __init__(self, state: StateAbstract, frame: int | str, type: pin.ReferenceFrame = pin.LOCAL) -> None:
+        fid = frame_id(state, frame, "frame")
+        super().__init__(state, type, self._frame_nc)
         self.id = fid
 
     def createData(self, data: pin.Data) -> ImpulseDataAbstract:
@@ -61,34 +75,12 @@ class _ImpulseFrame(ImpulseModelAbstract):
 
 
 class ImpulseModel3D(_ImpulseFrame):
-    """Crocoddyl's ``ImpulseModel3D(state, frame, type=pinocchio.LOCAL)``.
+    """Crocoddyl's ``ImpulseModel3D(state, frame, type=pinocchio.LOCAL)``: a point impulse (``nc = 3``)."""
 
-    Parameters
-    ----------
-    state : StateMultibody
-        Multibody state.
-    id : int or str
-        Impulse frame (index or name).
-    type : pinocchio.ReferenceFrame
-        ``pinocchio.LOCAL`` (default) or ``pinocchio.LOCAL_WORLD_ALIGNED``.
-    """
-
-    def __init__(self, state: StateAbstract, id: int | str, type: pin.ReferenceFrame = pin.LOCAL) -> None:
-        super().__init__(state, id, type, 3)
+    _frame_nc = 3
 
 
 class ImpulseModel6D(_ImpulseFrame):
-    """Crocoddyl's ``ImpulseModel6D(state, frame, type=pinocchio.LOCAL)``.
+    """Crocoddyl's ``ImpulseModel6D(state, frame, type=pinocchio.LOCAL)``: a rigid-frame impulse (``nc = 6``)."""
 
-    Parameters
-    ----------
-    state : StateMultibody
-        Multibody state.
-    id : int or str
-        Impulse frame (index or name).
-    type : pinocchio.ReferenceFrame
-        ``pinocchio.LOCAL`` (default) or ``pinocchio.LOCAL_WORLD_ALIGNED``.
-    """
-
-    def __init__(self, state: StateAbstract, id: int | str, type: pin.ReferenceFrame = pin.LOCAL) -> None:
-        super().__init__(state, id, type, 6)
+    _frame_nc = 6

@@ -5,12 +5,17 @@ dynamics) or ``shared.impulses.impulses`` (impulse dynamics) when the residual d
 Its force ``f`` is in the contact's coordinates (``LOCAL`` or ``LOCAL_WORLD_ALIGNED``), with the
 Jacobians ``df_dx``/``df_du`` that the action model writes when ``enable_force=True``.
 
-- ``ResidualModelContactForce``:        ``r = (f - fref)[:nc]``, ``Rx = df_dx``, ``Ru = df_du``.
+- ``ResidualModelContactForce``:        ``r = (f - fref)[:nc]``, ``Rx = df_dx``, ``Ru = df_du`` (``r = 0`` on
+  the terminal node of contact dynamics, which has no force; the other force residuals vanish there
+  because the action model zeroes the forces).
 - ``ResidualModelContactFrictionCone``: ``r = A f_linear`` (``nf + 1``).
 - ``ResidualModelContactWrenchCone``:   ``r = A f`` (``nf + 13``).
 - ``ResidualModelContactCoPPosition``:  ``r = A f`` (4).
-- ``ResidualModelContactControlGrav``:  ``r = τ - rnea(q, 0, 0, fext)`` (``nv``); the contact forces
-  are held fixed in the derivative: ``Rx = ∂τ/∂x - (∂rnea/∂q, 0)``, ``Ru = ∂τ/∂u``.
+- ``ResidualModelContactControlGrav``:  ``r = τ - (g(q) - Σ Jcᵀ f)`` (``nv``, ``rnea(q, 0, 0, fext)`` in
+  brackets); the forces move with ``x`` and ``u``: ``Rx = ∂τ/∂x - (∂rnea/∂q|f, 0) + Σ Jcᵀ df_dx``,
+  ``Ru = ∂τ/∂u + Σ Jcᵀ df_du`` (``Jc`` in each contact's coordinates; ``∂rnea/∂q|f`` holds ``f``
+  fixed in those coordinates, which for ``LOCAL_WORLD_ALIGNED`` adds ``-Jlᵀ[f_l]×Ja`` (+ ``-Jaᵀ[f_a]×Ja``
+  for 6D contacts) to Pinocchio's joint-frame derivative).
 - ``ResidualModelImpulseCoM``:          ``r = Jcom(q) (v⁺ - v)`` (3), the CoM velocity jump.
 """
 
@@ -24,7 +29,7 @@ from crocopy.residuals.base import ResidualDataAbstract, ResidualModelAbstract
 from crocopy.state import StateAbstract
 
 from .cones import CoPSupport, FrictionCone, WrenchCone
-from .contact_base import frame_id
+from .force_base import frame_id
 
 
 def _force_data(shared: DataCollectorAbstract | None, fid: int, name: str, nc: int):
@@ -114,6 +119,9 @@ class ResidualModelContactForce(_ForceResidual):
         self._fref_vec = value.vector[: self.ncf].copy()
 
     def calc(self, data: ResidualDataContactForce, x: np.ndarray, u: np.ndarray | None = None) -> None:
+        if u is None and data.impulses is None:  # terminal node of contact dynamics: no force, as Crocoddyl
+            data.r[:] = 0.0
+            return
         np.subtract(data.contact.f.vector[: self.ncf], self._fref_vec, out=data.r)
 
     def calcDiff(self, data: ResidualDataContactForce, x: np.ndarray, u: np.ndarray | None = None) -> None:
@@ -171,8 +179,20 @@ class ResidualModelContactCoPPosition(_ForceResidual):
         super().__init__(state, id, 4, nu, fwddyn)
         self.reference = cref
 
+    def createData(self, data: DataCollectorAbstract | None = None) -> "ResidualDataContactCoPPosition":
+        return ResidualDataContactCoPPosition(self, data)
+
     def _matrix(self) -> np.ndarray:
         return self.reference.A
+
+
+class ResidualDataContactCoPPosition(ResidualDataContactForce):
+    """Data of :class:`ResidualModelContactCoPPosition`: ``contact`` (the 6D contact or impulse data
+    on the residual's frame) and ``pinocchio`` (the node's Pinocchio data)."""
+
+    def __init__(self, model: ResidualModelContactCoPPosition, data: DataCollectorAbstract | None) -> None:
+        super().__init__(model, data)
+        self.pinocchio = self.contact.pinocchio
 
 
 class ResidualModelContactControlGrav(ResidualModelAbstract):
@@ -208,6 +228,26 @@ class ResidualModelContactControlGrav(ResidualModelAbstract):
         np.subtract(act.dtau_dx[:, :nv], dst, out=data.Rx[:, :nv])
         data.Rx[:, nv:] = act.dtau_dx[:, nv:]
         data.Ru[:] = act.dtau_du
+        self._add_force_terms(data, x[:nq])
+
+    def _add_force_terms(self, data: "ResidualDataContactControlGrav", q: np.ndarray) -> None:
+        """``Rx += Σ Jcᵀ df_dx`` (plus the rotation term of world-aligned forces), ``Ru += Σ Jcᵀ df_du``."""
+        model, pdi, nv = self.state.pinocchio, data.pinocchio, self.state.nv
+        pin.computeJointJacobians(model, pdi, q)
+        for cd in data.contacts.contacts.values():
+            nc = cd.df_dx.shape[0]
+            J = pin.getFrameJacobian(model, pdi, cd.frame, pin.LOCAL)
+            if cd.type == pin.LOCAL:
+                Jc = J[:nc]
+            else:
+                R = (pdi.oMi[cd.joint] * cd.jMf).rotation
+                Jc = np.vstack([R @ J[:3], R @ J[3:]])[:nc]
+                turn = J[:3].T @ pin.skew(cd.f_local.linear)
+                if nc == 6:
+                    turn += J[3:].T @ pin.skew(cd.f_local.angular)
+                data.Rx[:, :nv] += turn @ J[3:]
+            data.Rx += Jc.T @ cd.df_dx
+            data.Ru += Jc.T @ cd.df_du
 
 
 class ResidualDataContactControlGrav(ResidualDataAbstract):

@@ -87,22 +87,14 @@ class ResidualModelCentroidalMomentum(ResidualModelAbstract):
     def reference(self, value: np.ndarray) -> None:
         self._href = as_vector(value, 6, "href").copy()
 
-    def createData(self, data: DataCollectorAbstract | None = None) -> ResidualDataAbstract:
-        d = ResidualDataAbstract(self, data)
-        d.pinocchio = shared_pinocchio(data, self.state, type(self).__name__)
-        d.pinocchio_own = self.state.pinocchio.createData()
-        nv = self.state.nv
-        d.dh_dq = np.zeros((6, nv))
-        d.dhd_dq = np.zeros((6, nv))
-        d.dhd_dv = np.zeros((6, nv))
-        d.zero_a = np.zeros(nv)
-        return d
+    def createData(self, data: DataCollectorAbstract | None = None) -> "ResidualDataCentroidalMomentum":
+        return ResidualDataCentroidalMomentum(self, data)
 
-    def calc(self, data: ResidualDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
+    def calc(self, data: "ResidualDataCentroidalMomentum", x: np.ndarray, u: np.ndarray | None = None) -> None:
         h = pin.computeCentroidalMomentum(self.state.pinocchio, data.pinocchio)
         np.subtract(h.vector, self._href, out=data.r)
 
-    def calcDiff(self, data: ResidualDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
+    def calcDiff(self, data: "ResidualDataCentroidalMomentum", x: np.ndarray, u: np.ndarray | None = None) -> None:
         nq, nv = self.state.nq, self.state.nv
         dh_dq, dhd_dq, dhd_dv, Ag = pin.computeCentroidalDynamicsDerivatives(
             self.state.pinocchio, data.pinocchio_own, x[:nq], x[nq:], data.zero_a
@@ -112,6 +104,21 @@ class ResidualModelCentroidalMomentum(ResidualModelAbstract):
         data.dhd_dv[:] = dhd_dv
         data.Rx[:, :nv] = dh_dq
         data.Rx[:, nv:] = Ag
+
+
+class ResidualDataCentroidalMomentum(ResidualDataAbstract):
+    """Data of :class:`ResidualModelCentroidalMomentum` (Crocoddyl's fields ``pinocchio``, ``dhd_dq``,
+    ``dhd_dv``, plus ``dh_dq``, all ``(6, nv)``, and a private Pinocchio data for the derivatives)."""
+
+    def __init__(self, model: ResidualModelCentroidalMomentum, data: DataCollectorAbstract | None) -> None:
+        super().__init__(model, data)
+        nv = model.state.nv
+        self.pinocchio = shared_pinocchio(data, model.state, type(model).__name__)
+        self.pinocchio_own = model.state.pinocchio.createData()
+        self.dh_dq = np.zeros((6, nv))
+        self.dhd_dq = np.zeros((6, nv))
+        self.dhd_dv = np.zeros((6, nv))
+        self.zero_a = np.zeros(nv)
 
 
 class ResidualModelControlGrav(ResidualModelAbstract):

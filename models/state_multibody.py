@@ -8,6 +8,14 @@
     Jintegrate = (diag(∂(q ⊕ dq)/∂q, I), diag(∂(q ⊕ dq)/∂dq, I))
 
 with the configuration blocks from ``pinocchio.dDifference``/``pinocchio.dIntegrate``.
+
+The solvers and models call in-place forms (``_diff_into``, ``_integrate_into``,
+``_Jdiff_second_into`` and the Euler chain rule ``_integrate_chain_rule``, whose last step is the
+compiled :func:`~crocopy.integrators.euler_kernel.add_integrate_jacobian`) that call Pinocchio
+directly.  A subclass that overrides ``diff``, ``integrate``, ``Jdiff``, ``Jintegrate`` or
+``JintegrateTransport`` is honoured: the in-place forms built on the overridden operation then go
+through it (the generic :class:`~crocopy.state.StateAbstract` forms), logged once per class and
+operation at DEBUG level on the ``"crocopy"`` logger.
 """
 
 from __future__ import annotations
@@ -17,12 +25,24 @@ import copyreg
 import numpy as np
 import pinocchio as pin
 
+import crocopy.kernels as kernels
 from crocopy.enums import Jcomponent
-from crocopy.integrators.euler_kernel import add_integrate_jacobian
+from crocopy.integrators.euler_kernel import add_integrate_jacobian, add_integrate_jacobian_numpy
+from crocopy.kernels import log_fallback, overridden
 from crocopy.state import StateAbstract
+
+from .pinocchio_pickle import remember_model
 
 _HUGE = 1e300  # URDF "no limit" values (numeric_limits::max) are mapped to inf
 
+
+_IN_PLACE = {
+    "_diff_into": ("the in-place diff", ("diff",)),
+    "_integrate_into": ("the in-place integrate", ("integrate",)),
+    "_Jdiff_second_into": ("the in-place Jdiff", ("Jdiff",)),
+    "_integrate_chain_rule": ("the compiled Euler chain rule", ("Jintegrate", "JintegrateTransport")),
+}
+"""In-place form → (what it is, the public operations it must agree with)."""
 
 _MODEL_VECTORS = ("lowerPositionLimit", "upperPositionLimit", "velocityLimit", "effortLimit", "armature")
 
@@ -80,6 +100,7 @@ class StateMultibody(StateAbstract):
             raise ValueError(f"model must be a pinocchio.Model, got {type(model).__name__}")
         super().__init__(model.nq + model.nv, 2 * model.nv)
         self.pinocchio = model
+        remember_model(model)
         self.nq, self.nv = model.nq, model.nv
         lq = _finite_or_inf(model.lowerPositionLimit, -1.0)
         uq = _finite_or_inf(model.upperPositionLimit, 1.0)
@@ -96,10 +117,13 @@ class StateMultibody(StateAbstract):
         self._Jpos = np.zeros((ndx, ndx))  # templates with ±I in the velocity block
         self._Jpos[nv:, nv:] = np.eye(nv)
         self._Jneg = -self._Jpos
-        cls = type(self)
-        self._custom_operations = any(
-            getattr(cls, name) is not getattr(StateMultibody, name) for name in ("diff", "Jdiff", "integrate")
-        )
+        generic = []
+        for form, (what, operations) in _IN_PLACE.items():
+            steps = overridden(self, StateMultibody, operations)
+            if steps:
+                generic.append(form)
+                log_fallback(type(self), steps, what)
+        self._generic = tuple(generic)  # in-place forms that go through the overridden operations
 
     def zero(self) -> np.ndarray:
         """Neutral configuration and zero velocity."""
@@ -175,19 +199,19 @@ class StateMultibody(StateAbstract):
         rows[...] = np.reshape(pin.dIntegrateTransport(self.pinocchio, x[: self.nq], dx[:nv], rows, arg), rows.shape)
 
     def _integrate_into(self, x: np.ndarray, dx: np.ndarray, out: np.ndarray) -> None:
-        if self._custom_operations:
+        if "_integrate_into" in self._generic:
             super()._integrate_into(x, dx, out)
             return
         self._write_integrate(x, dx, out)
 
     def _diff_into(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:
-        if self._custom_operations:
+        if "_diff_into" in self._generic:
             super()._diff_into(x0, x1, out)
             return
         self._write_diff(x0, x1, out)
 
     def _Jdiff_second_into(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:
-        if self._custom_operations:
+        if "_Jdiff_second_into" in self._generic:
             super()._Jdiff_second_into(x0, x1, out)
             return
         nq = self.nq
@@ -197,10 +221,18 @@ class StateMultibody(StateAbstract):
         """Chain rule through ``x ⊕ dx`` (see :meth:`StateAbstract._integrate_chain_rule`): Pinocchio's
         ``dIntegrateTransport`` on the configuration rows of ``[Fx Fu]`` (one call), ``dIntegrate`` on the
         configuration block and the identity on the velocity block."""
+        if "_integrate_chain_rule" in self._generic:
+            super()._integrate_chain_rule(x, dx, Fx, Fu)
+            return
         model, nv = self.pinocchio, self.nv
         q, dq = x[: self.nq], dx[:nv]
         rows = pin.dIntegrateTransport(model, q, dq, np.hstack((Fx[:nv], Fu[:nv])), pin.ARG1)
-        add_integrate_jacobian(np.reshape(rows, (nv, -1)), pin.dIntegrate(model, q, dq, pin.ARG0), Fx, Fu)
+        add = add_integrate_jacobian if kernels.active else add_integrate_jacobian_numpy
+        add(np.reshape(rows, (nv, -1)), pin.dIntegrate(model, q, dq, pin.ARG0), Fx, Fu)
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        remember_model(self.pinocchio)
 
     def __repr__(self) -> str:
         return f"StateMultibody(nq={self.nq}, nv={self.nv})"

@@ -15,14 +15,14 @@ A node of a legged problem is one of:
 Costs of a contact node (weights are the ``weights`` mapping entries, each multiplying a
 squared-residual activation ``0.5 * ||r||^2_W``):
 
-``state``     state regularisation towards the reference posture ``x0`` with the per-component
-              weights of :meth:`LeggedSetup.state_weights` (base x/y free);
-``control``   control regularisation ``||u||^2``;
-``limits``    quadratic barrier on joint position limits and (possibly reduced) velocity limits;
-``friction``  quadratic barrier keeping each contact force in its linearised friction cone
-              (4 facets, outer approximation) or, for 6D contacts, its wrench cone;
-``swing``     translation (3D) or placement (6D) tracking of a swinging frame;
-``com``       centre-of-mass position tracking.
+* ``state``: state regularisation towards the reference posture ``x0`` with the per-component
+  weights of :meth:`LeggedSetup.state_weights` (base x/y free);
+* ``control``: control regularisation ``||u||^2``;
+* ``limits``: quadratic barrier on joint position limits and (possibly reduced) velocity limits;
+* ``friction``: quadratic barrier keeping each contact force in its linearised friction cone
+  (4 facets, outer approximation) or, for 6D contacts, its wrench cone;
+* ``swing``: translation (3D) or placement (6D) tracking of a swinging frame;
+* ``com``: centre-of-mass position tracking.
 """
 
 from __future__ import annotations

@@ -126,6 +126,7 @@ def build_taichi(
        target;
     3. balancing: on the right foot, the left foot moves forward/outward to a raised pose, the
        CoM stays above the right sole, the hand keeps its target.
+
     Terminal node: hand 1e5, foot 1e5, CoM 1e5.  Defaults: T = 120 (2.4 s), nx = 77, nu = 32.
     """
     setup = _setup(lib, weights=weights)
@@ -233,6 +234,7 @@ def build_monkey_bar(
        by ``landing_shift`` forward (weight 1e4), then a 6D impulse at touch-down, then
        ``knots[3]`` nodes standing on the feet with the hands released, the CoM above the new
        feet (weight 1e3).
+
     Defaults: T = 112 (110 × 30 ms + 2 impulses), nx = 77, nu = 32.
     """
     setup = _setup(lib, arm_torque_scale=arm_torque_scale, weights=weights)

@@ -1,4 +1,4 @@
-"""Quadruped problems (ANYmal, Solo12, HyQ): gaits, the 30 cm jump and two-leg hopping.
+"""Quadruped problems (ANYmal, Solo12, HyQ): gaits, the jump and two-leg hopping.
 
 Box-FDDP paper §IV-A3: ANYmal with torque limits reduced to 32 N m and joint-velocity limits to
 7.5 rad/s (the URDF's 80 N m and 15 rad/s scaled by 0.4 and 0.5); warm start = reference posture
@@ -140,7 +140,7 @@ def build_jump(
     limited: bool = True,
     weights: Mapping[str, float] | None = None,
 ) -> tuple[object, list, list]:
-    """The Box-FDDP paper's aggressive jump: 30 cm, jumping / flying / landing.
+    """The Box-FDDP paper's aggressive jump (30 cm asked), jumping / flying / landing.
 
     Phases (default ``dt`` 10 ms): jumping 0–300 ms (30 nodes, four-foot support with friction
     cones), flying 300–700 ms (40 free-dynamics nodes; the base must be ``jump_height`` above its

@@ -111,7 +111,9 @@ _SPECS = [
           (60, 77, 32), {"fddp": R(23, 381.07740), "boxfddp": R(46, 381.75535), "boxddp": R(112, 381.75517)}),
     _spec("taichi", humanoid.build_taichi, "Talos taichi: manipulation, one foot, balance (3 phases)",
           (120, 77, 32), {"fddp": R(21, 810.68472), "boxfddp": R(14, 811.22359), "boxddp": R(80, 811.22359)}),
-    _spec("jump", quadruped.build_jump, "ANYmal 30 cm jump, 32 N m / 7.5 rad/s, 0-300/300-700/700-1000 ms",
+    _spec("jump", quadruped.build_jump,
+          "ANYmal jump (30 cm asked; Box-FDDP reaches base +13 cm, CoM +18 cm), 32 N m / 7.5 rad/s,"
+          " 0-300/300-700/700-1000 ms",
           (101, 37, 12),
           {"fddp": R(77, 7655.03), "boxfddp": R(242, 11150.7), "boxddp": R(800, 2.97471e6, False)}, maxiter=800),
     _spec("hop", quadruped.build_hop, "ANYmal two-leg hopping, 10 hops with a leg switch, 5.8 s / 580 nodes",

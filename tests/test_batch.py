@@ -243,3 +243,34 @@ def test_hop_memory_subprocess_reports_its_own_peak():
     assert m["T"] == 592 and m["iter"] <= 1
     assert 0 < m["baseline"] < m["built"] <= m["solved"]
     assert m["solved"] - m["baseline"] < 2**30
+
+
+def dying_unicycle(x0, exit_code=None, kill=False):
+    """:func:`unicycle`, or the worker process ends abruptly (``os._exit`` or SIGKILL), as a segfault would."""
+    import os
+    import signal
+
+    if exit_code is not None:
+        os._exit(exit_code)
+    if kill:
+        os.kill(os.getpid(), signal.SIGKILL)
+    return unicycle(x0)
+
+
+DYING = [{"x0": (1.0, 0.5, 0.2)}, {"x0": (-1.0, 2.0, 1.0)}, {"x0": (0.3, -0.7, -2.0)}, {"x0": (0.5, 0.0, 0.0)}]
+
+
+@pytest.mark.parametrize("how", [{"exit_code": 3}, {"kill": True}])
+def test_a_dead_worker_costs_only_its_own_task_and_is_named(how):
+    params = [dict(p) for p in DYING]
+    params[3].update(how)
+    expected = [solve_one(unicycle, {"x0": p["x0"]}, maxiter=20) for p in DYING[:3]]
+    message = "exit code 3" if "exit_code" in how else "killed by signal SIGKILL"
+    with pytest.raises(crocopy.SolveManyError, match=rf"solve 3 with params .*{message}") as info:
+        crocopy.solve_many(dying_unicycle, params, maxiter=20, max_workers=2)
+    assert info.value.index == 3 and isinstance(info.value.__cause__, crocopy.WorkerDiedError)
+    results = crocopy.solve_many(dying_unicycle, params, maxiter=20, max_workers=2, return_exceptions=True)
+    assert isinstance(results[3], crocopy.WorkerDiedError)
+    assert results[3].exitcode == (3 if "exit_code" in how else -9)
+    for r, e in zip(results[:3], expected, strict=True):
+        assert isinstance(r, crocopy.SolveResult) and (r.cost, r.iter) == (e.cost, e.iter)

@@ -14,7 +14,7 @@ def test_identical_problems_have_no_differences_and_a_perturbed_one_shows_up():
     assert set(diffs) == {"DifferentialActionModelFreeFwdDynamics", "DifferentialActionModelFreeFwdDynamics (terminal)"}
     assert diffs["DifferentialActionModelFreeFwdDynamics"]["nodes"] == ours.T
     assert all(v == 0.0 for d in diffs.values() for k, v in d.items() if k != "nodes")
-    item = next(iter(other.runningModels[0].differential.costs.costs.values()))
+    item = other.runningModels[0].differential.costs.costs["state"]
     item.weight *= 2.0
     diffs = node_differences((ours, other), xs, us)
     changed = diffs["DifferentialActionModelFreeFwdDynamics"]

@@ -4,6 +4,7 @@ against Crocoddyl are ``crocopy bench --box-parity``, :mod:`crocopy.bench.box_pa
 import numpy as np
 import pytest
 
+import crocopy
 from crocopy import ActionModelUnicycle
 from crocopy.bench.box_parity import Trace, first_divergence, meets_bar, solve_trace
 from crocopy.shooting import ShootingProblem
@@ -88,15 +89,15 @@ def unicycle(T=15):
 def test_qp_warm_start_is_the_previous_step(compat):
     problem = unicycle()
     solver = SolverBoxFDDP(problem)
-    solver.use_kernel = False
     solver.compat_crocoddyl = compat
-    solver.solve(None, None, 3, True)
-    previous = [k.copy() for k in solver.k]
-    qp = solver._qps[2]
-    starts = []
-    solve = qp._solve
-    qp._solve = lambda H, q, lb, ub, xinit: starts.append(xinit.copy()) or solve(H, q, lb, ub, xinit)
-    solver.computeDirection(True)
+    with crocopy.use_kernels(False):
+        solver.solve(None, None, 3, True)
+        previous = [k.copy() for k in solver.k]
+        qp = solver._qps[2]
+        starts = []
+        solve = qp._solve
+        qp._solve = lambda H, q, lb, ub, xinit: starts.append(xinit.copy()) or solve(H, q, lb, ub, xinit)
+        solver.computeDirection(True)
     assert len(starts) == problem.T
     for t, xinit in enumerate(reversed(starts)):
         assert np.array_equal(xinit, previous[t] if compat else -previous[t])

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize
 
+import crocopy
 from crocopy import ActionModelLQR, ActionModelUnicycle
 from crocopy.shooting import ShootingProblem
 from crocopy.solvers import SolverDDP, SolverFDDP
@@ -211,11 +212,11 @@ def test_compiled_and_numpy_backward_passes_agree(Solver, general, compat):
     for kernel in (False, True):
         problem = unicycle_problem(T=30)
         solver = Solver(problem)
-        solver.use_kernel = kernel
         solver.general_value_update = general
         solver.compat_crocoddyl = compat
         rows = record(solver)
-        assert solver.solve(None, None, 100)
+        with crocopy.use_kernels(kernel):
+            assert solver.solve(None, None, 100)
         runs.append((rows, solver.nfactorizations, solver.nqp))
     (rows_np, f_np, q_np), (rows_k, f_k, q_k) = runs
     assert len(rows_np) == len(rows_k) and (f_np, q_np) == (f_k, q_k)

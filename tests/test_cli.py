@@ -1,50 +1,179 @@
-"""Smoke tests of the ``crocopy`` command (in-process, fast problems only)."""
+"""The ``crocopy`` command: exit statuses, usage errors caught before any work, outputs, first-run notice.
 
+In-process through ``main(argv)`` (which returns the exit status) on the fast problems, plus a few
+runs of the installed ``crocopy`` script to check the process's exit status itself.
+"""
+
+import os
+import re
+import subprocess
+import sys
+import time
+
+import numpy as np
 import pytest
 
 import crocopy
-from crocopy.cli import main
+from crocopy.cli import EXIT_CONVERGED, EXIT_NOT_CONVERGED, EXIT_USAGE, main, warm_up_kernels
+from crocopy.problems import registry
+
+CROCOPY = os.path.join(os.path.dirname(sys.executable), "crocopy")
+
+
+@pytest.fixture
+def no_work(monkeypatch):
+    """Fail the test if a problem gets built (usage errors must be caught before)."""
+
+    def build(self, *args, **kwargs):
+        raise AssertionError(f"problem {self.name} was built before the usage error was reported")
+
+    monkeypatch.setattr(registry.ProblemSpec, "build", build)
+
+
+def _usage_error(capsys, argv: list[str], command: str) -> str:
+    assert main(argv) == EXIT_USAGE
+    out, err = capsys.readouterr()
+    assert out == ""
+    assert err.startswith(f"usage: crocopy {command} ") and f"crocopy {command}: error: " in err
+    return err
 
 
 def test_version(capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(["--version"])
-    assert exc.value.code == 0
+    assert main(["--version"]) == 0
     assert crocopy.__version__ in capsys.readouterr().out
 
 
-def test_list_names_every_registered_problem(capsys):
-    from crocopy.problems import registry
+def test_help_documents_the_exit_statuses(capsys):
+    assert main(["solve", "--help"]) == 0
+    out = " ".join(capsys.readouterr().out.split())
+    assert "0 success (solve: converged), 1 solve did not converge, 2 usage error" in out
 
+
+def test_list_names_every_registered_problem(capsys):
     assert main(["list"]) == 0
     out = capsys.readouterr().out
     for name in registry.names():
-        assert name in out
+        assert re.search(rf"^{re.escape(name)} +T=", out, re.M)
 
 
-def test_solve_pendulum_writes_summary_plot_and_html(tmp_path, capsys):
+def test_unconverged_solve_exits_1_and_writes_plot_and_html(tmp_path, capsys):
     html, png = tmp_path / "pend.html", tmp_path / "conv.png"
-    assert main(["solve", "pend", "--solver", "fddp", "--quiet", "--maxiter", "5", "--html", str(html),
-                 "--plot", str(png)]) == 0
+    argv = ["solve", "pend", "--solver", "fddp", "--quiet", "--maxiter", "5", "--html", str(html), "--plot", str(png)]
+    assert main(argv) == EXIT_NOT_CONVERGED
     out = capsys.readouterr().out
-    assert "pend: SolverFDDP" in out and "after 5 iterations" in out
+    assert "pend: SolverFDDP did not converge" in out and "after 5 iterations" in out
+    assert f"convergence plot written to {png}\n" in out
     assert html.stat().st_size > 10_000 and "<html" in html.read_text()[:2000].lower()
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
-def test_solve_unknown_problem_is_a_clear_error(capsys):
-    assert main(["solve", "no-such-problem", "--no-html"]) == 2
-    assert "unknown problem 'no-such-problem'" in capsys.readouterr().err
+def test_converged_solve_exits_0_with_the_reference_iterations(tmp_path, capsys):
+    assert main(["solve", "pend", "--quiet", "--no-html"]) == EXIT_CONVERGED
+    out = capsys.readouterr().out
+    ref = registry.get("pend").reference["boxfddp"]
+    assert f"pend: SolverBoxFDDP converged (converged) after {ref.iters} iterations" in out
+    assert not list(tmp_path.iterdir())
 
 
-def test_unknown_paper_experiment(capsys):
-    assert main(["paper", "hddp", "nope"]) == 2
-    assert "known:" in capsys.readouterr().err
+def test_plot_without_suffix_gets_png_and_its_name_is_printed(tmp_path, capsys):
+    target = tmp_path / "convergence"
+    assert main(["solve", "quad-goal", "--quiet", "--no-html", "--maxiter", "2", "--plot", str(target)]) == 1
+    assert f"convergence plot written to {target}.png\n" in capsys.readouterr().out
+    assert (tmp_path / "convergence.png").read_bytes()[:4] == b"\x89PNG" and not target.exists()
+
+
+@pytest.mark.usefixtures("no_work")
+@pytest.mark.parametrize("argv", [["solve", "jmup"], ["solve", "no-such-problem", "--no-html"]])
+def test_unknown_problem_is_rejected_with_the_choices(capsys, argv):
+    err = _usage_error(capsys, argv, "solve")
+    assert f"unknown problem {argv[1]!r}; known problems: " + ", ".join(registry.names()) in err
+
+
+@pytest.mark.usefixtures("no_work")
+def test_table1_unknown_row_is_rejected_before_any_row_runs(capsys):
+    err = _usage_error(capsys, ["table1", "pend", "jmup"], "table1")
+    assert "unknown problem 'jmup'" in err and "quad-goal" in err
+
+
+@pytest.mark.usefixtures("no_work")
+@pytest.mark.parametrize("value", ["0", "-1", "ten"])
+def test_non_positive_maxiter_is_a_usage_error(capsys, value):
+    err = _usage_error(capsys, ["solve", "pend", "--maxiter", value], "solve")
+    assert "argument --maxiter:" in err and value in err
+
+
+@pytest.mark.usefixtures("no_work")
+@pytest.mark.parametrize(("argv", "command", "flag"), [
+    (["solve", "pend", "--bogus"], "solve", "--bogus"),
+    (["table1", "pend", "--maxiter", "3"], "table1", "--maxiter"),
+    (["bench", "--no-such-flag"], "bench", "--no-such-flag"),
+    (["paper", "hddp", "table2", "--bogus"], "paper", "--bogus"),
+    (["list", "--all"], "list", "--all"),
+])
+def test_a_bad_flag_prints_the_subcommands_usage(capsys, argv, command, flag):
+    err = _usage_error(capsys, argv, command)
+    assert "unrecognized arguments: " + flag in err
+    assert "{bench,list,solve,table1,paper}" not in err  # not the top-level usage
+
+
+@pytest.mark.usefixtures("no_work")
+def test_plot_into_a_missing_folder_is_rejected_before_solving(tmp_path, capsys):
+    err = _usage_error(capsys, ["solve", "pend", "--plot", str(tmp_path / "missing" / "x.png")], "solve")
+    assert "--plot" in err and "does not exist" in err
+
+
+@pytest.mark.usefixtures("no_work")
+def test_plot_in_an_unknown_format_is_rejected(tmp_path, capsys):
+    err = _usage_error(capsys, ["solve", "pend", "--plot", str(tmp_path / "x.docx")], "solve")
+    assert "unknown image format 'docx'" in err and "png" in err
+
+
+@pytest.mark.usefixtures("no_work")
+def test_html_that_cannot_be_written_is_rejected(tmp_path, capsys):
+    err = _usage_error(capsys, ["solve", "pend", "--html", str(tmp_path)], "solve")
+    assert "is a folder" in err
+    err = _usage_error(capsys, ["solve", "pend", "--html", str(tmp_path / "no" / "pend.html")], "solve")
+    assert "does not exist" in err
+    assert not list(tmp_path.iterdir())  # the check leaves nothing behind
+
+
+@pytest.mark.usefixtures("no_work")
+def test_default_html_is_checked_in_the_working_folder(tmp_path, monkeypatch, capsys):
+    """The default ``<problem>.html`` goes to the working folder: a folder of that name blocks it."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "pend.html").mkdir()
+    err = _usage_error(capsys, ["solve", "pend"], "solve")
+    assert "--html pend.html is a folder" in err
+
+
+def test_bench_out_and_problems_are_checked(tmp_path, capsys):
+    err = _usage_error(capsys, ["bench", "--vs", "crocoddyl", "--out", str(tmp_path / "no" / "B.md")], "bench")
+    assert "--out" in err and "does not exist" in err
+    err = _usage_error(capsys, ["bench", "--models", "--problems", "jump", "jmup"], "bench")
+    assert "unknown problem 'jmup'" in err
+    err = _usage_error(capsys, ["bench", "--repeats", "0"], "bench")
+    assert "argument --repeats: must be a positive integer" in err
+
+
+def test_paper_experiment_and_folder_are_checked(tmp_path, capsys):
+    err = _usage_error(capsys, ["paper", "hddp", "nope"], "paper")
+    assert "unknown experiment hddp 'nope'; known: table1, table2" in err
+    err = _usage_error(capsys, ["paper", "box-ddp", "lq", "--out", str(tmp_path / "missing")], "paper")
+    assert "is not an existing folder" in err
+
+
+def test_the_script_exits_with_the_documented_statuses(tmp_path):
+    """The installed ``crocopy`` script: 2 for a usage error, 1 for an unconverged solve."""
+    env = {**os.environ, "OMP_NUM_THREADS": "1", "MPLBACKEND": "Agg"}
+    bad = subprocess.run([CROCOPY, "table1", "jmup"], capture_output=True, text=True, env=env, cwd=tmp_path)
+    assert bad.returncode == 2 and "unknown problem 'jmup'" in bad.stderr and bad.stdout == ""
+    run = subprocess.run([CROCOPY, "solve", "quad-goal", "--maxiter", "2", "--quiet", "--no-html"],
+                         capture_output=True, text=True, env=env, cwd=tmp_path)
+    assert run.returncode == 1, run.stderr
+    assert "did not converge" in run.stdout and "after 2 iterations" in run.stdout
 
 
 def test_table1_row_uses_the_registry_success_rule(capsys):
-    from crocopy.problems import registry
-
     assert main(["table1", "pend"]) == 0
     out = capsys.readouterr().out
     row = next(line for line in out.splitlines() if line.startswith("| pend |"))
@@ -56,3 +185,65 @@ def test_table1_row_uses_the_registry_success_rule(capsys):
     assert not spec.solved(False, spec.reference["boxfddp"].cost)
     assert "- Box-FDDP solves all 1 rows: yes" in out  # trend summary (crocopy.experiments.table1) after the table
     assert "- Box-DDP fails at least on pend, jump, hop, bar: no (jump (not run), hop (not run)" in out
+
+
+def test_warm_up_announces_compilation_while_it_runs(capsys):
+    numba = pytest.importorskip("numba")
+
+    @numba.njit(cache=False)
+    def kernel(x):
+        return 2.0 * x
+
+    def run():
+        kernel(1.0)
+        time.sleep(0.2)  # the watcher polls every 10 ms: it sees the compilation before run returns
+
+    spent = warm_up_kernels(run, [kernel], poll=0.01)
+    err = capsys.readouterr().err
+    assert err.startswith("compiling kernels (first run only) ...\n")
+    assert spent >= 0.2 and f"kernels compiled in {spent:.1f} s" in err and "not counted in the solve time" in err
+    assert warm_up_kernels(run, [kernel], poll=0.01) == 0.0  # compiled already: silent
+    assert capsys.readouterr().err == ""
+
+
+def test_warm_up_is_silent_when_the_kernels_are_cached(capsys):
+    problem, xs, us = registry.get("quad-goal").build(crocopy)
+    crocopy.SolverBoxFDDP(problem).solve(xs, us, 2, False)  # loads (or compiles) this process's kernels
+    capsys.readouterr()
+    assert warm_up_kernels(lambda: crocopy.SolverBoxFDDP(problem).solve(xs, us, 2, False)) == 0.0
+    assert capsys.readouterr().err == ""
+
+
+@pytest.mark.slow
+def test_first_run_notice_with_an_empty_kernel_cache(tmp_path):
+    """A fresh numba cache: the notice appears, and the timed solve compiles nothing more (its ms/iteration
+    is that of a warm run, far below the compilation's seconds)."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache"), "OMP_NUM_THREADS": "1"}
+    run = subprocess.run([CROCOPY, "solve", "pend", "--quiet", "--no-html"], capture_output=True, text=True,
+                         env=env, cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    assert "compiling kernels (first run only) ..." in run.stderr
+    compile_s = float(re.search(r"kernels compiled in ([\d.]+) s", run.stderr).group(1))
+    solve_s = float(re.search(r"after 92 iterations, cost [\d.e+-]+, ([\d.]+) s", run.stdout).group(1))
+    assert solve_s < compile_s / 2
+    again = subprocess.run([CROCOPY, "solve", "pend", "--quiet", "--no-html", "--maxiter", "3"],
+                           capture_output=True, text=True, env=env, cwd=tmp_path)
+    assert again.returncode == 1 and "compiling" not in again.stderr
+
+
+@pytest.mark.slow
+def test_jump_label_states_the_apex_the_solution_reaches():
+    """``crocopy list`` gives the jump's base and CoM rise; the solved jump reaches them (±1 cm)."""
+    import pinocchio as pin
+
+    spec = registry.get("jump")
+    base_cm, com_cm = (float(v) for v in re.search(r"base \+(\d+) cm, CoM \+(\d+) cm", spec.description).groups())
+    problem, xs, us = spec.build(crocopy)
+    solver = crocopy.SolverBoxFDDP(problem)
+    assert solver.solve(xs, us, spec.maxiter, False)
+    model = problem.terminalModel.state.pinocchio
+    data = model.createData()
+    z = np.array([x[2] for x in solver.xs])
+    com = np.array([pin.centerOfMass(model, data, x[: model.nq])[2] for x in solver.xs])
+    assert abs(100 * (z.max() - z[0]) - base_cm) <= 1.0
+    assert abs(100 * (com.max() - com[0]) - com_cm) <= 1.0

@@ -199,9 +199,7 @@ def test_stacked_cost_sum_equals_its_items_and_follows_parameter_changes(termina
 @pytest.mark.parametrize("terminal", [False, True])
 def test_compiled_stack_steps_equal_the_numpy_steps(terminal):
     """The numba kernels of the stack give the numpy steps' cost, derivatives and activation rows."""
-    from crocopy.costs import stack_kernel as cost_stack_kernel
-
-    assert cost_stack_kernel.available
+    assert crocopy.kernels.available
     state, nu = crocopy.StateVector(4), 4
     costs = _every_activation_sum(state, nu)
     costs.changeCostStatus("wquad", False)
@@ -209,13 +207,13 @@ def test_compiled_stack_steps_equal_the_numpy_steps(terminal):
     results = []
     for use_kernel in (True, False):
         data = costs.createData(crocopy.DataCollectorAbstract())
-        data.stack.use_kernel = use_kernel
         out = []
         for _ in range(4):
             x = rng.uniform(-1.0, 1.0, 4)
             u = None if terminal else rng.uniform(-1.0, 1.0, nu)
-            costs.calc(data, x, u)
-            costs.calcDiff(data, x, u)
+            with crocopy.use_kernels(use_kernel):
+                costs.calc(data, x, u)
+                costs.calcDiff(data, x, u)
             out.append([data.cost, data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu, data.stack.Ar, data.stack.Arr])
             out[-1] = [np.array(a, copy=True) for a in out[-1]]
         rng = np.random.default_rng(3)
@@ -241,14 +239,14 @@ def test_stacked_cost_sum_reports_an_infinite_residual_without_warnings():
 
 @pytest.mark.parametrize("name", ["barrier", "wbarrier"])
 def test_barrier_curvature_counts_rows_on_their_bound_alone_and_in_a_sum(name):
-    """``Arr = w [r ≤ lb or r ≥ ub]`` (Crocoddyl's convention): a row sitting on its bound is curved."""
+    """``Arr = w² [r ≤ lb or r ≥ ub]`` (Crocoddyl's convention on the bound): a row sitting on its bound is curved."""
     model = ACTIVATIONS[name]()
     lb, ub = model.bounds.lb, model.bounds.ub
     r = np.array([lb[0], ub[1], 0.5 * (lb[2] + ub[2]), ub[3] + 1.0])
     data = model.createData()
     model.calc(data, r)
     model.calcDiff(data, r)
-    w = getattr(model, "weights", np.ones(4))
+    w = getattr(model, "weights", np.ones(4)) ** 2
     np.testing.assert_array_equal(data.Arr_diag, w * np.array([1.0, 1.0, 0.0, 1.0]))
     state = crocopy.StateVector(4)
     costs = crocopy.CostModelSum(state, 0)

@@ -186,7 +186,7 @@ def test_problem_api_rollout_quasistatic_circular_append():
 
 @pytest.mark.parametrize("feasible", [True, False])
 def test_compiled_riccati_kernel_equals_numpy_path(feasible):
-    assert crocopy.solvers.riccati_kernel.available
+    assert crocopy.kernels.available
     problem, _ = _lqr_problem(nx=8, nu=3, T=15, seed=3)
     rng = np.random.default_rng(1)
     xs = [rng.standard_normal(8) for _ in range(16)]
@@ -194,10 +194,10 @@ def test_compiled_riccati_kernel_equals_numpy_path(feasible):
     results = []
     for use_kernel in (True, False):
         s = crocopy.SolverFDDP(problem)
-        s.use_kernel = use_kernel
         s.setCandidate(xs, us, feasible)
         s.preg = s.dreg = 1e-3
-        s.computeDirection(True)
+        with crocopy.use_kernels(use_kernel):
+            s.computeDirection(True)
         results.append((np.array(s.K), np.array(s.k), np.array(s.Vxx), np.array(s.Vx), np.array(s.Quu)))
     for a, b in zip(*results):
         np.testing.assert_allclose(a, b, atol=1e-10, rtol=1e-10)

@@ -45,9 +45,16 @@ def _bobbing(robot, n=12, height=0.1):
 
 
 def _animation(commands):
+    """{path: {track name: (times (k,), values (k, width))}} of the page's one animation."""
     anims = [c for c in commands if c["type"] == "set_animation"]
     assert len(anims) == 1
-    return {a["path"]: {t["name"]: t for t in a["clip"]["tracks"]} for a in anims[0]["animations"]}
+    out = {}
+    for a in anims[0]["animations"]:
+        out[a["path"]] = {}
+        for t in a["clip"]["tracks"]:
+            times = np.array([k["time"] for k in t["keys"]])
+            out[a["path"]][t["name"]] = (times, np.array([k["value"] for k in t["keys"]]))
+    return out
 
 
 def _self_contained(path):
@@ -57,6 +64,7 @@ def _self_contained(path):
     assert not re.search(r"<link[^>]*\bhref\s*=\s*[\"']?https?:", html, re.I)
     assert not re.search(r"\bsrc\s*=\s*[\"']https?://", html, re.I)
     assert "viewer.handle_command_bytearray" in html  # the inlined viewer replays the scene
+    assert "DecompressionStream" in html and "fetch(\"data:" in html  # the bundle is inlined, not fetched
     return html
 
 
@@ -132,13 +140,12 @@ def test_anymal_export_animation_and_plain_trunk(anymal, tmp_path):
     leg = objects["/meshcat/pinocchio/visuals/LF_HIP_0/shape"]
     assert leg["object"]["object"]["type"] == "_meshfile_object" and leg["object"]["object"]["format"] == "dae"
     assert "/meshcat/floor" in objects
-    tracks = _animation(cmds)["/meshcat/pinocchio/visuals/base_0"]
-    times = [k["time"] for k in tracks[".position"]["keys"]]
-    assert times == [int(round(0.05 * i * 20)) for i in range(12)]
-    z = np.array([k["value"][2] for k in tracks[".position"]["keys"]])
-    np.testing.assert_allclose(z - z[0], [x[2] - xs[0][2] for x in xs], atol=1e-9)
-    quats = np.array([k["value"] for k in tracks[".quaternion"]["keys"]])
-    np.testing.assert_allclose(np.linalg.norm(quats, axis=1), 1.0, atol=1e-12)
+    times, positions = _animation(cmds)["/meshcat/pinocchio/visuals/base_0"][".position"]
+    np.testing.assert_array_equal(times, [int(round(0.05 * i * 20)) for i in range(12)])
+    np.testing.assert_allclose(positions[:, 2] - positions[0, 2], [x[2] - xs[0][2] for x in xs], atol=1e-6)
+    _, quats = _animation(cmds)["/meshcat/pinocchio/visuals/base_0"][".quaternion"]
+    assert quats.shape == (2, 4)  # the trunk does not turn: only the two ends of the run are kept
+    np.testing.assert_allclose(np.linalg.norm(quats, axis=1), 1.0, atol=1e-6)
 
 
 def test_iris_export(tmp_path, capsys):
@@ -149,8 +156,9 @@ def test_iris_export(tmp_path, capsys):
     _self_contained(path)
     tracks = _animation(static_html_commands(path))
     assert len(tracks) == len(iris.visual_model.geometryObjects)
-    rotor = tracks["/meshcat/pinocchio/visuals/iris__rotor_0_0"][".position"]["keys"]
-    assert rotor[-1]["value"][2] == pytest.approx(rotor[0]["value"][2] + 0.5 * np.sin(np.pi * 5 / 5), abs=1e-9)
+    _, rotor = tracks["/meshcat/pinocchio/visuals/iris__rotor_0_0"][".position"]
+    assert rotor[-1, 2] == pytest.approx(rotor[0, 2] + 0.5 * np.sin(np.pi * 5 / 5), abs=1e-6)
+    assert rotor[len(rotor) // 2, 2] > rotor[0, 2] + 0.45  # it rises half a metre in the middle
 
 
 def test_talos_mirrored_meshes_keep_scale_out_of_the_animation(tmp_path):
@@ -170,12 +178,12 @@ def test_talos_mirrored_meshes_keep_scale_out_of_the_animation(tmp_path):
     data, gdata = talos.model.createData(), pin.GeometryData(gm)
     pin.forwardKinematics(talos.model, data, xs[-1][: talos.model.nq])
     pin.updateGeometryPlacements(talos.model, data, gm, gdata)
-    keys = _animation(cmds)[node]
+    tracks = _animation(cmds)[node]
     last = gdata.oMg[gm.getGeometryId(go.name)]
-    np.testing.assert_allclose(keys[".position"]["keys"][-1]["value"], last.translation, atol=1e-9)
-    qx, qy, qz, qw = keys[".quaternion"]["keys"][-1]["value"]
-    R = pin.Quaternion(qw, qx, qy, qz).toRotationMatrix()
-    np.testing.assert_allclose(R, last.rotation, atol=1e-9)
+    np.testing.assert_allclose(tracks[".position"][1][-1], last.translation, atol=1e-6)
+    qx, qy, qz, qw = tracks[".quaternion"][1][-1].astype(float)
+    R = pin.Quaternion(qw, qx, qy, qz).normalized().toRotationMatrix()
+    np.testing.assert_allclose(R, last.rotation, atol=1e-6)
 
 
 def _fake_contact_solver(robot, force_node0):
@@ -221,11 +229,20 @@ def test_forces_and_cones_from_solver_data(anymal, anymal_display, tmp_path):
     arrow = [c for c in cmds if c["type"] == "set_transform" and c["path"] == "/meshcat/forces/LF_FOOT"][-1]
     T = np.array(arrow["matrix"]).reshape(4, 4).T
     np.testing.assert_allclose(T[:3, 3], rec["oMf"].translation, atol=1e-12)
-    np.testing.assert_allclose(T[:3, 1], np.array(f0) * d.forceScale, atol=1e-12)  # +y along f, length |f| scale
+    # +y along f; the longest arrow (50 N here) is forceFraction times the robot's size
+    assert d.force_scale == pytest.approx(d.forceFraction * d.robot_size / 50.0)
+    np.testing.assert_allclose(T[:3, 1], np.array(f0) * d.force_scale, atol=1e-12)
     assert any(c["type"] == "set_object" and c["path"].startswith("/meshcat/cones/LF_FOOT") for c in cmds)
     assert any(c["type"] == "set_object" and c["path"] == "/meshcat/trajectories/LF_FOOT" for c in cmds)
-    scale = _animation(cmds)["/meshcat/forces/LF_FOOT"][".scale"]["keys"]
-    assert scale[0]["value"][1] == pytest.approx(50.0 * d.forceScale) and scale[-1]["value"][1] < 1e-5
+    _, scale = _animation(cmds)["/meshcat/forces/LF_FOOT"][".scale"]
+    assert scale[0, 1] == pytest.approx(d.forceFraction * d.robot_size) and scale[-1, 1] < 1e-5
+    for name in ("forces", "cones"):  # an inactive contact shrinks where it was, it does not slide to the origin
+        _, positions = _animation(cmds)[f"/meshcat/{name}/LF_FOOT"][".position"]
+        np.testing.assert_allclose(positions[-1], rec["oMf"].translation, atol=1e-6)
+    d.forceScale = 0.01
+    d.exportHTMLFromSolver(solver, str(tmp_path / "fixed.html"))
+    assert d.force_scale == 0.01  # a scale set by the user is kept
+    d.forceScale = None
 
 
 def test_local_force_is_rotated_to_world(anymal_display):

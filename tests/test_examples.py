@@ -22,15 +22,15 @@ MAXITER = 2
 SLOW = pytest.mark.slow
 
 RUNS = [
-    pytest.param("quadrotor.py", ["narrow", "--maxiter", "2"], ["quadrotor_narrow.html"], id="quadrotor"),
+    pytest.param("quadrotor.py", ["narrow", "--maxiter", "2"], ["quad-narrow.html"], id="quadrotor"),
     pytest.param("quadruped_gaits.py", ["pace", "--maxiter", "1"], ["pace.html"], id="quadruped_gaits"),
     pytest.param("arm_reaching.py", [], ["arm.html"], id="arm_reaching"),
-    pytest.param("double_pendulum.py", [], ["pendulum.html"], id="double_pendulum"),
+    pytest.param("double_pendulum.py", [], ["pend.html"], id="double_pendulum"),
     pytest.param("quadruped_jump.py", [], ["jump.html"], id="quadruped_jump"),
     pytest.param("boxfddp_vs_boxddp.py", [], ["pend_gaps.png", "trot-short_gaps.png"], id="boxfddp_vs_boxddp"),
-    pytest.param("humanoid_manipulation.py", ["--maxiter", "1"], ["manipulation.html"], id="humanoid_manipulation"),
+    pytest.param("humanoid_manipulation.py", ["--maxiter", "1"], ["man.html"], id="humanoid_manipulation"),
     pytest.param("humanoid_taichi.py", ["--maxiter", "1"], ["taichi.html"], marks=SLOW, id="humanoid_taichi"),
-    pytest.param("monkey_bar.py", ["--maxiter", "1"], ["monkey_bar.html"], marks=SLOW, id="monkey_bar"),
+    pytest.param("monkey_bar.py", ["--maxiter", "1"], ["bar.html"], marks=SLOW, id="monkey_bar"),
 ]
 """``(script, arguments, files it must write)``; the Talos ones beyond the first are slow."""
 
@@ -56,6 +56,14 @@ def _cap_solvers(monkeypatch: pytest.MonkeyPatch) -> None:
 def test_every_example_is_run():
     listed = {p.values[0] for p in RUNS}
     assert listed == {p.name for p in EXAMPLES.glob("*.py")}
+
+
+def test_animations_are_named_after_their_registry_problem():
+    """One name per problem: an example's ``<name>.html`` is what ``crocopy solve <name>`` writes."""
+    from crocopy.problems import registry
+
+    pages = [Path(name).stem for p in RUNS for name in p.values[2] if name.endswith(".html")]
+    assert pages and set(pages) <= set(registry.names())
 
 
 @pytest.mark.parametrize(("script", "argv", "outputs"), RUNS)

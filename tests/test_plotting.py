@@ -73,8 +73,10 @@ def test_solution_plot_with_limits(solved, tmp_path):
     limits = sorted(line.get_ydata()[0] for line in control_ax.lines[2:])
     assert limits == [-0.5, 0.5, 2.0]  # infinite bound skipped
     assert fig._suptitle.get_text() == "unicycle"
+    assert [ax.get_title() for ax in fig.axes] == ["state trajectory", "control trajectory"]
     only_u = plotOCSolution(us=solver.us, show=False)
     assert len(only_u.axes) == 1
+    assert only_u._suptitle.get_text() == "State and control trajectories"  # a title even without figTitle
 
 
 def test_solution_plot_bad_input():
@@ -97,6 +99,11 @@ def test_convergence_plot_crocoddyl_signature(solved, tmp_path):
     assert len(fig.axes) == 5
     np.testing.assert_allclose(fig.axes[0].lines[0].get_ydata(), log.costs)
     np.testing.assert_allclose(fig.axes[4].lines[0].get_ydata(), log.steps)
+    assert [ax.get_title() for ax in fig.axes] == [
+        "Cost", "Regularization", "Gradient", "Stopping criterion", "Step length"]
+    assert all(ax.get_yscale() == "log" for ax in fig.axes)  # every quantity spans decades over a solve
+    assert fig._suptitle.get_text() == "Solver convergence"
+    assert max(log.costs) / min(log.costs) > 10  # the case the log scale is for: a linear axis would flatten it
     with pytest.raises(ValueError, match="one value per iteration"):
         plotConvergence([1.0, 2.0], [1.0], [1.0], [1.0], [1.0], [1.0], show=False)
     with pytest.raises(ValueError, match="costs must be a 1-D"):
@@ -111,6 +118,12 @@ def test_convergence_from_logger(solved, tmp_path):
     assert len(fig.axes) == 6
     gaps = fig.axes[5].lines[0].get_ydata()
     assert gaps[0] > 1e-3 and gaps[-1] == pytest.approx(1e-14)  # gaps open at first, closed (0) at the end
+    titles = {ax.get_title(): ax for ax in fig.axes}
+    assert set(titles) == {"Cost", "Regularization", "Gradient", "Stopping criterion", "Step length",
+                           "Dynamic feasibility"}
+    assert all(ax.get_yscale() == "log" for ax in fig.axes)
+    assert fig._suptitle.get_text() == "FDDP"
+    assert plot_convergence_from_logger(log)._suptitle.get_text() == "Solver convergence"
     with pytest.raises(ValueError, match="no iterations"):
         plot_convergence_from_logger(crocopy.CallbackLogger())
 
@@ -121,12 +134,14 @@ def test_feasibility_plots(solved, tmp_path):
     fig = plotFeasibility(log.ffeass, log.hfeass, show=False, path=path)
     _png_ok(path)
     np.testing.assert_allclose(fig.axes[0].lines[0].get_ydata(), np.where(np.array(log.ffeass) > 0, log.ffeass, 1e-14))
+    assert fig.axes[0].get_yscale() == "log" and fig.axes[0].get_title() and fig._suptitle.get_text() == "Feasibility"
     path2 = tmp_path / "fig4.png"
     slow = [1.0 * 0.5**k for k in range(12)] + [0.0]
     fig = plot_feasibility({"FDDP": log, "slow": slow}, path2, title="gap contraction")
     _png_ok(path2)
     assert [line.get_label() for line in fig.axes[0].lines] == ["FDDP", "slow"]
     assert fig.axes[0].get_yscale() == "log"
+    assert fig.axes[0].get_title() == "Gap norm per iteration" and fig._suptitle.get_text() == "gap contraction"
     np.testing.assert_allclose(fig.axes[0].lines[1].get_ydata()[-1], 1e-14)
     single = plot_feasibility(slow)
     assert len(single.axes[0].lines) == 1
@@ -142,3 +157,12 @@ def test_show_with_agg_backend_does_not_fail(solved):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         plotFeasibility(log.ffeass, log.hfeass, show=True)
+
+
+def test_negative_costs_get_a_symmetric_log_axis():
+    costs = [-50.0, -3.0, 0.0, 2.0, 400.0]
+    grads, steps = [1.0, 0.1, 1e-2, 1e-3, 1e-4], [1.0, 0.5, 0.25, 1.0, 1.0]
+    fig = plotConvergence(costs, [1e-9] * 5, [1e-9] * 5, grads, [1.0] * 5, steps, show=False)
+    assert fig.axes[0].get_yscale() == "symlog"
+    np.testing.assert_allclose(fig.axes[0].lines[0].get_ydata(), costs)  # drawn as they are, zero included
+    assert [ax.get_yscale() for ax in fig.axes[1:]] == ["log"] * 4

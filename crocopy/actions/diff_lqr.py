@@ -7,10 +7,10 @@ import numpy as np
 from ..diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
 from ..state import StateVector
 from ..validation import as_matrix, as_vector
-from .lq_terms import LQTerms, default_input_matrix, random_psd
+from .lq_terms import LQTerms, LQTermsAccess, default_input_matrix, lq_arguments, random_psd, size_arguments
 
 
-class DifferentialActionModelLQR(DifferentialActionModelAbstract):
+class DifferentialActionModelLQR(LQTermsAccess, DifferentialActionModelAbstract):
     """Crocoddyl's ``DifferentialActionModelLQR``.
 
     Constructed as ``DifferentialActionModelLQR(Aq, Av, B, Q, R, N[, G, H], f, q, r[, g, h])`` or
@@ -19,22 +19,13 @@ class DifferentialActionModelLQR(DifferentialActionModelAbstract):
 
     def __init__(self, *args, **kwargs) -> None:
         if args and np.isscalar(args[0]):
-            nq, nu = int(args[0]), int(args[1])
-            drift_free = bool(args[2]) if len(args) > 2 else kwargs.get("driftFree", True)
+            nq, nu, drift_free = size_arguments(args, kwargs)
             Aq, Av, B = np.eye(nq), np.eye(nq), default_input_matrix(nq, nu)
             Q, R, N = np.eye(2 * nq), np.eye(nu), np.zeros((2 * nq, nu))
             f = np.zeros(nq) if drift_free else np.ones(nq)
             q, r, G, H, g, h = np.ones(2 * nq), np.ones(nu), None, None, None, None
         else:
-            vals = dict(zip(("Aq", "Av", "B", "Q", "R", "N"), args[:6]))
-            vals.update(kwargs)
-            rest = args[6:]
-            if len(rest) == 3:
-                vals.update(zip(("f", "q", "r"), rest))
-            elif len(rest) == 7:
-                vals.update(zip(("G", "H", "f", "q", "r", "g", "h"), rest))
-            elif rest:
-                raise ValueError("DifferentialActionModelLQR takes (Aq, Av, B, Q, R, N[, f, q, r]) or with G, H, g, h")
+            vals = lq_arguments("DifferentialActionModelLQR", ("Aq", "Av", "B"), args, kwargs)
             Aq = np.atleast_2d(np.asarray(vals["Aq"], dtype=float))
             nq = Aq.shape[0]
             Av = vals["Av"]
@@ -52,16 +43,6 @@ class DifferentialActionModelLQR(DifferentialActionModelAbstract):
         self.B = as_matrix(B, (nq, nu), "B")
         self.f = as_vector(f, nq, "f")
         self._Fx = np.hstack([self.Aq, self.Av])
-
-    Q = property(lambda self: self._lq.Q)
-    R = property(lambda self: self._lq.R)
-    N = property(lambda self: self._lq.N)
-    q = property(lambda self: self._lq.q)
-    r = property(lambda self: self._lq.r)
-    G = property(lambda self: self._lq.G)
-    H = property(lambda self: self._lq.H)
-    g = property(lambda self: self._lq.g)
-    h = property(lambda self: self._lq.h)
 
     @staticmethod
     def Random(nq: int, nu: int, ng: int = 0, nh: int = 0) -> "DifferentialActionModelLQR":

@@ -2,6 +2,8 @@
 
 With ``z = [x; u]``: cost ``½ xᵀQx + ½ uᵀRu + xᵀNu + qᵀx + rᵀu``; inequalities
 ``g(z) = G z + g``; equalities ``h(z) = H z + h``.  Terminal nodes use the state blocks only.
+Both models take Crocoddyl's argument lists ``(dynamics..., Q, R, N[, G, H], f, q, r[, g, h])``
+and ``(n, nu, driftFree=True)``, read here by :func:`lq_arguments` and :func:`size_arguments`.
 """
 
 from __future__ import annotations
@@ -9,6 +11,48 @@ from __future__ import annotations
 import numpy as np
 
 from ..validation import as_matrix, as_vector
+
+_TAIL_NAMES = {3: ("f", "q", "r"), 7: ("G", "H", "f", "q", "r", "g", "h")}
+
+
+def lq_arguments(model: str, dynamics: tuple[str, ...], args: tuple, kwargs: dict) -> dict:
+    """Name Crocoddyl's positional ``(dynamics..., Q, R, N[, G, H], f, q, r[, g, h])`` and merge ``kwargs``.
+
+    Raises
+    ------
+    ValueError
+        If the positional arguments after ``N`` are neither ``f, q, r`` nor ``G, H, f, q, r, g, h``.
+    """
+    head = (*dynamics, "Q", "R", "N")
+    vals = dict(zip(head, args[: len(head)]))
+    vals.update(kwargs)
+    rest = args[len(head):]
+    if rest and len(rest) not in _TAIL_NAMES:
+        raise ValueError(f"{model} takes ({', '.join(head)}[, f, q, r]) or with G, H, g, h")
+    vals.update(zip(_TAIL_NAMES.get(len(rest), ()), rest))
+    return vals
+
+
+def size_arguments(args: tuple, kwargs: dict) -> tuple[int, int, bool]:
+    """``(n, nu, driftFree)`` of the size-only constructors ``(n, nu, driftFree=True)``."""
+    drift_free = bool(args[2]) if len(args) > 2 else kwargs.get("driftFree", True)
+    return int(args[0]), int(args[1]), drift_free
+
+
+class LQTermsAccess:
+    """Read-only ``Q, R, N, q, r, G, H, g, h`` of a model holding an :class:`LQTerms` in ``_lq``."""
+
+    _lq: "LQTerms"
+
+    Q = property(lambda self: self._lq.Q)
+    R = property(lambda self: self._lq.R)
+    N = property(lambda self: self._lq.N)
+    q = property(lambda self: self._lq.q)
+    r = property(lambda self: self._lq.r)
+    G = property(lambda self: self._lq.G)
+    H = property(lambda self: self._lq.H)
+    g = property(lambda self: self._lq.g)
+    h = property(lambda self: self._lq.h)
 
 
 class LQTerms:

@@ -10,10 +10,10 @@ import numpy as np
 from ..action_base import ActionDataAbstract, ActionModelAbstract
 from ..state import StateVector
 from ..validation import as_matrix, as_vector
-from .lq_terms import LQTerms, default_input_matrix, random_psd
+from .lq_terms import LQTerms, LQTermsAccess, default_input_matrix, lq_arguments, random_psd, size_arguments
 
 
-class ActionModelLQR(ActionModelAbstract):
+class ActionModelLQR(LQTermsAccess, ActionModelAbstract):
     """Linear-quadratic regulator node (Crocoddyl's ``ActionModelLQR``).
 
     Constructed as ``ActionModelLQR(A, B, Q, R, N[, G, H], f, q, r[, g, h])`` or
@@ -22,23 +22,13 @@ class ActionModelLQR(ActionModelAbstract):
 
     def __init__(self, *args, **kwargs) -> None:
         if args and np.isscalar(args[0]):
-            nx, nu = int(args[0]), int(args[1])
-            drift_free = bool(args[2]) if len(args) > 2 else kwargs.get("driftFree", True)
+            nx, nu, drift_free = size_arguments(args, kwargs)
             A, B = np.eye(nx), default_input_matrix(nx, nu)
             Q, R, N = np.eye(nx), np.eye(nu), np.zeros((nx, nu))
             f = np.zeros(nx) if drift_free else np.ones(nx)
             q, r, G, H, g, h = np.ones(nx), np.ones(nu), None, None, None, None
         else:
-            names = ("A", "B", "Q", "R", "N")
-            vals = dict(zip(names, args[:5]))
-            vals.update(kwargs)
-            rest = args[5:]
-            if len(rest) == 3:
-                vals.update(zip(("f", "q", "r"), rest))
-            elif len(rest) == 7:
-                vals.update(zip(("G", "H", "f", "q", "r", "g", "h"), rest))
-            elif rest:
-                raise ValueError("ActionModelLQR takes (A, B, Q, R, N[, f, q, r]) or with G, H, g, h")
+            vals = lq_arguments("ActionModelLQR", ("A", "B"), args, kwargs)
             A = np.atleast_2d(np.asarray(vals["A"], dtype=float))
             nx = A.shape[0]
             B = np.asarray(vals["B"], dtype=float).reshape(nx, -1)
@@ -57,16 +47,6 @@ class ActionModelLQR(ActionModelAbstract):
         self._AB = np.hstack([self.A, self.B])
         self._H = np.block([[lq.Q, lq.N], [lq.N.T, lq.R]])
         self._h = np.concatenate([lq.q, lq.r])
-
-    Q = property(lambda self: self._lq.Q)
-    R = property(lambda self: self._lq.R)
-    N = property(lambda self: self._lq.N)
-    q = property(lambda self: self._lq.q)
-    r = property(lambda self: self._lq.r)
-    G = property(lambda self: self._lq.G)
-    H = property(lambda self: self._lq.H)
-    g = property(lambda self: self._lq.g)
-    h = property(lambda self: self._lq.h)
 
     @staticmethod
     def Random(nx: int, nu: int, ng: int = 0, nh: int = 0) -> "ActionModelLQR":

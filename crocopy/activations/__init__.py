@@ -2,6 +2,7 @@
 
 from .barrier import ActivationBounds, ActivationModelQuadraticBarrier, ActivationModelWeightedQuadraticBarrier
 from .base import ActivationDataAbstract, ActivationModelAbstract
+from .flat import ActivationModelQuadFlatExp, ActivationModelQuadFlatLog
 from .norms import ActivationModel2NormBarrier, ActivationModelSmooth1Norm, ActivationModelSmooth2Norm
 from .quad import ActivationModelQuad, ActivationModelWeightedQuad
 
@@ -11,6 +12,8 @@ __all__ = [
     "ActivationModel2NormBarrier",
     "ActivationModelAbstract",
     "ActivationModelQuad",
+    "ActivationModelQuadFlatExp",
+    "ActivationModelQuadFlatLog",
     "ActivationModelQuadraticBarrier",
     "ActivationModelSmooth1Norm",
     "ActivationModelSmooth2Norm",

@@ -1,6 +1,8 @@
 """Quadratic barrier activations: zero inside ``[lb, ub]``, quadratic outside.
 
-``a = ½‖r - clip(r, lb, ub)‖²`` (weighted: ``½ Σ wᵢ (rᵢ - clip(rᵢ))²``).
+``a = ½‖r - clip(r, lb, ub)‖²`` (weighted: ``½ Σ (wᵢ (rᵢ - clip(rᵢ)))²``, the weights applied to the
+excess before squaring, which is the value Crocoddyl computes; its ``Arr = w`` is not the Hessian
+of that value, crocopy's ``Arr = w²`` is, see docs/crocoddyl_deviations.md).
 """
 
 from __future__ import annotations
@@ -8,7 +10,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..validation import as_vector, check_bounds
-from .base import ActivationDataAbstract, ActivationModelAbstract, ParametersVersion, frozen_copy
+from ..versioning import frozen_copy, touch
+from .base import ActivationDataAbstract, ActivationModelAbstract
+from .quad import ActivationWeights
 
 
 class ActivationBounds:
@@ -41,7 +45,7 @@ class ActivationBounds:
         value = as_vector(value, self._lb.size, "lb", allow_nonfinite=True)
         check_bounds(value, self._ub, "lb", "ub")
         self._lb = frozen_copy(value)
-        ParametersVersion.bump()
+        touch(self)
 
     @property
     def ub(self) -> np.ndarray:
@@ -53,7 +57,7 @@ class ActivationBounds:
         value = as_vector(value, self._ub.size, "ub", allow_nonfinite=True)
         check_bounds(self._lb, value, "lb", "ub")
         self._ub = frozen_copy(value)
-        ParametersVersion.bump()
+        touch(self)
 
     def __repr__(self) -> str:
         return f"ActivationBounds(lb={self.lb}, ub={self.ub}, beta={self.beta})"
@@ -61,6 +65,8 @@ class ActivationBounds:
 
 class ActivationModelQuadraticBarrier(ActivationModelAbstract):
     """``a = ½‖r - clip(r, lb, ub)‖²``."""
+
+    diagonal = True
 
     def __init__(self, bounds: ActivationBounds) -> None:
         super().__init__(bounds.lb.size)
@@ -76,7 +82,7 @@ class ActivationModelQuadraticBarrier(ActivationModelAbstract):
         if value.lb.size != self.nr:
             raise ValueError(f"bounds have size {value.lb.size}, expected nr = {self.nr}")
         self._bounds = value
-        ParametersVersion.bump()
+        touch(self)
 
     def barrier_form(self) -> tuple:
         return self._bounds.lb, self._bounds.ub, 1.0
@@ -119,32 +125,23 @@ class ActivationDataQuadraticBarrier(ActivationDataAbstract):
         self.above = np.zeros(model.nr, dtype=bool)
 
 
-class ActivationModelWeightedQuadraticBarrier(ActivationModelQuadraticBarrier):
-    """``a = ½ Σ wᵢ (rᵢ - clip(rᵢ, lbᵢ, ubᵢ))²``."""
+class ActivationModelWeightedQuadraticBarrier(ActivationWeights, ActivationModelQuadraticBarrier):
+    """``a = ½ Σ (wᵢ (rᵢ - clip(rᵢ, lbᵢ, ubᵢ)))²``; ``Ar = w² ∘ e``, ``Arr = diag(w²)`` outside the bounds."""
 
     def __init__(self, bounds: ActivationBounds, weights: np.ndarray) -> None:
         super().__init__(bounds)
         self._weights = frozen_copy(as_vector(weights, self.nr, "weights"))
 
-    @property
-    def weights(self) -> np.ndarray:
-        """Weights ``w``, shape ``(nr,)`` (read-only; assign a new array to change them)."""
-        return self._weights
-
-    @weights.setter
-    def weights(self, value: np.ndarray) -> None:
-        self._weights = frozen_copy(as_vector(value, self.nr, "weights"))
-        ParametersVersion.bump()
-
     def barrier_form(self) -> tuple:
-        return self._bounds.lb, self._bounds.ub, self._weights
+        return self._bounds.lb, self._bounds.ub, self._weights * self._weights
 
     def calc(self, data: ActivationDataQuadraticBarrier, r: np.ndarray) -> None:
-        e = self._excess(data, r)
-        data.a_value = 0.5 * float(e @ (self.weights * e))
+        e = self._excess(data, r) * self._weights
+        data.a_value = 0.5 * float(e @ e)
 
     def calcDiff(self, data: ActivationDataQuadraticBarrier, r: np.ndarray) -> None:
         e = self._excess(data, r)
-        np.multiply(self.weights, e, out=data.Ar)
+        w2 = self._weights * self._weights
+        np.multiply(w2, e, out=data.Ar)
         self._active_rows(data, r)
-        data.Arr_diag *= self.weights
+        data.Arr_diag *= w2

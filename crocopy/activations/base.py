@@ -9,33 +9,18 @@ from __future__ import annotations
 
 import numpy as np
 
-
-class ParametersVersion:
-    """Counter bumped whenever a parameter that cost sums cache changes.
-
-    Activation weights and bounds, and the weight or status of a cost item, go through setters that
-    call :meth:`bump`; a :class:`~crocopy.costs.stack.CostStack` re-reads them when the value moved.
-    """
-
-    value = 0
-
-    @classmethod
-    def bump(cls) -> None:
-        cls.value += 1
-
-
-def frozen_copy(values: np.ndarray) -> np.ndarray:
-    """A read-only copy of ``values`` (parameters change through setters only)."""
-    out = np.array(values, dtype=float)
-    out.setflags(write=False)
-    return out
+from ..array_views import KeepsViews, tolerate_python_model
 
 
 class ActivationModelAbstract:
-    """Abstract activation of a residual of dimension ``nr``."""
+    """Abstract activation of a residual of dimension ``nr`` (Crocoddyl's ``ActivationModelAbstract(nr)``).
 
-    #: True when ``Arr`` is diagonal (stored in ``data.Arr_diag``).
-    diagonal = True
+    A subclass written from Python fills ``data.a_value``, ``data.Ar`` and ``data.Arr`` (dense).
+    """
+
+    #: True when ``Arr`` is diagonal and stored in ``data.Arr_diag`` (``data.Arr`` is then rebuilt
+    #: from it on each read); False for a dense ``data.Arr``.
+    diagonal = False
 
     def __init__(self, nr: int) -> None:
         if nr < 0:
@@ -50,7 +35,9 @@ class ActivationModelAbstract:
         ``Arr = diag(w ∘ [r ≤ lb or r ≥ ub])`` exactly, else ``None``.
 
         The quadratic activations are the case ``lb = ub = 0``.  Cost sums evaluate such activations
-        for all their items at once.
+        for all their items at once; a subclass that overrides ``calc``/``calcDiff`` of the class
+        declaring the form is called item by item instead (logged once at DEBUG level on the
+        ``"crocopy"`` logger), unless it declares its own ``barrier_form``.
         """
         return None
 
@@ -64,7 +51,7 @@ class ActivationModelAbstract:
         return f"{type(self).__name__}(nr={self.nr})"
 
 
-class ActivationDataAbstract:
+class ActivationDataAbstract(KeepsViews):
     """Activation value ``a_value``, gradient ``Ar`` and Hessian ``Arr`` (dense or diagonal)."""
 
     def __init__(self, model: ActivationModelAbstract) -> None:
@@ -73,6 +60,7 @@ class ActivationDataAbstract:
         self.Arr_diag = np.zeros(model.nr)
         self._Arr = np.zeros((model.nr, model.nr))
         self._diagonal = model.diagonal
+        tolerate_python_model(model, self, ("Ar", "_Arr"))
 
     @property
     def a_value(self) -> float:

@@ -16,6 +16,8 @@ from .base import ActivationDataAbstract, ActivationModelAbstract
 class ActivationModelSmooth1Norm(ActivationModelAbstract):
     """``a(r) = Σ sqrt(eps + rᵢ²)``."""
 
+    diagonal = True
+
     def __init__(self, nr: int, eps: float = 1.0) -> None:
         if eps < 0:
             raise ValueError(f"eps must be non-negative, got {eps}")
@@ -34,8 +36,6 @@ class ActivationModelSmooth1Norm(ActivationModelAbstract):
 class ActivationModelSmooth2Norm(ActivationModelAbstract):
     """``a(r) = sqrt(eps + ‖r‖²)``."""
 
-    diagonal = False
-
     def __init__(self, nr: int, eps: float = 1.0) -> None:
         if eps < 0:
             raise ValueError(f"eps must be non-negative, got {eps}")
@@ -53,8 +53,6 @@ class ActivationModelSmooth2Norm(ActivationModelAbstract):
 
 class ActivationModel2NormBarrier(ActivationModelAbstract):
     """``a(r) = ½ (‖r‖ - alpha)²`` inside the ball of radius ``alpha``, zero outside."""
-
-    diagonal = False
 
     def __init__(self, nr: int, alpha: float = 0.1, true_hessian: bool = False) -> None:
         if alpha < 0:

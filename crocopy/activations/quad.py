@@ -5,11 +5,14 @@ from __future__ import annotations
 import numpy as np
 
 from ..validation import as_vector
-from .base import ActivationDataAbstract, ActivationModelAbstract, ParametersVersion, frozen_copy
+from ..versioning import frozen_copy, touch
+from .base import ActivationDataAbstract, ActivationModelAbstract
 
 
 class ActivationModelQuad(ActivationModelAbstract):
     """``a(r) = ½‖r‖²``; ``Ar = r``; ``Arr = I``."""
+
+    diagonal = True
 
     def barrier_form(self) -> tuple:
         return 0.0, 0.0, 1.0
@@ -22,13 +25,12 @@ class ActivationModelQuad(ActivationModelAbstract):
         data.Arr_diag[:] = 1.0
 
 
-class ActivationModelWeightedQuad(ActivationModelAbstract):
-    """``a(r) = ½ Σ wᵢ rᵢ²`` with ``weights`` of shape ``(nr,)``."""
+class ActivationWeights:
+    """The weights ``w`` (shape ``(nr,)``) of a weighted activation: a read-only array; assigning new
+    ones re-checks them and touches the activation (:mod:`crocopy.versioning`)."""
 
-    def __init__(self, weights: np.ndarray) -> None:
-        weights = np.asarray(weights, dtype=float).reshape(-1)
-        super().__init__(weights.size)
-        self._weights = frozen_copy(as_vector(weights, self.nr, "weights"))
+    nr: int
+    _weights: np.ndarray
 
     @property
     def weights(self) -> np.ndarray:
@@ -38,7 +40,18 @@ class ActivationModelWeightedQuad(ActivationModelAbstract):
     @weights.setter
     def weights(self, value: np.ndarray) -> None:
         self._weights = frozen_copy(as_vector(value, self.nr, "weights"))
-        ParametersVersion.bump()
+        touch(self)
+
+
+class ActivationModelWeightedQuad(ActivationWeights, ActivationModelAbstract):
+    """``a(r) = ½ Σ wᵢ rᵢ²`` with ``weights`` of shape ``(nr,)``."""
+
+    diagonal = True
+
+    def __init__(self, weights: np.ndarray) -> None:
+        weights = np.asarray(weights, dtype=float).reshape(-1)
+        super().__init__(weights.size)
+        self._weights = frozen_copy(as_vector(weights, self.nr, "weights"))
 
     def barrier_form(self) -> tuple:
         return 0.0, 0.0, self._weights

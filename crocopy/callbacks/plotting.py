@@ -10,6 +10,12 @@
 Every function returns the :class:`matplotlib.figure.Figure`, saves it when ``path`` is given and
 calls ``plt.show()`` only when ``show`` is true, so it works with the non-interactive ``Agg``
 backend. Matplotlib is imported on first use, not with crocopy.
+
+Every figure has a title (``figTitle`` / ``title``, or a default naming the plot) and every panel
+its own. Quantities that span decades over a solve are drawn on logarithmic axes: cost,
+regularisation, gradient, stopping criterion, step length and feasibility. A series with a
+negative value (a cost can be negative) is drawn on a symmetric-log axis instead, and exact zeros
+(closed gaps, zero regularisation) at :data:`_ZERO_FLOOR`.
 """
 
 from __future__ import annotations
@@ -46,9 +52,8 @@ def _figure(figIndex: int, size: tuple[float, float], nrows: int, ncols: int, **
     return fig, fig.subplots(nrows, ncols, **kwargs)
 
 
-def _finish(fig: Any, figTitle: str, path: str | os.PathLike | None, show: bool) -> Any:
-    if figTitle:
-        fig.suptitle(figTitle)
+def _finish(fig: Any, figTitle: str, default_title: str, path: str | os.PathLike | None, show: bool) -> Any:
+    fig.suptitle(figTitle or default_title)
     fig.tight_layout()
     if path is not None:
         fig.savefig(os.fspath(path), dpi=100)
@@ -84,6 +89,19 @@ def _bound(name: str, bound: Any, n: int) -> np.ndarray | None:
 
 def _positive(values: np.ndarray) -> np.ndarray:
     return np.where(values > 0, values, _ZERO_FLOOR)
+
+
+def _log_panel(ax: Any, title: str, ylabel: str, values: np.ndarray, style: str = ".-", **kwargs: Any) -> None:
+    """Draw ``values`` per iteration on a log axis (symmetric-log if any is negative), titled."""
+    it = np.arange(values.shape[0])
+    if np.any(values < 0):
+        ax.plot(it, values, style, **kwargs)
+        ax.set_yscale("symlog", linthresh=max(float(np.min(np.abs(values[values != 0]), initial=1.0)), _ZERO_FLOOR))
+    else:
+        ax.semilogy(it, _positive(values), style, **kwargs)
+    ax.set_title(title, fontsize=10)
+    ax.set_ylabel(ylabel)
+    ax.grid(True, alpha=0.3)
 
 
 def plotOCSolution(
@@ -140,7 +158,7 @@ def plotOCSolution(
         ax.grid(True, alpha=0.3)
         if data.shape[1] <= 20:
             ax.legend(fontsize=6, ncol=max(1, data.shape[1] // 10), loc="upper right")
-    return _finish(fig, figTitle, path, show)
+    return _finish(fig, figTitle, "State and control trajectories", path, show)
 
 
 def plotConvergence(
@@ -159,9 +177,9 @@ def plotConvergence(
 
     Parameters
     ----------
-    costs : cost; muLM, muV : primal and dual regularisation; gamma : gradient ``|d[0]|``;
-    theta : stopping criterion; alpha : step length (e.g. a logger's ``costs, pregs, dregs,
-    grads, stops, steps``).
+    costs, muLM, muV, gamma, theta, alpha : sequence of float
+        Cost, primal and dual regularisation, gradient ``|d[0]|``, stopping criterion and step
+        length (e.g. a logger's ``costs, pregs, dregs, grads, stops, steps``).
     """
     values = {
         "cost": _series("costs", costs),
@@ -174,25 +192,16 @@ def plotConvergence(
     if len({v.shape[0] for v in values.values()}) != 1:
         lengths = {k: len(v) for k, v in values.items()}
         raise ValueError(f"all series need one value per iteration, got lengths {lengths}")
-    fig, axes = _figure(figIndex, (7, 10), 5, 1, sharex=True)
-    it = np.arange(values["cost"].shape[0])
-    axes[0].plot(it, values["cost"], "k.-")
-    axes[0].set_ylabel("cost")
-    axes[1].semilogy(it, _positive(values["muLM"]), "b.-", label="muLM (primal)")
-    axes[1].semilogy(it, _positive(values["muV"]), "g.-", label="muV (dual)")
-    axes[1].set_ylabel("regularization")
+    fig, axes = _figure(figIndex, (7, 11), 5, 1, sharex=True)
+    _log_panel(axes[0], "Cost", "cost", values["cost"], "k.-")
+    _log_panel(axes[1], "Regularization", "regularization", values["muLM"], "b.-", label="muLM (primal)")
+    _log_panel(axes[1], "Regularization", "regularization", values["muV"], "g.-", label="muV (dual)")
     axes[1].legend(fontsize=7)
-    axes[2].semilogy(it, _positive(np.abs(values["gamma"])), "r.-")
-    axes[2].set_ylabel("gradient")
-    axes[3].semilogy(it, _positive(values["theta"]), "m.-")
-    axes[3].set_ylabel("stopping criteria")
-    axes[4].plot(it, values["alpha"], "c.-")
-    axes[4].set_ylim(-0.05, 1.05)
-    axes[4].set_ylabel("step length")
+    _log_panel(axes[2], "Gradient", "gradient |d0|", np.abs(values["gamma"]), "r.-")
+    _log_panel(axes[3], "Stopping criterion", "stopping criteria", values["theta"], "m.-")
+    _log_panel(axes[4], "Step length", "step length", values["alpha"], "c.-")
     axes[4].set_xlabel("iteration")
-    for ax in axes:
-        ax.grid(True, alpha=0.3)
-    return _finish(fig, figTitle, path, show)
+    return _finish(fig, figTitle, "Solver convergence", path, show)
 
 
 def plotFeasibility(
@@ -205,14 +214,13 @@ def plotFeasibility(
 ) -> Any:
     """Plot dynamic feasibility (gap norm) and equality feasibility per iteration (log scale)."""
     f, h = _series("ffeass", ffeass), _series("hfeass", hfeass)
-    fig, ax = _figure(figIndex, (7, 3.5), 1, 1)
-    ax.semilogy(np.arange(f.shape[0]), _positive(f), "b.-", label="dynamic feasibility ||gaps||")
-    ax.semilogy(np.arange(h.shape[0]), _positive(h), "r.-", label="equality feasibility")
+    fig, ax = _figure(figIndex, (7, 3.8), 1, 1)
+    label = f"feasibility (0 drawn at {_ZERO_FLOOR:g})"
+    _log_panel(ax, "Dynamic and equality feasibility", label, f, "b.-", label="dynamic feasibility ||gaps||")
+    _log_panel(ax, "Dynamic and equality feasibility", label, h, "r.-", label="equality feasibility")
     ax.set_xlabel("iteration")
-    ax.set_ylabel(f"feasibility (0 drawn at {_ZERO_FLOOR:g})")
-    ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
-    return _finish(fig, figTitle, path, show)
+    return _finish(fig, figTitle, "Feasibility", path, show)
 
 
 def gap_norms(logger: Any) -> np.ndarray:
@@ -234,25 +242,19 @@ def plot_convergence_from_logger(
     if costs.shape[0] == 0:
         raise ValueError("logger has no iterations recorded (was it passed to solver.setCallbacks?)")
     series = [
-        ("cost", costs, False),
-        ("regularization (preg)", _series("logger.pregs", logger.pregs), True),
-        ("gradient |d0|", np.abs(_series("logger.grads", logger.grads)), True),
-        ("stopping criteria", _series("logger.stops", logger.stops), True),
-        ("step length", _series("logger.steps", logger.steps), False),
-        ("||gaps||", gap_norms(logger), True),
+        ("Cost", "cost", costs),
+        ("Regularization", "regularization (preg)", _series("logger.pregs", logger.pregs)),
+        ("Gradient", "gradient |d0|", np.abs(_series("logger.grads", logger.grads))),
+        ("Stopping criterion", "stopping criteria", _series("logger.stops", logger.stops)),
+        ("Step length", "step length", _series("logger.steps", logger.steps)),
+        ("Dynamic feasibility", "||gaps||", gap_norms(logger)),
     ]
-    fig, axes = _figure(figIndex, (10, 7), 3, 2, sharex=True)
-    for ax, (label, values, log) in zip(axes.T.reshape(-1), series, strict=True):
-        it = np.arange(values.shape[0])
-        if log:
-            ax.semilogy(it, _positive(values), ".-")
-        else:
-            ax.plot(it, values, ".-")
-        ax.set_ylabel(label)
-        ax.grid(True, alpha=0.3)
+    fig, axes = _figure(figIndex, (10, 7.5), 3, 2, sharex=True)
+    for ax, (panel_title, label, values) in zip(axes.T.reshape(-1), series, strict=True):
+        _log_panel(ax, panel_title, label, values)
     for ax in axes[-1]:
         ax.set_xlabel("iteration")
-    return _finish(fig, title, path, show)
+    return _finish(fig, title, "Solver convergence", path, show)
 
 
 def plot_feasibility(
@@ -273,10 +275,8 @@ def plot_feasibility(
     fig, ax = _figure(figIndex, (7, 4), 1, 1)
     for label, run in items:
         values = gap_norms(run) if hasattr(run, "costs") else _series(f"runs[{label!r}]", run)
-        ax.semilogy(np.arange(values.shape[0]), _positive(values), ".-", label=label or None)
+        _log_panel(ax, "Gap norm per iteration", f"||gaps|| (0 drawn at {_ZERO_FLOOR:g})", values, label=label or None)
     ax.set_xlabel("iteration")
-    ax.set_ylabel(f"||gaps|| (0 drawn at {_ZERO_FLOOR:g})")
-    ax.grid(True, alpha=0.3)
     if isinstance(runs, Mapping):
         ax.legend(fontsize=8)
-    return _finish(fig, title, path, show)
+    return _finish(fig, title, "Dynamic feasibility", path, show)

@@ -15,6 +15,8 @@ import enum
 
 import numpy as np
 
+from ..action_common import constraint_arrays
+from ..array_views import tolerate_python_model
 from ..data_collector import DataCollectorAbstract
 from ..residuals.base import ResidualModelAbstract
 from ..state import StateAbstract
@@ -32,34 +34,52 @@ class ConstraintType(enum.IntEnum):
 class ConstraintModelAbstract:
     """Abstract constraint (Crocoddyl's ``ConstraintModelAbstract``).
 
-    Constructed as ``(state, residual, ng, nh)``, ``(state, nu, ng, nh, T_const=True)`` or
-    ``(state, ng, nh, T_const=True)`` (then ``nu = state.nv``).
+    Constructed, positionally or with keywords, as ``(state, residual, ng, nh)``,
+    ``(state, nu, ng, nh, T_const=True)`` or ``(state, ng, nh, T_const=True)`` (then
+    ``nu = state.nv``).  A constraint written from Python fills ``data.g``/``data.Gx``/``data.Gu``
+    (inequality rows, bounded by ``lb``/``ub``) and ``data.h``/``data.Hx``/``data.Hu`` (equality rows).
+    As in Crocoddyl, the residual form is a terminal constraint when the residual reads ``q`` or
+    ``v``, and the other forms hold an abstract residual of ``ng + nh`` rows that sizes
+    ``data.residual``.
     """
 
-    def __init__(self, state: StateAbstract, *args, T_const: bool = True) -> None:
+    def __init__(
+        self,
+        state: StateAbstract,
+        *args,
+        residual: ResidualModelAbstract | None = None,
+        nu: int | None = None,
+        ng: int | None = None,
+        nh: int | None = None,
+        T_const: bool = True,
+    ) -> None:
         if not isinstance(state, StateAbstract):
             raise ValueError(f"state must be a StateAbstract, got {type(state).__name__}")
-        self.state = state
-        self.residual: ResidualModelAbstract | None = None
-        if args and isinstance(args[0], ResidualModelAbstract):
-            if len(args) != 3:
-                raise ValueError("ConstraintModelAbstract(state, residual, ng, nh) takes exactly ng and nh")
-            self.residual, ng, nh = args
-            self.nu = self.residual.nu
-            T_const = True
-        elif len(args) in (3, 4):
-            nu, ng, nh = args[:3]
-            if len(args) == 4:
-                T_const = args[3]
-            self.nu = int(nu)
-        elif len(args) in (2,):
-            ng, nh = args
-            self.nu = state.nv
+        given = _positional_form(args, residual is not None, nu is not None)
+        named = {"residual": residual, "nu": nu, "ng": ng, "nh": nh}
+        for key, value in given.items():
+            if key == "T_const":
+                T_const = value
+            elif named[key] is not None:
+                raise TypeError(f"ConstraintModelAbstract got {key} both by position and by keyword")
+            else:
+                named[key] = value
+        residual, nu, ng, nh = named["residual"], named["nu"], named["ng"], named["nh"]
+        if ng is None or nh is None:
+            raise TypeError("ConstraintModelAbstract needs ng and nh")
+        if int(ng) < 0 or int(nh) < 0 or (nu is not None and int(nu) < 0):
+            raise ValueError(f"nu, ng and nh must be non-negative, got nu={nu}, ng={ng}, nh={nh}")
+        if residual is None:
+            residual = ResidualModelAbstract(state, int(ng) + int(nh), nu)
         else:
-            raise ValueError("ConstraintModelAbstract takes (state, residual, ng, nh), (state, nu, ng, nh[, T_const])"
-                             " or (state, ng, nh[, T_const])")
-        if int(ng) < 0 or int(nh) < 0:
-            raise ValueError(f"ng and nh must be non-negative, got ng={ng}, nh={nh}")
+            if not isinstance(residual, ResidualModelAbstract):
+                raise ValueError(f"residual must be a ResidualModelAbstract, got {type(residual).__name__}")
+            if nu is not None and int(nu) != residual.nu:
+                raise ValueError(f"nu = {nu} does not match residual.nu = {residual.nu}")
+            T_const = residual.q_dependent or residual.v_dependent
+        self.state = state
+        self.residual = residual
+        self.nu = residual.nu
         self.ng = int(ng)
         self.nh = int(nh)
         self.T_constraint = bool(T_const)
@@ -108,8 +128,30 @@ class ConstraintModelAbstract:
         raise NotImplementedError(f"{type(self).__name__}.calcDiff is not implemented")
 
     def __repr__(self) -> str:
-        inner = f"{{{type(self.residual).__name__}}}" if self.residual is not None else f"(ng={self.ng}, nh={self.nh})"
+        inner = (
+            f"(ng={self.ng}, nh={self.nh})"
+            if type(self.residual) is ResidualModelAbstract
+            else f"{{{type(self.residual).__name__}}}"
+        )
         return f"{type(self).__name__} {inner}"
+
+
+def _positional_form(args: tuple, has_residual: bool, has_nu: bool) -> dict:
+    """Name the positional arguments after ``state`` by Crocoddyl's constructor forms."""
+    if args and isinstance(args[0], ResidualModelAbstract):
+        names = ("residual", "ng", "nh")
+    elif has_residual:
+        names = ("ng", "nh")
+    elif not has_nu and (len(args) == 4 or (len(args) == 3 and not isinstance(args[2], (bool, np.bool_)))):
+        names = ("nu", "ng", "nh", "T_const")
+    else:
+        names = ("ng", "nh", "T_const")
+    if len(args) > len(names):
+        raise TypeError(
+            "ConstraintModelAbstract takes (state, residual, ng, nh), (state, nu, ng, nh[, T_const])"
+            f" or (state, ng, nh[, T_const]); got {len(args) + 1} positional arguments"
+        )
+    return dict(zip(names, args))
 
 
 class ConstraintDataAbstract:
@@ -118,13 +160,9 @@ class ConstraintDataAbstract:
     def __init__(self, model: ConstraintModelAbstract, data: DataCollectorAbstract | None) -> None:
         ndx, nu = model.state.ndx, model.nu
         self.shared = data
-        self.residual = model.residual.createData(data) if model.residual is not None else None
-        self.g = np.zeros(model.ng)
-        self.Gx = np.zeros((model.ng, ndx))
-        self.Gu = np.zeros((model.ng, nu))
-        self.h = np.zeros(model.nh)
-        self.Hx = np.zeros((model.nh, ndx))
-        self.Hu = np.zeros((model.nh, nu))
+        self.residual = model.residual.createData(data)
+        self.g, self.Gx, self.Gu, self.h, self.Hx, self.Hu = constraint_arrays(model.ng, model.nh, ndx, nu)
+        tolerate_python_model(model, self, ("g", "Gx", "Gu", "h", "Hx", "Hu"))
 
 
 class ConstraintModelResidual(ConstraintModelAbstract):

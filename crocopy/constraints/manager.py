@@ -6,9 +6,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..action_common import constraint_arrays
+from ..array_views import share_arrays
 from ..data_collector import DataCollectorAbstract
-from ..named_items import NamedItems
-from ..state import StateAbstract
+from ..named_items import ModelItems
 from .base import ConstraintModelAbstract
 
 
@@ -24,7 +25,7 @@ class ConstraintItem:
         return f"{{{self.constraint!r}}}"
 
 
-class ConstraintModelManager(NamedItems):
+class ConstraintModelManager(ModelItems):
     """Named constraints stacked into one ``g``/``h`` (Crocoddyl's ``ConstraintModelManager``).
 
     Parameters
@@ -36,16 +37,7 @@ class ConstraintModelManager(NamedItems):
     """
 
     _kind = "constraint"
-
-    def __init__(self, state: StateAbstract, nu: int | None = None) -> None:
-        if not isinstance(state, StateAbstract):
-            raise ValueError(f"state must be a StateAbstract, got {type(state).__name__}")
-        self.state = state
-        self.nu = state.nv if nu is None else int(nu)
-        if self.nu < 0:
-            raise ValueError(f"nu must be non-negative, got {self.nu}")
-        self._items: dict[str, ConstraintItem] = {}
-        self._recount()
+    _model_type = ConstraintModelAbstract
 
     @property
     def constraints(self) -> dict[str, ConstraintItem]:
@@ -74,14 +66,15 @@ class ConstraintModelManager(NamedItems):
         return np.concatenate(parts) if parts else np.zeros(0)
 
     def addConstraint(self, name: str, constraint: ConstraintModelAbstract, active: bool = True) -> None:
-        """Add ``constraint`` under ``name`` (items are kept ordered by name)."""
-        if not isinstance(constraint, ConstraintModelAbstract):
-            raise ValueError(f"constraint must be a ConstraintModelAbstract, got {type(constraint).__name__}")
-        self._check_new_name(name)
-        if constraint.nu != self.nu:
-            raise ValueError(f"constraint {name!r} has nu = {constraint.nu}, expected nu = {self.nu}")
-        if constraint.state.nx != self.state.nx or constraint.state.ndx != self.state.ndx:
-            raise ValueError(f"constraint {name!r} was built on a state of another dimension")
+        """Add ``constraint`` under ``name`` (items are kept ordered by name).
+
+        Raises
+        ------
+        ValueError
+            If ``constraint`` is not a ``ConstraintModelAbstract``, ``name`` is taken, or ``constraint``
+            has another ``nu`` or another state dimension.
+        """
+        self._check_model(name, constraint)
         self._insert(name, ConstraintItem(name, constraint, bool(active)))
 
     def removeConstraint(self, name: str) -> None:
@@ -107,15 +100,19 @@ class ConstraintModelManager(NamedItems):
                 f"ng={self.ng}, nh={self.nh}: create the data again after changing the active set"
             )
 
+    def _applying(self, data: "ConstraintDataManager", u: np.ndarray | None) -> list:
+        """``(constraint, data)`` of the active constraints, only ``T_constraint`` ones when ``u`` is None."""
+        self._check(data)
+        return [
+            (item.constraint, data.constraints[name])
+            for name, item in self._items.items()
+            if item.active and (u is not None or item.constraint.T_constraint)
+        ]
+
     def calc(self, data: "ConstraintDataManager", x: np.ndarray, u: np.ndarray | None = None) -> None:
         """Stack the active constraints (only ``T_constraint`` ones when ``u`` is None) into ``g``/``h``."""
-        self._check(data)
         ig = ih = 0
-        for name, item in self._items.items():
-            c = item.constraint
-            if not item.active or (u is None and not c.T_constraint):
-                continue
-            cd = data.constraints[name]
+        for c, cd in self._applying(data, u):
             c.calc(cd, x, u)
             if c.ng:
                 data.g[ig:ig + c.ng] = cd.g
@@ -128,13 +125,8 @@ class ConstraintModelManager(NamedItems):
 
     def calcDiff(self, data: "ConstraintDataManager", x: np.ndarray, u: np.ndarray | None = None) -> None:
         """Stack the Jacobians of the active constraints into ``Gx, Gu, Hx, Hu`` (same rows as :meth:`calc`)."""
-        self._check(data)
         ig = ih = 0
-        for name, item in self._items.items():
-            c = item.constraint
-            if not item.active or (u is None and not c.T_constraint):
-                continue
-            cd = data.constraints[name]
+        for c, cd in self._applying(data, u):
             c.calcDiff(cd, x, u)
             if c.ng:
                 data.Gx[ig:ig + c.ng] = cd.Gx
@@ -144,13 +136,10 @@ class ConstraintModelManager(NamedItems):
                 data.Hx[ih:ih + c.nh] = cd.Hx
                 data.Hu[ih:ih + c.nh] = cd.Hu
                 ih += c.nh
-        for J in (data.Gx, data.Gu):
-            J[ig:] = 0.0
-        for J in (data.Hx, data.Hu):
-            J[ih:] = 0.0
-
-    def __repr__(self) -> str:
-        return "ConstraintModelManager(" + ", ".join(f"{n}: {c!r}" for n, c in self._items.items()) + ")"
+        data.Gx[ig:] = 0.0
+        data.Gu[ig:] = 0.0
+        data.Hx[ih:] = 0.0
+        data.Hu[ih:] = 0.0
 
 
 class ConstraintDataManager:
@@ -160,12 +149,7 @@ class ConstraintDataManager:
         ndx, nu = model.state.ndx, model.nu
         self.shared = data
         self.constraints = {name: item.constraint.createData(data) for name, item in model.constraints.items()}
-        self.g = np.zeros(model.ng)
-        self.Gx = np.zeros((model.ng, ndx))
-        self.Gu = np.zeros((model.ng, nu))
-        self.h = np.zeros(model.nh)
-        self.Hx = np.zeros((model.nh, ndx))
-        self.Hu = np.zeros((model.nh, nu))
+        self.g, self.Gx, self.Gu, self.h, self.Hx, self.Hu = constraint_arrays(model.ng, model.nh, ndx, nu)
 
     def shareMemory(self, data) -> None:
         """Write straight into ``data``'s ``g, Gx, Gu, h, Hx, Hu`` (an action or differential data).
@@ -175,8 +159,4 @@ class ConstraintDataManager:
         ValueError
             If ``data``'s arrays do not have this manager data's shapes.
         """
-        for name in ("g", "Gx", "Gu", "h", "Hx", "Hu"):
-            mine, theirs = getattr(self, name), getattr(data, name)
-            if theirs.shape != mine.shape:
-                raise ValueError(f"data.{name} has shape {theirs.shape}, expected {mine.shape}")
-            setattr(self, name, theirs)
+        share_arrays(self, data, ("g", "Gx", "Gu", "h", "Hx", "Hu"))

@@ -10,17 +10,67 @@ from __future__ import annotations
 import numpy as np
 
 from ..activations import ActivationModelAbstract, ActivationModelQuad
+from ..array_views import tolerate_python_model
 from ..data_collector import DataCollectorAbstract
 from ..residuals.base import ResidualModelAbstract
 from ..state import StateAbstract
 
 
+def _is_int(value: object) -> bool:
+    return isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+
+
 class CostModelAbstract:
-    """Abstract cost ``l(x, u)`` of an activation and a residual (Crocoddyl's ``CostModelAbstract``)."""
+    """Abstract cost ``l(x, u)`` of an activation and a residual (Crocoddyl's ``CostModelAbstract``).
+
+    Crocoddyl's constructor forms, positional or with keywords:
+
+    - ``CostModelAbstract(state, activation, residual)``;
+    - ``CostModelAbstract(state, residual)`` (quadratic activation of ``residual.nr`` rows);
+    - ``CostModelAbstract(state, activation, nu=state.nv)`` and ``CostModelAbstract(state, nr,
+      nu=state.nv)`` (quadratic activation): for costs written from Python, whose ``residual`` is
+      then an abstract residual of ``nr = activation.nr`` rows that only sizes the data.
+
+    Parameters
+    ----------
+    state : StateAbstract
+        State manifold.
+    activation : ActivationModelAbstract, ResidualModelAbstract or int
+        Activation, or the residual (form 2), or the residual dimension ``nr``.
+    residual : ResidualModelAbstract or int, optional
+        Residual, or the control dimension ``nu`` given positionally.
+    nu : int, optional
+        Control dimension when there is no residual (default ``state.nv``).
+    nr : int, optional
+        Residual dimension when there is neither activation nor residual.
+    """
 
     def __init__(
-        self, state: StateAbstract, activation: ActivationModelAbstract, residual: ResidualModelAbstract
+        self,
+        state: StateAbstract,
+        activation: ActivationModelAbstract | ResidualModelAbstract | int | None = None,
+        residual: ResidualModelAbstract | int | None = None,
+        nu: int | None = None,
+        nr: int | None = None,
     ) -> None:
+        if not isinstance(state, StateAbstract):
+            raise ValueError(f"state must be a StateAbstract, got {type(state).__name__}")
+        if isinstance(activation, ResidualModelAbstract):
+            activation, residual = None, activation
+        elif _is_int(activation):
+            activation, nr = None, activation
+        if _is_int(residual):
+            residual, nu = None, residual
+        if residual is None:
+            residual = self._sizing_residual(state, activation, nr, nu)
+        elif nu is not None and int(nu) != residual.nu:
+            raise ValueError(f"nu = {nu} does not match residual.nu = {residual.nu}")
+        if not isinstance(residual, ResidualModelAbstract):
+            raise ValueError(f"residual must be a ResidualModelAbstract, got {type(residual).__name__}")
+        if activation is None:
+            activation = ActivationModelQuad(residual.nr)
+        if not isinstance(activation, ActivationModelAbstract):
+            raise ValueError(f"activation must be an ActivationModelAbstract, got {type(activation).__name__}")
         if activation.nr != residual.nr:
             raise ValueError(
                 f"activation.nr = {activation.nr} does not match residual.nr = {residual.nr}"
@@ -31,6 +81,19 @@ class CostModelAbstract:
         self.activation = activation
         self.residual = residual
         self.nu = residual.nu
+
+    @staticmethod
+    def _sizing_residual(state: StateAbstract, activation, nr: int | None, nu: int | None) -> ResidualModelAbstract:
+        """The abstract residual of a cost built without one (``nr`` rows from the activation or ``nr``)."""
+        if activation is not None:
+            if not isinstance(activation, ActivationModelAbstract):
+                raise ValueError(f"activation must be an ActivationModelAbstract, got {type(activation).__name__}")
+            if nr is not None and int(nr) != activation.nr:
+                raise ValueError(f"nr = {nr} does not match activation.nr = {activation.nr}")
+            nr = activation.nr
+        if nr is None:
+            raise ValueError("CostModelAbstract needs an activation, a residual or nr")
+        return ResidualModelAbstract(state, int(nr), nu)
 
     def createData(self, data: DataCollectorAbstract | None = None) -> "CostDataAbstract":
         return CostDataAbstract(self, data)
@@ -59,11 +122,23 @@ class CostDataAbstract:
         self.Luu = np.zeros((nu, nu))
         self.residual = model.residual.createData(data)
         self.activation = model.activation.createData()
+        tolerate_python_model(model, self, ("Lx", "Lu", "Lxx", "Lxu", "Luu"))
+        tolerate_python_model(model, self.residual, ("r", "Rx", "Ru"))
 
     @property
     def r(self) -> np.ndarray:
-        """Residual vector of this cost, shape ``(nr,)``."""
+        """Residual vector of this cost, shape ``(nr,)`` (Crocoddyl's deprecated alias of ``residual.r``)."""
         return self.residual.r
+
+    @property
+    def Rx(self) -> np.ndarray:
+        """Residual Jacobian in ``x``, shape ``(nr, ndx)`` (alias of ``residual.Rx``)."""
+        return self.residual.Rx
+
+    @property
+    def Ru(self) -> np.ndarray:
+        """Residual Jacobian in ``u``, shape ``(nr, nu)`` (alias of ``residual.Ru``)."""
+        return self.residual.Ru
 
 
 class CostModelResidual(CostModelAbstract):

@@ -1,27 +1,56 @@
-"""Compiled activation and accumulation steps of :class:`~crocopy.costs.stack.CostStack` (numba).
+"""Activation and accumulation steps of :class:`~crocopy.costs.stack.CostStack`: numba kernels and numpy twins.
 
-Twins of the numpy steps in :mod:`crocopy.costs.stack`, same maths (rows ``i``, items ``k``)::
+Both compute (rows ``i``, items ``k``)::
 
     eᵢ = rᵢ - clip(rᵢ, lbᵢ, ubᵢ),   costₖ = ½ Σ_{i ∈ k} aᵢ eᵢ²,   cost = Σₖ wₖ costₖ
     Arᵢ = aᵢ eᵢ,   Arrᵢ = aᵢ [rᵢ ≤ lbᵢ or rᵢ ≥ ubᵢ]
     Lx = Jxᵀ (w ∘ Ar),   Lxx = Jxᵀ diag(w ∘ Arr) Jx,   Lu, Lxu, Luu likewise with the ``Ju`` rows
 
 One call replaces a dozen small numpy calls, and rows whose weighted curvature is zero (a barrier
-row inside its bounds, an inactive item) are left out of the matrix products.  ``available`` is
-False when numba cannot be imported; :class:`~crocopy.costs.stack.CostStack` then uses its numpy
-steps, which give the same numbers to round-off (tested).
+row inside its bounds, an inactive item) are left out of the matrix products.  Each kernel has a
+numpy twin (``*_numpy``, same arguments) giving the same numbers to round-off (tested);
+:mod:`crocopy.kernels` chooses.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-try:
-    from numba import njit
-except ImportError:  # pragma: no cover - exercised only without numba
-    njit = None
+from ..kernels import compiled
 
-available = njit is not None
+
+def _excess(r, lb, ub):
+    return r - np.maximum(np.minimum(r, ub), lb)
+
+
+def activation_values_numpy(r, lb, ub, act_w, starts, item_costs, item_weights) -> float:
+    """Numpy twin of :func:`activation_values`."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        rows = _excess(r, lb, ub)
+        rows *= rows
+        rows *= act_w
+    np.add.reduceat(rows, starts, out=item_costs)
+    item_costs *= 0.5
+    return float(item_weights @ item_costs)
+
+
+def activation_derivatives_numpy(r, lb, ub, act_w, Ar, Arr) -> None:
+    """Numpy twin of :func:`activation_derivatives`."""
+    np.multiply(act_w, _excess(r, lb, ub), out=Ar)
+    np.multiply((r <= lb) | (r >= ub), act_w, out=Arr)
+
+
+def accumulate_numpy(weights, Ar, Arr, Jx, Ju, u_start, with_u, Jc, Hx, Juc, Hu, Lx, Lu, Lxx, Lxu, Luu) -> None:
+    """Numpy twin of :func:`accumulate` (uses ``Hx``/``Hu`` as scratch; ``Jc``/``Juc`` unused)."""
+    wArr = weights * Arr
+    np.dot(Jx.T, weights * Ar, out=Lx)
+    np.multiply(wArr[:, None], Jx, out=Hx)
+    np.dot(Jx.T, Hx, out=Lxx)
+    if with_u:
+        np.dot(Ju.T, (weights * Ar)[u_start:], out=Lu)
+        np.multiply(wArr[u_start:, None], Ju, out=Hu)
+        np.dot(Jx[u_start:].T, Hu, out=Lxu)
+        np.dot(Ju.T, Hu, out=Luu)
 
 
 def _activation_values(r, lb, ub, act_w, starts, item_costs, item_weights):
@@ -96,9 +125,6 @@ def _accumulate(weights, Ar, Arr, Jx, Ju, u_start, with_u, Jc, Hx, Juc, Hu, Lx, 
             Luu[:, :] = 0.0
 
 
-if available:
-    activation_values = njit(cache=True)(_activation_values)
-    activation_derivatives = njit(cache=True)(_activation_derivatives)
-    accumulate = njit(cache=True)(_accumulate)
-else:  # pragma: no cover - exercised only without numba
-    activation_values, activation_derivatives, accumulate = _activation_values, _activation_derivatives, _accumulate
+activation_values = compiled(_activation_values)
+activation_derivatives = compiled(_activation_derivatives)
+accumulate = compiled(_accumulate)

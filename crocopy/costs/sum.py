@@ -6,10 +6,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..activations.base import ParametersVersion
+from ..array_views import share_arrays
 from ..data_collector import DataCollectorAbstract
-from ..named_items import NamedItems
-from ..state import StateAbstract
+from ..named_items import ModelItems
+from ..versioning import touch
 from .base import CostModelAbstract, CostModelResidual
 from .stack import CostStack
 
@@ -25,13 +25,13 @@ class CostItem:
 
     def __setattr__(self, name: str, value: object) -> None:
         object.__setattr__(self, name, value)
-        ParametersVersion.bump()
+        touch(self)
 
     def __repr__(self) -> str:
         return f"{{w={self.weight}, {self.cost!r}}}"
 
 
-class CostModelSum(NamedItems):
+class CostModelSum(ModelItems):
     """Weighted sum of named costs (Crocoddyl's ``CostModelSum``).
 
     Parameters
@@ -43,18 +43,11 @@ class CostModelSum(NamedItems):
     """
 
     _kind = "cost"
-    _sorted = False
-
-    def __init__(self, state: StateAbstract, nu: int | None = None) -> None:
-        self.state = state
-        self.nu = state.nv if nu is None else int(nu)
-        self._items: dict[str, CostItem] = {}
-        self.nr = 0
-        self.nr_total = 0
+    _model_type = CostModelAbstract
 
     @property
     def costs(self) -> dict[str, CostItem]:
-        """All items (active or not), in insertion order."""
+        """All items (active or not), ordered by name as in Crocoddyl."""
         return self._items
 
     def _recount(self) -> None:
@@ -62,12 +55,15 @@ class CostModelSum(NamedItems):
         self.nr_total = sum(c.cost.activation.nr for c in self._items.values())
 
     def addCost(self, name: str, cost: CostModelAbstract, weight: float, active: bool = True) -> None:
-        """Add ``weight * cost`` under ``name``."""
-        self._check_new_name(name)
-        if cost.nu != self.nu:
-            raise ValueError(f"cost {name!r} has nu = {cost.nu}, expected nu = {self.nu}")
-        if cost.state.nx != self.state.nx or cost.state.ndx != self.state.ndx:
-            raise ValueError(f"cost {name!r} was built on a state of another dimension")
+        """Add ``weight * cost`` under ``name``.
+
+        Raises
+        ------
+        ValueError
+            If ``cost`` is not a ``CostModelAbstract``, ``name`` is taken, ``cost`` has another ``nu`` or
+            another state dimension, or ``weight`` is not finite.
+        """
+        self._check_model(name, cost)
         if not np.isfinite(weight):
             raise ValueError(f"weight of cost {name!r} must be finite, got {weight}")
         self._insert(name, CostItem(name, cost, float(weight), bool(active)))
@@ -79,6 +75,10 @@ class CostModelSum(NamedItems):
     def changeCostStatus(self, name: str, active: bool) -> None:
         """Activate or deactivate the cost ``name``."""
         self._set_active(name, active)
+
+    def getCostStatus(self, name: str) -> bool:
+        """True if the cost ``name`` is active (``KeyError`` if unknown)."""
+        return self._get(name).active
 
     def createData(self, data: DataCollectorAbstract | None = None) -> "CostDataSum":
         return CostDataSum(self, data)
@@ -110,9 +110,6 @@ class CostModelSum(NamedItems):
                 data.Lxu += w * cd.Lxu
                 data.Luu += w * cd.Luu
 
-    def __repr__(self) -> str:
-        return "CostModelSum(" + ", ".join(f"{n}: {c!r}" for n, c in self.costs.items()) + ")"
-
 
 class CostDataSum:
     """Data of a :class:`CostModelSum`: one data per item in ``costs`` plus the sums.
@@ -139,3 +136,14 @@ class CostDataSum:
         self.stack = CostStack(stackable, ndx, nu)
         stacked = {name for name, _, _ in stackable}
         self.generic = [name for name in model.costs if name not in stacked]
+
+    def shareMemory(self, data) -> None:
+        """Write the derivatives straight into ``data``'s ``Lx, Lu, Lxx, Lxu, Luu`` (an action or
+        differential action data), as Crocoddyl's ``CostDataSum.shareMemory``.
+
+        Raises
+        ------
+        ValueError
+            If ``data``'s arrays do not have this cost data's shapes.
+        """
+        share_arrays(self, data, ("Lx", "Lu", "Lxx", "Lxu", "Luu"))

@@ -1,7 +1,9 @@
 """Symplectic Euler integration of a differential action model.
 
-With ``x = (q, v)`` and ``a = a(x, u)``: ``dx = ((v + a dt) dt, a dt)``, ``xnext = x ⊕ dx``,
-``cost = dt l(x, u)``.  Derivatives by the chain rule through the state's ``Jintegrate``::
+With ``x = (q, v)``, the control input ``w = w(0, u)`` of the control parametrization at the start of
+the step (``w = u`` by default) and ``a = a(x, w)``: ``dx = ((v + a dt) dt, a dt)``, ``xnext = x ⊕ dx``,
+``cost = dt l(x, w)``; the derivatives below are with respect to ``w``, mapped to ``u`` as in
+:mod:`~crocopy.integrators.base`.  Derivatives by the chain rule through the state's ``Jintegrate``::
 
     ∂dx/∂x = [[dt² Fx + dt [0 I]], [dt Fx]],   ∂dx/∂u = [[dt² Fu], [dt Fu]]
     Fx = J_x + J_dx ∂dx/∂x,                  Fu = J_dx ∂dx/∂u
@@ -14,27 +16,32 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import kernels
 from ..action_base import ActionDataAbstract
 from ..enums import Jcomponent
+from ..kernels import log_fallback
 from ..state import StateAbstract
 from . import euler_kernel as integrator_kernel
-from .base import IntegratedActionModelAbstract
+from .base import ControlChainData, IntegratedActionModelAbstract
 
 
 class IntegratedActionModelEuler(IntegratedActionModelAbstract):
-    """Crocoddyl's ``IntegratedActionModelEuler(diffModel, timeStep=1e-3, withCostResidual=True)``.
+    """Crocoddyl's ``IntegratedActionModelEuler(diffModel, [control,] timeStep=1e-3, withCostResidual=True)``.
 
-    ``use_kernel`` (default: numba available) takes the step and applies the chain rule with
-    :mod:`~crocopy.integrators.euler_kernel`'s compiled functions instead of their numpy twins.
+    While :func:`crocopy.kernels_enabled` the step and the chain rule run
+    :mod:`~crocopy.integrators.euler_kernel`'s compiled functions, else their numpy twins.  A
+    Lie-group state without ``JintegrateTransport`` gets the dense ``Jintegrate`` product instead of
+    the compiled chain rule (logged once per state class at DEBUG level on the ``"crocopy"`` logger).
     """
 
-    use_kernel = integrator_kernel.available
-
-    def __init__(self, diffModel, timeStep: float = 1e-3, withCostResidual: bool = True) -> None:
-        super().__init__(diffModel, timeStep, withCostResidual)
+    def __init__(self, diffModel, *args: object, **kwargs: object) -> None:
+        super().__init__(diffModel, *args, **kwargs)
         self._transport = not self._euclidean and (
             type(self.state).JintegrateTransport is not StateAbstract.JintegrateTransport
         )
+        if not (self._euclidean or self._transport):
+            kernel = "the compiled Euler chain rule"
+            log_fallback(type(self.state), ["JintegrateTransport"], kernel, how="does not implement")
 
     def createData(self) -> "IntegratedActionDataEuler":
         return IntegratedActionDataEuler(self)
@@ -44,10 +51,10 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
         if u is None:
             self._terminal_calc(data, ddata, x)
             return
-        self.differential.calc(ddata, x, u)
+        self.differential.calc(ddata, x, self._control_input(data.control, 0.0, u))
         dt = self._dt
         dx = data.dx
-        step = integrator_kernel.euler_step if self.use_kernel else integrator_kernel.euler_step_numpy
+        step = integrator_kernel.euler_step if kernels.active else integrator_kernel.euler_step_numpy
         step(ddata.xout, x, dt, dx)
         self.state._integrate_into(x, dx, data.xnext)
         data.cost = dt * ddata.cost
@@ -60,43 +67,48 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
         if u is None:
             self._terminal_calcDiff(data, ddata, x)
             return
-        self.differential.calcDiff(ddata, x, u)
+        cdata = data.control
+        self.differential.calcDiff(ddata, x, self._control_input(cdata, 0.0, u))
+        Fu, Lu, Lxu, Luu = self._control_derivatives(cdata, ddata, 0.0, u, data.control_chain)
         if self._euclidean or self._transport:
-            chain = integrator_kernel.euler_chain if self.use_kernel else integrator_kernel.euler_chain_numpy
+            chain = integrator_kernel.euler_chain if kernels.active else integrator_kernel.euler_chain_numpy
             chain(
-                ddata.Fx, ddata.Fu, ddata.Lx, ddata.Lu, ddata.Lxx, ddata.Lxu, ddata.Luu, self._dt, self._euclidean,
+                ddata.Fx, Fu, ddata.Lx, Lu, ddata.Lxx, Lxu, Luu, self._dt, self._euclidean,
                 data.Fx, data.Fu, data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu,
             )
             if self._transport:
                 self.state._integrate_chain_rule(x, data.dx, data.Fx, data.Fu)
-            self._copy_constraints(data, ddata, diff=True)
+            self._copy_constraints(data, ddata, diff=True, cdata=cdata)
             return
         nv, dt = self.state.nv, self._dt
         dxdx, dxdu = data.ddx_dx, data.ddx_du
         np.multiply(ddata.Fx, dt, out=dxdx[nv:])
         np.multiply(dxdx[nv:], dt, out=dxdx[:nv])
         dxdx.reshape(-1)[data.qv_diagonal] += dt
-        np.multiply(ddata.Fu, dt, out=dxdu[nv:])
+        np.multiply(Fu, dt, out=dxdu[nv:])
         np.multiply(dxdu[nv:], dt, out=dxdu[:nv])
         Jx, Jdx = self.state.Jintegrate(x, data.dx, Jcomponent.both)
         np.dot(Jdx, dxdx, out=data.Fx)
         data.Fx += Jx
         np.dot(Jdx, dxdu, out=data.Fu)
         np.multiply(ddata.Lx, dt, out=data.Lx)
-        np.multiply(ddata.Lu, dt, out=data.Lu)
+        np.multiply(Lu, dt, out=data.Lu)
         np.multiply(ddata.Lxx, dt, out=data.Lxx)
-        np.multiply(ddata.Lxu, dt, out=data.Lxu)
-        np.multiply(ddata.Luu, dt, out=data.Luu)
-        self._copy_constraints(data, ddata, diff=True)
+        np.multiply(Lxu, dt, out=data.Lxu)
+        np.multiply(Luu, dt, out=data.Luu)
+        self._copy_constraints(data, ddata, diff=True, cdata=cdata)
 
 
 class IntegratedActionDataEuler(ActionDataAbstract):
-    """Data of :class:`IntegratedActionModelEuler`: ``differential`` data, ``dx`` and the chain-rule blocks."""
+    """Data of :class:`IntegratedActionModelEuler`: ``differential`` and ``control`` data, ``dx`` and the
+    chain-rule blocks (``control_chain``: the differential derivatives mapped to the parameters)."""
 
     def __init__(self, model: IntegratedActionModelEuler) -> None:
         super().__init__(model)
         ndx, nv, nu = model.state.ndx, model.state.nv, model.nu
         self.differential = model.differential.createData()
+        self.control = model.control.createData()
+        self.control_chain = ControlChainData(model)
         self.dx = np.zeros(ndx)
         self.ddx_dx = np.zeros((ndx, ndx))
         self.ddx_du = np.zeros((ndx, nu))

@@ -1,4 +1,4 @@
-"""Compiled chain-rule step of :class:`~crocopy.integrators.euler.IntegratedActionModelEuler` (numba).
+"""Step and chain rule of :class:`~crocopy.integrators.euler.IntegratedActionModelEuler`: numba kernels and numpy twins.
 
 ``euler_step(a, x, dt, dx)`` writes the symplectic Euler step ``dx = ((v + a dt) dt, a dt)``.
 
@@ -16,19 +16,15 @@ carried through ``Jintegrate`` (transport of the rows, plus ``∂(x ⊕ dx)/∂x
 
     Fx[:nv] = rows[:, :ndx] + [Jq 0],   Fx[nv:, nv:] += I,   Fu[:nv] = rows[:, ndx:]
 
-Each kernel has a numpy twin (``*_numpy``) giving the same numbers (tested).
+Each kernel has a numpy twin (``*_numpy``) giving the same numbers (tested); :mod:`crocopy.kernels`
+chooses.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-try:
-    from numba import njit
-except ImportError:  # pragma: no cover - exercised only without numba
-    njit = None
-
-available = njit is not None
+from ..kernels import compiled
 
 
 def euler_step_numpy(a, x, dt, dx) -> None:
@@ -95,8 +91,8 @@ def _euler_chain(dFx, dFu, dLx, dLu, dLxx, dLxu, dLuu, dt, euclidean, Fx, Fu, Lx
             Luu[i, j] = dt * dLuu[i, j]
 
 
-euler_step = njit(cache=True)(_euler_step) if available else euler_step_numpy
-euler_chain = njit(cache=True)(_euler_chain) if available else euler_chain_numpy
+euler_step = compiled(_euler_step)
+euler_chain = compiled(_euler_chain)
 
 
 def add_integrate_jacobian_numpy(rows, Jq, Fx, Fu) -> None:
@@ -121,4 +117,4 @@ def _add_integrate_jacobian(rows, Jq, Fx, Fu):
         Fx[nv + i, nv + i] += 1.0
 
 
-add_integrate_jacobian = njit(cache=True)(_add_integrate_jacobian) if available else add_integrate_jacobian_numpy
+add_integrate_jacobian = compiled(_add_integrate_jacobian)

@@ -1,11 +1,14 @@
 """Explicit Runge-Kutta integration (orders 2, 3, 4) of a differential action model.
 
-Stage ``i`` evaluates the differential model at ``yᵢ = x ⊕ (cᵢ dt kᵢ₋₁)`` (``y₀ = x``) and forms
+Stage ``i`` evaluates the differential model at ``yᵢ = x ⊕ (cᵢ dt kᵢ₋₁)`` (``y₀ = x``) and at the
+control input ``wᵢ = w(cᵢ, u)`` of the control parametrization (``wᵢ = u`` by default), and forms
 the tangent rate ``kᵢ = (vᵢ, aᵢ)``; then ``xnext = x ⊕ dt Σ bᵢ kᵢ`` and ``cost = dt Σ bᵢ lᵢ``.
 Tableaux (each stage uses only the previous one): RK2 midpoint ``c = (0, ½)``, ``b = (0, 1)``;
 RK3 Heun ``c = (0, ⅓, ⅔)``, ``b = (¼, 0, ¾)``; RK4 classic ``c = (0, ½, ½, 1)``,
 ``b = (⅙, ⅓, ⅓, ⅙)``.  Derivatives propagate ``∂yᵢ/∂(x, u)`` stage by stage; cost Hessians are
-Gauss-Newton (the curvature of ``yᵢ`` itself is dropped).
+Gauss-Newton (the curvature of ``yᵢ`` itself is dropped).  Each stage's derivatives with respect
+to ``wᵢ`` are mapped to ``u`` through ``∂wᵢ/∂u`` (:mod:`~crocopy.integrators.base`); the node's
+residual and constraints are the first stage's.
 """
 
 from __future__ import annotations
@@ -15,7 +18,7 @@ import numpy as np
 from ..action_base import ActionDataAbstract
 from ..diff_action_base import DifferentialActionModelAbstract
 from ..enums import Jcomponent, RKType
-from .base import IntegratedActionModelAbstract
+from .base import ControlChainData, IntegratedActionModelAbstract, bind_arguments
 
 _TABLEAUX = {
     RKType.two: ((0.0, 0.5), (0.0, 1.0)),
@@ -25,20 +28,18 @@ _TABLEAUX = {
 
 
 class IntegratedActionModelRK(IntegratedActionModelAbstract):
-    """Crocoddyl's ``IntegratedActionModelRK(diffModel, rktype, timeStep=1e-3, withCostResidual=True)``."""
+    """Crocoddyl's ``IntegratedActionModelRK(diffModel, [control,] rktype, timeStep=1e-3, withCostResidual=True)``."""
 
-    def __init__(
-        self,
-        diffModel: DifferentialActionModelAbstract,
-        rktype: RKType,
-        timeStep: float = 1e-3,
-        withCostResidual: bool = True,
-    ) -> None:
+    def __init__(self, diffModel: DifferentialActionModelAbstract, *args: object, **kwargs: object) -> None:
+        bound = bind_arguments(
+            type(self).__name__, args, kwargs, ("control", "rktype", "timeStep", "withCostResidual")
+        )
+        rktype = bound["rktype"]
         try:
             rktype = RKType(rktype)
-        except ValueError as exc:
+        except (TypeError, ValueError) as exc:
             raise ValueError(f"rktype must be RKType.two, three or four, got {rktype!r}") from exc
-        super().__init__(diffModel, timeStep, withCostResidual)
+        self._init_integrated(diffModel, bound["control"], bound["timeStep"], bound["withCostResidual"])
         self.rk_type = rktype
         self.rk_c, self.rk_b = _TABLEAUX[rktype]
         self.ni = len(self.rk_c)
@@ -46,6 +47,9 @@ class IntegratedActionModelRK(IntegratedActionModelAbstract):
     def _differential_data(self, data: "IntegratedActionDataRK"):
         """The first stage's data: the differential model evaluated at the node's own state."""
         return data.differential[0]
+
+    def _control_data(self, data: "IntegratedActionDataRK"):
+        return data.control[0]
 
     def createData(self) -> "IntegratedActionDataRK":
         return IntegratedActionDataRK(self)
@@ -66,7 +70,7 @@ class IntegratedActionModelRK(IntegratedActionModelAbstract):
                 y = state.integrate(x, data.dyi[i])
             data.y[i][:] = y
             dd = data.differential[i]
-            self.differential.calc(dd, y, u)
+            self.differential.calc(dd, y, self._control_input(data.control[i], c, u))
             data.ki[i][:nv] = y[-nv:]
             data.ki[i][nv:] = dd.xout
             if b:
@@ -99,24 +103,25 @@ class IntegratedActionModelRK(IntegratedActionModelAbstract):
                 Jx, Jdy = state.Jintegrate(x, data.dyi[i], Jcomponent.both)
                 dydx[:] = Jx + (c * dt) * (Jdy @ data.dkdx[i - 1])
                 dydu[:] = (c * dt) * (Jdy @ data.dkdu[i - 1])
-            dd = data.differential[i]
-            self.differential.calcDiff(dd, data.y[i], u)
+            dd, cd = data.differential[i], data.control[i]
+            self.differential.calcDiff(dd, data.y[i], self._control_input(cd, c, u))
+            Fu, Lu, Lxu, Luu = self._control_derivatives(cd, dd, c, u, data.control_chain)
             dkdx, dkdu = data.dkdx[i], data.dkdu[i]
             dkdx[:nv] = dydx[nv:]
             dkdu[:nv] = dydu[nv:]
             dkdx[nv:] = dd.Fx @ dydx
-            dkdu[nv:] = dd.Fx @ dydu + dd.Fu
+            dkdu[nv:] = dd.Fx @ dydu + Fu
             if b:
                 w = b * dt
                 dkdx_sum += w * dkdx
                 dkdu_sum += w * dkdu
                 LxxJ = dd.Lxx @ dydu
                 data.Lx += w * (dydx.T @ dd.Lx)
-                data.Lu += w * (dydu.T @ dd.Lx + dd.Lu)
+                data.Lu += w * (dydu.T @ dd.Lx + Lu)
                 data.Lxx += w * (dydx.T @ dd.Lxx @ dydx)
-                data.Lxu += w * (dydx.T @ (LxxJ + dd.Lxu))
-                dLxu = dydu.T @ dd.Lxu
-                data.Luu += w * (dydu.T @ LxxJ + dLxu + dLxu.T + dd.Luu)
+                data.Lxu += w * (dydx.T @ (LxxJ + Lxu))
+                dLxu = dydu.T @ Lxu
+                data.Luu += w * (dydu.T @ LxxJ + dLxu + dLxu.T + Luu)
         if self._euclidean:
             data.Fx[:] = np.eye(ndx) + dkdx_sum
             data.Fu[:] = dkdu_sum
@@ -124,16 +129,19 @@ class IntegratedActionModelRK(IntegratedActionModelAbstract):
             Jx, Jdx = state.Jintegrate(x, data.dx, Jcomponent.both)
             data.Fx[:] = Jx + Jdx @ dkdx_sum
             data.Fu[:] = Jdx @ dkdu_sum
-        self._copy_constraints(data, data.differential[0], diff=True)
+        self._copy_constraints(data, data.differential[0], diff=True, cdata=data.control[0])
 
 
 class IntegratedActionDataRK(ActionDataAbstract):
-    """Data of :class:`IntegratedActionModelRK`: one differential data per stage (``differential``)."""
+    """Data of :class:`IntegratedActionModelRK`: one differential and one control data per stage
+    (``differential``, ``control``); ``control_chain`` holds a stage's derivatives mapped to the parameters."""
 
     def __init__(self, model: IntegratedActionModelRK) -> None:
         super().__init__(model)
         ndx, nu, nx, ni = model.state.ndx, model.nu, model.state.nx, model.ni
         self.differential = [model.differential.createData() for _ in range(ni)]
+        self.control = [model.control.createData() for _ in range(ni)]
+        self.control_chain = ControlChainData(model)
         self.dx = np.zeros(ndx)
         self.y = [np.zeros(nx) for _ in range(ni)]
         self.dyi = [np.zeros(ndx) for _ in range(ni)]

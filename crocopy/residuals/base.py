@@ -9,12 +9,17 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..array_views import KeepsViews, tolerate_python_model
 from ..data_collector import DataCollectorAbstract
 from ..state import StateAbstract
 
 
 class ResidualModelAbstract:
     """Abstract residual (Crocoddyl's ``ResidualModelAbstract``).
+
+    As in Crocoddyl, ``nu`` may be left out positionally:
+    ``ResidualModelAbstract(state, nr, q_dependent, v_dependent, u_dependent)`` (a bool in third
+    place is ``q_dependent``).
 
     Parameters
     ----------
@@ -39,6 +44,8 @@ class ResidualModelAbstract:
     ) -> None:
         if not isinstance(state, StateAbstract):
             raise ValueError(f"state must be a StateAbstract, got {type(state).__name__}")
+        if isinstance(nu, (bool, np.bool_)):
+            nu, q_dependent, v_dependent, u_dependent = None, nu, q_dependent, v_dependent
         if nr < 0:
             raise ValueError(f"nr must be non-negative, got {nr}")
         self.state = state
@@ -63,7 +70,7 @@ class ResidualModelAbstract:
         return f"{type(self).__name__}(nr={self.nr}, nu={self.nu})"
 
 
-class ResidualDataAbstract:
+class ResidualDataAbstract(KeepsViews):
     """Residual value ``r``, Jacobians ``Rx``/``Ru`` and the ``shared`` data collector."""
 
     def __init__(self, model: ResidualModelAbstract, data: DataCollectorAbstract | None) -> None:
@@ -71,3 +78,4 @@ class ResidualDataAbstract:
         self.r = np.zeros(model.nr)
         self.Rx = np.zeros((model.nr, model.state.ndx))
         self.Ru = np.zeros((model.nr, model.nu))
+        tolerate_python_model(model, self, ("r", "Rx", "Ru"))

@@ -9,11 +9,13 @@ NaN in ``xs``/``us``: a divergent iterate is never accepted.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from enum import IntEnum
 
 import numpy as np
 
+from ..enums import FeasibilityNorm
 from ..shooting import ShootingProblem
+from .std_vector import StdVecAttribute
+from .stopwatch import profiled
 
 
 class BackwardPassError(RuntimeError):
@@ -24,13 +26,6 @@ class ForwardPassError(RuntimeError):
     """Raised by a forward pass that produced a non-finite state or cost."""
 
 
-class FeasibilityNorm(IntEnum):
-    """Norm used for ``ffeas``/``gfeas``/``hfeas``."""
-
-    LInf = 0
-    L1 = 1
-
-
 class SolverAbstract:
     """Base class of the shooting-problem solvers (Crocoddyl's ``SolverAbstract``).
 
@@ -39,6 +34,21 @@ class SolverAbstract:
     problem : ShootingProblem
         Problem to solve.
     """
+
+    #: State trajectory (T+1 arrays), controls (T arrays) and gaps (T+1 arrays), each a
+    #: :class:`~crocopy.solvers.std_vector.StdVec_VectorXs` (a list with Crocoddyl's ``tolist()``).
+    xs = StdVecAttribute()
+    us = StdVecAttribute()
+    fs = StdVecAttribute()
+
+    #: Methods timed by the profiler (:mod:`crocopy.solvers.stopwatch`) as ``"ClassName::method"``.
+    _profiled = ("solve", "computeDirection", "calcDiff", "backwardPass", "tryStep", "forwardPass")
+
+    def __init_subclass__(cls, **kwargs) -> None:
+        super().__init_subclass__(**kwargs)
+        for name in cls._profiled:
+            if name in cls.__dict__:
+                setattr(cls, name, profiled(f"{cls.__name__}::{name}", cls.__dict__[name]))
 
     def __init__(self, problem: ShootingProblem) -> None:
         if not isinstance(problem, ShootingProblem):

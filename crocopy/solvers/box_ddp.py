@@ -47,19 +47,21 @@ iterates to round-off (``crocopy bench --box-parity``):
    declared feasible).
 
 Crocopy extensions: ``compat_crocoddyl``; ``nfactorizations`` and ``nqp`` count box-QP Cholesky
-factorizations and QP solves since the last ``solve``.  With ``use_kernel`` (numba available) the
+factorizations and QP solves since the last ``solve``.  While :func:`crocopy.kernels_enabled` the
 recursion runs the compiled node steps of :mod:`.box_kernel`, which give the numpy path's numbers to
-round-off.
+round-off; a subclass that overrides ``computeActionValueFunction``, ``computeGains`` or
+``computeValueFunction`` gets the numpy steps (logged once at DEBUG level on the ``"crocopy"`` logger).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from .. import kernels
 from ..shooting import ShootingProblem
 from ..validation import check_bounds
-from . import box_kernel, riccati_kernel
-from .base import BackwardPassError, ForwardPassError
+from . import box_kernel
+from .base import BackwardPassError
 from .box_qp import BoxQP, BoxQPError
 from .ddp import SolverDDP
 
@@ -132,55 +134,47 @@ class BoxSolverMixin:
         """Box-QP factorizations since the last ``solve`` (all nodes, all iterations)."""
         return self._kernel_fact + sum(qp.nfactorizations for qp in self._qps.values())
 
-    def _uses_box_steps(self) -> bool:
-        cls = type(self)
-        return (
-            cls.computeActionValueFunction is SolverDDP.computeActionValueFunction
-            and cls.computeGains is BoxSolverMixin.computeGains
-            and cls.computeValueFunction is BoxSolverMixin.computeValueFunction
+    def backwardPass(self) -> None:
+        """Riccati recursion with box-QP gains; compiled node steps while :func:`crocopy.kernels_enabled`.
+
+        The compiled path (:func:`.box_kernel.box_step`, :func:`.riccati_kernel.riccati_step`) gives the
+        numbers of the node steps ``computeActionValueFunction`` / ``computeGains`` /
+        ``computeValueFunction`` to round-off; a subclass overriding one of them gets the numpy steps
+        (logged once at DEBUG level on the ``"crocopy"`` logger).
+        """
+        if kernels.active and self._kernel_applies(SolverBoxDDP, "the compiled box-QP node step"):
+            self._backward_pass_kernel()
+        else:
+            self._backward_pass_numpy()
+
+    def _kernel_node(self, preg: float, gaps: bool):
+        """This pass's compiled node step: :func:`.box_kernel.box_step` at the bounded nodes of a
+        feasible iterate, the Riccati step elsewhere."""
+        riccati = super()._kernel_node(preg, gaps)
+        box_mode, compat, general = self._box_mode(), self._compat, bool(self.general_value_update)
+        warm = 1.0 if compat else -1.0
+        step = box_kernel.box_step
+        lbs, ubs, us, qps, clamped = self._lb, self._ub, self.us, self._qps, self._clamped
+        Qxx, Qxu, Quu, Qx, Qu, K, k, Quu_inv, Vxx, Vx, fs = (
+            self.Qxx, self.Qxu, self.Quu, self.Qx, self.Qu, self.K, self.k, self.Quu_inv, self.Vxx, self.Vx, self.fs
         )
 
-    def backwardPass(self) -> None:
-        """Riccati recursion with box-QP gains; compiled per-node steps when ``use_kernel`` is set.
-
-        The compiled path (:mod:`.box_kernel`, :mod:`.riccati_kernel`) gives the numbers of the numpy
-        path (``computeActionValueFunction`` / ``computeGains`` / ``computeValueFunction``) to round-off.
-        """
-        if not (self.use_kernel and box_kernel.available and self._uses_box_steps()):
-            super().backwardPass()
-            return
-        problem = self.problem
-        T = problem.T
-        gaps = self._terminal_value_function()
-        preg = float(self.preg)
-        box_mode = self._box_mode()
-        general = bool(self.general_value_update)
-        warm = 1.0 if self._compat else -1.0
-        for t in range(T - 1, -1, -1):
-            d = problem.runningDatas[t]
-            lb = self._lb[t]
+        def node(t: int, d) -> bool:
+            lb = lbs[t]
             if lb is None or not box_mode:
-                self._clamped[t] = False
-                ok = riccati_kernel.riccati_step(
-                    d.Fx, d.Fu, d.Lxx, d.Lxu, d.Luu, d.Lx, d.Lu, self.Vxx[t + 1], self.Vx[t + 1], preg, self.fs[t],
-                    gaps, self.Qxx[t], self.Qxu[t], self.Quu[t], self.Qx[t], self.Qu[t], self.K[t], self.k[t],
-                    self.Vxx[t], self.Vx[t],
-                )
-            else:
-                qp = self._qps[lb.size]
-                th_acc = -qp.th_acceptStep if self._compat else qp.th_acceptStep
-                ok, nfact, self._clamped[t] = box_kernel.box_step(
-                    d.Fx, d.Fu, d.Lxx, d.Lxu, d.Luu, d.Lx, d.Lu, self.Vxx[t + 1], self.Vx[t + 1], preg, self.fs[t],
-                    gaps, self.us[t], lb, self._ub[t], qp.th_grad, th_acc, warm, qp.maxiter, general,
-                    self.Qxx[t], self.Qxu[t], self.Quu[t], self.Qx[t], self.Qu[t], self.K[t], self.k[t],
-                    self.Quu_inv[t], self.Vxx[t], self.Vx[t],
-                )
-                self._kernel_fact += nfact
-                self.nqp += 1
-            if not ok:
-                raise BackwardPassError(f"Quu (or its free block) is not positive definite at node {t}")
-        if not (np.isfinite(self.Vx[0]).all() and np.isfinite(self.Vxx[0]).all()):
-            raise BackwardPassError("non-finite value function in the backward pass")
+                clamped[t] = False
+                return riccati(t, d)
+            qp = qps[lb.size]
+            ok, nfact, clamped[t] = step(
+                d.Fx, d.Fu, d.Lxx, d.Lxu, d.Luu, d.Lx, d.Lu, Vxx[t + 1], Vx[t + 1], preg, fs[t], gaps, us[t], lb,
+                ubs[t], qp.th_grad, -qp.th_acceptStep if compat else qp.th_acceptStep, warm, qp.maxiter, general,
+                Qxx[t], Qxu[t], Quu[t], Qx[t], Qu[t], K[t], k[t], Quu_inv[t], Vxx[t], Vx[t],
+            )
+            self._kernel_fact += nfact
+            self.nqp += 1
+            return ok
+
+        return node
 
     def _box_mode(self) -> bool:
         return self.isFeasible
@@ -223,36 +217,6 @@ class BoxSolverMixin:
             k, K = self.k[t], self.K[t]
             self.Vx[t] += K.T @ (self.Quu[t] @ k) - self.Qxu[t] @ k
 
-    def _box_rollout(self, steplength: float, gaps: bool, terminal_gap: bool = False) -> None:
-        """Rollout with clamped controls; ``gaps`` keeps them open by ``(1 - steplength)`` (FDDP).
-
-        ``terminal_gap`` keeps only the last gap open (Crocoddyl 3.2's Box-DDP from an infeasible
-        iterate, reproduced in ``compat_crocoddyl`` mode).
-        """
-        problem = self.problem
-        xs, xs_try, us_try, fs = self.xs, self.xs_try, self.us_try, self.fs
-        models = problem.runningModels
-        first = models[0] if models else problem.terminalModel
-        gaps = gaps and steplength != 1.0  # a full step closes the gaps exactly
-        terminal_gap = terminal_gap and steplength != 1.0
-        xs_try[0] = first.state.integrate(problem.x0, (steplength - 1.0) * fs[0]) if gaps else problem.x0.copy()
-        cost = 0.0
-        for t, (m, d) in enumerate(zip(models, problem.runningDatas)):
-            if m.nu:
-                dx = self._dx_try[t] = m.state.diff(xs[t], xs_try[t])
-                us_try[t] = self._feedback_control(t, steplength, dx, self._lb[t], self._ub[t])
-            m.calc(d, xs_try[t], us_try[t])
-            cost += d.cost
-            if gaps or (terminal_gap and t == problem.T - 1):
-                xs_try[t + 1] = m.state.integrate(d.xnext, (steplength - 1.0) * fs[t + 1])
-            else:
-                xs_try[t + 1] = d.xnext.copy()
-        problem.terminalModel.calc(problem.terminalData, xs_try[-1])
-        cost += problem.terminalData.cost
-        if not np.isfinite(cost) or not np.isfinite(xs_try[-1]).all():
-            raise ForwardPassError("the rollout produced a non-finite state or cost")
-        self.cost_try = cost
-
 
 class SolverBoxDDP(BoxSolverMixin, SolverDDP):
     """Crocoddyl's ``SolverBoxDDP(problem)``: DDP with a box QP per node and a clamped rollout.
@@ -272,4 +236,5 @@ class SolverBoxDDP(BoxSolverMixin, SolverDDP):
 
         In ``compat_crocoddyl`` mode an infeasible iterate keeps its last gap open by ``(1 - α)``.
         """
-        self._box_rollout(steplength, gaps=False, terminal_gap=self.compat_crocoddyl and not self.isFeasible)
+        last_gap = self.compat_crocoddyl and not self.isFeasible and steplength != 1.0
+        self._trial_rollout(steplength, bounds=(self._lb, self._ub), last_gap=last_gap)

@@ -52,5 +52,6 @@ class SolverBoxFDDP(BoxSolverMixin, SolverFDDP):
         return not self.isFeasible and self.dV > self.th_acceptNegStep * self.dVexp
 
     def forwardPass(self, steplength: float) -> None:
-        """Rollout with projected controls and gaps contracted by ``(1 - steplength)``."""
-        self._box_rollout(steplength, gaps=not self.isFeasible)
+        """Rollout with projected controls and gaps contracted by ``(1 - steplength)`` (none after a full step)."""
+        gaps = not self.isFeasible and steplength != 1.0
+        self._trial_rollout(steplength, gaps=gaps, bounds=(self._lb, self._ub))

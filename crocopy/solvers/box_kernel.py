@@ -1,4 +1,5 @@
-"""Compiled Box-DDP node step (numba), twin of the numpy path of :mod:`.box_ddp` and :mod:`crocopy.solvers.box_qp`.
+"""Compiled Box-DDP node step (numba), twin of the numpy path of :mod:`~crocopy.solvers.box_ddp` and
+:mod:`crocopy.solvers.box_qp`.
 
 For node t with next value function ``(V'x, V'xx)`` (Crocoddyl's signs) it computes the Q terms
 (as :mod:`.riccati_kernel`), solves the box QP ``min ½ δuᵀ Quu δu + Quᵀ δu, lb ≤ δu ≤ ub`` by the
@@ -8,14 +9,18 @@ or ``+k`` in Crocoddyl-compatible mode; no extra regularisation; signed Armijo r
 ``Quu_inv`` (free block inverse, zero-padded), ``K = Quu_inv Qux``, zeroes the ``Qu`` entries of
 clamped controls unless ``general``, and updates the value function (general gradient update when
 ``general`` and a control is clamped).  Returns ``(ok, nfactorizations, clamped)``; ``ok`` is False
-when a free block is not positive definite.  Without numba the same Python function runs.
+when a free block is not positive definite.  Its numpy twin is
+:meth:`~crocopy.solvers.box_ddp.BoxSolverMixin.computeGains` with :class:`~crocopy.solvers.box_qp.BoxQP`
+between the Q terms and value function of :class:`~crocopy.solvers.ddp.SolverDDP`;
+:mod:`crocopy.kernels` chooses.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .riccati_kernel import available, cholesky_lower, finish_value_function, njit
+from ..kernels import compiled
+from .riccati_kernel import action_value_function, cholesky_lower, finish_value_function
 
 
 def _chol_inverse(H, idx, nf, out):
@@ -122,15 +127,7 @@ def _box_qp(H, q, lb, ub, x, th_grad, th_acc, maxiter, free, Hinv):
 def _box_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, u, lb, ub, th_grad, th_acc, warm, maxiter,
               general, Qxx, Qxu, Quu, Qx, Qu, K, k, Quu_inv, Vxx, Vx):
     nu = Fu.shape[1]
-    FxTV = Fx.T @ Vxx_n
-    Qxx[:, :] = Lxx + FxTV @ Fx
-    Qx[:] = Lx + Fx.T @ Vx_n
-    FuTV = Fu.T @ Vxx_n
-    Quu[:, :] = Luu + FuTV @ Fu
-    Qxu[:, :] = Lxu + FxTV @ Fu
-    Qu[:] = Lu + Fu.T @ Vx_n
-    for i in range(nu):
-        Quu[i, i] += preg
+    action_value_function(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu)
     x = warm * k
     free = np.empty(nu, dtype=np.bool_)
     Hinv = np.zeros((nu, nu))
@@ -162,10 +159,7 @@ def _box_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, u, lb,
     return True, nfact, clamped
 
 
-if available:
-    _chol_inverse = njit(cache=True)(_chol_inverse)
-    _free_set = njit(cache=True)(_free_set)
-    _box_qp = njit(cache=True)(_box_qp)
-    box_step = njit(cache=True)(_box_step)
-else:  # pragma: no cover - exercised only without numba
-    box_step = _box_step
+_chol_inverse = compiled(_chol_inverse)
+_free_set = compiled(_free_set)
+_box_qp = compiled(_box_qp)
+box_step = compiled(_box_step)

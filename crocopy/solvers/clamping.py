@@ -82,4 +82,4 @@ class SolverClampedDDP(BoxSolverMixin, SolverDDP):
 
     def forwardPass(self, steplength: float) -> None:
         """Rollout from ``x0`` with clamped controls; raises ForwardPassError on NaN."""
-        self._box_rollout(steplength, gaps=False)
+        self._trial_rollout(steplength, bounds=(self._lb, self._ub))

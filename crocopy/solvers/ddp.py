@@ -10,6 +10,14 @@ Sign convention (Crocoddyl's): the control update is ``û = u - α k - K (x̂ �
 With open gaps ``fs`` the stored gradient is deflected, ``Vx ← Vx + Vxx fs``.  Expected
 improvement ``dVexp(α) = α (d₀ + ½ α d₁)`` with ``d₀ = Σ Quᵀk``, ``d₁ = -Σ kᵀ Quu k``; the
 stopping test is ``stop = |d₀ + ½ d₁| < th_stop`` on a feasible iterate.
+
+Subclass hooks: ``computeActionValueFunction``, ``computeGains`` and ``computeValueFunction`` are
+the three steps of one node of the backward pass, fused by the compiled
+:func:`~crocopy.solvers.riccati_kernel.riccati_step` while :func:`crocopy.kernels_enabled`.  A
+subclass that overrides any of them gets the numpy steps for the whole recursion (its override
+runs), logged once at DEBUG level on the ``"crocopy"`` logger.  ``forwardPass`` runs
+:meth:`SolverDDP._trial_rollout`, the rollout of the whole DDP family, parameterised by the gaps
+it keeps open and by the control bounds.
 """
 
 from __future__ import annotations
@@ -17,6 +25,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.linalg.lapack import dpotrf, dpotrs
 
+from .. import kernels
+from ..kernels import log_fallback, overridden
 from ..shooting import ShootingProblem
 from . import riccati_kernel
 from .base import BackwardPassError, ForwardPassError, SolverAbstract
@@ -36,7 +46,6 @@ class SolverDDP(SolverAbstract):
         self.th_grad = 1e-12
         self.alphas = [2.0 ** (-n) for n in range(10)]
         self.cost_try = 0.0
-        self.use_kernel = riccati_kernel.available
         self._allocate()
 
     def _allocate(self) -> None:
@@ -172,24 +181,27 @@ class SolverDDP(SolverAbstract):
         self.computeEqualityFeasibility()
         return self.cost
 
-    def _uses_plain_riccati(self) -> bool:
-        """True when no subclass replaces a step of the recursion, so the compiled kernel applies."""
-        cls = type(self)
-        return (
-            cls.computeActionValueFunction is SolverDDP.computeActionValueFunction
-            and cls.computeGains is SolverDDP.computeGains
-            and cls.computeValueFunction is SolverDDP.computeValueFunction
-        )
+    def _kernel_applies(self, owner: type, kernel: str) -> bool:
+        """True when no subclass replaces a node step as ``owner`` defines it (else log it once)."""
+        steps = overridden(self, owner, ("computeActionValueFunction", "computeGains", "computeValueFunction"))
+        if steps:
+            log_fallback(type(self), steps, kernel)
+        return not steps
 
     def backwardPass(self) -> None:
         """Riccati recursion over the stored derivatives (fills Q terms, gains and value function).
 
-        Uses the compiled step of :mod:`.riccati_kernel` when ``use_kernel`` is set and no subclass
-        overrides a step; otherwise the numpy steps below (same numbers to round-off).
+        Uses the compiled step of :mod:`.riccati_kernel` when :func:`crocopy.kernels_enabled` and no
+        subclass overrides a node step; otherwise the numpy steps below (same numbers to round-off).
         """
-        if self.use_kernel and self._uses_plain_riccati():
+        if kernels.active and self._kernel_applies(SolverDDP, "the compiled Riccati step"):
             self._backward_pass_kernel()
-            return
+        else:
+            self._backward_pass_numpy()
+
+    def _backward_pass_numpy(self) -> None:
+        """The recursion through the node steps (``computeActionValueFunction``, ``computeGains``,
+        ``computeValueFunction``)."""
         problem = self.problem
         self._terminal_value_function()
         for t in range(problem.T - 1, -1, -1):
@@ -216,22 +228,30 @@ class SolverDDP(SolverAbstract):
         return gaps
 
     def _backward_pass_kernel(self) -> None:
+        """The recursion through the compiled node step of :meth:`_kernel_node`."""
         problem = self.problem
-        T = problem.T
         gaps = self._terminal_value_function()
-        step = riccati_kernel.riccati_step
-        preg = float(self.preg)
-        for t in range(T - 1, -1, -1):
-            d = problem.runningDatas[t]
-            ok = step(
-                d.Fx, d.Fu, d.Lxx, d.Lxu, d.Luu, d.Lx, d.Lu, self.Vxx[t + 1], self.Vx[t + 1], preg, self.fs[t], gaps,
-                self.Qxx[t], self.Qxu[t], self.Quu[t], self.Qx[t], self.Qu[t], self.K[t], self.k[t],
-                self.Vxx[t], self.Vx[t],
-            )
-            if not ok:
+        node = self._kernel_node(float(self.preg), gaps)
+        datas = problem.runningDatas
+        for t in range(problem.T - 1, -1, -1):
+            if not node(t, datas[t]):
                 raise BackwardPassError(f"Quu is not positive definite at node {t}")
         if not (np.isfinite(self.Vx[0]).all() and np.isfinite(self.Vxx[0]).all()):
             raise BackwardPassError("non-finite value function in the backward pass")
+
+    def _kernel_node(self, preg: float, gaps: bool):
+        """This pass's compiled node step ``node(t, data) -> ok`` (:func:`.riccati_kernel.riccati_step`;
+        ``ok`` is False when ``Quu`` is not positive definite)."""
+        step = riccati_kernel.riccati_step
+        Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx, fs = (
+            self.Qxx, self.Qxu, self.Quu, self.Qx, self.Qu, self.K, self.k, self.Vxx, self.Vx, self.fs
+        )
+
+        def node(t: int, d) -> bool:
+            return step(d.Fx, d.Fu, d.Lxx, d.Lxu, d.Luu, d.Lx, d.Lu, Vxx[t + 1], Vx[t + 1], preg, fs[t], gaps,
+                        Qxx[t], Qxu[t], Quu[t], Qx[t], Qu[t], K[t], k[t], Vxx[t], Vx[t])
+
+        return node
 
     def computeActionValueFunction(self, t: int, model, data) -> None:
         """Q terms of node ``t`` from its derivatives and the next value function."""
@@ -298,16 +318,41 @@ class SolverDDP(SolverAbstract):
 
     def forwardPass(self, steplength: float) -> None:
         """Nonlinear rollout from ``x0`` with ``û = u - α k - K (x̂ ⊖ x)``; raises ForwardPassError on NaN."""
+        self._trial_rollout(steplength)
+
+    def _trial_rollout(self, steplength: float, gaps: bool = False, bounds: tuple[list, list] | None = None,
+                       last_gap: bool = False) -> None:
+        """The DDP family's rollout into ``xs_try``/``us_try``/``cost_try``; raises ForwardPassError on NaN.
+
+        ``û_t = clamp(u_t - α k_t - K_t (x̂_t ⊖ x_t), lb_t, ub_t)`` with ``bounds = (lbs, ubs)`` (no
+        ``bounds``, or ``None`` entries: no clamp) and ``x̂_{t+1} = f(x̂_t, û_t)``.  ``gaps`` keeps every
+        gap open by ``(1 - α)``: ``x̂₀ = x0 ⊕ ((α-1) f₀)``, ``x̂_{t+1} = f(x̂_t, û_t) ⊕ ((α-1) f_{t+1})``
+        (FDDP); ``last_gap`` keeps only the last one (Crocoddyl 3.2's Box-DDP from an infeasible
+        iterate).  Stores ``x̂_t ⊖ x_t`` in ``_dx_try``.
+        """
         problem = self.problem
-        xs, xs_try, us_try = self.xs, self.xs_try, self.us_try
-        xs_try[0] = problem.x0.copy()
+        xs, xs_try, us_try, fs, dx_try = self.xs, self.xs_try, self.us_try, self.fs, self._dx_try
+        models = problem.runningModels
+        if gaps:
+            first = models[0] if models else problem.terminalModel
+            xs_try[0] = first.state.integrate(problem.x0, (steplength - 1.0) * fs[0])
+        else:
+            xs_try[0] = problem.x0.copy()
+        last = problem.T - 1
         cost = 0.0
-        for t, (m, d) in enumerate(zip(problem.runningModels, problem.runningDatas)):
+        for t, (m, d) in enumerate(zip(models, problem.runningDatas)):
             if m.nu:
-                us_try[t] = self._feedback_control(t, steplength, m.state.diff(xs[t], xs_try[t]))
+                dx = dx_try[t] = m.state.diff(xs[t], xs_try[t])
+                if bounds is None:
+                    us_try[t] = self._feedback_control(t, steplength, dx)
+                else:
+                    us_try[t] = self._feedback_control(t, steplength, dx, bounds[0][t], bounds[1][t])
             m.calc(d, xs_try[t], us_try[t])
-            xs_try[t + 1] = d.xnext.copy()
             cost += d.cost
+            if gaps or (last_gap and t == last):
+                xs_try[t + 1] = m.state.integrate(d.xnext, (steplength - 1.0) * fs[t + 1])
+            else:
+                xs_try[t + 1] = d.xnext.copy()
         problem.terminalModel.calc(problem.terminalData, xs_try[-1])
         cost += problem.terminalData.cost
         if not np.isfinite(cost) or not np.isfinite(xs_try[-1]).all():
@@ -320,7 +365,7 @@ class SolverDDP(SolverAbstract):
         if lb is None:
             lb, ub = self._unbounded[u.shape[0]]
         out = np.empty(u.shape[0])
-        feedback = riccati_kernel.feedback_control if self.use_kernel else riccati_kernel.feedback_control_numpy
+        feedback = riccati_kernel.feedback_control if kernels.active else riccati_kernel.feedback_control_numpy
         feedback(u, self.k[t], self.K[t], dx, steplength, lb, ub, out)
         return out
 

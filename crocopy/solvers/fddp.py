@@ -12,7 +12,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..shooting import ShootingProblem
-from .base import ForwardPassError
 from .ddp import SolverDDP
 
 
@@ -78,25 +77,4 @@ class SolverFDDP(SolverDDP):
 
     def forwardPass(self, steplength: float) -> None:
         """Rollout with the gaps shrunk by ``(1 - steplength)``; raises ForwardPassError on NaN."""
-        problem = self.problem
-        xs, xs_try, us_try, fs = self.xs, self.xs_try, self.us_try, self.fs
-        feasible = self.isFeasible
-        models = problem.runningModels
-        first = models[0] if models else problem.terminalModel
-        xs_try[0] = problem.x0.copy() if feasible else first.state.integrate(problem.x0, (steplength - 1.0) * fs[0])
-        cost = 0.0
-        for t, (m, d) in enumerate(zip(models, problem.runningDatas)):
-            if m.nu:
-                dx = self._dx_try[t] = m.state.diff(xs[t], xs_try[t])
-                us_try[t] = self._feedback_control(t, steplength, dx)
-            m.calc(d, xs_try[t], us_try[t])
-            cost += d.cost
-            if feasible:
-                xs_try[t + 1] = d.xnext.copy()
-            else:
-                xs_try[t + 1] = m.state.integrate(d.xnext, (steplength - 1.0) * fs[t + 1])
-        problem.terminalModel.calc(problem.terminalData, xs_try[-1])
-        cost += problem.terminalData.cost
-        if not np.isfinite(cost) or not np.isfinite(xs_try[-1]).all():
-            raise ForwardPassError("the rollout produced a non-finite state or cost")
-        self.cost_try = cost
+        self._trial_rollout(steplength, gaps=not self.isFeasible)

@@ -11,20 +11,16 @@ Computes, for node t with next value function ``(V'x, V'xx)`` (Crocoddyl signs):
 ``clamp(u - α k - K dx, lb, ub)`` (infinite bounds for the unconstrained solvers).
 
 ``riccati_step`` returns False when ``Quu`` is not positive definite (the caller raises the
-regularisation).  ``available`` is False when numba cannot be imported; the solvers then use the
-numpy path, which gives the same numbers to round-off (tested to 1e-10).
+regularisation).  Its numpy twin is the chain of :class:`~crocopy.solvers.ddp.SolverDDP`'s
+``computeActionValueFunction``, ``computeGains`` and ``computeValueFunction`` (Cholesky by LAPACK),
+``feedback_control``'s is :func:`feedback_control_numpy`; :mod:`crocopy.kernels` chooses.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-try:
-    from numba import njit
-except ImportError:  # pragma: no cover - exercised only without numba
-    njit = None
-
-available = njit is not None
+from ..kernels import compiled
 
 
 def _finish_value_function(Vxx, Vx, preg, fs, gaps):
@@ -40,7 +36,7 @@ def _finish_value_function(Vxx, Vx, preg, fs, gaps):
         Vx[:] += Vxx @ fs
 
 
-finish_value_function = njit(cache=True)(_finish_value_function) if available else _finish_value_function
+finish_value_function = compiled(_finish_value_function)
 
 
 def _cholesky_lower(A, idx, n, L):
@@ -60,12 +56,12 @@ def _cholesky_lower(A, idx, n, L):
     return True
 
 
-cholesky_lower = njit(cache=True)(_cholesky_lower) if available else _cholesky_lower
+cholesky_lower = compiled(_cholesky_lower)
 
 
-def _riccati_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx):
+def _action_value_function(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu):
+    """The Q terms of a node (``preg`` on the diagonal of ``Quu``; no control terms when ``nu = 0``)."""
     nu = Fu.shape[1]
-    ndx = Fx.shape[1]
     FxTV = Fx.T @ Vxx_n
     Qxx[:, :] = Lxx + FxTV @ Fx
     Qx[:] = Lx + Fx.T @ Vx_n
@@ -76,6 +72,16 @@ def _riccati_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, Qx
         Qu[:] = Lu + Fu.T @ Vx_n
         for i in range(nu):
             Quu[i, i] += preg
+
+
+action_value_function = compiled(_action_value_function)
+
+
+def _riccati_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx):
+    nu = Fu.shape[1]
+    ndx = Fx.shape[1]
+    action_value_function(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu)
+    if nu > 0:
         L = np.zeros((nu, nu))
         if not cholesky_lower(Quu, np.arange(nu), nu, L):
             return False
@@ -95,7 +101,7 @@ def _riccati_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, Qx
     return True
 
 
-riccati_step = njit(cache=True)(_riccati_step) if available else _riccati_step
+riccati_step = compiled(_riccati_step)
 
 
 def feedback_control_numpy(u, k, K, dx, alpha, lb, ub, out) -> None:
@@ -118,4 +124,4 @@ def _feedback_control(u, k, K, dx, alpha, lb, ub, out):
         out[i] = s
 
 
-feedback_control = njit(cache=True)(_feedback_control) if available else feedback_control_numpy
+feedback_control = compiled(_feedback_control)

@@ -17,11 +17,15 @@ from __future__ import annotations
 import numpy as np
 
 from crocopy.actuation_base import ActuationDataAbstract, ActuationModelAbstract
+from crocopy.array_views import KeepsViews, tolerate_python_model
 from crocopy.validation import as_vector, check_bounds
 
 
 class SquashingModelAbstract:
-    """Abstract squashing (Crocoddyl's ``SquashingModelAbstract(ns)``) with bounds ``s_lb``/``s_ub``."""
+    """Abstract squashing (Crocoddyl's ``SquashingModelAbstract(ns)``) with bounds ``s_lb``/``s_ub``.
+
+    A squashing written from Python fills ``data.u`` in ``calc`` and ``data.du_ds`` in ``calcDiff``.
+    """
 
     def __init__(self, ns: int) -> None:
         if ns <= 0:
@@ -70,12 +74,13 @@ class SquashingModelAbstract:
         return f"{type(self).__name__}(ns={self.ns})"
 
 
-class SquashingDataAbstract:
+class SquashingDataAbstract(KeepsViews):
     """Squashing output ``u (ns,)`` and its Jacobian ``du_ds (ns, ns)``."""
 
     def __init__(self, model: SquashingModelAbstract) -> None:
         self.u = np.zeros(model.ns)
         self.du_ds = np.zeros((model.ns, model.ns))
+        tolerate_python_model(model, self, ("u", "du_ds"))
 
 
 class SquashingModelSmoothSat(SquashingModelAbstract):
@@ -124,7 +129,8 @@ class SquashingModelSmoothSat(SquashingModelAbstract):
         data.diag = np.einsum("ii->i", data.du_ds)  # writable view of the diagonal of du_ds
         return data
 
-    def calc(self, data: SquashingDataAbstract, s: np.ndarray) -> None:
+    def _roots(self, data: SquashingDataAbstract, s: np.ndarray) -> None:
+        """``a = s - s_lb``, ``b = s - s_ub``, ``ra = √(β² + a²)``, ``rb = √(β² + b²)`` into ``data``."""
         np.subtract(s, self._s_lb, out=data.a)
         np.subtract(s, self._s_ub, out=data.b)
         np.multiply(data.a, data.a, out=data.ra)
@@ -133,12 +139,16 @@ class SquashingModelSmoothSat(SquashingModelAbstract):
         np.multiply(data.b, data.b, out=data.rb)
         data.rb += self._beta2
         np.sqrt(data.rb, out=data.rb)
+
+    def calc(self, data: SquashingDataAbstract, s: np.ndarray) -> None:
+        self._roots(data, s)
         np.subtract(data.ra, data.rb, out=data.u)
         data.u *= 0.5
         data.u += self._mid
 
     def calcDiff(self, data: SquashingDataAbstract, s: np.ndarray) -> None:
-        """``du_ds = diag(½ (a/√(β²+a²) - b/√(β²+b²)))``; needs :meth:`calc` at the same ``s``."""
+        """``du_ds = diag(½ (a/√(β²+a²) - b/√(β²+b²)))`` (no prior :meth:`calc` needed)."""
+        self._roots(data, s)
         d = data.diag
         np.divide(data.a, data.ra, out=d)
         d -= data.b / data.rb

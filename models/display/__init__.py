@@ -1,5 +1,7 @@
-"""Meshcat display of solutions: the live viewer (:mod:`.meshcat_display`), what a solver's data says
-about contacts and frames (:mod:`.scene`) and the self-contained HTML animation (:mod:`.html`).
+"""Meshcat display of solutions: the live viewer (:mod:`.meshcat_display`, its server in
+:mod:`.server`), what a solver's data says about contacts and frames (:mod:`.scene`), a camera and
+floor that frame the whole motion (:mod:`.framing`) and the self-contained HTML animation
+(:mod:`.html`), written as a compact page (:mod:`.page`, Collada packing in :mod:`.collada`).
 
 Imported lazily by :mod:`crocopy.models` (meshcat is only needed to display).
 """

@@ -1,9 +1,11 @@
 """Static HTML export of robot trajectories (meshcat animation + ``static_html``).
 
 A trajectory is recorded as a :class:`meshcat.animation.Animation`: node ``i`` becomes the key frame
-``round(t_i * fps)`` with ``t_i = factor * sum(dts[:i])``. The meshcat server then packs the scene,
-the animation and the viewer's JavaScript into one HTML file that plays from ``file://`` with no
-server and no network.
+``round(t_i * fps)`` with ``t_i = factor * sum(dts[:i])`` (of the nodes falling on one frame, the
+closest to it). The scene the meshcat server holds is then written by :func:`.page.write_page` as
+one compact HTML file (each mesh once, compact animation tracks) that plays from ``file://`` with
+no server and no network. Unless the display was given a camera, the camera and the floor frame
+the whole trajectory first (:meth:`MeshcatDisplay.fit_view`).
 
 Typical use, headless (no browser is opened; the local meshcat server is ended afterwards)::
 
@@ -13,23 +15,19 @@ Typical use, headless (no browser is opened; the local meshcat server is ended a
 
 from __future__ import annotations
 
-import base64
 import contextlib
 import io
 import os
-import re
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-import umsgpack
 from meshcat.animation import Animation
 
 from .meshcat_display import MeshcatDisplay
+from .page import keyed_animation, meshcat_commands, read_page, write_page
 
 __all__ = ["record_animation", "export_animation", "export_html", "export_html_from_solver", "static_html_commands"]
-
-_COMMAND_RE = re.compile(r"data:application/octet-binary;base64,([A-Za-z0-9+/=]+)")
 
 
 def _key_frames(n: int, dts: Sequence[float], factor: float, fps: int) -> list[tuple[int, int]]:
@@ -110,23 +108,24 @@ def export_animation(
     """Write the trajectory as one self-contained HTML file and return its path.
 
     The scene shows the first state; with more than one state the animation plays on load and
-    repeats ``repetitions`` times. ``ps`` draws frame trajectories as lines.
+    repeats ``repetitions`` times. ``ps`` draws frame trajectories as lines. The camera and the
+    floor frame the whole trajectory when ``display.auto_frame`` is true.
     """
     qs = display.configurations(xs)
+    if display.auto_frame:
+        display.fit_view(xs)
     if ps:
         display.displayFramePoses(dict(ps))
     if fs:
         display.guarded(display.ensure_force_nodes, fs)
         display.guarded(display.set_forces, display.viewer, fs[0], False)
     display.guarded(display.set_robot, display.viewer, qs[0])
-    if len(qs) > 1:
-        anim = record_animation(display, xs, fs=fs, dts=dts, factor=factor, fps=fps)
-        display.guarded(display.viewer.set_animation, anim, True, int(repetitions))
+    # An empty animation replaces the one a previous export left in the server's scene.
+    anim = record_animation(display, xs, fs=fs, dts=dts, factor=factor, fps=fps) if len(qs) > 1 else Animation()
+    display.guarded(display.viewer.set_animation, anim, len(qs) > 1, int(repetitions))
     html = display.guarded(display.viewer.static_html)
-    path = os.fspath(path)
-    with open(path, "w", encoding="utf-8") as f:
-        f.write(html)
-    return path
+    title = f"crocopy: {os.path.splitext(os.path.basename(os.fspath(path)))[0]}"
+    return write_page(meshcat_commands(html), path, title=title)
 
 
 def _quiet_display(robot: Any, display_kwargs: dict) -> MeshcatDisplay:
@@ -168,8 +167,9 @@ def static_html_commands(path: str | os.PathLike) -> list[dict]:
     """Decode the meshcat commands embedded in an exported HTML file (for inspection and tests).
 
     Returns the list of command dicts (``type`` is ``set_object``, ``set_transform``,
-    ``set_property`` or ``set_animation``; ``path`` is the meshcat path).
+    ``set_property`` or ``set_animation``; ``path`` is the meshcat path), with the meshes and
+    arrays stored once in the page put back in every command that uses them. Animation tracks
+    are given as meshcat writes them (``keys``: ``{"time", "value"}``), with the float32 values
+    the page stores and without the keys it dropped inside runs of equal values.
     """
-    with open(os.fspath(path), encoding="utf-8") as f:
-        html = f.read()
-    return [umsgpack.unpackb(base64.b64decode(blob)) for blob in _COMMAND_RE.findall(html)]
+    return [keyed_animation(c) for c in read_page(path)]

@@ -4,9 +4,22 @@ The display is built on :class:`pinocchio.visualize.MeshcatVisualizer` (mesh loa
 materials) and :mod:`meshcat` (scene graph, animations, static HTML). It shows
 
 * the robot, one pose per node of a trajectory ``xs`` (only ``q = x[:nq]`` is used);
-* the floor (a thin grey box under ``z = 0``);
+* the floor (a thin grey box under ``z = 0``, or under the motion if it goes lower, sized to the
+  motion; meshcat's grid is hidden);
 * frame trajectories ``ps`` as poly-lines;
 * contact forces ``fs`` as arrows and their friction cones.
+
+Framing: unless a camera placement ``cameraTF`` is given, every trajectory shown or exported is
+framed whole: the camera looks at the box holding the robot at all its nodes and the floor covers
+that box (:meth:`MeshcatDisplay.fit_view`, :mod:`.framing`). The live display only widens the
+view (a solver's iterates do not make the camera jump back and forth). meshcat's orbit controls
+always turn about the viewer's origin, so the scene node ``/meshcat`` is shifted by minus the
+camera's target (everything drawn by this class lives under it); meshcat's grid and axes are hidden.
+
+Force arrows: an arrow's length is ``|f| * force_scale``. With ``forceScale = None`` (default)
+``force_scale = forceFraction * robot_size / max |f|``, the maximum over the trajectory shown: the
+longest arrow is ``forceFraction`` (0.4) times the robot's size (largest side of its box at
+``q0``). Setting ``forceScale`` (metres per newton) fixes the scale instead.
 
 Scene layout (meshcat paths under ``/meshcat``)::
 
@@ -30,7 +43,6 @@ triangles taken from the collision library's mesh instead.
 
 from __future__ import annotations
 
-import re
 import time
 from collections.abc import Sequence
 from typing import Any
@@ -40,89 +52,16 @@ import meshcat.geometry as mg
 import numpy as np
 import pinocchio as pin
 import zmq
-from meshcat.visualizer import ViewerWindow
 from pinocchio.visualize import MeshcatVisualizer
 
+from crocopy.callbacks.display import DisplayAbstract
+
+from .framing import box_corners, camera_placement, floor_extent, motion_bounds, motion_points, robot_size
+from .meshes import has_mixed_texcoords, plain_mesh
 from .scene import active_contacts, frame_ids_of, friction_cones
+from .server import DEFAULT_TIMEOUT, start_meshcat_server, stop_meshcat_server
 
 __all__ = ["MeshcatDisplay", "start_meshcat_server", "stop_meshcat_server"]
-
-_DEFAULT_TIMEOUT = 60.0
-_PLAIN_MESH_CACHE: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-
-
-def start_meshcat_server(zmq_url: str | None = None, timeout: float = _DEFAULT_TIMEOUT) -> meshcat.Visualizer:
-    """Start (or connect to) a meshcat server and return a visualizer with request timeouts.
-
-    Parameters
-    ----------
-    zmq_url : str, optional
-        Address of an already running ``meshcat-server``; ``None`` starts a local server
-        subprocess on 127.0.0.1.
-    timeout : float
-        Seconds a request may wait for the server's answer before :class:`TimeoutError`.
-    """
-    if timeout <= 0:
-        raise ValueError(f"timeout must be positive, got {timeout}")
-    # Sockets take their options from the context when created: set them for the duration of the
-    # construction only, so that even the first request (the web URL) cannot hang.
-    context = ViewerWindow.context
-    saved = dict(context.sockopts)
-    context.setsockopt(zmq.RCVTIMEO, int(timeout * 1000))
-    context.setsockopt(zmq.SNDTIMEO, int(timeout * 1000))
-    context.setsockopt(zmq.LINGER, 0)
-    try:
-        return meshcat.Visualizer(zmq_url=zmq_url)
-    except zmq.error.Again as e:
-        raise TimeoutError(f"no meshcat server answered at {zmq_url} within {timeout} s") from e
-    finally:
-        context.sockopts.clear()
-        context.sockopts.update(saved)
-
-
-def stop_meshcat_server(vis: meshcat.Visualizer) -> None:
-    """Close the visualizer's socket and end the server subprocess it started (if any)."""
-    window = vis.window
-    window.zmq_socket.close(linger=0)
-    proc = getattr(window, "server_proc", None)
-    if proc is None:
-        return
-    if proc.poll() is None:
-        proc.terminate()
-        try:
-            proc.wait(timeout=5)
-        except Exception:
-            proc.kill()
-            proc.wait(timeout=5)
-    for stream in (proc.stdout, proc.stderr):
-        if stream is not None:
-            stream.close()
-
-
-def _has_mixed_texcoords(path: str) -> bool:
-    """Whether a Collada file mixes primitives with and without texture coordinates."""
-    if not path.lower().endswith(".dae"):
-        return False
-    with open(path, encoding="utf-8", errors="replace") as f:
-        text = f.read()
-    blocks = re.findall(r"<(?:triangles|polylist|polygons)\b.*?</(?:triangles|polylist|polygons)>", text, re.S)
-    textured = sum('semantic="TEXCOORD"' in b for b in blocks)
-    return 0 < textured < len(blocks)
-
-
-def _plain_mesh(geometry_object: pin.GeometryObject) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices (unscaled) and triangles of a mesh geometry, read from its collision mesh."""
-    key = geometry_object.meshPath
-    if key not in _PLAIN_MESH_CACHE:
-        bvh = geometry_object.geometry
-        scale = np.where(np.abs(geometry_object.meshScale) > 0, geometry_object.meshScale, 1.0)
-        vertices = np.asarray(bvh.vertices(), dtype=np.float32) / scale.astype(np.float32)
-        faces = np.empty((bvh.num_tris, 3), dtype=np.uint32)
-        for i in range(bvh.num_tris):
-            tri = bvh.tri_indices(i)
-            faces[i] = (tri[0], tri[1], tri[2])
-        _PLAIN_MESH_CACHE[key] = (vertices, faces)
-    return _PLAIN_MESH_CACHE[key]
 
 
 def _rgb_int(rgba: Sequence[float]) -> int:
@@ -146,7 +85,7 @@ def _homogeneous(rotation: np.ndarray, translation: np.ndarray) -> np.ndarray:
     return T
 
 
-class MeshcatDisplay:
+class MeshcatDisplay(DisplayAbstract):
     """Display robot trajectories in meshcat, with Crocoddyl's ``MeshcatDisplay`` interface.
 
     Parameters
@@ -173,9 +112,19 @@ class MeshcatDisplay:
         :meth:`close`).
     timeout : float
         Seconds a request to the meshcat server may take before :class:`TimeoutError`.
+
+    Attributes
+    ----------
+    robot_size : float
+        Largest side (m) of the robot's box at ``q0``.
+    force_scale : float
+        Metres of arrow per newton used for the forces shown last (see the module docstring).
+    auto_frame : bool
+        Frame every trajectory shown or exported (``True`` unless ``cameraTF`` was given).
     """
 
-    forceScale = 1.0 / 300.0  # metres of arrow per newton
+    forceScale: float | None = None  # metres of arrow per newton; None: the longest arrow is forceFraction x size
+    forceFraction = 0.4
     coneHeight = 0.1
     forceColor = 0xD62728
     coneColor = 0x2CA02C
@@ -192,7 +141,7 @@ class MeshcatDisplay:
         visibility: bool = True,
         openDisplay: bool = True,
         viewer: meshcat.Visualizer | None = None,
-        timeout: float = _DEFAULT_TIMEOUT,
+        timeout: float = DEFAULT_TIMEOUT,
     ) -> None:
         if int(freq) < 1:
             raise ValueError(f"freq must be a positive integer, got {freq}")
@@ -206,6 +155,13 @@ class MeshcatDisplay:
         self.data = self.model.createData()
         self.visual_model = robot.visual_model
         self.visual_data = pin.GeometryData(self.visual_model)
+        q0 = getattr(robot, "q0", None)
+        self.q0 = pin.neutral(self.model) if q0 is None else np.asarray(q0, dtype=float)
+        self.robot_size = robot_size(self.model, self.visual_model, self.q0)
+        self.force_scale = float(self.forceScale or 0.0)
+        self.auto_frame = cameraTF is None
+        self.view_bounds: tuple[np.ndarray, np.ndarray] | None = None
+        self._camera = (np.zeros(3), np.array([3.0, 0.0, 1.0]))
         self._owns_viewer = viewer is None
         self.viewer = start_meshcat_server(timeout=timeout) if viewer is None else viewer
         self.viz = MeshcatVisualizer(self.model, robot.collision_model, self.visual_model)
@@ -215,6 +171,7 @@ class MeshcatDisplay:
             self.close()
             raise
         self._forceKeys: list[str] = []
+        self._force_rest: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self._trajNames: list[str] = []
         if openDisplay:
             self.viewer.open()
@@ -240,8 +197,8 @@ class MeshcatDisplay:
         for gid, go in enumerate(self.visual_model.geometryObjects):
             parent = viz.getViewerNodeName(go, pin.GeometryType.VISUAL)
             child = parent + "/shape"
-            if go.meshPath and _has_mixed_texcoords(go.meshPath) and hasattr(go.geometry, "num_tris"):
-                vertices, faces = _plain_mesh(go)
+            if go.meshPath and has_mixed_texcoords(go.meshPath) and hasattr(go.geometry, "num_tris"):
+                vertices, faces = plain_mesh(go)
                 material = mg.MeshPhongMaterial(color=_rgb_int(go.meshColor))
                 self.viewer[child].set_object(mg.TriangularMeshGeometry(vertices, faces), material)
             else:
@@ -250,18 +207,15 @@ class MeshcatDisplay:
                 viz.loadViewerGeometryObject(shaped, pin.GeometryType.VISUAL)
             self.viewer[child].set_transform(np.diag(np.append(np.asarray(go.meshScale, dtype=float), 1.0)))
             self._nodes.append((gid, parent))
-        if self.floor:
-            self.viewer["floor"].set_object(mg.Box([4.0, 4.0, 0.02]), mg.MeshPhongMaterial(color=0xB0B0B0))
-            self.viewer["floor"].set_transform(_homogeneous(np.eye(3), np.array([0.0, 0.0, -0.0105])))
-        q0 = getattr(self.robot, "q0", None)
-        q0 = pin.neutral(self.model) if q0 is None else np.asarray(q0)
-        self.set_robot(self.viewer, q0)
+        self.viewer["/Grid"].set_property("visible", False)
+        self.viewer["/Axes"].set_property("visible", False)
+        self.set_robot(self.viewer, self.q0)
         if cameraTF is not None:
             self.viewer["/Cameras/default"].set_transform(self._camera_matrix(cameraTF))
+            lo, hi = motion_bounds(self.model, self.visual_model, [self.q0])
+            self._set_floor(lo, hi)
         else:
-            pin.framesForwardKinematics(self.model, self.data, q0)
-            radius = max(float(np.linalg.norm(oMf.translation)) for oMf in self.data.oMf)
-            self.setCameraPosition(float(np.clip(3.0 * radius, 1.0, 6.0)) * np.array([0.8, -0.56, 0.4]))
+            self.fit_view([self.q0])
 
     @staticmethod
     def _camera_matrix(cameraTF: Any) -> np.ndarray:
@@ -272,14 +226,73 @@ class MeshcatDisplay:
             return pin.XYZQUATToSE3(arr).homogeneous
         raise ValueError(f"cameraTF must be a 7-vector [x, y, z, qx, qy, qz, qw] or a 4x4 matrix, got {arr.shape}")
 
+    @staticmethod
+    def _point(name: str, value: Sequence[float] | np.ndarray) -> np.ndarray:
+        p = np.asarray(value, dtype=float).reshape(-1)
+        if p.shape != (3,) or not np.all(np.isfinite(p)):
+            raise ValueError(f"{name} must be 3 finite numbers (shape (3,)), got shape {p.shape}")
+        return p
+
+    def _place_camera(self, target: np.ndarray, position: np.ndarray) -> None:
+        # meshcat's orbit controls always look at the viewer's origin: the scene (/meshcat) is
+        # shifted by -target instead, and the camera sits at position - target. The camera lives in
+        # meshcat's y-up frame, where world (x, y, z) is (x, z, -y).
+        offset = position - target
+        self.viewer.set_transform(_homogeneous(np.eye(3), -target))
+        self.viewer["/Cameras/default"].set_transform(np.eye(4))
+        self.viewer["/Cameras/default/rotated/<object>"].set_property("position", [offset[0], offset[2], -offset[1]])
+        self._camera = (target.copy(), position.copy())
+
     def setCameraPosition(self, position: Sequence[float] | np.ndarray) -> None:
-        """Put the camera at ``position`` (world frame, z up); it keeps looking at the origin."""
-        p = np.asarray(position, dtype=float).reshape(-1)
-        if p.shape != (3,):
-            raise ValueError(f"position must have shape (3,), got {p.shape}")
-        # The camera node lives in meshcat's y-up frame: world (x, y, z) is (x, z, -y) there.
-        node = self.viewer["/Cameras/default/rotated/<object>"]
-        self.guarded(node.set_property, "position", [p[0], p[2], -p[1]])
+        """Put the camera at ``position`` (world frame, z up); it keeps looking at its target."""
+        p = self._point("position", position)
+        self.guarded(self._place_camera, self._camera[0], p)
+
+    def setCameraTarget(self, target: Sequence[float] | np.ndarray) -> None:
+        """Make the camera look at ``target`` (world frame) from where it is."""
+        t = self._point("target", target)
+        self.guarded(self._place_camera, t, self._camera[1])
+
+    def _set_floor(self, lo: np.ndarray, hi: np.ndarray) -> None:
+        if not self.floor:
+            return
+        centre, sides = floor_extent(lo, hi, self.robot_size)
+        self.viewer["floor"].set_object(mg.Box([sides[0], sides[1], 0.02]), mg.MeshPhongMaterial(color=0xB0B0B0))
+        self.viewer["floor"].set_transform(_homogeneous(np.eye(3), centre - np.array([0.0, 0.0, 0.0105])))
+
+    def fit_view(self, xs: Sequence[np.ndarray], grow: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Point the camera at the whole motion ``xs`` and size the floor under it.
+
+        Parameters
+        ----------
+        xs : list of ndarray, each (nx,) with nx >= nq
+            States (or configurations) of the motion.
+        grow : bool
+            Frame the union of this motion and the ones framed before (the view only widens).
+
+        Returns
+        -------
+        lo, hi : ndarray (3,)
+            Corners of the framed box (world frame): it holds the robot at every node.
+        """
+        points = motion_points(self.model, self.visual_model, self.configurations(xs))
+        lo, hi = points.min(axis=0), points.max(axis=0)
+        if grow and self.view_bounds is not None:
+            old_lo, old_hi = self.view_bounds
+            if np.all(lo >= old_lo) and np.all(hi <= old_hi):
+                return old_lo, old_hi
+            points = np.concatenate([points, box_corners(old_lo, old_hi)])
+            lo, hi = np.minimum(lo, old_lo), np.maximum(hi, old_hi)
+        self.view_bounds = (lo, hi)
+        target, position = camera_placement(points)
+        self.guarded(self._place_camera, target, position)
+        self.guarded(self._set_floor, lo, hi)
+        return lo, hi
+        self.view_bounds = (lo, hi)
+        target, position = camera_placement(lo, hi)
+        self.guarded(self._place_camera, target, position)
+        self.guarded(self._set_floor, lo, hi)
+        return lo, hi
 
     def set_robot(self, target: Any, q: np.ndarray) -> None:
         """Place every visual geometry at configuration ``q`` (``target``: viewer or animation frame)."""
@@ -304,6 +317,15 @@ class MeshcatDisplay:
     def ensure_force_nodes(self, fs: Sequence[Sequence[dict]]) -> None:
         """Create one arrow (and cone) node per contact key seen in the force trajectory ``fs``."""
         keys = sorted({str(item["key"]) for node in fs for item in node})
+        if self.forceScale is not None:
+            self.force_scale = float(self.forceScale)
+        else:
+            norms = [float(np.linalg.norm(self._force_world(item)[1])) for node in fs for item in node]
+            longest = max(norms, default=0.0)
+            self.force_scale = self.forceFraction * self.robot_size / longest if longest > 1e-9 else 0.0
+        for node in reversed(fs):  # a contact is first drawn where it starts (see set_forces)
+            for key, (arrow_T, _, cone_T, _) in self._force_poses(node).items():
+                self._force_rest[key] = (arrow_T, cone_T)
         for key in keys:
             if key in self._forceKeys:
                 continue
@@ -331,17 +353,25 @@ class MeshcatDisplay:
             mu = float(item.get("mu", 0.7))
             arrow_T = _homogeneous(_rotation_y_to(f) if norm > 1e-9 else np.eye(3), p)
             cone_T = _homogeneous(_rotation_y_to(R[:, 2]), p)
-            length = max(norm * self.forceScale, 1e-6)
+            length = max(norm * self.force_scale, 1e-6)
             h = self.coneHeight
             poses[key] = (arrow_T, np.array([1.0, length, 1.0]), cone_T, np.array([mu * h, h, mu * h]))
         return poses
 
     def set_forces(self, target: Any, node: Sequence[dict], animation: bool) -> None:
-        """Place the force arrows of one node's contacts (``target``: viewer or animation frame)."""
+        """Place the force arrows of one node's contacts (``target``: viewer or animation frame).
+
+        A contact that is not active at this node shrinks to nothing where it was last drawn (or
+        where it starts), so that animations do not slide it in from elsewhere.
+        """
         poses = self._force_poses(node)
         tiny = np.full(3, 1e-6)
         for key in self._forceKeys:
-            arrow_T, arrow_s, cone_T, cone_s = poses.get(key, (np.eye(4), tiny, np.eye(4), tiny))
+            if key in poses:
+                arrow_T, arrow_s, cone_T, cone_s = poses[key]
+                self._force_rest[key] = (arrow_T, cone_T)
+            else:
+                (arrow_T, cone_T), arrow_s, cone_s = self._force_rest.get(key, (np.eye(4), np.eye(4))), tiny, tiny
             for name, T, s in (("forces", arrow_T, arrow_s), ("cones", cone_T, cone_s)):
                 if animation:
                     target[name][key].set_transform(T)
@@ -414,6 +444,8 @@ class MeshcatDisplay:
             Slow-down factor applied to the playback time.
         """
         qs = self.configurations(xs)
+        if self.auto_frame:
+            self.fit_view(xs, grow=True)
         if ps:
             self.displayFramePoses(dict(ps))
         if fs:
@@ -489,14 +521,6 @@ class MeshcatDisplay:
                 if name not in names:
                     names.append(name)
         self.frameTrajNames = names
-
-    def getDurationSequenceFromSolver(self, solver: Any) -> list[float]:
-        """Duration ``dt`` of every running node (0 for nodes without one, e.g. impulses)."""
-        return [float(getattr(m, "dt", 0.0)) for m in solver.problem.runningModels]
-
-    def getTimeSequenceFromSolver(self, solver: Any) -> list[float]:
-        """Start time of every node, terminal included."""
-        return [0.0, *np.cumsum(self.getDurationSequenceFromSolver(solver)).tolist()]
 
     def getJointTorquesTrajectoryFromSolver(self, solver: Any) -> list[np.ndarray]:
         """The controls ``us`` of the solver (copies)."""

@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .action_base import ActionDataAbstract, ActionModelAbstract
-from .diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
+from ..action_base import ActionDataAbstract, ActionModelAbstract
+from ..diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
 
 _EPS = np.finfo(float).eps
 

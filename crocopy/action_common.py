@@ -1,0 +1,174 @@
+"""What discrete and differential action models share.
+
+Both evaluate at ``(x, u)`` (shapes ``(nx,)``, ``(nu,)``) a cost ``l(x, u)``, a cost residual
+``r (nr,)``, inequality constraints ``g_lb <= g(x, u) <= g_ub`` (``ng`` rows on running nodes,
+``ng_T`` on terminal ones), equality constraints ``h(x, u) = 0`` (``nh``/``nh_T``) and a dynamics
+output with ``nf`` rows and Jacobians ``Fx (nf, ndx)``, ``Fu (nf, nu)``: the next state ``xnext``
+(``nf = ndx``) for an action model, the acceleration ``xout`` (``nf = nv``) for a differential one.
+
+:class:`ActionModelBase` holds the constructor (Crocoddyl's ``(state, nu, nr=1, ng=0, nh=0, ng_T=0,
+nh_T=0)``), the control bounds and the quasi-static Newton loop; each kind says what "at rest" means
+through ``_rest_error``.  :class:`ActionDataBase` allocates the arrays.  :class:`ControlBounds` gives
+``u_lb``/``u_ub`` to actuation models as well.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .state import StateAbstract
+from .validation import as_vector, check_bounds
+
+
+def check_state_and_nu(state: StateAbstract, nu: int) -> int:
+    """Validate the ``(state, nu)`` pair every model constructor takes; return ``nu`` as an int.
+
+    Raises
+    ------
+    ValueError
+        If ``state`` is not a :class:`~crocopy.state.StateAbstract` or ``nu`` is negative.
+    """
+    if not isinstance(state, StateAbstract):
+        raise ValueError(f"state must be a StateAbstract, got {type(state).__name__}")
+    if nu < 0:
+        raise ValueError(f"nu must be non-negative, got {nu}")
+    return int(nu)
+
+
+def constraint_arrays(ng: int, nh: int, ndx: int, nu: int) -> tuple[np.ndarray, ...]:
+    """Zero ``g (ng,)``, ``Gx (ng, ndx)``, ``Gu (ng, nu)``, ``h (nh,)``, ``Hx (nh, ndx)``, ``Hu (nh, nu)``: the
+    constraint values and Jacobians of action, constraint and constraint-manager data."""
+    return (np.zeros(ng), np.zeros((ng, ndx)), np.zeros((ng, nu)),
+            np.zeros(nh), np.zeros((nh, ndx)), np.zeros((nh, nu)))
+
+
+class ControlBounds:
+    """Control bounds ``u_lb``/``u_ub`` (shape ``(nu,)``, default unbounded) checked on assignment."""
+
+    nu: int
+
+    def _init_control_limits(self) -> None:
+        self._u_lb = np.full(self.nu, -np.inf)
+        self._u_ub = np.full(self.nu, np.inf)
+
+    @property
+    def u_lb(self) -> np.ndarray:
+        """Lower control bound, shape ``(nu,)``."""
+        return self._u_lb
+
+    @u_lb.setter
+    def u_lb(self, value: np.ndarray) -> None:
+        self._set_control_limits(as_vector(value, self.nu, "u_lb", allow_nonfinite=True), self._u_ub)
+
+    @property
+    def u_ub(self) -> np.ndarray:
+        """Upper control bound, shape ``(nu,)``."""
+        return self._u_ub
+
+    @u_ub.setter
+    def u_ub(self, value: np.ndarray) -> None:
+        self._set_control_limits(self._u_lb, as_vector(value, self.nu, "u_ub", allow_nonfinite=True))
+
+    def _set_control_limits(self, lb: np.ndarray, ub: np.ndarray) -> None:
+        check_bounds(lb, ub, "u_lb", "u_ub")
+        self._u_lb = lb
+        self._u_ub = ub
+
+
+class ControlLimitsMixin(ControlBounds):
+    """Control bounds of action and differential models, with ``has_control_limits`` (all bounds finite)."""
+
+    def _init_control_limits(self) -> None:
+        super()._init_control_limits()
+        self.has_control_limits = False
+
+    def _set_control_limits(self, lb: np.ndarray, ub: np.ndarray) -> None:
+        super()._set_control_limits(lb, ub)
+        self.has_control_limits = bool(np.all(np.isfinite(lb)) and np.all(np.isfinite(ub)) and self.nu > 0)
+
+
+class ActionModelBase(ControlLimitsMixin):
+    """Constructor, stubs and quasi-static solve of Crocoddyl's two action-model abstractions.
+
+    The parameters ``(state, nu, nr=1, ng=0, nh=0, ng_T=0, nh_T=0)`` are described by
+    :class:`~crocopy.action_base.ActionModelAbstract`; they are stored under the same names.
+
+    Attributes
+    ----------
+    g_lb, g_ub : numpy.ndarray
+        Inequality bounds of running nodes, shape ``(ng,)``, default unbounded.
+    u_lb, u_ub : numpy.ndarray
+        Control bounds, shape ``(nu,)``, default unbounded (``has_control_limits`` False).
+    """
+
+    def __init__(
+        self, state: StateAbstract, nu: int, nr: int = 1, ng: int = 0, nh: int = 0, ng_T: int = 0, nh_T: int = 0
+    ) -> None:
+        self.nu = check_state_and_nu(state, nu)
+        self.state = state
+        self.nr = int(nr)
+        self.ng = int(ng)
+        self.nh = int(nh)
+        self.ng_T = int(ng_T)
+        self.nh_T = int(nh_T)
+        self.g_lb = np.full(self.ng, -np.inf)
+        self.g_ub = np.full(self.ng, np.inf)
+        self._init_control_limits()
+
+    def calc(self, data: "ActionDataBase", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        raise NotImplementedError(f"{type(self).__name__}.calc is not implemented")
+
+    def calcDiff(self, data: "ActionDataBase", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        raise NotImplementedError(f"{type(self).__name__}.calcDiff is not implemented")
+
+    def _rest_error(self, data: "ActionDataBase", x: np.ndarray) -> np.ndarray:
+        """What is zero when the system rests at ``x`` (rows of ``Fu``), read after ``calc``."""
+        raise NotImplementedError
+
+    def quasiStatic(self, data: "ActionDataBase", x: np.ndarray, maxiter: int = 100, tol: float = 1e-9) -> np.ndarray:
+        """Control that keeps the system at rest at ``x``.
+
+        Newton iterations ``u ← u - Fu⁺ e(x, u)`` on the rest error ``e`` (``xnext ⊖ x`` for an action
+        model, ``xout`` for a differential one), stopped when the step is below ``tol`` (max norm) or
+        after ``maxiter`` iterations.
+
+        Returns
+        -------
+        numpy.ndarray
+            Quasi-static control, shape ``(nu,)``.
+        """
+        x = as_vector(x, self.state.nx, "x")
+        u = np.zeros(self.nu)
+        if self.nu == 0:
+            return u
+        for _ in range(maxiter):
+            self.calc(data, x, u)
+            self.calcDiff(data, x, u)
+            du = np.linalg.lstsq(data.Fu, -self._rest_error(data, x), rcond=None)[0]
+            u += du
+            if np.linalg.norm(du, np.inf) <= tol:
+                break
+        return u
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(nx={self.state.nx}, nu={self.nu})"
+
+
+class ActionDataBase:
+    """Cost ``cost``, residual ``r (nr,)``, dynamics Jacobians ``Fx (nf, ndx)``, ``Fu (nf, nu)``, cost
+    derivatives ``Lx, Lu, Lxx, Lxu, Luu`` and constraints ``g, Gx, Gu`` (``max(ng, ng_T)`` rows),
+    ``h, Hx, Hu`` (``max(nh, nh_T)`` rows)."""
+
+    def __init__(self, model: ActionModelBase, nf: int) -> None:
+        ndx, nu = model.state.ndx, model.nu
+        ng, nh = max(model.ng, model.ng_T), max(model.nh, model.nh_T)
+        self.cost = np.nan
+        self.r = np.zeros(model.nr)
+        self.Fx = np.zeros((nf, ndx))
+        self.Fu = np.zeros((nf, nu))
+        self.Lx = np.zeros(ndx)
+        self.Lu = np.zeros(nu)
+        self.Lxx = np.zeros((ndx, ndx))
+        self.Lxu = np.zeros((ndx, nu))
+        self.Luu = np.zeros((nu, nu))
+        self.g, self.Gx, self.Gu, self.h, self.Hx, self.Hu = constraint_arrays(ng, nh, ndx, nu)

@@ -1,0 +1,109 @@
+"""Arrays shared between data objects: sharing them, and copying or pickling them as shared.
+
+:func:`share_arrays` makes a cost or constraint data write straight into an action data's arrays
+(Crocoddyl's ``shareMemory``).  Data objects also hold views: a cost sum makes its residuals'
+``r``/``Rx``/``Ru`` and activations' ``Ar``/``Arr_diag`` views into stacked arrays, a squashing
+keeps a view of a Jacobian's diagonal.  ``pickle`` and ``copy.deepcopy`` copy a view as a separate
+array, so the copy would stop writing where its owner reads.  :class:`KeepsViews` pickles each
+view attribute as ``(owner, offset, shape, strides)``; the owner array is pickled once (pickle and
+deepcopy keep object identity), and unpickling rebuilds the view on the copied owner.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from typing import Any
+
+import numpy as np
+
+
+def share_arrays(holder: Any, data: Any, names: Iterable[str]) -> None:
+    """Replace ``holder``'s arrays ``names`` by ``data``'s (same shapes), so ``holder`` writes into ``data``.
+
+    Raises
+    ------
+    ValueError
+        If one of ``data``'s arrays does not have ``holder``'s shape.
+    """
+    for name in names:
+        mine, theirs = getattr(holder, name), getattr(data, name)
+        if theirs.shape != mine.shape:
+            raise ValueError(f"data.{name} has shape {theirs.shape}, expected {mine.shape}")
+    for name in names:
+        setattr(holder, name, getattr(data, name))
+
+
+class ArrayView:
+    """The pickled form of an array that views memory owned by the array ``owner``."""
+
+    __slots__ = ("owner", "offset", "shape", "strides", "dtype", "kind")
+
+    def __init__(self, view: np.ndarray, owner: np.ndarray) -> None:
+        self.owner = owner
+        self.offset = view.__array_interface__["data"][0] - owner.__array_interface__["data"][0]
+        self.shape = view.shape
+        self.strides = view.strides
+        self.dtype = view.dtype
+        self.kind = type(view)
+
+    def restore(self) -> np.ndarray:
+        """The view, rebuilt on ``owner``."""
+        view = np.ndarray(self.shape, self.dtype, buffer=self.owner, offset=self.offset, strides=self.strides)
+        return view if self.kind is np.ndarray else view.view(self.kind)
+
+
+def _encode(value: Any) -> Any:
+    """``value`` as an :class:`ArrayView` if it views a C-contiguous array's memory, else unchanged."""
+    if not isinstance(value, np.ndarray) or not isinstance(value.base, np.ndarray):
+        return value
+    owner = value.base
+    while isinstance(owner.base, np.ndarray):
+        owner = owner.base
+    if not owner.flags.c_contiguous:
+        return value
+    return ArrayView(value, owner)
+
+
+class KeepsViews:
+    """Mixin: ``pickle``/``copy``/``deepcopy`` keep the attributes that are views of other arrays as views."""
+
+    def __getstate__(self) -> dict:
+        return {name: _encode(value) for name, value in self.__dict__.items()}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(
+            {name: value.restore() if isinstance(value, ArrayView) else value for name, value in state.items()}
+        )
+
+
+class ShapeTolerantArray(np.ndarray):
+    """An array whose item assignment also takes a value of the same size whose shape differs only
+    by dimensions of length one (``tau[:] = M`` with ``M`` of shape ``(n, 1)``).
+
+    Crocoddyl shows an ``n×1`` or ``1×n`` matrix (e.g. ``dtau_du`` with one control) as a vector
+    of shape ``(n,)``, so models written from Python for Crocoddyl write such products into its
+    arrays; :func:`tolerate_python_model` gives the data of such models these arrays.
+    """
+
+    def __setitem__(self, key: Any, value: Any) -> None:
+        try:
+            super().__setitem__(key, value)
+        except ValueError:
+            target = self[key]
+            value = np.asarray(value)
+            if value.size != np.size(target) or _squeezed(value.shape) != _squeezed(np.shape(target)):
+                raise
+            super().__setitem__(key, value.reshape(np.shape(target)))
+
+
+def _squeezed(shape: tuple) -> tuple:
+    return tuple(n for n in shape if n != 1)
+
+
+def tolerate_python_model(model: Any, data: Any, names: Iterable[str]) -> None:
+    """If ``model``'s class is written outside crocopy, make ``data``'s arrays ``names``
+    :class:`ShapeTolerantArray` views (same memory)."""
+    if type(model).__module__.partition(".")[0] == "crocopy":
+        return
+    for name in names:
+        setattr(data, name, getattr(data, name).view(ShapeTolerantArray))

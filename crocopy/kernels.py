@@ -1,0 +1,121 @@
+"""The compiled kernels: the one place that imports numba, and the library-wide switch.
+
+Hot inner loops (a node's Riccati step, the box-QP node step, the rollout's control update, the
+cost stack's activations and Gauss-Newton sums, Euler's step and chain rule) exist twice: as a
+numba-compiled kernel and as a numpy twin that gives the same numbers to round-off (tested to
+1e-12).  Each kernel lives beside its twin:
+
+=====================================  ==========================================================
+``solvers/riccati_kernel.py``          ``riccati_step`` (twin: ``SolverDDP.computeActionValueFunction``,
+                                       ``computeGains``, ``computeValueFunction``);
+                                       ``feedback_control`` / ``feedback_control_numpy``
+``solvers/box_kernel.py``              ``box_step`` (twin: ``BoxSolverMixin.computeGains`` with
+                                       :class:`~crocopy.solvers.box_qp.BoxQP`)
+``costs/stack_kernel.py``              ``activation_values``, ``activation_derivatives``,
+                                       ``accumulate`` and their ``*_numpy`` twins
+``integrators/euler_kernel.py``        ``euler_step``, ``euler_chain``, ``add_integrate_jacobian``
+                                       and their ``*_numpy`` twins
+=====================================  ==========================================================
+
+One setting chooses between them for the whole library (default: on when numba is installed)::
+
+    crocopy.set_kernels(False)          # numpy twins from now on
+    crocopy.kernels_enabled()           # -> False
+    with crocopy.use_kernels(True):     # compiled kernels inside the block, then back
+        solver.solve()
+
+The consumers read the switch at every call, so it may be flipped between (not during) solves.
+It is process-wide and not thread-local; a worker process that is spawned rather than forked (e.g.
+by :func:`crocopy.solve_many` under the ``spawn``/``forkserver`` start methods) starts from the
+default.  Without numba, :data:`available` is False, the kernel functions stay plain Python (never
+called by the library) and ``set_kernels(True)`` raises.
+
+Kernels are compiled with ``numba.njit(cache=True)``: the machine code is cached beside the
+sources (``__pycache__``) and loaded, not recompiled, by later processes.
+
+A subclass that overrides a step a kernel fuses (a solver's ``computeGains``, a multibody state's
+``integrate``, an activation's ``calc``) keeps its override: that step then runs in Python/numpy.
+This is logged once per class and step at DEBUG level on the ``"crocopy"`` logger
+(``logging.getLogger("crocopy").setLevel(logging.DEBUG)`` to see it).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+from collections.abc import Callable, Iterable, Iterator
+
+import numpy as np
+
+try:
+    import numba
+except ImportError:  # pragma: no cover - exercised only without numba (tested in a subprocess)
+    numba = None
+
+available: bool = numba is not None
+"""True when numba could be imported."""
+
+active: bool = available
+"""True while the library runs its compiled kernels.  The hot paths read this flag; change it only
+through :func:`set_kernels` / :func:`use_kernels`."""
+
+_logged: set[tuple[type, str]] = set()
+logger = logging.getLogger("crocopy")
+
+
+def compiled(function: Callable) -> Callable:
+    """``numba.njit(cache=True)(function)``, or ``function`` itself without numba."""
+    return numba.njit(cache=True)(function) if available else function
+
+
+def kernels_enabled() -> bool:
+    """True when the library runs its compiled kernels (numba installed and not switched off)."""
+    return active
+
+
+def set_kernels(enabled: bool) -> None:
+    """Switch the compiled kernels on or off for the whole library.
+
+    Raises
+    ------
+    TypeError
+        If ``enabled`` is not a bool.
+    RuntimeError
+        If ``enabled`` is True and numba is not installed.
+    """
+    global active
+    if not isinstance(enabled, (bool, np.bool_)):
+        raise TypeError(f"enabled must be a bool, got {type(enabled).__name__}")
+    if enabled and not available:
+        raise RuntimeError("crocopy.set_kernels(True): numba is not installed (pip install numba)")
+    active = bool(enabled)
+
+
+@contextlib.contextmanager
+def use_kernels(enabled: bool) -> Iterator[None]:
+    """Context manager: ``set_kernels(enabled)`` inside the block, the previous setting after it."""
+    global active
+    previous = active
+    set_kernels(enabled)
+    try:
+        yield
+    finally:
+        active = previous
+
+
+def overridden(obj: object, owner: type, steps: Iterable[str]) -> list[str]:
+    """The names in ``steps`` that ``type(obj)`` defines differently from ``owner``."""
+    cls = type(obj)
+    return [step for step in steps if getattr(cls, step) is not getattr(owner, step)]
+
+
+def log_fallback(cls: type, steps: Iterable[str], kernel: str, how: str = "overrides") -> None:
+    """Log once per ``(cls, step)``, at DEBUG level, that ``cls`` ``how`` ``steps`` and so skips ``kernel``."""
+    new = [step for step in steps if (cls, step) not in _logged]
+    if not new:
+        return
+    _logged.update((cls, step) for step in new)
+    logger.debug(
+        "%s %s %s: %s is not used for it, the numpy/Python steps run instead",
+        cls.__qualname__, how, ", ".join(new), kernel,
+    )
