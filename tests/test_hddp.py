@@ -285,7 +285,7 @@ def reach_lq(T=6, dt=2e-3, minv=(1.0, 0.05, 20.0), weight=1.0):
 def test_rank_threshold_keeps_the_reach_directions_of_the_last_node():
     """Curvature ``dt⁴ M⁻²`` spread over 4e5 at the last node: all reach directions stay in level 1."""
     Fx, Fu, reach, effort, C, c = reach_lq()
-    res = hierarchical_backward_pass(Fx, Fu, [reach, effort])
+    res = hierarchical_backward_pass(Fx, Fu, [reach, effort], rank_scale="peak")
     T = len(Fx)
     assert res.rank[0][T - 1] == 2 and res.rank[1][T - 1] == 1
     assert all(res.rank[0][t] == 0 for t in range(T - 1))  # V⁽¹⁾ is round-off before the last node
@@ -293,6 +293,20 @@ def test_rank_threshold_keeps_the_reach_directions_of_the_last_node():
     for t in range(T):
         dx = Fx[t] @ dx + Fu[t] @ (res.ff[0][t] + res.ff[1][t] + res.K[t] @ dx)
     np.testing.assert_allclose(C @ dx + c, 0.0, atol=1e-10)
+
+
+def test_rank_scale_task_leaves_a_small_running_part_to_the_lower_levels():
+    """A running reach weighted 1e-5: its curvature is ~1e-10 of the task scale and ~1e-5 of the peak."""
+    Fx, Fu, reach, effort, C, c = reach_lq()
+    T = len(Fx)
+    running = LevelDerivatives([1e-5 * C.T @ c] * T + [reach.Lx[T]], reach.Lu, [1e-5 * C.T @ C] * T + [reach.Lxx[T]],
+                               reach.Lxu, reach.Luu)
+    task = hierarchical_backward_pass(Fx, Fu, [running, effort])
+    peak = hierarchical_backward_pass(Fx, Fu, [running, effort], rank_scale="peak")
+    assert task.rank[0] == [0] * (T - 1) + [2] and task.rank[1][: T - 1] == [3] * (T - 1)
+    assert all(r == 2 for r in peak.rank[0]) and all(r == 1 for r in peak.rank[1])
+    with pytest.raises(ValueError, match="rank_scale"):
+        hierarchical_backward_pass(Fx, Fu, [running, effort], rank_scale="max")
 
 
 def test_levenberg_regularisation_is_relative_to_the_task_curvature():

@@ -63,6 +63,7 @@ TESTS = {
 
 
 LAMBDA0 = 1e-6  # initial Levenberg regularisation of every level (the paper gives no value)
+RANK_SCALE = "peak"  # rank threshold relative to the task's peak curvature (see crocopy.solvers.hddp_lq)
 BAR = 1e-7  # m², the bar of issue 16 for the top task (Tests 1-2) and both tasks (Test 3)
 
 PAPER_TABLE1 = {  # HDDP rows of the paper's Table I: task errors (m²), iterations, CPU time (Matlab)
@@ -155,6 +156,7 @@ def _hddp_solve(scn: HDDPScenario, targets, levels, maxiter: int):
     solver.th_abs = [0.5e-8] * (len(levels) - 1) + [np.inf]
     solver.th_rel = [1e-4] * len(levels)
     solver.lambda0 = LAMBDA0
+    solver.rank_scale = RANK_SCALE
     us0 = [scn.ugrav.copy() for _ in range(scn.T)]
     t0 = time.perf_counter()
     solver.solve(problem.rollout(us0), us0, maxiter=maxiter, is_feasible=True)
@@ -317,6 +319,7 @@ def priority_check(scn: HDDPScenario, maxiter: int = 200, say=print) -> dict:
         names = [n for lv in levels for n in lv if n != "effort"]
         problem = scn.problem({n: targets[n] for n in names})
         solver = SolverHDDP(problem, levels)
+        solver.rank_scale = RANK_SCALE
         solver.th_abs = [0.0] * len(levels)
         solver.th_worse = 0.0
         solver.th_rel = [1e-12] + [1e-4] * (len(levels) - 1)
@@ -357,6 +360,7 @@ def run_hddp_weighted(weights: Sequence[float] = (10.0, 1e2, 1e3, 1e4, 1e5, 1e6)
                 solver.th_stop = 1e-8
             else:
                 solver = SolverHDDP(problem, [["left", "right", "torso", "effort"]])
+                solver.rank_scale = RANK_SCALE
                 solver.th_abs, solver.th_rel = [0.5e-8], [1e-4]
             with np.errstate(all="ignore"):
                 ok = solver.solve(problem.rollout(us0), us0, maxiter=maxiter, is_feasible=True)

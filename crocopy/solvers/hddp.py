@@ -187,6 +187,11 @@ class SolverHDDP(SolverDDP):
     th_worse : float
         Relative increase of a higher level tolerated by the line search (default 1e-10); a level
         may also rise up to its ``th_abs`` (set ``th_abs`` to 0 for strict priorities).
+    th_rank, rank_scale : float, str
+        Rank threshold of the prioritised backward pass and its scale, ``"task"`` (default) or
+        ``"peak"`` (see :mod:`crocopy.solvers.hddp_lq`; the hierarchical-DDP experiment uses
+        ``"peak"``, which keeps a terminal task's last-node directions but also every running part
+        of a task).
     th_model : float
         A trial whose largest state deviation exceeds ``th_model`` times that of its linear
         prediction is rejected as a blow-up (default 100; 0 disables).  Crocopy extension: in the
@@ -213,6 +218,7 @@ class SolverHDDP(SolverDDP):
         self.th_abs = [1e-8] * K
         self.th_rel = [1e-4] * K
         self.th_rank = 1e-9
+        self.rank_scale = "task"
         self.th_worse = 1e-10
         self.th_model = 100.0
         self.max_reg_increases = 6
@@ -307,7 +313,7 @@ class SolverHDDP(SolverDDP):
         with np.errstate(over="ignore", invalid="ignore"):
             res = hierarchical_backward_pass(
                 [d.Fx for d in p.runningDatas], [d.Fu for d in p.runningDatas], derivs,
-                self.lambdas, self.mus, self.th_rank,
+                self.lambdas, self.mus, self.th_rank, self.rank_scale,
             )
         if not all(np.isfinite(K).all() for K in res.K):
             raise np.linalg.LinAlgError("non-finite gains in the hierarchical backward pass")

@@ -21,13 +21,21 @@ pseudo-inverse).  Every task's value function is then updated for the full polic
 ``Vx = Qx + K̄ᵀ Qu + (K̄ᵀ Quu + Qxu) k̄``, ``Vxx = Qxx + K̄ᵀ Quu K̄ + Qxu K̄ + K̄ᵀ Qux``.
 Sign convention: ``+k̄``, ``+K̄`` (paper D's ``-K`` is ``K̄ = -K``).  One task gives DDP.
 
-Rank threshold.  A terminal task that the last control can meet (a reach through ``∂q_T/∂u_{T-1} =
-dt² M⁻¹``) has ``Vxx⁽ᵏ⁾ₜ ≈ 0`` before the last node: there ``Quu⁽ᵏ⁾`` is round-off, about
-``ε ‖Lxx‖ ‖Fu‖²``, while the genuine curvature at the last node is about ``‖Lxx‖ ‖dt² M⁻¹‖²``, a few
-``1e-5`` of that in the hierarchical-DDP experiment.  A fixed scale ``‖Lxx‖ max‖Fu‖²`` with a ``1e-9``
-threshold therefore cut genuine reaching directions at the last node (measured: the top task stalled
-at 1e-4..1e-2 m² in 2-5 % of the paper's trials); the running peak keeps them and still drops the
-round-off directions (``ε / 1e-5 ≈ 1e-11 < th_rank``).
+Rank threshold.  Eigenvalues of ``N̄ Quu⁽ᵏ⁾ N̄`` at node ``t`` count as nullspace below ``th_rank``
+times a scale, ``rank_scale`` choosing which:
+
+* ``"task"`` (default): ``s⁽ᵏ⁾ = max(maxₜ|Luu⁽ᵏ⁾|, maxₜ|Lxx⁽ᵏ⁾| · maxₜ|Fu|²)``, one scale per task.  A
+  small running part of a task (the arm's running reach, weight 1e1·dt against the terminal 1e4) is
+  below it and is left to the lower levels.
+* ``"peak"``: ``p⁽ᵏ⁾ₜ = max_{s >= t} max diag Quu⁽ᵏ⁾ₛ``, the task's largest curvature met so far in
+  the sweep.  A terminal reach met by the last control (``∂q_T/∂u_{T-1} = dt² M⁻¹``) has a genuine
+  last-node curvature a few ``1e-5`` of ``s⁽ᵏ⁾`` in the hierarchical-DDP experiment: ``"task"`` with
+  ``th_rank = 1e-9`` cut reaching directions there (the top task stalled at 1e-4..1e-2 m² in
+  2-5 % of the paper's trials), ``"peak"`` keeps them.  It keeps every genuine curvature, so a task
+  with a running part, or with ``λ > 0`` (the damped last node leaves a residual ``V⁽ᵏ⁾``), takes
+  directions at every node: on the Kinova arm with ``[["goal"], ["state", "control"]]`` the top level
+  then drives its running reach error down with unbounded torques (the effort reaches 1e6 within
+  50 iterations, the strict-priority optimum being at infinite torque) instead of converging.
 """
 
 from __future__ import annotations
@@ -73,6 +81,7 @@ def hierarchical_backward_pass(
     lambdas: Sequence[float] | None = None,
     mus: Sequence[float] | None = None,
     th_rank: float = 1e-9,
+    rank_scale: str = "task",
 ) -> HierarchicalLQResult:
     """Prioritised Riccati recursion over ``K = len(levels)`` tasks.
 
@@ -86,15 +95,17 @@ def hierarchical_backward_pass(
         Levenberg state regularisation (relative to the task's ``max diag Lxx``) and
         pseudo-inverse damping per task (default 0).
     th_rank : float
-        Eigenvalues of ``N̄ Quu⁽ᵏ⁾ N̄`` at node ``t`` below ``th_rank · p⁽ᵏ⁾ₜ`` count as nullspace,
-        with ``p⁽ᵏ⁾ₜ = max_{s >= t} max diag Quu⁽ᵏ⁾ₛ`` the task's largest curvature met so far in the
-        sweep (see the module docstring).
+        Eigenvalues of ``N̄ Quu⁽ᵏ⁾ N̄`` below ``th_rank`` times the scale count as nullspace.
+    rank_scale : {"task", "peak"}
+        The scale: per task ``s⁽ᵏ⁾`` or the running peak ``p⁽ᵏ⁾ₜ`` (see the module docstring).
 
     Returns
     -------
     HierarchicalLQResult
         Gains in the ``δu = Σₖ ff[k] + K δx`` convention and per-task value functions.
     """
+    if rank_scale not in ("task", "peak"):
+        raise ValueError(f"rank_scale: expected 'task' or 'peak', got {rank_scale!r}")
     T, nlev = len(Fx), len(levels)
     lambdas = [0.0] * nlev if lambdas is None else list(lambdas)
     mus = [0.0] * nlev if mus is None else list(mus)
@@ -105,7 +116,14 @@ def hierarchical_backward_pass(
         [[None] * T + [np.array(lv.Lxx[T], dtype=float)] for lv in levels],
         [[0] * T for _ in range(nlev)], [0] * T,
     )
-    peaks = [0.0] * nlev
+    scale = [0.0] * nlev
+    if rank_scale == "task":
+        bmax = max((float(np.abs(B).max()) for B in Fu if B.size), default=0.0)
+        task_scale = [
+            max(max((float(np.abs(m).max()) for m in lv.Luu if m.size), default=0.0),
+                bmax**2 * max(float(np.abs(m).max()) for m in lv.Lxx if m.size))
+            for lv in levels
+        ]
     curvature = [max((float(np.max(np.diag(m))) for m in lv.Lxx if m.size), default=0.0) or 1.0 for lv in levels]
     for t in range(T - 1, -1, -1):
         A, B = Fx[t], Fu[t]
@@ -120,11 +138,14 @@ def hierarchical_backward_pass(
             Qxu = lv.Lxu[t] + A.T @ VxxB
             Quu = lv.Luu[t] + B.T @ VxxB
             Qs.append((Qx, Qu, Qxx, Qxu, Quu))
-            peaks[k] = max(peaks[k], float(np.max(np.diag(Quu), initial=0.0)))
-            if np.trace(Nbar) < 0.5 or peaks[k] == 0.0:
+            if rank_scale == "task":
+                scale[k] = task_scale[k]
+            else:
+                scale[k] = max(scale[k], float(np.max(np.diag(Quu), initial=0.0)))
+            if np.trace(Nbar) < 0.5 or scale[k] == 0.0:
                 continue
             w, V = np.linalg.eigh(Nbar @ Quu @ Nbar)
-            Vr = V[:, w > th_rank * peaks[k]]
+            Vr = V[:, w > th_rank * scale[k]]
             r = Vr.shape[1]
             res.rank[k][t] = r
             if not r:
