@@ -352,6 +352,30 @@ def test_table1_bars_on_ten_trials():
     assert res[3]["errors"]["left"] <= 1e-7 and res[3]["errors"]["right"] <= 1e-7
     assert res[3]["met"]["left"] == res[3]["met"]["right"] == 10
     assert res["priority"]["relative"] <= 1e-8
+    assert res[1]["bar"] and res[2]["bar"] and res[3]["bar"]
+
+
+def test_table1_bar_counts_trials_and_test3_means():
+    from crocopy.experiments.hddp import table1_bar
+
+    errors = np.full((20, 2), 1e-9)
+    errors[:1, 0] = 1e-3
+    assert table1_bar(1, errors)[0] and "19/20" in table1_bar(1, errors)[1]
+    errors[:2, 0] = 1e-3
+    assert not table1_bar(2, errors)[0]  # 18/20 = 90 % < 95 %
+    assert not table1_bar(3, errors)[0]  # the mean of task 1 is 1e-4
+    assert table1_bar(3, np.full((5, 2), 5e-8))[0]
+    assert not table1_bar(3, np.array([[1e-9, 2e-7]]))[0]
+
+
+@pytest.mark.slow
+def test_table2_weighted_runs_do_not_stop_at_no_level_improves():
+    from crocopy.experiments.hddp import run_hddp_weighted
+
+    rows = run_hddp_weighted(weights=(1e3, 1e4, 1e5), verbose=False)
+    for r in rows:
+        if r["solver"] == "Weighted HDDP":
+            assert "no level improves" not in r["reason"] and r["errors"][0] < 1e-6
 
 
 def test_linear_prediction_of_a_trial_is_exact_on_linear_dynamics():

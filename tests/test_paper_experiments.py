@@ -151,6 +151,7 @@ def test_box_ddp_lq_bar_on_the_20_random_problems(tmp_path):
     box = res["summary"]["methods"]["Box-DDP"]
     assert res["showcase"]["iterations"]["Box-DDP"] <= 20
     assert box["within_20"] - (res["showcase"]["iterations"]["Box-DDP"] <= 20) >= 18
+    assert res["summary"]["bar"]
     for r in res["random"]:
         assert r["gap"] <= 1e-11 * abs(r["J*"])
 

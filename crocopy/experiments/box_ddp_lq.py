@@ -136,6 +136,11 @@ def run_lq(out_dir: str = ".", maxiter: int = 30, n_random: int = 20, c_u: float
         f"{summary['order_range'][0]:.2f}..{summary['order_range'][1]:.2f} (the step after them reaches round-off)")
     say(f"  Box-DDP box-QP factorisations per QP solve: {summary['factorizations_per_qp']:.2f} (paper: ~1.5 per "
         "iteration)")
+    show = showcase["iterations"]["Box-DDP"]
+    within = sum(r["iterations"]["Box-DDP"] is not None and r["iterations"]["Box-DDP"] <= 20 for r in randoms)
+    summary["bar"] = show is not None and show <= 20 and within >= 0.9 * len(randoms)
+    say(f"  bar: Box-DDP reaches 1e-8 |J*| within 20 iterations on the showcase ({_fmt_it(show, maxiter)}) and on "
+        f">= 90 % of the {len(randoms)} random problems ({within}): {'met' if summary['bar'] else 'NOT MET'}")
     out = {"showcase": showcase, "random": randoms, "summary": summary}
     if plot:
         out["plot"] = _plot(out, out_dir)
