@@ -31,12 +31,13 @@ Issue 16 (measured; see ``docs/experiments.md``).  The earlier Test 1 targets (l
 each axis, right hand 35 cm to the left) were not conflicting: the static lexicographic optimum of
 the right hand was 1.7e-24 m².  The runs that ended with the top task at 1e-4..3e-2 m² (2 % of
 Test 1, 5 % of Test 2) were not unreachable targets (task 1 solved alone reached < 1e-8 m² in
-the five such trials checked) but (a) a rank threshold that dropped genuine reaching directions at the last
-node (fixed in :mod:`crocopy.solvers.hddp_lq`), (b) first iterations that blew the effort up to
-1e28..1e56 (huge deadbeat feedback gains, no regularisation at ``λ = 1e-9``; fixed by ``LAMBDA0``)
-and (c) lower levels declared converged while blocked by a higher level that was still moving
-(fixed by the per-level schedule of :class:`~crocopy.solvers.hddp.SolverHDDP`) and (d) full steps
-whose rollout left the linear model by a factor ~1e39 (joints spinning; rejected by ``th_model``).
+the five such trials checked) but (a) a rank threshold that dropped genuine reaching directions at
+the last node (``rank_scale = "peak"`` of :mod:`crocopy.solvers.hddp_lq`, set here:
+:data:`RANK_SCALE`), (b) first iterations that blew the effort up to 1e28..1e56 (huge deadbeat
+feedback gains, no regularisation at ``λ = 1e-9``; fixed by ``LAMBDA0``) and (c) lower levels
+declared converged while blocked by a higher level that was still moving (fixed by the per-level
+schedule of :class:`~crocopy.solvers.hddp.SolverHDDP`) and (d) full steps whose rollout left the
+linear model by a factor ~1e39 (joints spinning; rejected by ``th_model``).
 
 :func:`run_hddp` prints Table I (mean errors, iterations, CPU time per trial; trials can run in
 ``jobs`` processes) and the strict priority check; :func:`run_hddp_weighted` prints Table II
