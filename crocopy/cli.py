@@ -288,7 +288,7 @@ def _table1(args: argparse.Namespace) -> int:
 def _paper(args: argparse.Namespace) -> int:
     key = (args.paper, args.experiment)
     if key == ("box-ddp", "lq"):
-        from .experiments.box_ddp import run_lq
+        from .experiments.box_ddp_lq import run_lq
 
         run_lq(out_dir=args.out)
     elif key == ("box-ddp", "car"):
