@@ -9,6 +9,7 @@ SOLVERS = {
     "boxddp": "SolverBoxDDP",
     "fddp": "SolverFDDP",
     "ddp": "SolverDDP",
+    "intro": "SolverIntro",
 }
 """Short solver names (the CLI's ``--solver`` choices) → class names, the same in crocopy and Crocoddyl."""
 
