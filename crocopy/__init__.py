@@ -69,6 +69,7 @@ from .solvers.box_qp import BoxQP, BoxQPSolution
 from .solvers.clamping import SolverClampedDDP
 from .solvers.hddp import CallbackHDDPLogger, CallbackHDDPVerbose, SolverHDDP
 from .solvers.intro import EqualitySolverType, SolverIntro
+from .solvers.kkt import SolverKKT
 from .solvers.projection import ConstraintRankError, SolverProjection
 from .solvers.std_vector import StdVec_VectorXs
 from .solvers.stopwatch import (

@@ -10,6 +10,7 @@ SOLVERS = {
     "fddp": "SolverFDDP",
     "ddp": "SolverDDP",
     "intro": "SolverIntro",
+    "kkt": "SolverKKT",
 }
 """Short solver names (the CLI's ``--solver`` choices) → class names, the same in crocopy and Crocoddyl."""
 

@@ -178,6 +178,17 @@ class SolverIntro(SolverFDDP):
         if self.zero_upsilon:
             self._upsilon = 0.0
 
+    def computeDirection(self, recalc: bool = True) -> None:
+        """Derivatives (if ``recalc``), constrained backward pass, and the penalty update.
+
+        The update divides by the equality feasibility held before the derivatives refreshed it:
+        the previous accepted iterate's (0 before a fresh solver's first iteration).
+        """
+        hfeas = self.hfeas
+        super().computeDirection(recalc)
+        if hfeas > 0.0:
+            self._upsilon = max(self._upsilon, (self._dg + 0.5 * self._dq) / ((1.0 - self.rho) * hfeas))
+
     def _equality_norm(self) -> float:
         p = self.problem
         return self._norm([d.h for d in (*p.runningDatas, p.terminalData)])
@@ -189,8 +200,6 @@ class SolverIntro(SolverFDDP):
         """
         self.forwardPass(steplength)
         self.expectedImprovement()
-        if self.hfeas > 0.0:
-            self._upsilon = max(self._upsilon, (self.d[0] + 0.5 * self.d[1]) / ((1.0 - self.rho) * self.hfeas))
         self.hfeas_try = self._equality_norm()
         self.dfeas = self.hfeas - self.hfeas_try
         self.dV = self.cost - self.cost_try
