@@ -293,7 +293,8 @@ class SolverIntro(SolverFDDP):
 
     def _constrained_value_function(self, t: int) -> None:
         """``V`` of node ``t`` along the constrained policy (gap-deflected when infeasible)."""
-        Qx, Qu, Qxx, Qxu, Quu, k, K = self.Qx[t], self.Qu[t], self.Qxx[t], self.Qxu[t], self.Quu[t], self.k[t], self.K[t]
+        Qx, Qu, Qxx, Qxu, Quu = self.Qx[t], self.Qu[t], self.Qxx[t], self.Qxu[t], self.Quu[t]
+        k, K = self.k[t], self.K[t]
         QuuK = Quu @ K
         Vx, Vxx = self.Vx[t], self.Vxx[t]
         Vx[:] = Qx - K.T @ Qu - Qxu @ k + QuuK.T @ k

@@ -119,7 +119,7 @@ class SolverKKT(SolverAbstract):
         kkt, ref = self.kkt, self.kktref
         kkt[:] = 0.0
         xo, uo, lo, nw = self._x_off, self._u_off, self._l_off, self._nw
-        for t, (m, d) in enumerate(zip(p.runningModels, p.runningDatas)):
+        for t, d in enumerate(p.runningDatas):
             xs, us = slice(xo[t], xo[t + 1]), slice(uo[t], uo[t + 1])
             kkt[xs, xs] = d.Lxx
             kkt[xs, us] = d.Lxu
