@@ -72,3 +72,33 @@ def nonlinear_equality_problem(lib, T: int = 10, seed: int = 1, a: float = 0.8, 
     problem = lib.ShootingProblem(r.randn(4), running, terminal)
     r = np.random.RandomState(seed + 7)
     return problem, [r.randn(4) for _ in range(T + 1)], [r.randn(3) for _ in range(T)]
+
+
+
+def arm_problem(lib, T: int = 20, dt: float = 1e-2, aref=(0.5, -0.3, 0.2, 0.4, -0.1, 0.3, 0.2)):
+    """Talos' arm (free forward dynamics, Euler): joint accelerations held at ``aref`` by equality rows
+    (``ConstraintModelResidual(state, ResidualModelJointAcceleration)``, ``Hu = M⁻¹``) on every running
+    node, state and control regularisation and a gripper target as costs."""
+    import example_robot_data
+
+    model = example_robot_data.load("talos_arm").model
+    state = lib.StateMultibody(model)
+    actuation = lib.ActuationModelFull(state)
+    frame = model.getFrameId("gripper_left_joint")
+    x0 = np.concatenate([np.array([0.17, -0.16, 0.0, -0.7, 0.0, 0.3, 0.0]), np.zeros(model.nv)])
+
+    def dam(constrained: bool, terminal: bool):
+        costs = lib.CostModelSum(state, actuation.nu)
+        costs.addCost("x", lib.CostModelResidual(state, lib.ResidualModelState(state, x0, actuation.nu)), 1e-2)
+        costs.addCost("u", lib.CostModelResidual(state, lib.ResidualModelControl(state, actuation.nu)), 1e-3)
+        track = lib.ResidualModelFrameTranslation(state, frame, np.array([0.4, 0.2, 0.4]), actuation.nu)
+        costs.addCost("track", lib.CostModelResidual(state, track), 1e2 if terminal else 1.0)
+        constraints = lib.ConstraintModelManager(state, actuation.nu)
+        if constrained:
+            accel = lib.ResidualModelJointAcceleration(state, np.array(aref), actuation.nu)
+            constraints.addConstraint("accel", lib.ConstraintModelResidual(state, accel))
+        return lib.DifferentialActionModelFreeFwdDynamics(state, actuation, costs, constraints)
+
+    running = [lib.IntegratedActionModelEuler(dam(True, False), dt) for _ in range(T)]
+    terminal = lib.IntegratedActionModelEuler(dam(False, True), 0.0)
+    return lib.ShootingProblem(x0, running, terminal)

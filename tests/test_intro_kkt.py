@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from intro_problems import lq_equality_problem, nonlinear_equality_problem
+from intro_problems import arm_problem, lq_equality_problem, nonlinear_equality_problem
 
 import crocopy
 
@@ -227,3 +227,31 @@ def test_registered_and_exported():
 
     assert SOLVERS["intro"] == "SolverIntro" and SOLVERS["kkt"] == "SolverKKT"
     assert (crocopy.LuNull, crocopy.QrNull, crocopy.Schur) == EQ_SOLVERS
+
+
+def test_arm_acceleration_rows_three_solvers_agree():
+    """Talos' arm with its joint accelerations held by equality rows (``Hu = M⁻¹``, nonlinear in q)."""
+    results = []
+    for eq in EQ_SOLVERS:
+        solver, converged = _solve_intro(arm_problem(crocopy, T=10), eq)
+        assert converged and solver.hfeas < 1e-9
+        results.append(solver)
+    for s in results[1:]:
+        assert s.iter == results[0].iter
+        assert s.cost == pytest.approx(results[0].cost, rel=1e-9)
+
+
+def test_rows_the_controls_cannot_reach_are_left_to_hfeas():
+    """Pure-state rows (``Hu = 0``): the nullspace solvers keep the whole control space (rank 0) and
+    the rows only count in ``hfeas``; the Schur complement is singular and the solve returns False."""
+    model = crocopy.ActionModelLQR(np.eye(2), np.eye(2), np.eye(2), np.eye(2), np.zeros((2, 2)),
+                                   np.zeros((0, 4)), np.array([[1.0, 0.0, 0.0, 0.0]]), np.zeros(2), np.zeros(2),
+                                   np.zeros(2), np.zeros(0), np.array([-1.0]))
+    problem = crocopy.ShootingProblem(np.zeros(2), [model] * 3, crocopy.ActionModelLQR(2, 2))
+    lu, _ = _solve_intro(problem, crocopy.LuNull, maxiter=5)
+    assert lu.Hu_rank == [0, 0, 0]
+    assert lu.hfeas > 0.5
+    assert all(np.isfinite(u).all() for u in lu.us)
+    schur, converged = _solve_intro(problem, crocopy.Schur, maxiter=5)
+    assert converged is False
+    assert "reg_max" in schur.reason

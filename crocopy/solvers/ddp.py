@@ -129,21 +129,29 @@ class SolverDDP(SolverAbstract):
                     self._accept_trial(alpha)
                     break
                 self._synced = False
-            if self.stepLength > self.th_stepDec:
-                self.decreaseRegularization()
-            if self.stepLength <= self.th_stepInc:
-                self.increaseRegularization()
-                if self.preg >= self.reg_max:
-                    self.stoppingCriteria()
-                    self._run_callbacks()
-                    return self._fail(f"no step accepted and regularization reached reg_max = {self.reg_max:g}")
-            self.stoppingCriteria()
-            self._run_callbacks()
-            if was_feasible and self.stop < self.th_stop:
-                self.reason = "converged"
-                return True
+            outcome = self._close_iteration(was_feasible)
+            if outcome is not None:
+                return outcome
         self.iter = maxiter
         return self._fail(f"maximum number of iterations ({maxiter}) reached")
+
+    def _close_iteration(self, was_feasible: bool) -> bool | None:
+        """After the line search: regularisation update, stopping value, callbacks; True once converged,
+        False on failure, None to go on."""
+        if self.stepLength > self.th_stepDec:
+            self.decreaseRegularization()
+        if self.stepLength <= self.th_stepInc:
+            self.increaseRegularization()
+            if self.preg >= self.reg_max:
+                self.stoppingCriteria()
+                self._run_callbacks()
+                return self._fail(f"no step accepted and regularization reached reg_max = {self.reg_max:g}")
+        self.stoppingCriteria()
+        self._run_callbacks()
+        if was_feasible and self.stop < self.th_stop:
+            self.reason = "converged"
+            return True
+        return None
 
     def _accept(self, alpha: float) -> bool:
         if self.dVexp >= 0:

@@ -50,6 +50,9 @@ class EqualitySolverType(enum.IntEnum):
     QrNull = 1
     Schur = 2
 
+    def __str__(self) -> str:
+        return self.name
+
 
 def full_pivot_lu(A: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """``P A Q = L U`` with full pivoting (largest remaining entry first).
@@ -217,6 +220,26 @@ class SolverIntro(SolverFDDP):
         super()._accept_trial(alpha)
         self.hfeas = self.hfeas_try
         self.merit = self.cost + self._upsilon * self.hfeas
+
+    def _close_iteration(self, was_feasible: bool) -> bool | None:
+        """Stopping value and callbacks, then the regularisation update of Crocoddyl's SolverIntro.
+
+        The update comes after the callbacks (the verbose line shows the ``preg`` the iteration used):
+        ``preg`` decreases after a step longer than ``th_stepDec`` that lowered the cost, and increases
+        after a step of at most ``th_stepInc`` or once ``|d₀| <= th_feas``.
+        """
+        self.stoppingCriteria()
+        self._run_callbacks()
+        if was_feasible and self.stop < self.th_stop:
+            self.reason = "converged"
+            return True
+        if self.stepLength > self.th_stepDec and self.dV >= 0.0:
+            self.decreaseRegularization()
+        if self.stepLength <= self.th_stepInc or abs(self.d[0]) <= self.th_feas:
+            self.increaseRegularization()
+            if self.preg >= self.reg_max:
+                return self._fail(f"regularization reached reg_max = {self.reg_max:g}")
+        return None
 
     def stoppingCriteria(self) -> float:
         """``stop = max(|d₀ + ½ d₁|, hfeas)``."""

@@ -108,6 +108,21 @@ def test_nonlinear_equality_problem_same_iterations_and_cost(case):
             assert rm[k] == pytest.approx(rc[k], rel=REL.get(k, 1e-6), abs=1e-9), f"iteration {i}: {k}"
 
 
+@pytest.mark.parametrize("eq", EQ)
+def test_arm_acceleration_rows_same_as_crocoddyl(eq):
+    """Talos' arm, free forward dynamics, joint accelerations as equality rows on every running node."""
+    out = {}
+    for lib in (crocoddyl, crocopy):
+        s = _intro(lib, ip.arm_problem(lib), eq)
+        ok, rows = _trace(lib, s, [], [], 100)
+        out[lib] = (ok, s.iter, s.cost, rows)
+    assert out[crocoddyl][:2] == out[crocopy][:2] == (True, 4)
+    assert out[crocopy][2] == pytest.approx(out[crocoddyl][2], rel=1e-9)
+    for rc, rm in zip(out[crocoddyl][3], out[crocopy][3]):
+        for k in ("cost", "merit", "stepLength", "ffeas"):
+            assert rm[k] == pytest.approx(rc[k], rel=1e-6, abs=1e-9)
+
+
 def test_verbose_header_and_rows_as_crocoddyl(capfd):
     for lib in (crocoddyl, crocopy):
         s = _intro(lib, ip.lq_equality_problem(lib), "LuNull")
