@@ -8,13 +8,16 @@ sign, ``û = u - α k - K (x̂ ⊖ x)``), so ``Hu k = h`` and ``Hu K = Hx``.  Th
 * ``LuNull`` / ``QrNull`` (nullspace): ``[Y Z] = YZ`` spans the row space of ``Hu`` (``Y``, ``r =
   Hu_rank`` columns) and its kernel (``Z``), from a fully pivoted LU of ``Hu`` (``Y = Huᵀ`` of the
   pivot rows, ``Z`` the LU kernel) or a column-pivoted QR of ``Huᵀ`` (``Y, Z`` orthonormal).  With
-  ``Hy = Hu Y``: ``ks = Hy⁺ h``, ``Ks = Hy⁺ Hx``, and the rest of the control minimises the Q-function
-  in the kernel: ``Qzz = Zᵀ Quu Z``, ``Qz = Zᵀ (Qu - Quu Y ks)``, ``Qxz = (Qxu - Ksᵀ Yᵀ Quu) Z``,
-  ``Quz = Quu Z``, ``kz = Qzz⁻¹ Qz``, ``Kz = Qzz⁻¹ Qxzᵀ``; ``k = Y ks + Z kz``, ``K = Y Ks + Z Kz``.
-* ``Schur``: the node's KKT system ``[Quu Huᵀ; Hu 0] [k; λ] = [Qu; h]`` by the Schur complement
-  ``Qzz = Hu Quu⁻¹ Huᵀ`` (``Quz = Quu⁻¹ Huᵀ``, ``Qxz = Qxu Quu⁻¹ Huᵀ - Hxᵀ``): ``ks = λ``,
-  ``Ks`` its feedback, ``k = Quu⁻¹ (Qu - Huᵀ ks)``, ``K = Quu⁻¹ (Qux - Huᵀ Ks)``.
+  ``Hy = Hu Y``: ``ks = Hy⁺ h``, ``Ks = Hy⁺ Hx`` and their images ``kz = Y ks``, ``Kz = Y Ks``; the
+  rest of the control minimises the Q-function in the kernel, with ``Qzz = Zᵀ Quu Z``,
+  ``Qz = Qzz⁻¹ Zᵀ (Qu - Quu Y ks)``, ``Qxz = (Qzz⁻¹ Zᵀ (Qux - Quu Y Ks))ᵀ``, ``Quz = Quu Z Qzz⁻¹``:
+  ``k = Y ks + Z Qz``, ``K = Y Ks + Z Qxzᵀ``.
+* ``Schur``: the node's KKT system ``[Quu Huᵀ; Hu 0]`` by the Schur complement
+  ``Qzz = Hu Quu⁻¹ Huᵀ``: with the right-hand sides ``ks = h - Hu Quu⁻¹ Qu``,
+  ``Ks = Hx - Hu Quu⁻¹ Qux`` and ``[λ Λ] = Qzz⁻¹ [ks Ks]``, ``k = Quu⁻¹ (Qu + Huᵀ λ)``,
+  ``K = Quu⁻¹ (Qux + Huᵀ Λ)`` (the nullspace attributes are zero).
 
+These attributes hold what Crocoddyl's hold (measured on the same problems).
 All three give the same ``k, K`` when ``Hu`` has full row rank.  Nodes without equality rows take the
 DDP step.  The value function is the Q-function along the constrained policy,
 ``Vx = Qx - Kᵀ Qu - Qxu k + Kᵀ Quu k``, ``Vxx = Qxx - Qxu K - Kᵀ Qux + Kᵀ Quu K`` (gap-deflected as
@@ -22,11 +25,18 @@ in FDDP).  Pure-state rows (rows ``Hu`` cannot reach) and terminal rows are not 
 policy; they only count in ``hfeas``.
 
 Globalisation (FDDP's rollout and expected improvement ``d``, plus a merit on the equality
-feasibility ``hfeas``): before the line search the penalty grows to
-``upsilon = max(upsilon, (d₀ + ½ d₁) / ((1 - rho) hfeas))``; a trial step ``α`` changes the merit
-``merit = cost + upsilon hfeas`` by ``dPhi = dV + upsilon dfeas`` (``dfeas = hfeas - hfeas_try``)
-against the prediction ``dPhiexp = dVexp + α upsilon dfeas``, and is accepted on FDDP's test applied
-to ``(dPhi, dPhiexp)``.  The stopping value is ``stop = max(|d₀ + ½ d₁|, hfeas)``.
+feasibility ``hfeas``, all measured against Crocoddyl 3.2.1):
+
+* after the backward pass the penalty grows to ``upsilon = max(upsilon, (d₀ + ½ d₁) / ((1 - rho) h))``
+  with ``h`` the ``hfeas`` held before the derivatives (the last accepted iterate's; 0, no update, on
+  a fresh solver's first iteration);
+* a trial step ``α`` changes the merit ``merit = cost + upsilon hfeas`` by ``dPhi = dV + upsilon dfeas``
+  (``dfeas = hfeas - hfeas_try``), predicted as ``dPhiexp = dVexp + α upsilon dfeas``; it is accepted
+  when ``dPhi > th_acceptStep dPhiexp`` if ``dPhiexp >= 0``, else when ``dV > th_acceptNegStep dVexp``
+  (or when ``|d₀| < th_grad``);
+* ``stop = max(|d₀ + ½ d₁|, hfeas)``; after the callbacks, ``preg`` decreases after a step longer
+  than ``th_stepDec`` that lowered the cost and increases after a step of at most ``th_stepInc`` or
+  once ``|d₀| <= th_feas`` (near convergence).
 """
 
 from __future__ import annotations
@@ -86,8 +96,8 @@ def full_pivot_lu(A: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray, n
 
 
 def lu_range_kernel(Hu: np.ndarray, rtol: float) -> tuple[np.ndarray, int]:
-    """``[Y Z]`` of ``Hu`` (nh, nu) by fully pivoted LU: ``Y = Huᵀ`` of the pivot rows (in their
-    order in ``Hu``) and ``Z`` the LU kernel basis (identity on the free columns)."""
+    """``[Y Z]`` of ``Hu`` (nh, nu) by fully pivoted LU: ``Y = Huᵀ`` of the pivot rows (in pivot
+    order) and ``Z`` the LU kernel basis (identity on the free columns)."""
     U, rows, cols, r = full_pivot_lu(Hu, rtol)
     nu = Hu.shape[1]
     Z = np.zeros((nu, nu - r))
@@ -96,7 +106,7 @@ def lu_range_kernel(Hu: np.ndarray, rtol: float) -> tuple[np.ndarray, int]:
         free[:r] = -scipy.linalg.solve_triangular(U[:r, :r], U[:r, r:]) if r else 0.0
         free[r:] = np.eye(nu - r)
         Z[cols] = free
-    Y = Hu[np.sort(rows[:r])].T
+    Y = Hu[rows[:r]].T
     return np.hstack([Y, Z]), r
 
 
@@ -135,6 +145,8 @@ class SolverIntro(SolverFDDP):
         Per running node, as described in the module docstring (empty for nodes without rows).
     dfeas : float
         ``hfeas - hfeas_try`` of the last trial step.
+    th_rank : float
+        crocopy's: relative pivot threshold of the rank decisions (machine epsilon, times ``min(nh, nu)``).
     """
 
     def __init__(self, problem: ShootingProblem) -> None:
@@ -197,7 +209,7 @@ class SolverIntro(SolverFDDP):
         return self._norm([d.h for d in (*p.runningDatas, p.terminalData)])
 
     def tryStep(self, steplength: float = 1.0) -> float:
-        """Roll out with step ``steplength``, update the penalty; returns the cost reduction ``dV``.
+        """Roll out with step ``steplength``; returns the cost reduction ``dV``.
 
         Also sets ``hfeas_try``, ``dfeas``, ``dPhi`` and the predictions ``dVexp``, ``dPhiexp``.
         """
@@ -276,43 +288,45 @@ class SolverIntro(SolverFDDP):
         Y, Z = YZ[:, :r], YZ[:, r:]
         Hy = Hu @ Y
         ks, Ks = _least_squares(Hy, h, Hx)
+        Yks, YKs = Y @ ks, Y @ Ks
         QuuZ = Quu @ Z
         Qzz = Z.T @ QuuZ
-        Yks, YKs = Y @ ks, Y @ Ks
-        Qz = Z.T @ Qu - QuuZ.T @ Yks
-        Qxz = Qxu @ Z - YKs.T @ QuuZ
+        kz = Z.T @ Qu - QuuZ.T @ Yks
+        Kz = Z.T @ Qxu.T - QuuZ.T @ YKs
+        Quz = QuuZ
         if Z.shape[1]:
             chol, info = scipy.linalg.lapack.dpotrf(Qzz, lower=0, clean=1)
             if info != 0:
                 raise BackwardPassError(f"the reduced Hessian Qzz is not positive definite at node {t}")
-            kz = scipy.linalg.cho_solve((chol, False), Qz)
-            Kz = scipy.linalg.cho_solve((chol, False), Qxz.T)
-        else:
-            kz, Kz = np.zeros(0), np.zeros((0, Hx.shape[1]))
+            kz = scipy.linalg.cho_solve((chol, False), kz)
+            Kz = scipy.linalg.cho_solve((chol, False), Kz)
+            Quz = scipy.linalg.cho_solve((chol, False), QuuZ.T).T
         self.k[t][:] = Yks + Z @ kz
         self.K[t][:] = YKs + Z @ Kz
         self.Hu_rank[t], self.YZ[t], self.Hy[t] = r, YZ, Hy
-        self.ks[t], self.Ks[t], self.kz[t], self.Kz[t] = ks, Ks, kz, Kz
-        self.Qz[t], self.Qzz[t], self.Qxz[t], self.Quz[t] = Qz, Qzz, Qxz, QuuZ
+        self.ks[t], self.Ks[t], self.kz[t], self.Kz[t] = ks, Ks, Yks, YKs
+        self.Qz[t], self.Qzz[t], self.Qxz[t], self.Quz[t] = kz, Qzz, Kz.T, Quz
 
     def _schur_gains(self, t, h, Hx, Hu, Quu, Qu, Qxu) -> None:
         chol, info = scipy.linalg.lapack.dpotrf(Quu, lower=0, clean=1)
         if info != 0:
             raise BackwardPassError(f"Quu is not positive definite at node {t}")
-        Quz = scipy.linalg.cho_solve((chol, False), Hu.T)
-        Qzz = Hu @ Quz
+        QuuinvHuT = scipy.linalg.cho_solve((chol, False), Hu.T)
+        Qzz = Hu @ QuuinvHuT
         kq = scipy.linalg.cho_solve((chol, False), np.column_stack([Qu, Qxu.T]))
-        Qxz = Qxu @ Quz - Hx.T
-        rhs = np.column_stack([Hu @ kq[:, 0] - h, Qxz.T])
+        rhs = np.column_stack([h, Hx]) - Hu @ kq
         try:
             lam = scipy.linalg.solve(Qzz, rhs, assume_a="pos")
         except (np.linalg.LinAlgError, ValueError) as exc:
             raise BackwardPassError(f"the Schur complement Hu Quu⁻¹ Huᵀ is singular at node {t}") from exc
-        ks, Ks = lam[:, 0], lam[:, 1:]
-        self.k[t][:] = kq[:, 0] - Quz @ ks
-        self.K[t][:] = kq[:, 1:] - Quz @ Ks
+        self.k[t][:] = kq[:, 0] + QuuinvHuT @ lam[:, 0]
+        self.K[t][:] = kq[:, 1:] + QuuinvHuT @ lam[:, 1:]
+        nu, nh, ndx = Hu.shape[1], Hu.shape[0], Hx.shape[1]
         self.Hu_rank[t] = int(np.linalg.matrix_rank(Hu))
-        self.ks[t], self.Ks[t], self.Qzz[t], self.Qxz[t], self.Quz[t] = ks, Ks, Qzz, Qxz, Quz
+        self.ks[t], self.Ks[t], self.Qzz[t] = rhs[:, 0], rhs[:, 1:], Qzz
+        self.YZ[t], self.Hy[t], self.Qz[t] = np.zeros((nu, nu)), np.zeros((nh, nh)), np.zeros(nh)
+        self.Qxz[t], self.Quz[t] = np.zeros((ndx, nh)), np.zeros((nu, nh))
+        self.kz[t], self.Kz[t] = np.zeros(nu), np.zeros((nu, ndx))
 
     def _constrained_value_function(self, t: int) -> None:
         """``V`` of node ``t`` along the constrained policy (gap-deflected when infeasible)."""
