@@ -36,7 +36,7 @@ feasibility ``hfeas``, all measured against Crocoddyl 3.2.1):
   (or when ``|d₀| < th_grad``);
 * ``stop = max(|d₀ + ½ d₁|, hfeas)``; after the callbacks, ``preg`` decreases after a step longer
   than ``th_stepDec`` that lowered the cost and increases after a step of at most ``th_stepInc`` or
-  once ``|d₀| <= th_feas`` (near convergence).
+  once ``|d₁| <= th_feas`` (near convergence).
 """
 
 from __future__ import annotations
@@ -238,7 +238,7 @@ class SolverIntro(SolverFDDP):
 
         The update comes after the callbacks (the verbose line shows the ``preg`` the iteration used):
         ``preg`` decreases after a step longer than ``th_stepDec`` that lowered the cost, and increases
-        after a step of at most ``th_stepInc`` or once ``|d₀| <= th_feas``.
+        after a step of at most ``th_stepInc`` or once ``|d₁| <= th_feas``.
         """
         self.stoppingCriteria()
         self._run_callbacks()
@@ -247,7 +247,7 @@ class SolverIntro(SolverFDDP):
             return True
         if self.stepLength > self.th_stepDec and self.dV >= 0.0:
             self.decreaseRegularization()
-        if self.stepLength <= self.th_stepInc or abs(self.d[0]) <= self.th_feas:
+        if self.stepLength <= self.th_stepInc or abs(self.d[1]) <= self.th_feas:
             self.increaseRegularization()
             if self.preg >= self.reg_max:
                 return self._fail(f"regularization reached reg_max = {self.reg_max:g}")
