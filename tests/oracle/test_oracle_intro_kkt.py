@@ -32,14 +32,17 @@ import intro_problems as ip  # noqa: E402
 
 EQ = ("LuNull", "QrNull", "Schur")
 NONLINEAR = [dict(T=10, seed=3, a=0.3, b=0.1), dict(T=12, seed=3, a=0.5, b=0.1), dict(T=10, seed=6, a=0.3, b=0.1),
-             dict(T=10, seed=1, a=0.3, b=0.1), dict(T=12, seed=6, a=0.5, b=0.1)]
-FIGURES = ("cost", "merit", "upsilon", "stop", "stepLength", "hfeas", "ffeas", "dV", "dVexp", "dPhi", "dPhiexp")
+             dict(T=10, seed=1, a=0.3, b=0.1), dict(T=12, seed=6, a=0.5, b=0.1), dict(T=12, seed=5, a=0.5, b=0.1),
+             dict(T=12, seed=3, a=0.5, b=0.1, th_feas=1e-2, init_reg=1e-3),
+             dict(T=12, seed=7, a=0.5, b=0.1, th_feas=1e4, init_reg=1e-9),
+             dict(T=12, seed=1, a=0.5, b=0.1, th_feas=1.0, init_reg=1e-1)]
+FIGURES = ("cost", "merit", "upsilon", "stop", "stepLength", "hfeas", "ffeas", "dV", "dVexp", "dPhi", "dPhiexp", "preg")
 KKT_FIGURES = ("cost", "stop", "stepLength", "dV", "dVexp", "ffeas")
 #: upsilon divides by hfeas, which tends to 0: round-off differences grow as it does.
-REL = {"upsilon": 1e-4}
+REL = {"upsilon": 1e-4, "preg": 1e-9}
 
 
-def _trace(lib, solver, xs, us, maxiter, figures=FIGURES):
+def _trace(lib, solver, xs, us, maxiter, figures=FIGURES, init_reg=None):
     rows = []
 
     def record(s):
@@ -56,7 +59,10 @@ def _trace(lib, solver, xs, us, maxiter, figures=FIGURES):
         solver.setCallbacks([Recorder()])
     else:
         solver.setCallbacks([record])
-    converged = solver.solve(list(xs), list(us), maxiter)
+    if init_reg is None:
+        converged = solver.solve(list(xs), list(us), maxiter)
+    else:
+        converged = solver.solve(list(xs), list(us), maxiter, False, init_reg)
     return converged, rows
 
 
@@ -101,10 +107,13 @@ def test_backward_pass_attributes_same_as_crocoddyl(eq):
 @pytest.mark.parametrize("case", NONLINEAR, ids=lambda c: "-".join(f"{k}{v}" for k, v in c.items()))
 def test_nonlinear_equality_problem_same_iterations_and_cost(case):
     out = {}
+    case = dict(case)
+    th_feas, init_reg = case.pop("th_feas", 1e-4), case.pop("init_reg", None)
     for lib in (crocoddyl, crocopy):
         problem, xs, us = ip.nonlinear_equality_problem(lib, **case)
         s = lib.SolverIntro(problem)
-        ok, rows = _trace(lib, s, xs, us, 100)
+        s.th_feas = th_feas
+        ok, rows = _trace(lib, s, xs, us, 100, init_reg=init_reg)
         out[lib] = (ok, s.iter, s.cost, rows)
     ok_c, it_c, cost_c, rows_c = out[crocoddyl]
     ok_m, it_m, cost_m, rows_m = out[crocopy]
