@@ -158,6 +158,8 @@ class SolverIntro(SolverFDDP):
         self.zero_upsilon = False
         self.dfeas = 0.0
         self.feas = 0.0
+        self.x_reg = 0.0
+        self.u_reg = 0.0
         self.th_rank = np.finfo(float).eps
         models = problem.runningModels
         self.Hu_rank = [0 for _ in models]

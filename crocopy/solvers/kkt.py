@@ -59,6 +59,8 @@ class SolverKKT(SolverAbstract):
         self.lambdas = [self.primaldual[a:b] for a, b in zip(self._l_off[:-1], self._l_off[1:])]
         self.x_reg = 0.0
         self.u_reg = 0.0
+        self.feas = 0.0
+        self.dfeas = 0.0
         self.cost_try = 0.0
         self.alphas = [2.0 ** (-n) for n in range(10)]
         self._gaps: list[np.ndarray] = []
