@@ -301,6 +301,11 @@ class SolverDDP(SolverAbstract):
         if model.nu:
             Vx -= self.K[t].T @ self.Qu[t]
             Vxx -= self.Qxu[t] @ self.K[t]
+        self._finish_value_function(t)
+
+    def _finish_value_function(self, t: int) -> None:
+        """Symmetrise ``Vxx[t]``, add ``preg`` to it and deflect ``Vx[t]`` by the gap when infeasible."""
+        Vx, Vxx = self.Vx[t], self.Vxx[t]
         Vxx += Vxx.T
         Vxx *= 0.5
         if self.preg:

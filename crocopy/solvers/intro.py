@@ -335,15 +335,9 @@ class SolverIntro(SolverFDDP):
         Qx, Qu, Qxx, Qxu, Quu = self.Qx[t], self.Qu[t], self.Qxx[t], self.Qxu[t], self.Quu[t]
         k, K = self.k[t], self.K[t]
         QuuK = Quu @ K
-        Vx, Vxx = self.Vx[t], self.Vxx[t]
-        Vx[:] = Qx - K.T @ Qu - Qxu @ k + QuuK.T @ k
-        Vxx[:] = Qxx - Qxu @ K - K.T @ Qxu.T + K.T @ QuuK
-        Vxx += Vxx.T
-        Vxx *= 0.5
-        if self.preg:
-            Vxx.flat[:: Vxx.shape[0] + 1] += self.preg
-        if not self.isFeasible:
-            Vx += Vxx @ self.fs[t]
+        self.Vx[t][:] = Qx - K.T @ Qu - Qxu @ k + QuuK.T @ k
+        self.Vxx[t][:] = Qxx - Qxu @ K - K.T @ Qxu.T + K.T @ QuuK
+        self._finish_value_function(t)
 
 
 def _least_squares(A: np.ndarray, b: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
