@@ -81,6 +81,8 @@ from .solvers.box_fddp import SolverBoxFDDP
 from .solvers.box_qp import BoxQP, BoxQPSolution
 from .solvers.clamping import SolverClampedDDP
 from .solvers.hddp import CallbackHDDPLogger, CallbackHDDPVerbose, SolverHDDP
+from .solvers.intro import EqualitySolverType, SolverIntro
+from .solvers.kkt import SolverKKT
 from .solvers.projection import ConstraintRankError, SolverProjection
 from .solvers.std_vector import StdVec_VectorXs
 from .solvers.stopwatch import (
@@ -138,6 +140,7 @@ setto, addto, rmfrom = AssignmentOp.setto, AssignmentOp.addto, AssignmentOp.rmfr
 two, three, four = RKType.two, RKType.three, RKType.four
 Inequality, Equality, Both = ConstraintType.Inequality, ConstraintType.Equality, ConstraintType.Both
 LInf, L1 = FeasibilityNorm.LInf, FeasibilityNorm.L1
+LuNull, QrNull, Schur = EqualitySolverType.LuNull, EqualitySolverType.QrNull, EqualitySolverType.Schur
 CW, CCW = _ThrusterType.CW, _ThrusterType.CCW
 #: crocopy has no code generation (CppAD) back-end.
 WITH_CODEGEN = False

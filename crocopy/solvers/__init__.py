@@ -9,6 +9,8 @@ SOLVERS = {
     "boxddp": "SolverBoxDDP",
     "fddp": "SolverFDDP",
     "ddp": "SolverDDP",
+    "intro": "SolverIntro",
+    "kkt": "SolverKKT",
 }
 """Short solver names (the CLI's ``--solver`` choices) → class names, the same in crocopy and Crocoddyl."""
 

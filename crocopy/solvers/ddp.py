@@ -198,22 +198,30 @@ class SolverDDP(SolverAbstract):
                     rollout_error = None
                     break
                 self._synced = False
-            if self.stepLength > self.th_stepDec:
-                self.decreaseRegularization()
-            if self.stepLength <= self.th_stepInc:
-                self.increaseRegularization()
-                if self.preg >= self.reg_max:
-                    self.stoppingCriteria()
-                    self._run_callbacks()
-                    last = f" (last trial: {rollout_error})" if rollout_error is not None else ""
-                    return self._fail(f"no step accepted and regularization reached reg_max = {self.reg_max:g}{last}")
-            self.stoppingCriteria()
-            self._run_callbacks()
-            if was_feasible and self.stop < self.th_stop:
-                self.reason = "converged"
-                return True
+            outcome = self._close_iteration(was_feasible, rollout_error)
+            if outcome is not None:
+                return outcome
         self.iter = maxiter
         return self._fail(f"maximum number of iterations ({maxiter}) reached")
+
+    def _close_iteration(self, was_feasible: bool, rollout_error: str | None = None) -> bool | None:
+        """After the line search: regularisation update, stopping value, callbacks; True once converged,
+        False on failure (``rollout_error``: why the last trial failed, if it did), None to go on."""
+        if self.stepLength > self.th_stepDec:
+            self.decreaseRegularization()
+        if self.stepLength <= self.th_stepInc:
+            self.increaseRegularization()
+            if self.preg >= self.reg_max:
+                self.stoppingCriteria()
+                self._run_callbacks()
+                last = f" (last trial: {rollout_error})" if rollout_error is not None else ""
+                return self._fail(f"no step accepted and regularization reached reg_max = {self.reg_max:g}{last}")
+        self.stoppingCriteria()
+        self._run_callbacks()
+        if was_feasible and self.stop < self.th_stop:
+            self.reason = "converged"
+            return True
+        return None
 
     def _regularised_direction(self) -> bool:
         """``computeDirection``, raising the regularisation while ``Quu`` is not positive definite;
@@ -422,6 +430,11 @@ class SolverDDP(SolverAbstract):
         if model.nu:
             Vx -= self.K[t].T @ self.Qu[t]
             Vxx -= self.Qxu[t] @ self.K[t]
+        self._finish_value_function(t)
+
+    def _finish_value_function(self, t: int) -> None:
+        """Symmetrise ``Vxx[t]``, add ``preg`` to it and deflect ``Vx[t]`` by the gap when infeasible."""
+        Vx, Vxx = self.Vx[t], self.Vxx[t]
         Vxx += Vxx.T
         Vxx *= 0.5
         if self.preg:
