@@ -277,6 +277,9 @@ DYNAMICS: dict[str, DynamicsSpec] = {
                                                                    (_SOLES[1], _WORLD, (0.0, 0.0))), 6, True,
                                 dims=(6, 3)),
 }
+#: the inverse-dynamics kinds are crossed with these integrators only (their differential model is what
+#: is new; the Runge-Kutta cases are the slow ones, their Jacobians being proven against numdiff)
+INVDYN_INTEGRATORS = ("euler", "rk4", "euler-poly1", "rk3-poly2rk3")
 DYNAMICS[FREE_INV] = dataclasses.replace(DYNAMICS[FREE], invdyn=True, integrators=INVDYN_INTEGRATORS)
 DYNAMICS[CONTACT3_INV] = dataclasses.replace(DYNAMICS[CONTACT3], invdyn=True, integrators=INVDYN_INTEGRATORS)
 DYNAMICS[CONTACT6_INV] = dataclasses.replace(DYNAMICS[CONTACT6], invdyn=True, integrators=INVDYN_INTEGRATORS)
@@ -376,11 +379,6 @@ INTEGRATORS: dict[str, Callable] = {
 #: parametrization acts between the integrator and the differential model, whatever the cost)
 CONTROLLED_RESIDUALS = ("state", "control", "joint_effort", "joint_acceleration", "com", "frame_velocity_world",
                         "contact_force", "friction_cone")
-
-
-#: the inverse-dynamics kinds are crossed with these integrators only (their differential model is what
-#: is new; the Runge-Kutta cases are the slow ones, their Jacobians being proven against numdiff)
-INVDYN_INTEGRATORS = ("euler", "rk4", "euler-poly1", "rk3-poly2rk3")
 
 
 def crossed(integrator: str, residual: str, kind: str = FREE) -> bool:
