@@ -95,6 +95,12 @@ def check_bounds(lb: np.ndarray, ub: np.ndarray, lb_name: str, ub_name: str) -> 
         )
 
 
+def check_finite(values: Any, name: str) -> None:
+    """Raise ``ValueError`` if the array ``values`` (e.g. a Pinocchio SE3's ``homogeneous``) holds NaN or inf."""
+    if not np.all(np.isfinite(values)):
+        raise ValueError(f"{name} contains NaN or inf")
+
+
 def as_number(value: Any, name: str, minimum: float | None = None, strict: bool = False,
               allow_inf: bool = False) -> float:
     """Return ``value`` as a float, refusing non-numbers, NaN, inf (unless ``allow_inf``) and values

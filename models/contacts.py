@@ -21,6 +21,7 @@ import numpy as np
 import pinocchio as pin
 
 from crocopy.state import StateAbstract
+from crocopy.validation import as_vector, check_finite
 from crocopy.versioning import frozen_copy, touch
 
 from .contact_base import ContactDataAbstract, ContactModelAbstract, check_gains
@@ -119,10 +120,7 @@ class ContactModel3D(_FrameContact):
 
     @reference.setter
     def reference(self, value: np.ndarray) -> None:
-        ref = np.asarray(value, dtype=float).reshape(-1) if np.ndim(value) == 2 else np.asarray(value, dtype=float)
-        if ref.shape != (3,) or not np.all(np.isfinite(ref)):
-            raise ValueError(f"xref must be a finite vector of shape (3,), got shape {np.shape(value)}")
-        self._xref = frozen_copy(ref)
+        self._xref = frozen_copy(as_vector(value, 3, "xref"))
         touch(self)
 
     def _reference_placement(self) -> pin.SE3:
@@ -254,6 +252,7 @@ class ContactModel6D(_FrameContact):
     def reference(self, value: pin.SE3) -> None:
         if not isinstance(value, pin.SE3):
             raise ValueError(f"pref must be a pinocchio.SE3, got {type(value).__name__}")
+        check_finite(value.homogeneous, "pref")
         self._pref = value.copy()
         self._prefinv = value.inverse()
         touch(self)

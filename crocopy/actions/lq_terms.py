@@ -111,7 +111,8 @@ def check_cost_hessian(Q: np.ndarray, R: np.ndarray, N: np.ndarray) -> None:
     semi-definite (to a relative tolerance of 1e-10 of its largest eigenvalue)."""
     for name, M in (("Q", Q), ("R", R)):
         if not np.allclose(M, M.T, rtol=1e-10, atol=1e-12):
-            raise ValueError(f"{name} must be symmetric, got {name} - {name}.T with max |entry| {np.abs(M - M.T).max():g}")
+            asym = np.abs(M - M.T).max()
+            raise ValueError(f"{name} must be symmetric, got max |{name} - {name}.T| = {asym:g}")
     H = np.block([[Q, N], [N.T, R]])
     if not H.size:
         return
