@@ -192,8 +192,9 @@ def test_nonfinite_inputs_raise_and_overflow_warns():
         m.calc(d, np.array([0.0, np.nan, 0.0]), np.zeros(2))
     with pytest.raises(ValueError, match=r"u contains NaN or inf \(u\[0\] = inf\)"):
         m.calcDiff(d, np.zeros(3), np.array([np.inf, 0.0]))
-    with pytest.warns(NonFiniteWarning, match="ActionModelUnicycle: data.cost is not finite"), np.errstate(over="ignore"):
-        m.calc(d, np.full(3, 1e300), np.zeros(2))
+    with pytest.warns(NonFiniteWarning, match="ActionModelUnicycle: data.cost is not finite"):
+        with np.errstate(over="ignore"):
+            m.calc(d, np.full(3, 1e300), np.zeros(2))
     act = crocopy.ActivationModelQuad(3)
     with pytest.raises(ValueError, match=r"r contains NaN"):
         act.calc(act.createData(), np.array([0.0, np.nan, 1.0]))
