@@ -33,6 +33,8 @@ FUZZ = settings.get_profile("crocopy-fuzz-slow" if os.environ.get("CROCOPY_FUZZ_
 
 VALID_KINDS = ("ok", "list", "column", "row", "int")
 BAD_KINDS = ("short", "long", "matrix", "nan", "inf", "string", "complex", "bool", "none", "scalar")
+CONTROL_KINDS = tuple(k for k in VALID_KINDS + BAD_KINDS if k != "none")
+"""Forms of a control ``u``: ``None`` is not bad there, it asks for the terminal evaluation."""
 
 
 @dataclass
