@@ -47,9 +47,12 @@ class ControlBounds:
     """Control bounds ``u_lb``/``u_ub`` (shape ``(nu,)``, default unbounded).
 
     Each assignment checks the shape and refuses NaN (inf means unbounded).  The order of the pair is
-    checked where the bounds are used (the box solvers, squashing), not on assignment, so that
-    ``u_lb`` and ``u_ub`` can be set one after the other in either order.
+    checked where the bounds are used (``solve``, the box solvers, squashing), not on assignment, so
+    that ``u_lb`` and ``u_ub`` can be set one after the other in either order;
+    ``inverted_control_limits`` (crocopy extension) tells whether some ``u_lb[i] > u_ub[i]`` now.
     """
+
+    inverted_control_limits = False
 
     nu: int
 
@@ -76,6 +79,7 @@ class ControlBounds:
         self._set_control_limits(self._u_lb, as_vector(value, self.nu, "u_ub", allow_nonfinite=True))
 
     def _set_control_limits(self, lb: np.ndarray, ub: np.ndarray) -> None:
+        self.inverted_control_limits = bool((lb > ub).any())
         self._u_lb = lb
         self._u_ub = ub
 

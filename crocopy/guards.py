@@ -8,9 +8,11 @@ written later, in crocopy or by a user from Python, are checked as well.
 
 The wrapper checks only the outermost call: while a checked call runs, the calls it makes to other
 guarded methods (an integrator calling its differential model, a cost sum its costs) go straight to
-the raw functions behind a one-flag test.  A solve goes further: :func:`trusted_path` installs the
-raw functions themselves on every guarded class for its duration, so the hot path runs exactly the
-code it ran before the checks existed, and a user's override of ``calc`` is still the one called.
+the raw functions behind a one-flag test.  A solve goes further: inside :func:`trusted_path` the
+first call of a guarded method installs the raw functions on its class ("hot" classes) for the rest
+of the solve, and later solves install them on every hot class on entry; the hot path then runs
+exactly the code it ran before the checks existed, and a user's override of ``calc`` is still the
+one called.  The checked wrappers are back on exit.
 
 While a solve runs (in any thread), calls made from its callbacks are not checked either.
 """
@@ -34,7 +36,8 @@ class _Trust:
     """Greater than 0 inside a solve: the raw methods are installed on the guarded classes."""
 
 
-_CLASSES: weakref.WeakSet = weakref.WeakSet()
+_HOT: weakref.WeakSet = weakref.WeakSet()
+"""Guarded classes a solve has called into: their raw methods are installed during every solve."""
 
 
 class Guard:
@@ -73,10 +76,23 @@ class Guard:
         return args, kwargs
 
 
-def _wrap(raw: Callable, guard: Guard) -> Callable:
+def _install(cls: type, raw: bool) -> None:
+    for name, pair in cls.__dict__["_guard_pairs"].items():
+        setattr(cls, name, pair[0] if raw else pair[1])
+
+
+def _heat(cls: type) -> None:
+    """Install ``cls``'s raw methods for the rest of the solve, and on entry of the next ones."""
+    _HOT.add(cls)
+    _install(cls, raw=True)
+
+
+def _wrap(raw: Callable, guard: Guard, cls: type) -> Callable:
     @functools.wraps(raw)
     def guarded(self, *args, **kwargs):
         if _Trust.depth:
+            if _Trust.raw:
+                _heat(cls)
             return raw(self, *args, **kwargs)
         args, kwargs = guard.convert(self, args, kwargs)
         _Trust.depth += 1
@@ -103,25 +119,18 @@ class Guarded:
         for name, guard in cls._guards.items():
             f = cls.__dict__.get(name)
             if callable(f) and not hasattr(f, "_crocopy_raw"):
-                pairs[name] = (f, _wrap(f, guard))
+                pairs[name] = (f, _wrap(f, guard, cls))
         if pairs:
             cls._guard_pairs = pairs
-            for name, (raw, guarded) in pairs.items():
-                setattr(cls, name, raw if _Trust.raw else guarded)
-            _CLASSES.add(cls)
-
-
-def _install(raw: bool) -> None:
-    for cls in list(_CLASSES):
-        for name, pair in cls.__dict__["_guard_pairs"].items():
-            setattr(cls, name, pair[0] if raw else pair[1])
+            _install(cls, raw=False)
 
 
 @contextmanager
 def trusted_path() -> Iterator[None]:
     """Run the body with every guarded method unchecked and unwrapped (a solve's hot path)."""
     if not _Trust.raw:
-        _install(raw=True)
+        for cls in list(_HOT):
+            _install(cls, raw=True)
     _Trust.raw += 1
     _Trust.depth += 1
     try:
@@ -130,7 +139,8 @@ def trusted_path() -> Iterator[None]:
         _Trust.depth -= 1
         _Trust.raw -= 1
         if not _Trust.raw:
-            _install(raw=False)
+            for cls in list(_HOT):
+                _install(cls, raw=False)
 
 
 @contextmanager

@@ -49,7 +49,7 @@ def check_solve_arguments(solver: "SolverAbstract", maxiter: object, is_feasible
     if reg_min is not None and reg_max is not None and reg_min > reg_max:
         raise ValueError(f"reg_min = {reg_min} is above reg_max = {reg_max}")
     for t, m in enumerate(solver.problem.runningModels):
-        if m.nu:
+        if getattr(m, "inverted_control_limits", False):
             check_bounds(m.u_lb, m.u_ub, f"runningModels[{t}].u_lb", f"runningModels[{t}].u_ub")
     return maxiter, is_feasible, init_reg
 
