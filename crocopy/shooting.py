@@ -18,13 +18,23 @@ import numpy as np
 
 from .action_base import ActionDataAbstract, ActionModelAbstract
 from .guards import Guard, Guarded
-from .validation import ArgumentTypeError, as_vector
+from .validation import ArgumentTypeError, as_count, as_vector
 
 
 def _sequence(value: object, name: str) -> list:
     if value is None or isinstance(value, (str, bytes)) or not hasattr(value, "__len__"):
         raise ArgumentTypeError(f"{name} must be a list of vectors, got {type(value).__name__}")
     return list(value)
+
+
+def _node_model(problem: "ShootingProblem", model: object, name: str) -> ActionModelAbstract:
+    if not isinstance(model, ActionModelAbstract):
+        raise ArgumentTypeError(f"{name} must be an ActionModelAbstract, got {type(model).__name__}")
+    return model
+
+
+def _node_index(problem: "ShootingProblem", i: object, name: str) -> int:
+    return as_count(i, name)
 
 
 def _trajectories(problem: "ShootingProblem", args: list, kwargs: dict) -> None:
@@ -68,6 +78,9 @@ class ShootingProblem(Guarded):
         "calcDiff": Guard((("xs", None), ("us", None)), check=_trajectories),
         "rollout": Guard((("us", _controls),)),
         "quasiStatic": Guard((("xs", _states),)),
+        "updateModel": Guard((("i", _node_index), ("model", _node_model))),
+        "updateNode": Guard((("i", _node_index), ("model", _node_model))),
+        "circularAppend": Guard((("model", _node_model),)),
     }
 
     def __init__(

@@ -283,3 +283,22 @@ def test_a_direct_call_checks_only_the_outermost_level():
     assert seen == [False]
     with pytest.raises(ArgumentTypeError):
         integrated.calc(integrated.createData(), None)
+
+
+def test_problem_node_updates_and_named_items_check_their_arguments():
+    p = unicycle_problem()
+    with pytest.raises(TypeError, match="i must be an integer, got str"):
+        p.updateModel("2", crocopy.ActionModelUnicycle())
+    with pytest.raises(TypeError, match="model must be an ActionModelAbstract, got NoneType"):
+        p.updateModel(2, None)
+    with pytest.raises(TypeError, match="model must be an ActionModelAbstract, got str"):
+        p.circularAppend("unicycle")
+    state = crocopy.StateVector(2)
+    costs = crocopy.CostModelSum(state, 1)
+    with pytest.raises(TypeError, match="name of the cost must be a str, got int"):
+        costs.addCost(3, crocopy.CostModelResidual(state, crocopy.ResidualModelControl(state, 1)), 1.0)
+    costs.addCost("u", crocopy.CostModelResidual(state, crocopy.ResidualModelControl(state, 1)), 1.0)
+    with pytest.raises(TypeError, match="active must be a bool"):
+        costs.changeCostStatus("u", "no")
+    with pytest.raises(KeyError, match="no cost named 'v'"):
+        costs.changeCostStatus("v", False)
