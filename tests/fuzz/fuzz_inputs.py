@@ -119,3 +119,30 @@ def assert_finite(obj: Any, shapes: dict[str, tuple]) -> None:
         value = np.asarray(getattr(obj, attr))
         assert value.shape == shape, f"{attr} has shape {value.shape}, expected {shape}"
         assert np.all(np.isfinite(value)), f"{attr} is not finite: {value}"
+
+
+def calls_in_drawn_order(data: st.DataObject, model: Any, md: Any, args: list[Arg],
+                         shapes_of: Callable[[str], dict]) -> None:
+    """``calc``/``calcDiff`` of ``model`` on ``md`` with ``args``, 1 to 3 calls in a drawn order, each
+    meeting :func:`outcome` with the shapes ``shapes_of(method)``."""
+    values = [a.value for a in args]
+    for method in data.draw(st.lists(st.sampled_from(["calc", "calcDiff"]), min_size=1, max_size=3)):
+        shapes = shapes_of(method)
+        outcome(lambda m=method: getattr(model, m)(md, *values), args, lambda s=shapes: assert_finite(md, s))
+
+
+def assert_matches_numdiff(model: Any, x: np.ndarray, u: np.ndarray, tol: float) -> None:
+    """Cost and ``Fx, Fu, Lx, Lu`` of ``model`` at ``(x, u)`` agree with its numerical differentiation
+    (``tol`` relative to the largest entry of each numerical derivative, at least 1)."""
+    import crocopy
+
+    differential = isinstance(model, crocopy.DifferentialActionModelAbstract)
+    nd = (crocopy.DifferentialActionModelNumDiff if differential else crocopy.ActionModelNumDiff)(model)
+    md, ndd = model.createData(), nd.createData()
+    for m, d in ((model, md), (nd, ndd)):
+        m.calc(d, x, u)
+        m.calcDiff(d, x, u)
+    assert abs(md.cost - ndd.cost) <= 1e-9 * max(1.0, abs(ndd.cost))
+    for f in ("Fx", "Fu", "Lx", "Lu"):
+        ref = getattr(ndd, f)
+        np.testing.assert_allclose(getattr(md, f), ref, atol=tol * max(1.0, np.abs(ref).max()), err_msg=f)

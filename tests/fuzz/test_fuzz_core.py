@@ -6,7 +6,17 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from fuzz_inputs import CONTROL_KINDS, FUZZ, Arg, assert_finite, finite_values, outcome, vector_arg
+from fuzz_inputs import (
+    CONTROL_KINDS,
+    FUZZ,
+    Arg,
+    assert_finite,
+    assert_matches_numdiff,
+    calls_in_drawn_order,
+    finite_values,
+    outcome,
+    vector_arg,
+)
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -70,28 +80,16 @@ def test_action_models_give_a_clear_error_or_a_finite_result(name, data):
     terminal = data.draw(st.booleans())
     u = None if terminal else data.draw(vector_arg("u", model.nu, kinds=CONTROL_KINDS if model.nu else None))
     args = [x] if terminal else [x, u]
-    values = [a.value for a in args]
-    order = data.draw(st.lists(st.sampled_from(["calc", "calcDiff"]), min_size=1, max_size=3))
-    for method in order:
-        shapes = _action_shapes(model) if method == "calc" else _diff_shapes(model)
-        outcome(lambda m=method: getattr(model, m)(d, *values), args, lambda s=shapes: assert_finite(d, s))
+    calls_in_drawn_order(data, model, d, args, lambda m: _action_shapes(model) if m == "calc" else _diff_shapes(model))
 
 
 @FUZZ
 @given(name=st.sampled_from(sorted(ACTIONS)), data=st.data())
 def test_action_model_derivatives_match_numdiff(name, data):
     model = ACTIONS[name]()
-    differential = isinstance(model, crocopy.DifferentialActionModelAbstract)
-    nd = (crocopy.DifferentialActionModelNumDiff if differential else crocopy.ActionModelNumDiff)(model)
-    d, dn = model.createData(), nd.createData()
     x = data.draw(finite_values(model.state.nx, 1.0))
     u = data.draw(finite_values(model.nu, 1.0))
-    for m, md in ((model, d), (nd, dn)):
-        m.calc(md, x, u)
-        m.calcDiff(md, x, u)
-    assert d.cost == pytest.approx(dn.cost, rel=1e-10, abs=1e-10)
-    for f in ("Fx", "Fu", "Lx", "Lu"):
-        np.testing.assert_allclose(getattr(d, f), getattr(dn, f), atol=1e-5, rtol=1e-5, err_msg=f)
+    assert_matches_numdiff(model, x, u, 1e-5)
 
 
 @FUZZ

@@ -10,7 +10,15 @@ import example_robot_data
 import numpy as np
 import pinocchio as pin
 import pytest
-from fuzz_inputs import CONTROL_KINDS, FUZZ, assert_finite, outcome, vector_arg
+from fuzz_inputs import (
+    CONTROL_KINDS,
+    FUZZ,
+    assert_finite,
+    assert_matches_numdiff,
+    calls_in_drawn_order,
+    outcome,
+    vector_arg,
+)
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -117,29 +125,18 @@ def test_dynamics_give_a_clear_error_or_a_finite_result(name, data):
     terminal = data.draw(st.booleans())
     u = None if terminal else data.draw(vector_arg("u", model.nu, kinds=CONTROL_KINDS))
     args = [x] if terminal else [x, u]
-    values = [a.value for a in args]
     ndx, nu = model.state.ndx, model.nu
-    for method in data.draw(st.lists(st.sampled_from(["calc", "calcDiff"]), min_size=1, max_size=3)):
-        shapes = {"cost": ()} if method == "calc" else {"Lx": (ndx,), "Lu": (nu,), "Lxx": (ndx, ndx)}
-        outcome(lambda m=method: getattr(model, m)(md, *values), args, lambda s=shapes: assert_finite(md, s))
+    calls_in_drawn_order(data, model, md, args,
+                         lambda m: {"cost": ()} if m == "calc" else {"Lx": (ndx,), "Lu": (nu,), "Lxx": (ndx, ndx)})
 
 
 @FUZZ
 @given(name=st.sampled_from(sorted(MODELS)), data=st.data())
 def test_dynamics_derivatives_match_numdiff(name, data):
     model = MODELS[name]()
-    differential = isinstance(model, crocopy.DifferentialActionModelAbstract)
-    nd = (crocopy.DifferentialActionModelNumDiff if differential else crocopy.ActionModelNumDiff)(model)
-    md, ndd = model.createData(), nd.createData()
     x = _point(model.state, data)
     u = np.array(data.draw(st.lists(st.floats(-1.0, 1.0), min_size=model.nu, max_size=model.nu)))
-    for m, d in ((model, md), (nd, ndd)):
-        m.calc(d, x, u)
-        m.calcDiff(d, x, u)
-    assert md.cost == pytest.approx(ndd.cost, rel=1e-9, abs=1e-9)
-    for f in ("Fx", "Fu", "Lx", "Lu"):
-        ref = getattr(ndd, f)
-        np.testing.assert_allclose(getattr(md, f), ref, atol=1e-4 * max(1.0, np.abs(ref).max()), err_msg=f)
+    assert_matches_numdiff(model, x, u, 1e-4)
 
 
 @FUZZ
