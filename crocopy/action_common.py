@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .guards import Guard, Guarded
+from .guards import Guard, Guarded, unchecked
 from .state import StateAbstract
 from .validation import as_count, as_vector, control_arg, data_arg, state_arg, warn_nonfinite
 
@@ -108,6 +108,16 @@ def _after_calc_diff(model: "ActionModelBase", args: list, kwargs: dict) -> None
     warn_nonfinite(model, _data(args, kwargs), ("Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu"))
 
 
+def _calc_first(model: "ActionModelBase", args: list, kwargs: dict) -> None:
+    """A direct ``calcDiff`` on a data never evaluated (``cost`` still NaN) runs ``calc`` first at the
+    same point: derivatives may read what ``calc`` computes (contact dynamics read Pinocchio's KKT data)."""
+    data = _data(args, kwargs)
+    cost = getattr(data, "cost", 0.0)
+    if isinstance(cost, float) and cost != cost:
+        with unchecked():
+            model.calc(*args, **kwargs)
+
+
 _ACTION_DATA = data_arg({"Lx": lambda m: (m.state.ndx,), "Lu": lambda m: (m.nu,)})
 _ACTION_PARAMS = (("data", _ACTION_DATA), ("x", state_arg), ("u", control_arg))
 
@@ -128,12 +138,13 @@ class ActionModelBase(ControlLimitsMixin, Guarded):
     ``calc``, ``calcDiff`` and ``quasiStatic`` of every subclass check their arguments when a user
     calls them (:mod:`crocopy.guards`): ``data`` from this model, ``x (nx,)``, ``u (nu,)`` or ``None``,
     finite (NaN/inf raise ``ValueError``); a result that is not finite warns
-    (:class:`~crocopy.validation.NonFiniteWarning`).  A solve calls them unchecked.
+    (:class:`~crocopy.validation.NonFiniteWarning`); a ``calcDiff`` on a data that ``calc`` never
+    evaluated runs ``calc`` first.  A solve calls them unchecked.
     """
 
     _guards = {
         "calc": Guard(_ACTION_PARAMS, after=_after_calc),
-        "calcDiff": Guard(_ACTION_PARAMS, after=_after_calc_diff),
+        "calcDiff": Guard(_ACTION_PARAMS, check=_calc_first, after=_after_calc_diff),
         "quasiStatic": Guard((("data", _ACTION_DATA), ("x", state_arg))),
     }
 

@@ -302,3 +302,15 @@ def test_problem_node_updates_and_named_items_check_their_arguments():
         costs.changeCostStatus("u", "no")
     with pytest.raises(KeyError, match="no cost named 'v'"):
         costs.changeCostStatus("v", False)
+
+
+def test_calc_diff_before_calc_evaluates_the_node_first():
+    differential = crocopy.DifferentialActionModelLQR.Random(2, 1)
+    x, u = np.array([0.1, -0.2, 0.3, 0.4]), np.array([0.5])
+    fresh, ref = differential.createData(), differential.createData()
+    differential.calcDiff(fresh, x, u)  # no calc before
+    differential.calc(ref, x, u)
+    differential.calcDiff(ref, x, u)
+    assert fresh.cost == ref.cost
+    for f in ("xout", "Fx", "Fu", "Lx", "Lu"):
+        np.testing.assert_array_equal(getattr(fresh, f), getattr(ref, f), err_msg=f)
