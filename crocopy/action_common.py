@@ -79,7 +79,10 @@ class ControlBounds:
         self._set_control_limits(self._u_lb, as_vector(value, self.nu, "u_ub", allow_nonfinite=True))
 
     def _set_control_limits(self, lb: np.ndarray, ub: np.ndarray) -> None:
-        self.inverted_control_limits = bool((lb > ub).any())
+        if (lb > ub).any():
+            self.inverted_control_limits = True
+        else:  # the class default: nothing more per model to copy or pickle
+            self.__dict__.pop("inverted_control_limits", None)
         self._u_lb = lb
         self._u_ub = ub
 
