@@ -91,7 +91,7 @@ def _wrap(raw: Callable, guard: Guard, cls: type) -> Callable:
     @functools.wraps(raw)
     def guarded(self, *args, **kwargs):
         if _Trust.depth:
-            if _Trust.raw:
+            if _Trust.raw and cls not in _HOT:  # (a bound method kept from before the solve stays wrapped)
                 _heat(cls)
             return raw(self, *args, **kwargs)
         args, kwargs = guard.convert(self, args, kwargs)
