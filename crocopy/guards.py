@@ -14,12 +14,18 @@ of the solve, and later solves install them on every hot class on entry; the hot
 exactly the code it ran before the checks existed, and a user's override of ``calc`` is still the
 one called.  The checked wrappers are back on exit.
 
+From Python 3.13 a class whose attributes were assigned 1000 times loses its attribute cache for
+good (CPython's ``MAX_VERSIONS_PER_CLASS``), which two assignments per solve would reach in an MPC
+loop; there (:data:`INSTALL_RAW` False) a solve keeps the wrappers and skips their checks behind
+the flag only, which costs one extra Python call per guarded call.
+
 While a solve runs (in any thread), calls made from its callbacks are not checked either.
 """
 
 from __future__ import annotations
 
 import functools
+import sys
 import weakref
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -35,6 +41,9 @@ class _Trust:
     raw = 0
     """Greater than 0 inside a solve: the raw methods are installed on the guarded classes."""
 
+
+INSTALL_RAW = sys.version_info < (3, 13)
+"""Whether a solve installs the raw methods on the classes it calls (see the module docstring)."""
 
 _HOT: weakref.WeakSet = weakref.WeakSet()
 """Guarded classes a solve has called into: their raw methods are installed during every solve."""
@@ -91,7 +100,7 @@ def _wrap(raw: Callable, guard: Guard, cls: type) -> Callable:
     @functools.wraps(raw)
     def guarded(self, *args, **kwargs):
         if _Trust.depth:
-            if _Trust.raw and cls not in _HOT:  # (a bound method kept from before the solve stays wrapped)
+            if _Trust.raw and INSTALL_RAW and cls not in _HOT:  # (a bound method kept from before stays wrapped)
                 _heat(cls)
             return raw(self, *args, **kwargs)
         args, kwargs = guard.convert(self, args, kwargs)
@@ -128,7 +137,8 @@ class Guarded:
 @contextmanager
 def trusted_path() -> Iterator[None]:
     """Run the body with every guarded method unchecked and unwrapped (a solve's hot path)."""
-    if not _Trust.raw:
+    install = INSTALL_RAW and not _Trust.raw
+    if install:
         for cls in list(_HOT):
             _install(cls, raw=True)
     _Trust.raw += 1
@@ -138,7 +148,7 @@ def trusted_path() -> Iterator[None]:
     finally:
         _Trust.depth -= 1
         _Trust.raw -= 1
-        if not _Trust.raw:
+        if install:
             for cls in list(_HOT):
                 _install(cls, raw=False)
 

@@ -242,7 +242,7 @@ def test_solve_runs_user_overrides_unchecked_and_restores_the_checks():
     solver.setCallbacks([callback])
     assert solver.solve([], [], 20)
     assert m.calls > 0 and m.checked_calls == 0
-    assert inside and all(c == (False, True) for c in inside)  # no checks, raw functions installed
+    assert inside and all(c == (False, guards.INSTALL_RAW) for c in inside)  # no checks, raw functions (< 3.13)
     assert guards.checking()
     assert type(m).calc is CountingUnicycle._guard_pairs["calc"][1]
     with pytest.raises(ValueError, match="x has shape"):
@@ -314,3 +314,19 @@ def test_calc_diff_before_calc_evaluates_the_node_first():
     assert fresh.cost == ref.cost
     for f in ("xout", "Fx", "Fu", "Lx", "Lu"):
         np.testing.assert_array_equal(getattr(fresh, f), getattr(ref, f), err_msg=f)
+
+
+def test_flag_only_trusted_path_leaves_the_classes_alone(monkeypatch):
+    monkeypatch.setattr(guards, "INSTALL_RAW", False)
+
+    class Fresh(CountingUnicycle):
+        pass
+
+    m = Fresh()
+    before = Fresh.__dict__.get("calc", CountingUnicycle.calc)
+    problem = crocopy.ShootingProblem(np.array([-1.0, -1.0, 1.0]), [m] * 10, m)
+    solver = crocopy.SolverFDDP(problem)
+    solver.setCallbacks([lambda s: inside.append(type(m).calc is before)])
+    inside = []
+    assert solver.solve([], [], 20)
+    assert m.calls > 0 and m.checked_calls == 0 and inside and all(inside)
