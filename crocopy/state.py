@@ -135,14 +135,6 @@ class StateAbstract(Guarded):
         self.JintegrateTransport(x, dx, Fu, Jcomponent.second)
         Fx += self.Jintegrate(x, dx, Jcomponent.first)[0]
 
-    def safe_diff(self, x0: np.ndarray, x1: np.ndarray) -> np.ndarray:
-        """``diff`` with dimension checks."""
-        return self.diff(as_vector(x0, self.nx, "x0"), as_vector(x1, self.nx, "x1"))
-
-    def safe_integrate(self, x: np.ndarray, dx: np.ndarray) -> np.ndarray:
-        """``integrate`` with dimension checks."""
-        return self.integrate(as_vector(x, self.nx, "x"), as_vector(dx, self.ndx, "dx"))
-
 
 class StateVector(StateAbstract):
     """Euclidean state: ``diff`` is ``x1 - x0`` and ``integrate`` is ``x + dx``.
