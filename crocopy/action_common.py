@@ -16,8 +16,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .guards import Guard, Guarded, unchecked
 from .state import StateAbstract
-from .validation import as_vector, check_bounds
+from .validation import as_count, as_vector, control_arg, data_arg, state_arg, warn_nonfinite
 
 
 def check_state_and_nu(state: StateAbstract, nu: int) -> int:
@@ -27,12 +28,12 @@ def check_state_and_nu(state: StateAbstract, nu: int) -> int:
     ------
     ValueError
         If ``state`` is not a :class:`~crocopy.state.StateAbstract` or ``nu`` is negative.
+    TypeError
+        If ``nu`` is not an integer.
     """
     if not isinstance(state, StateAbstract):
         raise ValueError(f"state must be a StateAbstract, got {type(state).__name__}")
-    if nu < 0:
-        raise ValueError(f"nu must be non-negative, got {nu}")
-    return int(nu)
+    return as_count(nu, "nu")
 
 
 def constraint_arrays(ng: int, nh: int, ndx: int, nu: int) -> tuple[np.ndarray, ...]:
@@ -43,7 +44,15 @@ def constraint_arrays(ng: int, nh: int, ndx: int, nu: int) -> tuple[np.ndarray, 
 
 
 class ControlBounds:
-    """Control bounds ``u_lb``/``u_ub`` (shape ``(nu,)``, default unbounded) checked on assignment."""
+    """Control bounds ``u_lb``/``u_ub`` (shape ``(nu,)``, default unbounded).
+
+    Each assignment checks the shape and refuses NaN (inf means unbounded).  The order of the pair is
+    checked where the bounds are used (``solve``, the box solvers, squashing), not on assignment, so
+    that ``u_lb`` and ``u_ub`` can be set one after the other in either order;
+    ``inverted_control_limits`` (crocopy extension) tells whether some ``u_lb[i] > u_ub[i]`` now.
+    """
+
+    inverted_control_limits = False
 
     nu: int
 
@@ -70,7 +79,10 @@ class ControlBounds:
         self._set_control_limits(self._u_lb, as_vector(value, self.nu, "u_ub", allow_nonfinite=True))
 
     def _set_control_limits(self, lb: np.ndarray, ub: np.ndarray) -> None:
-        check_bounds(lb, ub, "u_lb", "u_ub")
+        if (lb > ub).any():
+            self.inverted_control_limits = True
+        else:  # the class default: nothing more per model to copy or pickle
+            self.__dict__.pop("inverted_control_limits", None)
         self._u_lb = lb
         self._u_ub = ub
 
@@ -87,7 +99,33 @@ class ControlLimitsMixin(ControlBounds):
         self.has_control_limits = bool(np.all(np.isfinite(lb)) and np.all(np.isfinite(ub)) and self.nu > 0)
 
 
-class ActionModelBase(ControlLimitsMixin):
+def _data(args: list, kwargs: dict) -> object:
+    return args[0] if args else kwargs.get("data")
+
+
+def _after_calc(model: "ActionModelBase", args: list, kwargs: dict) -> None:
+    warn_nonfinite(model, _data(args, kwargs), ("cost", "xnext", "xout"))
+
+
+def _after_calc_diff(model: "ActionModelBase", args: list, kwargs: dict) -> None:
+    warn_nonfinite(model, _data(args, kwargs), ("Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu"))
+
+
+def _calc_first(model: "ActionModelBase", args: list, kwargs: dict) -> None:
+    """A direct ``calcDiff`` on a data never evaluated (``cost`` still NaN) runs ``calc`` first at the
+    same point: derivatives may read what ``calc`` computes (contact dynamics read Pinocchio's KKT data)."""
+    data = _data(args, kwargs)
+    cost = getattr(data, "cost", 0.0)
+    if isinstance(cost, float) and cost != cost:
+        with unchecked():
+            model.calc(*args, **kwargs)
+
+
+_ACTION_DATA = data_arg({"Lx": lambda m: (m.state.ndx,), "Lu": lambda m: (m.nu,)})
+_ACTION_PARAMS = (("data", _ACTION_DATA), ("x", state_arg), ("u", control_arg))
+
+
+class ActionModelBase(ControlLimitsMixin, Guarded):
     """Constructor, stubs and quasi-static solve of Crocoddyl's two action-model abstractions.
 
     The parameters ``(state, nu, nr=1, ng=0, nh=0, ng_T=0, nh_T=0)`` are described by
@@ -99,19 +137,31 @@ class ActionModelBase(ControlLimitsMixin):
         Inequality bounds of running nodes, shape ``(ng,)``, default unbounded.
     u_lb, u_ub : numpy.ndarray
         Control bounds, shape ``(nu,)``, default unbounded (``has_control_limits`` False).
+
+    ``calc``, ``calcDiff`` and ``quasiStatic`` of every subclass check their arguments when a user
+    calls them (:mod:`crocopy.guards`): ``data`` from this model, ``x (nx,)``, ``u (nu,)`` or ``None``,
+    finite (NaN/inf raise ``ValueError``); a result that is not finite warns
+    (:class:`~crocopy.validation.NonFiniteWarning`); a ``calcDiff`` on a data that ``calc`` never
+    evaluated runs ``calc`` first.  A solve calls them unchecked.
     """
+
+    _guards = {
+        "calc": Guard(_ACTION_PARAMS, after=_after_calc),
+        "calcDiff": Guard(_ACTION_PARAMS, check=_calc_first, after=_after_calc_diff),
+        "quasiStatic": Guard((("data", _ACTION_DATA), ("x", state_arg))),
+    }
 
     def __init__(
         self, state: StateAbstract, nu: int, nr: int = 1, ng: int = 0, nh: int = 0, ng_T: int = 0, nh_T: int = 0
     ) -> None:
         self.nu = check_state_and_nu(state, nu)
         self.state = state
-        self.nr = int(nr)
+        self.nr = as_count(nr, "nr")
         self._constraint_source = None
-        self.ng = int(ng)
-        self.nh = int(nh)
-        self.ng_T = int(ng_T)
-        self.nh_T = int(nh_T)
+        self.ng = as_count(ng, "ng")
+        self.nh = as_count(nh, "nh")
+        self.ng_T = as_count(ng_T, "ng_T")
+        self.nh_T = as_count(nh_T, "nh_T")
         self.g_lb = np.full(self.ng, -np.inf)
         self.g_ub = np.full(self.ng, np.inf)
         self._init_control_limits()

@@ -12,10 +12,12 @@ import numpy as np
 
 from .action_common import ControlBounds, check_state_and_nu
 from .array_views import KeepsViews, tolerate_python_model
+from .guards import Guard, Guarded, point_control_guards
 from .state import StateAbstract
+from .validation import as_vector, control_arg, state_arg
 
 
-class ActuationModelAbstract(ControlBounds):
+class ActuationModelAbstract(ControlBounds, Guarded):
     """Abstract actuation model (Crocoddyl's ``ActuationModelAbstract(state, nu)``).
 
     Parameters
@@ -29,7 +31,15 @@ class ActuationModelAbstract(ControlBounds):
     ----------
     u_lb, u_ub : numpy.ndarray
         Control bounds, shape ``(nu,)``, default unbounded.
+
+    A user's ``calc``, ``calcDiff``, ``commands`` and ``torqueTransform`` are checked (``x (nx,)``,
+    ``u (nu,)``, ``tau (nv,)``, finite).
     """
+
+    _guards = point_control_guards(
+        commands=Guard((("data", None), ("x", state_arg), ("tau", lambda m, v, n: as_vector(v, m.state.nv, n)))),
+        torqueTransform=Guard((("data", None), ("x", state_arg), ("u", control_arg))),
+    )
 
     def __init__(self, state: StateAbstract, nu: int) -> None:
         self.nu = check_state_and_nu(state, nu)

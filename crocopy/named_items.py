@@ -12,6 +12,7 @@ from __future__ import annotations
 from typing import Any
 
 from .state import StateAbstract
+from .validation import ArgumentTypeError, as_bool
 from .versioning import touch
 
 
@@ -47,6 +48,8 @@ class NamedItems:
             raise KeyError(f"no {self._kind} named {name!r}") from None
 
     def _check_new_name(self, name: str) -> None:
+        if not isinstance(name, str):
+            raise ArgumentTypeError(f"name of the {self._kind} must be a str, got {type(name).__name__}")
         if name in self._items:
             raise ValueError(f"{article(self._kind)} {self._kind} named {name!r} already exists")
 
@@ -62,7 +65,7 @@ class NamedItems:
         self._changed()
 
     def _set_active(self, name: str, active: bool) -> None:
-        self._get(name).active = bool(active)
+        self._get(name).active = as_bool(active, "active")
         self._changed()
 
     def _changed(self) -> None:

@@ -3,6 +3,11 @@
 ``calc(xs, us)`` evaluates every node (``xs``: T+1 states of shape ``(nx,)``, ``us``: T controls)
 and returns the total cost ``Σ l_t(x_t, u_t) + l_T(x_T)``; ``calcDiff`` fills the derivatives of
 every node (it assumes ``calc`` was called at the same point) and returns the cost.
+
+A user's call of ``calc``, ``calcDiff``, ``rollout`` and ``quasiStatic`` checks the trajectories
+(lengths T+1 and T, shapes ``(nx,)``/``(nu,)`` per node, finite; lists and ``(n, 1)`` columns are
+converted) and then runs unchecked; a solver calls them on the trusted path
+(:mod:`crocopy.guards`), without the checks.
 """
 
 from __future__ import annotations
@@ -12,10 +17,50 @@ from collections.abc import Sequence
 import numpy as np
 
 from .action_base import ActionDataAbstract, ActionModelAbstract
-from .validation import as_vector
+from .guards import Guard, Guarded
+from .validation import ArgumentTypeError, as_count, as_vector
 
 
-class ShootingProblem:
+def _sequence(value: object, name: str) -> list:
+    if value is None or isinstance(value, (str, bytes)) or not hasattr(value, "__len__"):
+        raise ArgumentTypeError(f"{name} must be a list of vectors, got {type(value).__name__}")
+    return list(value)
+
+
+def _node_model(problem: "ShootingProblem", model: object, name: str) -> ActionModelAbstract:
+    if not isinstance(model, ActionModelAbstract):
+        raise ArgumentTypeError(f"{name} must be an ActionModelAbstract, got {type(model).__name__}")
+    return model
+
+
+def _node_index(problem: "ShootingProblem", i: object, name: str) -> int:
+    return as_count(i, name)
+
+
+def _trajectories(problem: "ShootingProblem", args: list, kwargs: dict) -> None:
+    given = {**dict(zip(("xs", "us"), args)), **kwargs}
+    if "xs" in given and "us" in given:
+        xs, us = problem.check_trajectories(_sequence(given["xs"], "xs"), _sequence(given["us"], "us"))
+        args[:] = [xs, us][: len(args)]
+        kwargs.update({k: v for k, v in (("xs", xs), ("us", us)) if k in kwargs})
+
+
+def _controls(problem: "ShootingProblem", us: object, name: str) -> list:
+    us = _sequence(us, name)
+    if len(us) != problem.T:
+        raise ValueError(f"{name} has {len(us)} items, expected T = {problem.T}")
+    return [as_vector(u, m.nu, f"{name}[{t}]") for t, (u, m) in enumerate(zip(us, problem.runningModels))]
+
+
+def _states(problem: "ShootingProblem", xs: object, name: str) -> list:
+    xs = _sequence(xs, name)
+    if len(xs) not in (problem.T, problem.T + 1):
+        raise ValueError(f"{name} has {len(xs)} items, expected T = {problem.T} or T + 1")
+    models = [*problem.runningModels, problem.terminalModel]
+    return [as_vector(x, m.state.nx, f"{name}[{t}]") for t, (x, m) in enumerate(zip(xs, models))]
+
+
+class ShootingProblem(Guarded):
     """Crocoddyl's ``ShootingProblem(x0, runningModels, terminalModel)``.
 
     Parameters
@@ -27,6 +72,16 @@ class ShootingProblem:
     terminalModel : ActionModelAbstract
         Model of node ``T`` (called without control).
     """
+
+    _guards = {
+        "calc": Guard((("xs", None), ("us", None)), check=_trajectories),
+        "calcDiff": Guard((("xs", None), ("us", None)), check=_trajectories),
+        "rollout": Guard((("us", _controls),)),
+        "quasiStatic": Guard((("xs", _states),)),
+        "updateModel": Guard((("i", _node_index), ("model", _node_model))),
+        "updateNode": Guard((("i", _node_index), ("model", _node_model))),
+        "circularAppend": Guard((("model", _node_model),)),
+    }
 
     def __init__(
         self,
@@ -142,18 +197,14 @@ class ShootingProblem:
 
     def rollout(self, us: Sequence[np.ndarray]) -> list[np.ndarray]:
         """Integrate the dynamics from ``x0`` with controls ``us``; returns T+1 states."""
-        if len(us) != self.T:
-            raise ValueError(f"us has {len(us)} items, expected T = {self.T}")
         xs = [self._x0.copy()]
         for t, (m, d) in enumerate(zip(self._runningModels, self._runningDatas)):
-            m.calc(d, xs[-1], as_vector(us[t], m.nu, f"us[{t}]"))
+            m.calc(d, xs[-1], us[t])
             xs.append(d.xnext.copy())
         return xs
 
     def quasiStatic(self, xs: Sequence[np.ndarray]) -> list[np.ndarray]:
         """Quasi-static controls of the first T states of ``xs``."""
-        if len(xs) not in (self.T, self.T + 1):
-            raise ValueError(f"xs has {len(xs)} items, expected T = {self.T} or T + 1")
         return [m.quasiStatic(d, x) for m, d, x in zip(self._runningModels, self._runningDatas, xs)]
 
     def circularAppend(self, model: ActionModelAbstract, data: ActionDataAbstract | None = None) -> None:

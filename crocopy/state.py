@@ -12,11 +12,36 @@ from __future__ import annotations
 import numpy as np
 
 from .enums import Jcomponent
-from .validation import as_vector, check_bounds
+from .guards import Guard, Guarded
+from .validation import as_count, as_vector, point_arg, tangent_arg
 
 
-class StateAbstract:
+def _component_arg(owner: "StateAbstract", value: object, name: str) -> Jcomponent:
+    try:
+        return Jcomponent(value)
+    except ValueError:
+        raise ValueError(f"{name} must be Jcomponent.both, .first or .second, got {value!r}") from None
+
+
+def _jacobian_arg(owner: "StateAbstract", value: object, name: str) -> np.ndarray:
+    if not isinstance(value, np.ndarray) or value.dtype != np.float64:
+        raise TypeError(f"{name} must be a float64 numpy array (it is written in place), got {type(value).__name__}")
+    if value.ndim != 2 or value.shape[0] != owner.ndx:
+        raise ValueError(f"{name} has shape {value.shape}, expected ({owner.ndx}, k)")
+    return value
+
+
+_BINARY = (("x0", point_arg), ("x1", point_arg), ("firstsecond", _component_arg))
+_TANGENT = (("x", point_arg), ("dx", tangent_arg), ("firstsecond", _component_arg))
+
+
+class StateAbstract(Guarded):
     """Abstract state manifold (Crocoddyl's ``StateAbstract``).
+
+    ``diff``, ``integrate``, ``Jdiff``, ``Jintegrate`` and ``JintegrateTransport`` of every subclass
+    check their arguments when a user calls them (:mod:`crocopy.guards`): points ``(nx,)`` and
+    tangent vectors ``(ndx,)``, finite; a solve calls them unchecked.  The bounds ``lb``/``ub`` may
+    be set in either order; :meth:`_set_limits` refuses NaN only.
 
     Parameters
     ----------
@@ -26,11 +51,17 @@ class StateAbstract:
         Dimension of the tangent space.
     """
 
+    _guards = {
+        "diff": Guard(_BINARY[:2]),
+        "integrate": Guard(_TANGENT[:2]),
+        "Jdiff": Guard(_BINARY),
+        "Jintegrate": Guard(_TANGENT),
+        "JintegrateTransport": Guard((*_TANGENT[:2], ("Jin", _jacobian_arg), ("firstsecond", _component_arg))),
+    }
+
     def __init__(self, nx: int, ndx: int) -> None:
-        if nx < 0 or ndx < 0:
-            raise ValueError(f"nx and ndx must be non-negative, got nx={nx}, ndx={ndx}")
-        self.nx = int(nx)
-        self.ndx = int(ndx)
+        self.nx = as_count(nx, "nx")
+        self.ndx = as_count(ndx, "ndx")
         self.nv = self.ndx // 2
         self.nq = self.nx - self.nv
         self._lb = np.full(self.nx, -np.inf)
@@ -56,7 +87,6 @@ class StateAbstract:
         self._set_limits(self._lb, as_vector(value, self.nx, "ub", allow_nonfinite=True))
 
     def _set_limits(self, lb: np.ndarray, ub: np.ndarray) -> None:
-        check_bounds(lb, ub, "lb", "ub")
         self._lb = lb
         self._ub = ub
         self.has_limits = bool(np.any(np.isfinite(lb)) or np.any(np.isfinite(ub)))
@@ -104,14 +134,6 @@ class StateAbstract:
         self.JintegrateTransport(x, dx, Fx, Jcomponent.second)
         self.JintegrateTransport(x, dx, Fu, Jcomponent.second)
         Fx += self.Jintegrate(x, dx, Jcomponent.first)[0]
-
-    def safe_diff(self, x0: np.ndarray, x1: np.ndarray) -> np.ndarray:
-        """``diff`` with dimension checks."""
-        return self.diff(as_vector(x0, self.nx, "x0"), as_vector(x1, self.nx, "x1"))
-
-    def safe_integrate(self, x: np.ndarray, dx: np.ndarray) -> np.ndarray:
-        """``integrate`` with dimension checks."""
-        return self.integrate(as_vector(x, self.nx, "x"), as_vector(dx, self.ndx, "dx"))
 
 
 class StateVector(StateAbstract):

@@ -1,48 +1,83 @@
-"""Argument checks that raise a clear ``ValueError`` naming the argument and expected shape."""
+"""Argument checks that raise a clear error naming the argument, the expected shape and what was given.
+
+Vectors are accepted as 1-D arrays, ``(n, 1)``/``(1, n)`` columns or rows, and plain sequences of
+numbers (converted to ``float64``); strings, booleans, complex numbers and ``None`` are refused with
+an :class:`ArgumentTypeError`, wrong shapes and NaN/inf with a ``ValueError``.  The ``*_arg``
+converters have the signature ``convert(owner, value, name)`` of :class:`crocopy.guards.Guard`.
+"""
 
 from __future__ import annotations
 
+import numbers
+import warnings
 from typing import Any
 
 import numpy as np
 
 
+class ArgumentTypeError(TypeError, ValueError):
+    """An argument of the wrong type: a ``TypeError``, and a ``ValueError`` as crocopy raised before."""
+
+
+class NonFiniteWarning(RuntimeWarning):
+    """A direct ``calc``/``calcDiff`` call on finite inputs produced NaN or inf (e.g. overflow)."""
+
+
+def _as_float_array(value: Any, name: str, expected: str) -> np.ndarray:
+    if value is None:
+        raise ArgumentTypeError(f"{name} must be {expected}, got None")
+    try:
+        arr = np.asarray(value)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be {expected}, got {type(value).__name__} ({exc})") from exc
+    if arr.dtype.kind not in "fiu":
+        raise ArgumentTypeError(f"{name} must be {expected} of real numbers, got dtype {arr.dtype}")
+    return arr.astype(float, copy=False)
+
+
 def as_vector(value: Any, size: int, name: str, allow_nonfinite: bool = False) -> np.ndarray:
-    """Return ``value`` as a float vector of length ``size`` or raise ``ValueError``.
+    """Return ``value`` as a float vector of length ``size`` or raise.
 
     Parameters
     ----------
     value : array_like
-        Input to check.
+        Input to check: shape ``(size,)``, ``(size, 1)`` or ``(1, size)``, or a sequence of numbers.
     size : int
         Expected length.
     name : str
         Argument name used in the error message.
     allow_nonfinite : bool
-        Accept NaN/inf entries (used for bounds, where inf means "unbounded").
+        Accept inf entries (used for bounds, where inf means "unbounded"); NaN is always refused.
+
+    Raises
+    ------
+    ArgumentTypeError
+        ``None``, strings, booleans, complex or object entries.
+    ValueError
+        Another shape, or NaN (inf too unless ``allow_nonfinite``).
     """
     if type(value) is np.ndarray and value.dtype == np.float64 and value.shape == (size,):
         total = value.sum()
         if total == total and (allow_nonfinite or abs(total) != np.inf):
             return value
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a numeric vector of shape ({size},)") from exc
-    if arr.ndim == 2 and 1 in arr.shape:
-        arr = arr.reshape(-1)
-    if arr.shape != (size,):
-        raise ValueError(f"{name} has shape {arr.shape}, expected ({size},)")
-    if not allow_nonfinite and not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} contains NaN or inf")
-    if allow_nonfinite and np.any(np.isnan(arr)):
-        raise ValueError(f"{name} contains NaN")
+        arr = value
+    else:
+        arr = _as_float_array(value, name, f"a vector of shape ({size},)")
+        if arr.ndim == 2 and 1 in arr.shape:
+            arr = arr.reshape(-1)
+        if arr.shape != (size,):
+            raise ValueError(f"{name} has shape {arr.shape}, expected ({size},)")
+    bad = np.isnan(arr) if allow_nonfinite else ~np.isfinite(arr)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        what = "NaN" if allow_nonfinite else "NaN or inf"
+        raise ValueError(f"{name} contains {what} ({name}[{i}] = {arr[i]})")
     return arr
 
 
 def as_matrix(value: Any, shape: tuple[int, int], name: str) -> np.ndarray:
-    """Return ``value`` as a finite float matrix of ``shape`` or raise ``ValueError``."""
-    arr = np.asarray(value, dtype=float)
+    """Return ``value`` as a finite float matrix of ``shape`` or raise (``ValueError``/:class:`ArgumentTypeError`)."""
+    arr = _as_float_array(value, name, f"a matrix of shape {tuple(shape)}")
     if arr.shape != tuple(shape):
         raise ValueError(f"{name} has shape {arr.shape}, expected {tuple(shape)}")
     if not np.all(np.isfinite(arr)):
@@ -58,3 +93,116 @@ def check_bounds(lb: np.ndarray, ub: np.ndarray, lb_name: str, ub_name: str) -> 
         raise ValueError(
             f"{lb_name}[{i}] = {lb[i]} is above {ub_name}[{i}] = {ub[i]}: lower bound above upper bound"
         )
+
+
+def check_finite(values: Any, name: str) -> None:
+    """Raise ``ValueError`` if the array ``values`` (e.g. a Pinocchio SE3's ``homogeneous``) holds NaN or inf."""
+    if not np.all(np.isfinite(values)):
+        raise ValueError(f"{name} contains NaN or inf")
+
+
+def as_number(value: Any, name: str, minimum: float | None = None, strict: bool = False,
+              allow_inf: bool = False) -> float:
+    """Return ``value`` as a float, refusing non-numbers, NaN, inf (unless ``allow_inf``) and values
+    below ``minimum`` (or equal to it when ``strict``).
+
+    Raises
+    ------
+    ArgumentTypeError
+        ``value`` is not a real number (booleans and strings included).
+    ValueError
+        NaN, inf, or out of range.
+    """
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        if not (isinstance(value, np.ndarray) and value.shape in ((), (1,)) and value.dtype.kind in "fiu"):
+            raise ArgumentTypeError(f"{name} must be a real number, got {type(value).__name__}")
+    out = float(np.asarray(value).reshape(()))
+    if out != out or (not allow_inf and abs(out) == np.inf):
+        raise ValueError(f"{name} must be a finite number, got {out}")
+    if minimum is not None and (out < minimum or (strict and out == minimum)):
+        relation = ">" if strict else ">="
+        raise ValueError(f"{name} must be {relation} {minimum}, got {out}")
+    return out
+
+
+def as_count(value: Any, name: str, minimum: int = 0) -> int:
+    """Return ``value`` as an int ``>= minimum`` (booleans and floats refused)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise ArgumentTypeError(f"{name} must be an integer, got {type(value).__name__}")
+    if value < minimum:
+        bound = "non-negative" if minimum == 0 else f">= {minimum}"
+        raise ValueError(f"{name} must be {bound}, got {value}")
+    return int(value)
+
+
+def as_bool(value: Any, name: str) -> bool:
+    """Return ``value`` as a bool; only ``bool``, ``numpy.bool_`` and the integers 0 and 1 are accepted."""
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)) and value in (0, 1):
+        return bool(value)
+    raise ArgumentTypeError(f"{name} must be a bool, got {type(value).__name__} {value!r}")
+
+
+# ---------------------------------------------------------------- converters of guarded methods
+def state_arg(owner: Any, value: Any, name: str) -> np.ndarray:
+    """A point ``(nx,)`` of ``owner.state`` (a model's state)."""
+    return as_vector(value, owner.state.nx, name)
+
+
+def control_arg(owner: Any, value: Any, name: str) -> np.ndarray | None:
+    """A control ``(nu,)`` of ``owner``, or ``None`` (terminal node)."""
+    return None if value is None else as_vector(value, owner.nu, name)
+
+
+def point_arg(owner: Any, value: Any, name: str) -> np.ndarray:
+    """A point ``(nx,)`` of the state ``owner`` itself."""
+    return as_vector(value, owner.nx, name)
+
+
+def tangent_arg(owner: Any, value: Any, name: str) -> np.ndarray:
+    """A tangent vector ``(ndx,)`` of the state ``owner`` itself."""
+    return as_vector(value, owner.ndx, name)
+
+
+def residual_arg(owner: Any, value: Any, name: str) -> np.ndarray:
+    """A residual ``(nr,)`` of an activation ``owner``."""
+    return as_vector(value, owner.nr, name)
+
+
+def data_arg(expected: dict[str, tuple]) -> Any:
+    """Converter of a ``data`` argument: its arrays named in ``expected`` must have the shapes
+    ``expected[attr](owner)`` gives (an entry ``None`` is not checked); a data of another model is refused.
+    """
+    def convert(owner: Any, data: Any, name: str) -> Any:
+        if data is None:
+            raise ArgumentTypeError(f"{name} must be the data of {type(owner).__name__} (createData()), got None")
+        for attr, shape_of in expected.items():
+            arr = getattr(data, attr, None)
+            shape = shape_of(owner)
+            if isinstance(arr, np.ndarray) and shape is not None and arr.shape != shape:
+                raise ValueError(
+                    f"{name} was not created by this {type(owner).__name__}: {name}.{attr} has shape {arr.shape},"
+                    f" expected {shape}; use the data returned by this model's createData()"
+                )
+        return data
+    return convert
+
+
+def warn_nonfinite(owner: Any, data: Any, names: tuple[str, ...]) -> None:
+    """Warn (:class:`NonFiniteWarning`) if one of ``data``'s quantities ``names`` holds NaN or inf."""
+    for attr in names:
+        value = getattr(data, attr, None)
+        if value is None:
+            continue
+        try:
+            finite = bool(np.all(np.isfinite(value)))
+        except TypeError:
+            continue
+        if not finite:
+            warnings.warn(
+                f"{type(owner).__name__}: data.{attr} is not finite after a call on finite inputs"
+                " (overflow or a singular model?)",
+                NonFiniteWarning, stacklevel=4,
+            )
+            return

@@ -22,16 +22,14 @@ import numpy as np
 import pinocchio as pin
 
 from crocopy.state import StateAbstract
+from crocopy.validation import as_vector
 
 from .force_base import ForceDataAbstract, ForceModelAbstract
 
 
 def check_gains(gains: np.ndarray | None) -> np.ndarray:
     """Baumgarte gains ``(kp, kd)`` as a float vector of shape ``(2,)``."""
-    g = np.zeros(2) if gains is None else np.asarray(gains, dtype=float).reshape(-1)
-    if g.shape != (2,) or not np.all(np.isfinite(g)):
-        raise ValueError(f"gains must be a finite vector of shape (2,), got {np.asarray(gains).shape}")
-    return g
+    return np.zeros(2) if gains is None else as_vector(gains, 2, "gains")
 
 
 def check_position(value: np.ndarray, size: int, name: str = "xref") -> np.ndarray:

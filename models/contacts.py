@@ -21,6 +21,7 @@ import numpy as np
 import pinocchio as pin
 
 from crocopy.state import StateAbstract
+from crocopy.validation import as_vector, check_finite
 from crocopy.versioning import frozen_copy, touch
 
 from .contact_base import ContactDataAbstract, ContactModelAbstract, check_gains, check_position
@@ -252,6 +253,7 @@ class ContactModel6D(_FrameContact):
     def reference(self, value: pin.SE3) -> None:
         if not isinstance(value, pin.SE3):
             raise ValueError(f"pref must be a pinocchio.SE3, got {type(value).__name__}")
+        check_finite(value.homogeneous, "pref")
         self._pref = value.copy()
         self._prefinv = value.inverse()
         touch(self)

@@ -25,8 +25,10 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from crocopy.guards import Guarded, point_guards
 from crocopy.named_items import ModelItems
 from crocopy.state import StateAbstract
+from crocopy.validation import as_count
 
 REFERENCE_FRAMES = (pin.LOCAL, pin.WORLD, pin.LOCAL_WORLD_ALIGNED)
 _LOCAL = pin.LOCAL
@@ -78,7 +80,7 @@ def world_aligned(type: pin.ReferenceFrame) -> pin.ReferenceFrame:
     return pin.LOCAL if type == pin.LOCAL else pin.LOCAL_WORLD_ALIGNED
 
 
-class ForceModelAbstract:
+class ForceModelAbstract(Guarded):
     """Common base of ``ContactModelAbstract`` and ``ImpulseModelAbstract``.
 
     Parameters
@@ -92,15 +94,17 @@ class ForceModelAbstract:
         Force dimension.
     nu : int
         Control dimension.
+
+    A user's ``calc(data, x)``/``calcDiff(data, x)`` is checked (``x (nx,)``, finite).
     """
+
+    _guards = point_guards()
 
     def __init__(self, state: StateAbstract, type: pin.ReferenceFrame, nc: int, nu: int) -> None:
         self.state = check_state_multibody(state)
         self.type = check_reference_frame(type)
-        self.nc = int(nc)
-        self.nu = int(nu)
-        if self.nu < 0:
-            raise ValueError(f"nu must be non-negative, got {self.nu}")
+        self.nc = as_count(nc, "nc")
+        self.nu = as_count(nu, "nu")
         self.id = 0
 
     def calc(self, data: "ForceDataAbstract", x: np.ndarray) -> None:
@@ -218,7 +222,7 @@ class ForceDataAbstract:
         return np.vstack([R @ J[:3], R @ J[3:]])[:nc]
 
 
-class ForceModelMultiple(ModelItems):
+class ForceModelMultiple(ModelItems, Guarded):
     """Bookkeeping of ``ContactModelMultiple``/``ImpulseModelMultiple``: named forces of one robot.
 
     ``_kind`` (``"contact"``/``"impulse"``) names the items; an item holds its model under that
@@ -227,6 +231,7 @@ class ForceModelMultiple(ModelItems):
     """
 
     _model_type: type = ForceModelAbstract
+    _guards = point_guards()
     _check_state = staticmethod(check_state_multibody)
 
     def _state_mismatch(self, state: StateAbstract) -> str | None:

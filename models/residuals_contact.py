@@ -27,6 +27,7 @@ import pinocchio as pin
 from crocopy.data_collector import DataCollectorAbstract
 from crocopy.residuals.base import ResidualDataAbstract, ResidualModelAbstract
 from crocopy.state import StateAbstract
+from crocopy.validation import check_finite
 
 from .cones import CoPSupport, FrictionCone, WrenchCone
 from .force_base import frame_id
@@ -143,6 +144,7 @@ class ResidualModelContactForce(_ForceResidual):
     def reference(self, value: pin.Force) -> None:
         if not isinstance(value, pin.Force):
             raise ValueError(f"fref must be a pinocchio.Force, got {type(value).__name__}")
+        check_finite(value.vector, "fref")
         self._fref = value.copy()
         self._fref_vec = value.vector[self._components].copy()
 

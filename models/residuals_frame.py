@@ -21,7 +21,7 @@ import pinocchio as pin
 
 from crocopy.data_collector import DataCollectorAbstract
 from crocopy.residuals.base import ResidualDataAbstract, ResidualModelAbstract
-from crocopy.validation import as_matrix, as_vector
+from crocopy.validation import as_matrix, as_vector, check_finite
 
 from .state_multibody import StateMultibody
 
@@ -128,6 +128,7 @@ class ResidualModelFramePlacement(_FrameResidual):
     def reference(self, value: pin.SE3) -> None:
         if not isinstance(value, pin.SE3):
             raise ValueError(f"pref must be a pinocchio.SE3, got {type(value).__name__}")
+        check_finite(value.homogeneous, "pref")
         self._pref = value.copy()
         self._prefinv = value.inverse()
 
@@ -237,6 +238,7 @@ class ResidualModelFrameVelocity(_FrameResidual):
     def reference(self, value: pin.Motion) -> None:
         if not isinstance(value, pin.Motion):
             raise ValueError(f"vref must be a pinocchio.Motion, got {type(value).__name__}")
+        check_finite(value.vector, "vref")
         self._vref = value.copy()
         self._vref_vec = value.vector.copy()
 

@@ -125,8 +125,11 @@ def test_actuation_control_bounds_are_checked():
     actuation = crocopy.ActuationModelAbstract(state=crocopy.StateVector(4), nu=2)
     assert np.all(actuation.u_lb == -np.inf) and actuation.u_ub.shape == (2,)
     actuation.u_ub = np.zeros(2)
+    actuation.u_lb = np.ones(2)  # above u_ub for now: the pair is checked where it is used
+    actuation.u_ub = 2.0 * np.ones(2)
+    np.testing.assert_array_equal(actuation.u_lb, 1.0)
     with pytest.raises(ValueError, match="u_lb"):
-        actuation.u_lb = np.ones(2)
+        actuation.u_lb = np.array([0.0, np.nan])
     with pytest.raises(ValueError, match="u_ub"):
         actuation.u_ub = np.zeros(3)
     assert not hasattr(actuation, "has_control_limits")

@@ -220,9 +220,9 @@ def test_bad_parametrization_arguments_raise_clear_errors():
         control.params(data, 0.0, np.ones(3))
     abstract = crocopy.ControlParametrizationModelAbstract(2, 4)
     assert (abstract.nw, abstract.nu) == (2, 4)
-    for call in (abstract.calc, abstract.calcDiff, abstract.params):
+    for call, size in ((abstract.calc, 4), (abstract.calcDiff, 4), (abstract.params, 2)):
         with pytest.raises(NotImplementedError):
-            call(abstract.createData(), 0.0, np.zeros(4))
+            call(abstract.createData(), 0.0, np.zeros(size))
 
 
 # ---------------------------------------------------------------- inside the integrators

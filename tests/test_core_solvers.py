@@ -136,9 +136,10 @@ def test_bad_inputs_raise_value_errors():
     with pytest.raises(ValueError, match="node 0 has state"):
         crocopy.ShootingProblem(np.zeros(3), [crocopy.ActionModelUnicycle()], crocopy.ActionModelLQR(4, 2))
     m = crocopy.ActionModelUnicycle()
-    with pytest.raises(ValueError, match=r"u_lb\[1\] = 2.0 is above u_ub\[1\]"):
-        m.u_lb = np.array([0.0, 2.0])
-        m.u_ub = np.array([1.0, 1.0])
+    m.u_lb = np.array([0.0, 2.0])  # the pair is checked at use: its setters may come in any order
+    m.u_ub = np.array([1.0, 1.0])
+    with pytest.raises(ValueError, match=r"u_lb\[1\] = 2.0 is above runningModels\[0\].u_ub\[1\]"):
+        crocopy.SolverFDDP(crocopy.ShootingProblem(np.zeros(3), [m], m)).solve()
     with pytest.raises(ValueError, match="u_lb contains NaN"):
         m.u_lb = np.array([np.nan, 0.0])
 

@@ -4,6 +4,8 @@ With ``z = [x; u]``: cost ``½ xᵀQx + ½ uᵀRu + xᵀNu + qᵀx + rᵀu``; in
 ``g(z) = G z + g``; equalities ``h(z) = H z + h``.  Terminal nodes use the state blocks only.
 Both models take Crocoddyl's argument lists ``(dynamics..., Q, R, N[, G, H], f, q, r[, g, h])``
 and ``(n, nu, driftFree=True)``, read here by :func:`lq_arguments` and :func:`size_arguments`.
+The cost Hessian ``[[Q, N], [Nᵀ, R]]`` must be symmetric positive semi-definite (checked by
+:func:`check_cost_hessian`): an indefinite one makes the problem unbounded below and a solver diverge.
 """
 
 from __future__ import annotations
@@ -62,6 +64,7 @@ class LQTerms:
         self.Q = as_matrix(Q, (nx, nx), "Q")
         self.R = as_matrix(R, (nu, nu), "R")
         self.N = as_matrix(N, (nx, nu), "N")
+        check_cost_hessian(self.Q, self.R, self.N)
         self.q = as_vector(q, nx, "q")
         self.r = as_vector(r, nu, "r")
         G = np.zeros((0, nx + nu)) if G is None else np.atleast_2d(np.asarray(G, dtype=float))
@@ -101,6 +104,24 @@ class LQTerms:
             if diff:
                 data.Hx[:nh] = self.H[:, :nx]
                 data.Hu[:nh] = 0.0 if u is None else self.H[:, nx:]
+
+
+def check_cost_hessian(Q: np.ndarray, R: np.ndarray, N: np.ndarray) -> None:
+    """Raise ``ValueError`` unless ``Q``, ``R`` are symmetric and ``[[Q, N], [Nᵀ, R]]`` is positive
+    semi-definite (to a relative tolerance of 1e-10 of its largest eigenvalue)."""
+    for name, M in (("Q", Q), ("R", R)):
+        if not np.allclose(M, M.T, rtol=1e-10, atol=1e-12):
+            asym = np.abs(M - M.T).max()
+            raise ValueError(f"{name} must be symmetric, got max |{name} - {name}.T| = {asym:g}")
+    H = np.block([[Q, N], [N.T, R]])
+    if not H.size:
+        return
+    eig = np.linalg.eigvalsh(H)
+    if eig[0] < -1e-10 * max(1.0, abs(eig[-1])):
+        raise ValueError(
+            "the cost Hessian [[Q, N], [N.T, R]] must be positive semi-definite, got smallest eigenvalue"
+            f" {eig[0]:g}: the cost is unbounded below"
+        )
 
 
 def default_input_matrix(rows: int, nu: int) -> np.ndarray:

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..action_base import ActionDataAbstract, ActionModelAbstract
 from ..state import StateVector
+from ..validation import as_number, as_vector
 
 
 class ActionModelUnicycle(ActionModelAbstract):
@@ -19,6 +20,24 @@ class ActionModelUnicycle(ActionModelAbstract):
         super().__init__(StateVector(3), 2, 5)
         self.costWeights = np.array([10.0, 1.0])
         self.dt = 0.1
+
+    @property
+    def dt(self) -> float:
+        """Time step (>= 0, finite), checked on assignment."""
+        return self._dt
+
+    @dt.setter
+    def dt(self, value: float) -> None:
+        self._dt = as_number(value, "dt", 0.0)
+
+    @property
+    def costWeights(self) -> np.ndarray:
+        """Weights ``(w_state, w_control)``, shape ``(2,)``, finite; checked on assignment."""
+        return self._cost_weights
+
+    @costWeights.setter
+    def costWeights(self, value: np.ndarray) -> None:
+        self._cost_weights = as_vector(value, 2, "costWeights").copy()
 
     def createData(self) -> "ActionDataUnicycle":
         return ActionDataUnicycle(self)

@@ -10,9 +10,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..array_views import KeepsViews, tolerate_python_model
+from ..guards import Guard, Guarded
+from ..validation import as_count, residual_arg
+
+_R_PARAMS = (("data", None), ("r", residual_arg))
 
 
-class ActivationModelAbstract:
+class ActivationModelAbstract(Guarded):
     """Abstract activation of a residual of dimension ``nr`` (Crocoddyl's ``ActivationModelAbstract(nr)``).
 
     A subclass written from Python fills ``data.a_value``, ``data.Ar`` and ``data.Arr`` (dense).
@@ -22,10 +26,11 @@ class ActivationModelAbstract:
     #: from it on each read); False for a dense ``data.Arr``.
     diagonal = False
 
+    #: A user's ``calc(data, r)``/``calcDiff(data, r)`` is checked: ``r`` of shape ``(nr,)``, finite.
+    _guards = {"calc": Guard(_R_PARAMS), "calcDiff": Guard(_R_PARAMS)}
+
     def __init__(self, nr: int) -> None:
-        if nr < 0:
-            raise ValueError(f"nr must be non-negative, got {nr}")
-        self.nr = int(nr)
+        self.nr = as_count(nr, "nr")
 
     def createData(self) -> "ActivationDataAbstract":
         return ActivationDataAbstract(self)

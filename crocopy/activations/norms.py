@@ -4,29 +4,49 @@
 * Smooth2Norm: ``a = sqrt(ε + ‖r‖²)`` (dense Hessian ``I/a - r rᵀ/a³``).
 * 2NormBarrier: ``a = ½ (‖r‖ - α)²`` if ``‖r‖ < α`` else 0; Gauss-Newton Hessian
   ``r rᵀ/‖r‖²`` unless ``true_hessian``.
+
+The smoothing ``ε`` is at least :data:`EPS_MIN`: at ``r = 0`` the Hessian is ``1/√ε`` and a smaller
+``ε`` (or 0) overflows it to inf/NaN.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from ..validation import as_number
 from .base import ActivationDataAbstract, ActivationModelAbstract
+
+EPS_MIN = 1e-200
+"""Smallest smoothing ``eps`` of the smooth norms (``eps^1.5`` stays a normal float)."""
+
+
+class _Smoothing:
+    """The smoothing ``eps`` (>= :data:`EPS_MIN`, finite) of a smooth norm, checked on assignment."""
+
+    _eps: float
+
+    @property
+    def eps(self) -> float:
+        """Smoothing factor."""
+        return self._eps
+
+    @eps.setter
+    def eps(self, value: float) -> None:
+        self._eps = as_number(value, "eps", EPS_MIN)
 
 
 class ActivationDataSmooth1Norm(ActivationDataAbstract):
     """Data of :class:`ActivationModelSmooth1Norm` (the fields of :class:`ActivationDataAbstract`)."""
 
 
-class ActivationModelSmooth1Norm(ActivationModelAbstract):
+class ActivationModelSmooth1Norm(_Smoothing, ActivationModelAbstract):
     """``a(r) = Σ sqrt(eps + rᵢ²)``."""
 
     diagonal = True
 
     def __init__(self, nr: int, eps: float = 1.0) -> None:
-        if eps < 0:
-            raise ValueError(f"eps must be non-negative, got {eps}")
         super().__init__(nr)
-        self.eps = float(eps)
+        self.eps = eps
 
     def createData(self) -> ActivationDataSmooth1Norm:
         return ActivationDataSmooth1Norm(self)
@@ -40,14 +60,12 @@ class ActivationModelSmooth1Norm(ActivationModelAbstract):
         data.Arr_diag[:] = self.eps / (s * s * s)
 
 
-class ActivationModelSmooth2Norm(ActivationModelAbstract):
+class ActivationModelSmooth2Norm(_Smoothing, ActivationModelAbstract):
     """``a(r) = sqrt(eps + ‖r‖²)``."""
 
     def __init__(self, nr: int, eps: float = 1.0) -> None:
-        if eps < 0:
-            raise ValueError(f"eps must be non-negative, got {eps}")
         super().__init__(nr)
-        self.eps = float(eps)
+        self.eps = eps
 
     def calc(self, data: ActivationDataAbstract, r: np.ndarray) -> None:
         data.a_value = float(np.sqrt(self.eps + r @ r))
@@ -62,10 +80,8 @@ class ActivationModel2NormBarrier(ActivationModelAbstract):
     """``a(r) = ½ (‖r‖ - alpha)²`` inside the ball of radius ``alpha``, zero outside."""
 
     def __init__(self, nr: int, alpha: float = 0.1, true_hessian: bool = False) -> None:
-        if alpha < 0:
-            raise ValueError(f"alpha must be non-negative, got {alpha}")
         super().__init__(nr)
-        self.alpha = float(alpha)
+        self.alpha = as_number(alpha, "alpha", 0.0)
         self.true_hessian = bool(true_hessian)
 
     def calc(self, data: ActivationDataAbstract, r: np.ndarray) -> None:

@@ -18,6 +18,7 @@ import numpy as np
 from ..action_common import constraint_arrays
 from ..array_views import tolerate_python_model
 from ..data_collector import DataCollectorAbstract
+from ..guards import Guarded, point_control_guards
 from ..residuals.base import ResidualModelAbstract
 from ..state import StateAbstract
 from ..validation import as_vector, check_bounds
@@ -31,7 +32,7 @@ class ConstraintType(enum.IntEnum):
     Both = 2
 
 
-class ConstraintModelAbstract:
+class ConstraintModelAbstract(Guarded):
     """Abstract constraint (Crocoddyl's ``ConstraintModelAbstract``).
 
     Constructed, positionally or with keywords, as ``(state, residual, ng, nh)``,
@@ -40,8 +41,10 @@ class ConstraintModelAbstract:
     (inequality rows, bounded by ``lb``/``ub``) and ``data.h``/``data.Hx``/``data.Hu`` (equality rows).
     As in Crocoddyl, the residual form is a terminal constraint when the residual reads ``q`` or
     ``v``, and the other forms hold an abstract residual of ``ng + nh`` rows that sizes
-    ``data.residual``.
+    ``data.residual``.  A user's ``calc``/``calcDiff`` is checked (``x (nx,)``, ``u (nu,)`` or ``None``).
     """
+
+    _guards = point_control_guards()
 
     def __init__(
         self,

@@ -9,6 +9,7 @@ import numpy as np
 from ..action_common import constraint_arrays
 from ..array_views import share_arrays
 from ..data_collector import DataCollectorAbstract
+from ..guards import Guarded, point_control_guards
 from ..named_items import ModelItems
 from .base import ConstraintModelAbstract
 
@@ -25,7 +26,7 @@ class ConstraintItem:
         return f"{{{self.constraint!r}}}"
 
 
-class ConstraintModelManager(ModelItems):
+class ConstraintModelManager(ModelItems, Guarded):
     """Named constraints stacked into one ``g``/``h`` (Crocoddyl's ``ConstraintModelManager``).
 
     Parameters
@@ -38,6 +39,7 @@ class ConstraintModelManager(ModelItems):
 
     _kind = "constraint"
     _model_type = ConstraintModelAbstract
+    _guards = point_control_guards()
 
     @property
     def constraints(self) -> dict[str, ConstraintItem]:

@@ -12,6 +12,7 @@ import numpy as np
 from ..activations import ActivationModelAbstract, ActivationModelQuad
 from ..array_views import tolerate_python_model
 from ..data_collector import DataCollectorAbstract
+from ..guards import Guarded, point_control_guards
 from ..residuals.base import ResidualModelAbstract
 from ..state import StateAbstract
 
@@ -20,7 +21,7 @@ def _is_int(value: object) -> bool:
     return isinstance(value, (int, np.integer)) and not isinstance(value, bool)
 
 
-class CostModelAbstract:
+class CostModelAbstract(Guarded):
     """Abstract cost ``l(x, u)`` of an activation and a residual (Crocoddyl's ``CostModelAbstract``).
 
     Crocoddyl's constructor forms, positional or with keywords:
@@ -43,7 +44,11 @@ class CostModelAbstract:
         Control dimension when there is no residual (default ``state.nv``).
     nr : int, optional
         Residual dimension when there is neither activation nor residual.
+
+    A user's ``calc``/``calcDiff`` is checked (``x (nx,)``, ``u (nu,)`` or ``None``, finite).
     """
+
+    _guards = point_control_guards()
 
     def __init__(
         self,

@@ -8,7 +8,9 @@ import numpy as np
 
 from ..array_views import share_arrays
 from ..data_collector import DataCollectorAbstract
+from ..guards import Guarded, point_control_guards
 from ..named_items import ModelItems
+from ..validation import as_bool, as_number
 from ..versioning import touch
 from .base import CostModelAbstract, CostModelResidual
 from .stack import CostStack
@@ -24,6 +26,10 @@ class CostItem:
     active: bool = True
 
     def __setattr__(self, name: str, value: object) -> None:
+        if name == "weight":
+            value = as_number(value, f"weight of cost {self.__dict__.get('name')!r}")
+        elif name == "active":
+            value = as_bool(value, "active")
         object.__setattr__(self, name, value)
         touch(self)
 
@@ -31,7 +37,7 @@ class CostItem:
         return f"{{w={self.weight}, {self.cost!r}}}"
 
 
-class CostModelSum(ModelItems):
+class CostModelSum(ModelItems, Guarded):
     """Weighted sum of named costs (Crocoddyl's ``CostModelSum``).
 
     Parameters
@@ -44,6 +50,7 @@ class CostModelSum(ModelItems):
 
     _kind = "cost"
     _model_type = CostModelAbstract
+    _guards = point_control_guards()
 
     @property
     def costs(self) -> dict[str, CostItem]:
@@ -64,9 +71,7 @@ class CostModelSum(ModelItems):
             another state dimension, or ``weight`` is not finite.
         """
         self._check_model(name, cost)
-        if not np.isfinite(weight):
-            raise ValueError(f"weight of cost {name!r} must be finite, got {weight}")
-        self._insert(name, CostItem(name, cost, float(weight), bool(active)))
+        self._insert(name, CostItem(name, cost, weight, active))
 
     def removeCost(self, name: str) -> None:
         """Remove the cost ``name``."""
@@ -84,6 +89,18 @@ class CostModelSum(ModelItems):
         return CostDataSum(self, data)
 
     def calc(self, data: "CostDataSum", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        """Weighted sum of the active costs into ``data.cost``.
+
+        Raises
+        ------
+        ValueError
+            If ``data`` was created before a cost was added or removed (as Crocoddyl).
+        """
+        if len(data.costs) != len(self._items):
+            raise ValueError(
+                f"data holds {len(data.costs)} cost datas but the model has {len(self._items)} costs:"
+                " a cost was added or removed after createData(); create the data again"
+            )
         total = data.stack.calc(x, u)
         for name in data.generic:
             item = self._items[name]

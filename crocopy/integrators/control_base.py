@@ -28,7 +28,12 @@ import numbers
 import numpy as np
 
 from ..enums import AssignmentOp
-from ..validation import as_vector
+from ..guards import Guard, Guarded
+from ..validation import as_number, as_vector
+
+
+def _time_arg(owner: object, value: object, name: str) -> float:
+    return as_number(value, name)
 
 
 def as_dimension(value: object, name: str) -> int:
@@ -38,7 +43,7 @@ def as_dimension(value: object, name: str) -> int:
     return int(value)
 
 
-class ControlParametrizationModelAbstract:
+class ControlParametrizationModelAbstract(Guarded):
     """Crocoddyl's ``ControlParametrizationModelAbstract(nw, nu)``.
 
     Parameters
@@ -47,7 +52,16 @@ class ControlParametrizationModelAbstract:
         Dimension of the control input ``w`` (the differential model's ``nu``).
     nu : int
         Dimension of the control parameters ``u`` (the integrated model's ``nu``).
+
+    A user's ``calc``/``calcDiff(data, t, u)`` and ``params(data, t, w)`` are checked: ``t`` a finite
+    number, ``u (nu,)``, ``w (nw,)``, finite.
     """
+
+    _guards = {
+        "calc": Guard((("data", None), ("t", _time_arg), ("u", lambda m, v, n: as_vector(v, m.nu, n)))),
+        "calcDiff": Guard((("data", None), ("t", _time_arg), ("u", lambda m, v, n: as_vector(v, m.nu, n)))),
+        "params": Guard((("data", None), ("t", _time_arg), ("w", lambda m, v, n: as_vector(v, m.nw, n)))),
+    }
 
     def __init__(self, nw: int, nu: int) -> None:
         self._nw = as_dimension(nw, "nw")

@@ -11,10 +11,11 @@ import numpy as np
 
 from ..array_views import KeepsViews, tolerate_python_model
 from ..data_collector import DataCollectorAbstract
+from ..guards import Guarded, point_control_guards
 from ..state import StateAbstract
 
 
-class ResidualModelAbstract:
+class ResidualModelAbstract(Guarded):
     """Abstract residual (Crocoddyl's ``ResidualModelAbstract``).
 
     As in Crocoddyl, ``nu`` may be left out positionally:
@@ -31,7 +32,11 @@ class ResidualModelAbstract:
         Control dimension (default ``state.nv``).
     q_dependent, v_dependent, u_dependent : bool
         Which arguments the residual depends on.
+
+    A user's ``calc``/``calcDiff`` is checked (``x (nx,)``, ``u (nu,)`` or ``None``, finite).
     """
+
+    _guards = point_control_guards()
 
     def __init__(
         self,

@@ -8,12 +8,15 @@ NaN in ``xs``/``us``: a divergent iterate is never accepted.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import functools
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
 from ..enums import FeasibilityNorm
+from ..guards import trusted_path
 from ..shooting import ShootingProblem
+from ..validation import as_bool, as_count, as_number, check_bounds
 from .std_vector import StdVecAttribute
 from .stopwatch import profiled
 
@@ -24,6 +27,64 @@ class BackwardPassError(RuntimeError):
 
 class ForwardPassError(RuntimeError):
     """Raised by a forward pass that produced a non-finite state or cost."""
+
+
+def check_solve_arguments(solver: "SolverAbstract", maxiter: object, is_feasible: object, init_reg: object) -> tuple:
+    """``(maxiter, is_feasible, init_reg)`` of ``solve`` checked, and the settings read at the start of a solve.
+
+    ``maxiter`` is an integer >= 0, ``is_feasible`` a bool, ``init_reg`` ``None``, NaN (the default
+    regularisation) or a number >= 0.  ``reg_min <= reg_max`` and every running model's ``u_lb <= u_ub``
+    are checked here, where they are used, so that their setters may be called in any order.
+
+    Raises
+    ------
+    ValueError, TypeError
+        Naming the argument or setting, the expected range and what was given.
+    """
+    maxiter = as_count(maxiter, "maxiter")
+    is_feasible = as_bool(is_feasible, "is_feasible")
+    if init_reg is not None and not (isinstance(init_reg, float) and init_reg != init_reg):
+        init_reg = as_number(init_reg, "init_reg", minimum=0.0)
+    reg_min, reg_max = getattr(solver, "reg_min", None), getattr(solver, "reg_max", None)
+    if reg_min is not None and reg_max is not None and reg_min > reg_max:
+        raise ValueError(f"reg_min = {reg_min} is above reg_max = {reg_max}")
+    for t, m in enumerate(solver.problem.runningModels):
+        if getattr(m, "inverted_control_limits", False):
+            check_bounds(m.u_lb, m.u_ub, f"runningModels[{t}].u_lb", f"runningModels[{t}].u_ub")
+    return maxiter, is_feasible, init_reg
+
+
+def _checked_solve(solve: Callable) -> Callable:
+    """``solve`` with its arguments checked, run on the trusted path (:func:`crocopy.guards.trusted_path`)."""
+    @functools.wraps(solve)
+    def checked(self, init_xs=None, init_us=None, maxiter=100, is_feasible=False, init_reg=None, **kwargs):
+        maxiter, is_feasible, init_reg = check_solve_arguments(self, maxiter, is_feasible, init_reg)
+        with trusted_path():
+            return solve(self, init_xs, init_us, maxiter, is_feasible, init_reg, **kwargs)
+
+    return checked
+
+
+class Setting:
+    """A solver setting checked on assignment: a number ``>= minimum`` (``> minimum`` if ``strict``)."""
+
+    def __init__(self, minimum: float = 0.0, strict: bool = False) -> None:
+        self.minimum = minimum
+        self.strict = strict
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = name
+
+    def __get__(self, obj: object, owner: type | None = None) -> object:
+        if obj is None:
+            return self
+        try:
+            return obj.__dict__[self.name]
+        except KeyError:
+            raise AttributeError(self.name) from None
+
+    def __set__(self, obj: object, value: object) -> None:
+        obj.__dict__[self.name] = as_number(value, self.name, self.minimum, self.strict, allow_inf=True)
 
 
 class SolverAbstract:
@@ -44,8 +105,23 @@ class SolverAbstract:
     #: Methods timed by the profiler (:mod:`crocopy.solvers.stopwatch`) as ``"ClassName::method"``.
     _profiled = ("solve", "computeDirection", "calcDiff", "backwardPass", "tryStep", "forwardPass")
 
+    #: Settings checked on assignment (``ValueError`` naming the setting); the pairs whose order
+    #: matters (``reg_min <= reg_max``) are checked when ``solve`` starts.
+    reg_min = Setting()
+    reg_max = Setting()
+    reg_incFactor = Setting(1.0)
+    reg_decFactor = Setting(1.0)
+    th_stop = Setting()
+    th_grad = Setting()
+    th_gapTol = Setting()
+    th_acceptStep = Setting()
+    th_stepDec = Setting(0.0, strict=True)
+    th_stepInc = Setting(0.0, strict=True)
+
     def __init_subclass__(cls, **kwargs) -> None:
         super().__init_subclass__(**kwargs)
+        if "solve" in cls.__dict__:
+            cls.solve = _checked_solve(cls.__dict__["solve"])
         for name in cls._profiled:
             if name in cls.__dict__:
                 setattr(cls, name, profiled(f"{cls.__name__}::{name}", cls.__dict__[name]))

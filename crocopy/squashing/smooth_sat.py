@@ -18,14 +18,20 @@ import numpy as np
 
 from crocopy.actuation_base import ActuationDataAbstract, ActuationModelAbstract
 from crocopy.array_views import KeepsViews, tolerate_python_model
+from crocopy.guards import Guard, Guarded
 from crocopy.validation import as_vector, check_bounds
 
 
-class SquashingModelAbstract:
+class SquashingModelAbstract(Guarded):
     """Abstract squashing (Crocoddyl's ``SquashingModelAbstract(ns)``) with bounds ``s_lb``/``s_ub``.
 
     A squashing written from Python fills ``data.u`` in ``calc`` and ``data.du_ds`` in ``calcDiff``.
     """
+
+    _guards = {
+        "calc": Guard((("data", None), ("s", lambda m, v, n: as_vector(v, m.ns, n)))),
+        "calcDiff": Guard((("data", None), ("s", lambda m, v, n: as_vector(v, m.ns, n)))),
+    }
 
     def __init__(self, ns: int) -> None:
         if ns <= 0:

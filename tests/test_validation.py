@@ -1,0 +1,332 @@
+"""Validation at the public boundary (issue 14): the reproducers, the setters and the trusted path of a solve."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+import crocopy
+from crocopy import guards
+from crocopy.validation import ArgumentTypeError, NonFiniteWarning
+
+
+def unicycle_problem(T: int = 5) -> crocopy.ShootingProblem:
+    m = crocopy.ActionModelUnicycle()
+    return crocopy.ShootingProblem(np.array([-1.0, -1.0, 1.0]), [m] * T, m)
+
+
+# ---------------------------------------------------------------- reproducer 3: ShootingProblem arguments
+@pytest.mark.parametrize("method", ["calc", "calcDiff"])
+def test_problem_rejects_wrong_trajectory_lengths_and_none(method):
+    p = unicycle_problem()
+    call = getattr(p, method)
+    with pytest.raises(ValueError, match=r"us has 0 items, expected T = 5"):
+        call([np.ones(3)] * 6, [])
+    with pytest.raises(ValueError, match=r"xs has 5 items, expected T \+ 1 = 6"):
+        call([np.ones(3)] * 5, [np.zeros(2)] * 5)
+    with pytest.raises(TypeError, match=r"us\[0\] must be a vector of shape \(2,\), got None"):
+        call([np.ones(3)] * 6, [None] * 5)
+    with pytest.raises(TypeError, match="us must be a list of vectors, got NoneType"):
+        call([np.ones(3)] * 6, None)
+
+
+def test_problem_rollout_and_quasi_static_check_their_arguments():
+    p = unicycle_problem()
+    with pytest.raises(ValueError, match=r"us has 4 items, expected T = 5"):
+        p.rollout([np.zeros(2)] * 4)
+    with pytest.raises(ValueError, match=r"us\[1\] has shape \(3,\), expected \(2,\)"):
+        p.rollout([np.zeros(2), np.zeros(3), *[np.zeros(2)] * 3])
+    with pytest.raises(ValueError, match=r"xs\[2\] contains NaN"):
+        p.quasiStatic([np.zeros(3), np.zeros(3), np.full(3, np.nan), np.zeros(3), np.zeros(3)])
+    xs = p.rollout([[1.0, 0.5]] * 5)  # plain lists are converted
+    assert len(xs) == 6 and all(x.shape == (3,) for x in xs)
+
+
+def test_problem_calc_accepts_lists_and_columns_with_the_same_result():
+    p = unicycle_problem()
+    xs = [np.array([0.1 * t, -0.2, 0.3]) for t in range(6)]
+    us = [np.array([0.5, -0.1 * t]) for t in range(5)]
+    expected = p.calc(xs, us)
+    assert p.calc([x.tolist() for x in xs], [u.reshape(2, 1) for u in us]) == expected
+    assert p.calcDiff(xs, us) == expected
+
+
+# ---------------------------------------------------------------- reproducer 4: cost added after createData
+def test_cost_added_after_create_data_raises():
+    state = crocopy.StateVector(4)
+    costs = crocopy.CostModelSum(state, 2)
+    costs.addCost("u", crocopy.CostModelResidual(state, crocopy.ResidualModelControl(state, 2)), 1.0)
+    data = costs.createData(crocopy.DataCollectorAbstract())
+    costs.addCost("x", crocopy.CostModelResidual(state, crocopy.ResidualModelState(state, np.ones(4), 2)), 1.0)
+    with pytest.raises(ValueError, match="a cost was added or removed after createData"):
+        costs.calc(data, np.zeros(4), np.zeros(2))
+    with guards.unchecked():  # the check is in calc itself, so a solve meets it too
+        with pytest.raises(ValueError, match="a cost was added or removed after createData"):
+            costs.calc(data, np.zeros(4), np.zeros(2))
+    fresh = costs.createData(crocopy.DataCollectorAbstract())
+    costs.calc(fresh, np.zeros(4), np.zeros(2))
+    assert fresh.cost == pytest.approx(0.5 * 4.0)
+
+
+# ---------------------------------------------------------------- reproducers 5 and 6: shapes, columns, lists
+def test_state_operations_take_columns_and_refuse_other_shapes():
+    s = crocopy.StateVector(3)
+    np.testing.assert_array_equal(s.integrate(np.zeros(3), np.ones((3, 1))), np.ones(3))
+    np.testing.assert_array_equal(s.diff([0.0, 0.0, 0.0], np.ones((1, 3))), np.ones(3))
+    with pytest.raises(ValueError, match=r"dx has shape \(3, 3\), expected \(3,\)"):
+        s.integrate(np.zeros(3), np.ones((3, 3)))
+    with pytest.raises(ValueError, match=r"x1 has shape \(2,\), expected \(3,\)"):
+        s.Jdiff(np.zeros(3), np.zeros(2))
+    with pytest.raises(ValueError, match="firstsecond must be Jcomponent"):
+        s.Jintegrate(np.zeros(3), np.zeros(3), 7)
+    with pytest.raises(TypeError, match="Jin must be a float64 numpy array"):
+        s.JintegrateTransport(np.zeros(3), np.zeros(3), [[1.0]] * 3, crocopy.Jcomponent.first)
+
+
+def test_action_calc_takes_lists_and_columns_and_refuses_scalars():
+    m = crocopy.ActionModelUnicycle()
+    d, d_ref = m.createData(), m.createData()
+    x, u = np.array([0.3, -0.2, 0.5]), np.array([1.0, -0.4])
+    m.calc(d_ref, x, u)
+    m.calc(d, x.tolist(), u.reshape(2, 1))
+    assert d.cost == d_ref.cost
+    np.testing.assert_array_equal(d.xnext, d_ref.xnext)
+    with pytest.raises(ValueError, match=r"x has shape \(\), expected \(3,\)"):
+        m.calc(d, 1.0)
+    with pytest.raises(ValueError, match=r"u has shape \(3,\), expected \(2,\)"):
+        m.calcDiff(d, x, np.zeros(3))
+
+
+def test_action_calc_refuses_the_data_of_another_model():
+    m = crocopy.ActionModelUnicycle()
+    other = crocopy.ActionModelLQR(3, 1).createData()
+    with pytest.raises(ValueError, match=r"data was not created by this ActionModelUnicycle: data.Lu has shape"):
+        m.calc(other, np.zeros(3), np.zeros(2))
+
+
+# ---------------------------------------------------------------- reproducer 7: setters
+def test_setters_validate():
+    m = crocopy.ActionModelUnicycle()
+    with pytest.raises(ValueError, match=r"dt must be >= 0.0, got -0.1"):
+        m.dt = -0.1
+    with pytest.raises(ValueError, match="costWeights contains NaN"):
+        m.costWeights = [np.nan, 1.0]
+    integrated = crocopy.IntegratedActionModelEuler(crocopy.DifferentialActionModelLQR(2, 1), 0.1)
+    with pytest.raises(ValueError, match="timeStep"):
+        integrated.dt = np.inf
+    state = crocopy.StateVector(2)
+    costs = crocopy.CostModelSum(state, 1)
+    costs.addCost("u", crocopy.CostModelResidual(state, crocopy.ResidualModelControl(state, 1)), 1.0)
+    with pytest.raises(ValueError, match="weight of cost 'u' must be a finite number, got nan"):
+        costs.costs["u"].weight = np.nan
+    with pytest.raises(TypeError, match="active must be a bool"):
+        costs.costs["u"].active = "yes"
+    solver = crocopy.SolverFDDP(unicycle_problem())
+    with pytest.raises(ValueError, match=r"reg_min must be >= 0.0, got -1.0"):
+        solver.reg_min = -1
+    with pytest.raises(ValueError, match="th_stop must be a finite number"):
+        solver.th_stop = np.nan
+    solver.reg_min = 10.0
+    solver.reg_max = 1.0
+    with pytest.raises(ValueError, match=r"reg_min = 10.0 is above reg_max = 1.0"):
+        solver.solve()
+
+
+def test_control_bounds_may_be_set_in_either_order():
+    m = crocopy.ActionModelUnicycle()
+    m.u_ub = np.array([-2.0, -2.0])  # below the current (default) u_lb? no: the default is -inf
+    m.u_lb = np.array([-1.0, -1.0])  # now u_lb > u_ub: allowed until the pair is used
+    m.u_ub = np.array([1.0, 1.0])
+    assert m.has_control_limits
+    np.testing.assert_array_equal(m.u_lb, -1.0)
+    problem = crocopy.ShootingProblem(np.zeros(3), [m] * 3, m)
+    assert crocopy.SolverBoxFDDP(problem).solve(maxiter=5) in (True, False)
+    m.u_ub = np.array([-2.0, 1.0])
+    for Solver in (crocopy.SolverFDDP, crocopy.SolverBoxFDDP):
+        with pytest.raises(ValueError, match=r"u_lb\[0\] = -1.0 is above runningModels\[0\].u_ub\[0\] = -2.0"):
+            Solver(problem).solve()
+
+
+# ---------------------------------------------------------------- reproducer 8: indefinite LQR
+def test_lqr_with_an_indefinite_cost_hessian_is_rejected():
+    with pytest.raises(ValueError, match=r"positive semi-definite, got smallest eigenvalue -1"):
+        crocopy.ActionModelLQR(np.eye(3), np.eye(3, 1), -np.eye(3), np.eye(1), np.zeros((3, 1)))
+    with pytest.raises(ValueError, match="positive semi-definite"):
+        crocopy.DifferentialActionModelLQR(
+            np.eye(1), np.eye(1), np.ones((1, 1)), np.eye(2), np.eye(1), 3.0 * np.ones((2, 1))
+        )
+    with pytest.raises(ValueError, match="Q must be symmetric"):
+        crocopy.ActionModelLQR(np.eye(2), np.eye(2, 1), np.array([[1.0, 1.0], [0.0, 1.0]]), np.eye(1),
+                               np.zeros((2, 1)))
+    crocopy.ActionModelLQR(np.eye(2), np.eye(2, 1), np.zeros((2, 2)), np.eye(1), np.zeros((2, 1)))  # PSD is fine
+
+
+# ---------------------------------------------------------------- reproducer 10: silently accepted
+def test_solve_arguments_and_x0_types_are_checked():
+    p = unicycle_problem()
+    solver = crocopy.SolverFDDP(p)
+    with pytest.raises(ValueError, match="maxiter must be non-negative, got -5"):
+        solver.solve(None, None, -5)
+    with pytest.raises(TypeError, match="maxiter must be an integer, got float"):
+        solver.solve(None, None, 2.5)
+    with pytest.raises(TypeError, match="is_feasible must be a bool, got str 'yes'"):
+        solver.solve(None, None, 10, "yes")
+    with pytest.raises(ValueError, match=r"init_reg must be >= 0.0, got -1.0"):
+        solver.solve(None, None, 10, False, -1.0)
+    assert solver.solve(None, None, 10, False, float("nan")) in (True, False)  # NaN: the default, as Crocoddyl
+    with pytest.raises(TypeError, match="x0 must be a vector of shape \\(3,\\) of real numbers, got dtype complex"):
+        p.x0 = np.array([1.0 + 1j, 0.0, 0.0])
+    with pytest.raises(TypeError, match="dtype <U1"):
+        p.x0 = ["1", "2", "3"]
+    with pytest.raises(TypeError, match="dtype bool"):
+        p.x0 = [True, False, True]
+
+
+# ---------------------------------------------------------------- reproducer 11: NaN/inf and overflow
+def test_nonfinite_inputs_raise_and_overflow_warns():
+    m = crocopy.ActionModelUnicycle()
+    d = m.createData()
+    with pytest.raises(ValueError, match=r"x contains NaN or inf \(x\[1\] = nan\)"):
+        m.calc(d, np.array([0.0, np.nan, 0.0]), np.zeros(2))
+    with pytest.raises(ValueError, match=r"u contains NaN or inf \(u\[0\] = inf\)"):
+        m.calcDiff(d, np.zeros(3), np.array([np.inf, 0.0]))
+    with pytest.warns(NonFiniteWarning, match="ActionModelUnicycle: data.cost is not finite"):
+        with np.errstate(over="ignore"):
+            m.calc(d, np.full(3, 1e300), np.zeros(2))
+    act = crocopy.ActivationModelQuad(3)
+    with pytest.raises(ValueError, match=r"r contains NaN"):
+        act.calc(act.createData(), np.array([0.0, np.nan, 1.0]))
+    state = crocopy.StateVector(3)
+    residual = crocopy.ResidualModelState(state, np.zeros(3), 2)
+    with pytest.raises(ValueError, match="xref contains NaN"):
+        residual.reference = np.array([np.nan, 0.0, 0.0])
+    with pytest.raises(ValueError, match="x contains NaN"):
+        residual.calc(residual.createData(crocopy.DataCollectorAbstract()), np.full(3, np.nan), np.zeros(2))
+    for eps in (-0.0, 0.0, 1e-300, np.nan):
+        with pytest.raises(ValueError, match="eps must be"):
+            crocopy.ActivationModelSmooth1Norm(3, eps)
+        with pytest.raises(ValueError, match="eps must be"):
+            crocopy.ActivationModelSmooth2Norm(3, eps)
+    smooth = crocopy.ActivationModelSmooth2Norm(3, crocopy.activations.norms.EPS_MIN)
+    sd = smooth.createData()
+    smooth.calcDiff(sd, np.zeros(3))
+    assert np.all(np.isfinite(sd.Arr))
+
+
+# ---------------------------------------------------------------- the trusted path
+class CountingUnicycle(crocopy.ActionModelUnicycle):
+    """A user's subclass overriding calc, as Crocoddyl users write them."""
+
+    def __init__(self):
+        super().__init__()
+        self.calls = 0
+        self.checked_calls = 0
+
+    def calc(self, data, x, u=None):
+        self.calls += 1
+        self.checked_calls += guards.checking()
+        super().calc(data, x, u)
+
+
+def test_solve_runs_user_overrides_unchecked_and_restores_the_checks():
+    m = CountingUnicycle()
+    problem = crocopy.ShootingProblem(np.array([-1.0, -1.0, 1.0]), [m] * 10, m)
+    solver = crocopy.SolverFDDP(problem)
+    inside = []
+
+    def callback(s):
+        inside.append((guards.checking(), type(m).calc is CountingUnicycle._guard_pairs["calc"][0]))
+
+    solver.setCallbacks([callback])
+    assert solver.solve([], [], 20)
+    assert m.calls > 0 and m.checked_calls == 0
+    assert inside and all(c == (False, guards.INSTALL_RAW) for c in inside)  # no checks, raw functions (< 3.13)
+    assert guards.checking()
+    assert type(m).calc is CountingUnicycle._guard_pairs["calc"][1]
+    with pytest.raises(ValueError, match="x has shape"):
+        m.calc(m.createData(), np.zeros(2))
+
+
+def test_checks_come_back_after_a_solve_that_raises():
+    m = crocopy.ActionModelUnicycle()
+    problem = crocopy.ShootingProblem(np.zeros(3), [m] * 3, m)
+    solver = crocopy.SolverFDDP(problem)
+
+    def boom(s):
+        raise RuntimeError("callback failed")
+
+    solver.setCallbacks([boom])
+    with pytest.raises(RuntimeError, match="callback failed"):
+        solver.solve()
+    assert guards.checking()
+    with pytest.raises(ValueError, match="x contains NaN"):
+        m.calc(m.createData(), np.full(3, np.nan))
+
+
+def test_a_direct_call_checks_only_the_outermost_level():
+    differential = crocopy.DifferentialActionModelLQR(2, 1)
+    seen = []
+    inner = type(differential)
+
+    class Spy(inner):
+        def calc(self, data, x, u=None):
+            seen.append(guards.checking())
+            super().calc(data, x, u)
+
+    spy = Spy(2, 1)
+    integrated = crocopy.IntegratedActionModelEuler(spy, 0.1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        integrated.calc(integrated.createData(), [0.1, 0.2, 0.3, 0.4], [[0.5]])
+    assert seen == [False]
+    with pytest.raises(ArgumentTypeError):
+        integrated.calc(integrated.createData(), None)
+
+
+def test_problem_node_updates_and_named_items_check_their_arguments():
+    p = unicycle_problem()
+    with pytest.raises(TypeError, match="i must be an integer, got str"):
+        p.updateModel("2", crocopy.ActionModelUnicycle())
+    with pytest.raises(TypeError, match="model must be an ActionModelAbstract, got NoneType"):
+        p.updateModel(2, None)
+    with pytest.raises(TypeError, match="model must be an ActionModelAbstract, got str"):
+        p.circularAppend("unicycle")
+    state = crocopy.StateVector(2)
+    costs = crocopy.CostModelSum(state, 1)
+    with pytest.raises(TypeError, match="name of the cost must be a str, got int"):
+        costs.addCost(3, crocopy.CostModelResidual(state, crocopy.ResidualModelControl(state, 1)), 1.0)
+    costs.addCost("u", crocopy.CostModelResidual(state, crocopy.ResidualModelControl(state, 1)), 1.0)
+    with pytest.raises(TypeError, match="active must be a bool"):
+        costs.changeCostStatus("u", "no")
+    with pytest.raises(KeyError, match="no cost named 'v'"):
+        costs.changeCostStatus("v", False)
+
+
+def test_calc_diff_before_calc_evaluates_the_node_first():
+    differential = crocopy.DifferentialActionModelLQR.Random(2, 1)
+    x, u = np.array([0.1, -0.2, 0.3, 0.4]), np.array([0.5])
+    fresh, ref = differential.createData(), differential.createData()
+    differential.calcDiff(fresh, x, u)  # no calc before
+    differential.calc(ref, x, u)
+    differential.calcDiff(ref, x, u)
+    assert fresh.cost == ref.cost
+    for f in ("xout", "Fx", "Fu", "Lx", "Lu"):
+        np.testing.assert_array_equal(getattr(fresh, f), getattr(ref, f), err_msg=f)
+
+
+def test_flag_only_trusted_path_leaves_the_classes_alone(monkeypatch):
+    monkeypatch.setattr(guards, "INSTALL_RAW", False)
+
+    class Fresh(CountingUnicycle):
+        pass
+
+    m = Fresh()
+    before = Fresh.__dict__.get("calc", CountingUnicycle.calc)
+    problem = crocopy.ShootingProblem(np.array([-1.0, -1.0, 1.0]), [m] * 10, m)
+    solver = crocopy.SolverFDDP(problem)
+    solver.setCallbacks([lambda s: inside.append(type(m).calc is before)])
+    inside = []
+    assert solver.solve([], [], 20)
+    assert m.calls > 0 and m.checked_calls == 0 and inside and all(inside)
