@@ -21,7 +21,7 @@ import numpy as np
 import pinocchio as pin
 
 from crocopy.state import StateAbstract
-from crocopy.validation import as_vector, check_finite
+from crocopy.validation import check_finite
 from crocopy.versioning import frozen_copy, touch
 
 from .contact_base import ContactDataAbstract, ContactModelAbstract, check_gains, check_position
