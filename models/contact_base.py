@@ -33,11 +33,9 @@ def check_gains(gains: np.ndarray | None) -> np.ndarray:
 
 
 def check_position(value: np.ndarray, size: int, name: str = "xref") -> np.ndarray:
-    """A contact position as a finite float vector of shape ``(size,)`` (a column or row matrix is accepted)."""
-    ref = np.asarray(value, dtype=float).reshape(-1) if np.ndim(value) == 2 else np.asarray(value, dtype=float)
-    if ref.shape != (size,) or not np.all(np.isfinite(ref)):
-        raise ValueError(f"{name} must be a finite vector of shape ({size},), got shape {np.shape(value)}")
-    return ref
+    """A contact position as a finite float vector of shape ``(size,)`` (a column, a row or a list is
+    accepted; see :func:`crocopy.validation.as_vector`)."""
+    return as_vector(value, size, name)
 
 
 class ContactModelAbstract(ForceModelAbstract):
