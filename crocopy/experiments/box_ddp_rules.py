@@ -69,8 +69,9 @@ class SolverBoxDDPRules(SolverBoxDDP):
         self.tol_fun = float(tol_fun)
         if line_search == "tassa":
             self.alphas = list(10.0 ** np.linspace(0.0, -3.0, 11))
-        if regularization == "tassa":  # every iteration ends in decreaseRegularization (see there)
-            self.th_stepDec, self.th_stepInc, self.reg_max = -1.0, -1.0, 1e10
+        if regularization == "tassa":  # every iteration ends in decreaseRegularization (see there):
+            # a step is never shorter than min(alphas) = 1e-3, so it is always > th_stepDec, never <= th_stepInc
+            self.th_stepDec, self.th_stepInc, self.reg_max = 1e-300, 1e-300, 1e10
         if stopping == "tassa":
             self.th_stop = 0.5  # stoppingCriteria returns 0 (stop) or inf
         self._dlam = 1.0

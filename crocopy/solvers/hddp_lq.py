@@ -121,7 +121,7 @@ def hierarchical_backward_pass(
         bmax = max((float(np.abs(B).max()) for B in Fu if B.size), default=0.0)
         task_scale = [
             max(max((float(np.abs(m).max()) for m in lv.Luu if m.size), default=0.0),
-                bmax**2 * max(float(np.abs(m).max()) for m in lv.Lxx if m.size))
+                bmax * bmax * max(float(np.abs(m).max()) for m in lv.Lxx if m.size))
             for lv in levels
         ]
     curvature = [max((float(np.max(np.diag(m))) for m in lv.Lxx if m.size), default=0.0) or 1.0 for lv in levels]
