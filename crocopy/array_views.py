@@ -77,15 +77,31 @@ class KeepsViews:
 
 
 class ShapeTolerantArray(np.ndarray):
-    """An array whose item assignment also takes a value of the same size whose shape differs only
-    by dimensions of length one (``tau[:] = M`` with ``M`` of shape ``(n, 1)``).
+    """An array that Python models written for Crocoddyl can index as Crocoddyl shows it.
 
-    Crocoddyl shows an ``n×1`` or ``1×n`` matrix (e.g. ``dtau_du`` with one control) as a vector
-    of shape ``(n,)``, so models written from Python for Crocoddyl write such products into its
-    arrays; :func:`tolerate_python_model` gives the data of such models these arrays.
+    Crocoddyl shows an ``n×1`` or ``1×n`` matrix (e.g. ``dtau_du`` or ``Mtau`` with one control) as
+    a vector of shape ``(n,)``, so models written from Python for Crocoddyl index such a matrix by
+    one key (``Mtau[1] = 1.0`` sets the second entry) and write products of any of these shapes into
+    its arrays.  On a matrix with a dimension of length one, a single key (not a tuple) indexes along
+    the other dimension; an item assignment also takes a value of the same size whose shape differs
+    only by dimensions of length one (``tau[:] = M`` with ``M`` of shape ``(n, 1)``).
+    :func:`tolerate_python_model` gives the data of such models these arrays.
     """
 
+    def _as_vector_key(self, key: Any) -> Any:
+        """``key`` along the long dimension if it is one vector index (not a tuple, not a mask or index
+        array of two or more dimensions) of a matrix with a dimension of length one, else ``key``."""
+        if self.ndim != 2 or 1 not in self.shape or isinstance(key, tuple) or key is None:
+            return key
+        if not isinstance(key, (int, np.integer, slice, type(Ellipsis))) and np.ndim(key) > 1:
+            return key
+        return (0, key) if self.shape[0] == 1 else (key, 0)
+
+    def __getitem__(self, key: Any) -> Any:
+        return super().__getitem__(self._as_vector_key(key))
+
     def __setitem__(self, key: Any, value: Any) -> None:
+        key = self._as_vector_key(key)
         try:
             super().__setitem__(key, value)
         except ValueError:

@@ -11,9 +11,13 @@ Kinematics contract with the residuals (as under forward dynamics, see
 :mod:`crocopy.models.free_fwd_dynamics`): ``calc`` runs RNEA (``τ`` in ``pinocchio.Data.tau``) then
 the forward kinematics at ``(q, v, a)`` (joint placements, velocities and accelerations); ``calcDiff`` runs
 ``computeRNEADerivatives`` (``∂τ/∂q``, ``∂τ/∂v``, ``M`` and the kinematic derivatives).  The joint
-data collector holds ``a = u`` and the actuation commands of ``τ``: ``tau = Mtau τ`` (Crocoddyl's
-``actuation.commands``), ``dtau_dx = Mtau ∂τ/∂x``, ``dtau_du = Mtau M``, so that joint-effort and
-joint-acceleration residuals read the efforts and accelerations of the inverse dynamics.
+data collector holds ``a = u`` and the actuation commands of ``τ``: ``tau = c(x, τ)`` (Crocoddyl's
+``actuation.commands``), ``dtau_dx = Mtau (∂τ/∂x - ∂a/∂x)``, ``dtau_du = Mtau M``, so that joint-effort
+and joint-acceleration residuals read the efforts and accelerations of the inverse dynamics.  The
+commands invert the actuation ``τ = a(x, w)``: differentiating ``a(x, c(x, τ)) = τ`` gives
+``∂c/∂τ = Mtau`` and ``∂c/∂x = -Mtau ∂a/∂x`` (``∂a/∂x``: the actuation's ``dtau_dx`` at the commands),
+exact when ``τ`` is a torque the actuation produces (always with a full actuation; on the ``"tau"``
+equality otherwise).  The second term vanishes for the state-independent actuations.
 """
 
 from __future__ import annotations
@@ -67,10 +71,11 @@ def joint_commands(actuation, adata, joint, x: np.ndarray, tau: np.ndarray) -> N
 
 
 def joint_commands_diff(actuation, adata, joint, x: np.ndarray, dtau_dx: np.ndarray, dtau_du: np.ndarray) -> None:
-    """``joint.dtau_dx = Mtau dtau_dx`` and ``joint.dtau_du = Mtau dtau_du`` (``Mtau``: torques → commands)."""
+    """``joint.dtau_dx = Mtau (dtau_dx - ∂a/∂x)`` and ``joint.dtau_du = Mtau dtau_du`` (``Mtau``: torques →
+    commands, ``∂a/∂x``: the actuation's ``dtau_dx`` at the commands)."""
     actuation.calcDiff(adata, x, adata.u)
     actuation.torqueTransform(adata, x, adata.u)
-    np.dot(adata.Mtau, dtau_dx, out=joint.dtau_dx)
+    np.dot(adata.Mtau, dtau_dx - adata.dtau_dx, out=joint.dtau_dx)
     np.dot(adata.Mtau, dtau_du, out=joint.dtau_du)
 
 
