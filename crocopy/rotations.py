@@ -27,10 +27,11 @@ def rotationMatrixFromTwoVectors(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         If ``a`` or ``b`` is not a finite vector of shape ``(3,)``.
     """
     a, b = as_vector(a, 3, "a"), as_vector(b, 3, "b")
-    na, nb = np.linalg.norm(a), np.linalg.norm(b)
-    if na == 0.0 or nb == 0.0:
+    ma, mb = np.abs(a).max(), np.abs(b).max()
+    if ma == 0.0 or mb == 0.0:
         return np.eye(3)
-    u, w = a / na, b / nb
+    a, b = a / ma, b / mb  # largest entry 1: the norms below neither underflow nor overflow
+    u, w = a / np.linalg.norm(a), b / np.linalg.norm(b)
     k = np.cross(u, w)
     s2 = float(k @ k)
     if s2 == 0.0:
