@@ -7,6 +7,7 @@ Everything public is re-exported here flat, as in Crocoddyl (``crocopy.SolverFDD
 import builtins as _builtins
 from importlib.metadata import PackageNotFoundError as _PackageNotFoundError
 from importlib.metadata import version as _version
+from types import ModuleType as _ModuleType
 
 from .action_base import ActionDataAbstract, ActionModelAbstract
 from .actions import ActionModelLQR, ActionModelUnicycle, DifferentialActionModelLQR
@@ -148,10 +149,15 @@ WITH_CODEGEN = False
 #: ``except crocopy.Exception`` catches as ``except crocoddyl.Exception`` catches Crocoddyl's.
 Exception = _builtins.Exception  # noqa: A001
 
+#: ``from crocopy import *`` gives every public name, as ``from crocoddyl import *`` does.
+__all__ = sorted(n for n, v in globals().items() if not n.startswith("_") and not isinstance(v, _ModuleType))
+
 
 def __getattr__(name: str):
     """Names that load lazily (``MeshcatDisplay``, HTML export) come from ``crocopy.models``; a name
     of Crocoddyl's API that crocopy lacks raises an ``AttributeError`` saying so."""
+    if name.startswith("__"):
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
     from . import models
 
     try:

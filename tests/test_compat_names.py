@@ -117,3 +117,14 @@ def test_seed_shared_memory_and_exception():
         crocopy.sharedMemory(False)
     with pytest.raises(crocopy.Exception):
         crocopy.ContactModel1D(state, "LF_FOOT", np.zeros(3), pin.LOCAL)
+
+
+def test_star_import_gives_the_core_and_the_models():
+    namespace: dict = {}
+    exec("from crocopy import *", namespace)
+    for name in ("ActionModelUnicycle", "SolverFDDP", "SolverIntro", "ShootingProblem", "ContactModel3D",
+                 "StateMultibody", "LuNull"):
+        assert name in namespace, name
+    assert not any(name.startswith("_") for name in crocopy.__all__)
+    with pytest.raises(AttributeError, match="has no attribute '__wrapped__'"):
+        crocopy.__wrapped__  # noqa: B018  (dunders are not forwarded to crocopy.models)
