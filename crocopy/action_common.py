@@ -138,6 +138,8 @@ class ActionModelBase(ControlLimitsMixin, Guarded):
     u_lb, u_ub : numpy.ndarray
         Control bounds, shape ``(nu,)``, default unbounded (``has_control_limits`` False).
 
+    Notes
+    -----
     ``calc``, ``calcDiff`` and ``quasiStatic`` of every subclass check their arguments when a user
     calls them (:mod:`crocopy.guards`): ``data`` from this model, ``x (nx,)``, ``u (nu,)`` or ``None``,
     finite (NaN/inf raise ``ValueError``); a result that is not finite warns

@@ -32,6 +32,8 @@ class ActuationModelAbstract(ControlBounds, Guarded):
     u_lb, u_ub : numpy.ndarray
         Control bounds, shape ``(nu,)``, default unbounded.
 
+    Notes
+    -----
     A user's ``calc``, ``calcDiff``, ``commands`` and ``torqueTransform`` are checked (``x (nx,)``,
     ``u (nu,)``, ``tau (nv,)``, finite).
     """

@@ -36,3 +36,15 @@ napoleon_use_ivar = True
 html_theme = "furo"
 html_title = f"crocopy {release}"
 html_static_path: list[str] = []
+
+
+def _skip_class_aliases(app, what, name, obj, skip, options):
+    """Skip a class attribute that is another class documented under its own name (Crocoddyl's nested
+    names such as ``DifferentialActionModelFreeInvDynamics.ResidualModelActuation``)."""
+    if what == "class" and isinstance(obj, type) and obj.__name__ == name and "." not in obj.__qualname__:
+        return True
+    return None
+
+
+def setup(app):
+    app.connect("autodoc-skip-member", _skip_class_aliases)

@@ -95,6 +95,8 @@ class ForceModelAbstract(Guarded):
     nu : int
         Control dimension.
 
+    Notes
+    -----
     A user's ``calc(data, x)``/``calcDiff(data, x)`` is checked (``x (nx,)``, finite).
     """
 

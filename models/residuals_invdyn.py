@@ -183,7 +183,8 @@ class ResidualModelContact(ResidualModelAbstract):
 
 
 class ResidualDataContact(ResidualDataAbstract):
-    """Data of :class:`ResidualModelContact`: ``contact`` (the data of the contact on the residual's frame)."""
+    """Data of :class:`~crocopy.models.residuals_invdyn.ResidualModelContact`: ``contact`` (the data of the
+    contact on the residual's frame)."""
 
     def __init__(self, model: ResidualModelContact, data: DataCollectorAbstract | None) -> None:
         super().__init__(model, data)

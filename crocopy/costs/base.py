@@ -45,6 +45,8 @@ class CostModelAbstract(Guarded):
     nr : int, optional
         Residual dimension when there is neither activation nor residual.
 
+    Notes
+    -----
     A user's ``calc``/``calcDiff`` is checked (``x (nx,)``, ``u (nu,)`` or ``None``, finite).
     """
 

@@ -53,6 +53,8 @@ class ControlParametrizationModelAbstract(Guarded):
     nu : int
         Dimension of the control parameters ``u`` (the integrated model's ``nu``).
 
+    Notes
+    -----
     A user's ``calc``/``calcDiff(data, t, u)`` and ``params(data, t, w)`` are checked: ``t`` a finite
     number, ``u (nu,)``, ``w (nw,)``, finite.
     """

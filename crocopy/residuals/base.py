@@ -33,6 +33,8 @@ class ResidualModelAbstract(Guarded):
     q_dependent, v_dependent, u_dependent : bool
         Which arguments the residual depends on.
 
+    Notes
+    -----
     A user's ``calc``/``calcDiff`` is checked (``x (nx,)``, ``u (nu,)`` or ``None``, finite).
     """
 
