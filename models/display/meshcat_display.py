@@ -58,8 +58,8 @@ from crocopy.callbacks.display import DisplayAbstract
 
 from .framing import box_corners, camera_placement, floor_extent, motion_bounds, motion_points, robot_size
 from .meshes import has_mixed_texcoords, plain_mesh
-from .scene import active_contacts, frame_ids_of, friction_cones
 from .server import DEFAULT_TIMEOUT, start_meshcat_server, stop_meshcat_server
+from .solver_reading import configurations, force_trajectories, frame_trajectories, trajectory_frame_names
 
 __all__ = ["MeshcatDisplay", "start_meshcat_server", "stop_meshcat_server"]
 
@@ -505,22 +505,9 @@ class MeshcatDisplay(DisplayAbstract):
         )
 
     # ------------------------------------------------------------------ reading a solver
-    @staticmethod
-    def _nodes_of(solver: Any) -> list[tuple[Any, Any]]:
-        problem = solver.problem
-        return list(zip(problem.runningModels, problem.runningDatas, strict=False)) + [
-            (problem.terminalModel, problem.terminalData)
-        ]
-
     def init(self, solver: Any) -> None:
         """Collect the frames to draw from the solver's problem (contacts and frame residuals)."""
-        names = list(self.frameNames)
-        for model, _ in self._nodes_of(solver):
-            for fid in frame_ids_of(model):
-                name = self.model.frames[fid].name
-                if name not in names:
-                    names.append(name)
-        self.frameTrajNames = names
+        self.frameTrajNames = trajectory_frame_names(self.model, self.frameNames, solver)
 
     def getJointTorquesTrajectoryFromSolver(self, solver: Any) -> list[np.ndarray]:
         """The controls ``us`` of the solver (copies)."""
@@ -534,57 +521,16 @@ class MeshcatDisplay(DisplayAbstract):
         """Positions of the frames found by :meth:`init`: ``{frame name: [[x, y, z], ...]}``."""
         if not hasattr(self, "frameTrajNames"):
             self.init(solver)
-        ids = {name: self.model.getFrameId(name) for name in self.frameTrajNames}
-        ps: dict[str, list[list[float]]] = {name: [] for name in ids}
-        for q in self.configurations(solver.xs):
-            pin.framesForwardKinematics(self.model, self.data, q)
-            for name, fid in ids.items():
-                ps[name].append(self.data.oMf[fid].translation.tolist())
-        return ps
+        return frame_trajectories(self.model, self.data, self.frameTrajNames, self.configurations(solver.xs))
 
     def getForceTrajectoryFromSolver(self, solver: Any) -> list[list[dict]]:
-        """Contact (and impulse) forces of every node, read from the solver's data.
-
-        Each node gives a list of records ``{"key", "oMf", "f", "R", "mu", "type"}``; nodes with
-        free dynamics give an empty list. Friction-cone orientation and coefficient come from
-        friction-cone residuals on the same frame, else ``R = I``, ``mu = 0.7``.
-        """
-        qs = self.configurations(solver.xs)
-        fs: list[list[dict]] = []
-        for i, (model, data) in enumerate(self._nodes_of(solver)):
-            records = []
-            contacts = active_contacts(model, data)
-            if contacts:
-                pin.framesForwardKinematics(self.model, self.data, qs[min(i, len(qs) - 1)])
-                cones = friction_cones(model)
-            for fid, force, ftype in contacts:
-                R, mu = cones.get(fid, (np.eye(3), 0.7))
-                records.append(
-                    {
-                        "key": self.model.frames[fid].name,
-                        "oMf": self.data.oMf[fid].copy(),
-                        "f": force,
-                        "R": R,
-                        "mu": mu,
-                        "type": ftype,
-                    }
-                )
-            fs.append(records)
-        return fs
+        """Contact (and impulse) forces of every node (see :func:`.solver_reading.force_trajectories`)."""
+        return force_trajectories(self.model, self.data, solver, self.configurations(solver.xs))
 
     # ------------------------------------------------------------------ helpers and lifetime
     def configurations(self, xs: Sequence[np.ndarray]) -> list[np.ndarray]:
         """The configurations ``q`` (first ``nq`` entries) of the states ``xs``, checked."""
-        nq = self.model.nq
-        qs = []
-        for i, x in enumerate(xs):
-            x = np.asarray(x, dtype=float).reshape(-1)
-            if x.shape[0] < nq:
-                raise ValueError(f"xs[{i}] must have at least nq={nq} entries, got shape {x.shape}")
-            qs.append(x[:nq])
-        if not qs:
-            raise ValueError("xs must contain at least one state")
-        return qs
+        return configurations(self.model.nq, xs)
 
     def url(self) -> str:
         """Address of the live viewer."""
