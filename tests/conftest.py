@@ -9,6 +9,7 @@ run there.
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import os
 import shutil
 from types import ModuleType
@@ -33,30 +34,41 @@ def chromium_path() -> str | None:
     return None
 
 
+def skip_without_chromium() -> pytest.MarkDecorator:
+    """Mark: skip outside CI when Chromium is missing (in CI the test runs and :func:`require_chromium` fails)."""
+    return pytest.mark.skipif(chromium_path() is None and not in_ci(),
+                              reason=f"chromium not found, real-browser test skipped: {INSTALL_HINT} (CI requires it)")
+
+
 def require_chromium() -> str:
-    """Chromium's path; skips the calling test without it, or fails it in CI."""
+    """Chromium's path; fails the calling test without it (outside CI :func:`skip_without_chromium` skipped it)."""
     found = chromium_path()
-    if found is not None:
-        return found
-    if in_ci():
+    if found is None:
         pytest.fail(f"chromium not found (required in CI; .ci/run installs it): {INSTALL_HINT}")
-    pytest.skip(f"chromium not found, real-browser test skipped: {INSTALL_HINT} (CI requires it)")
+    return found
+
+
+def _module_hint(name: str, extra: str) -> str:
+    return f'{name} not importable: pip install ".[{extra}]"'
+
+
+def skip_without_module(name: str, extra: str) -> pytest.MarkDecorator:
+    """Mark: skip outside CI when ``name`` cannot be found (in CI :func:`require_module` fails instead)."""
+    return pytest.mark.skipif(importlib.util.find_spec(name) is None and not in_ci(),
+                              reason=f"{_module_hint(name, extra)} (CI requires it)")
 
 
 def require_module(name: str, extra: str) -> ModuleType:
-    """Import ``name``; without it skip the calling test (fail it in CI), naming the extra that installs it."""
+    """Import ``name``; fail the calling test without it, naming the extra that installs it."""
     try:
         return importlib.import_module(name)
     except ImportError as exc:
-        hint = f'{name} not importable ({exc}): pip install ".[{extra}]"'
-        if in_ci():
-            pytest.fail(f"{hint} (required in CI; .ci/run installs it)")
-        pytest.skip(f"{hint} (CI requires it)")
+        pytest.fail(f"{_module_hint(name, extra)} ({exc}) (required in CI; .ci/run installs it)")
 
 
 @pytest.fixture(scope="session")
 def chromium() -> str:
-    """Path of the Chromium executable (skip outside CI / fail in CI when missing)."""
+    """Path of the Chromium executable (fails when missing; see :func:`skip_without_chromium`)."""
     return require_chromium()
 
 

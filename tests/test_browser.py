@@ -19,14 +19,14 @@ import example_robot_data as erd
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import require_chromium
+from conftest import require_chromium, skip_without_chromium
 from PIL import Image
 
 import crocopy
 from crocopy.models.display.meshcat_display import MeshcatDisplay
 from crocopy.problems import registry
 
-pytestmark = pytest.mark.usefixtures("chromium")
+pytestmark = [skip_without_chromium(), pytest.mark.usefixtures("chromium")]
 FLAGS = [
     "--headless",
     "--no-sandbox",

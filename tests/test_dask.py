@@ -12,12 +12,13 @@ import os
 
 import numpy as np
 import pytest
-from conftest import require_module
+from conftest import require_module, skip_without_module
 
 import crocopy
 from crocopy.experiments.box_fddp import initial_positions
 from crocopy.problems import registry
 
+pytestmark = skip_without_module("distributed", "distributed")
 STARTS = 4
 MAXITER = 15
 

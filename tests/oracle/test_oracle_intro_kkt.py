@@ -20,12 +20,8 @@ import pytest
 crocoddyl = pytest.importorskip("crocoddyl")
 
 import crocopy  # noqa: E402
-from crocopy.bench.side_by_side import BenchDependencyError, require_crocoddyl  # noqa: E402
 
-try:
-    require_crocoddyl()
-except BenchDependencyError as exc:  # Crocoddyl next to a Pinocchio it was not built for
-    pytest.skip(str(exc), allow_module_level=True)
+pytestmark = pytest.mark.usefixtures("bench_crocoddyl")
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import intro_problems as ip  # noqa: E402

@@ -20,12 +20,8 @@ crocoddyl = pytest.importorskip("crocoddyl")
 import oracle_models as om  # noqa: E402
 
 import crocopy  # noqa: E402
-from crocopy.bench.side_by_side import BenchDependencyError, require_crocoddyl  # noqa: E402
 
-try:
-    require_crocoddyl()
-except BenchDependencyError as exc:
-    pytest.skip(str(exc), allow_module_level=True)
+pytestmark = pytest.mark.usefixtures("bench_crocoddyl")
 
 CLASSES = ("ContactModel1D", "ContactModel2D", "ContactModel3D", "ContactModel6D", "ImpulseModel3D",
            "ImpulseModel6D", "ContactModelMultiple", "ImpulseModelMultiple")

@@ -33,12 +33,8 @@ import oracle_deviations as od  # noqa: E402
 import oracle_models as om  # noqa: E402
 
 import crocopy  # noqa: E402
-from crocopy.bench.side_by_side import BenchDependencyError, require_crocoddyl  # noqa: E402
 
-try:
-    require_crocoddyl()
-except BenchDependencyError as exc:  # Crocoddyl next to a Pinocchio it was not built for
-    pytest.skip(str(exc), allow_module_level=True)
+pytestmark = pytest.mark.usefixtures("bench_crocoddyl")
 
 ACTIVATIONS = tuple(name for name, (cls, _) in om.ACTIVATIONS.items() if om.implemented(crocopy, cls))
 COSTS = (*ACTIVATIONS, "default")
