@@ -19,7 +19,7 @@ import example_robot_data as erd
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import require_chromium, skip_without_chromium
+from optional_requirements import require_chromium, skip_without_chromium
 from PIL import Image
 
 import crocopy

@@ -12,7 +12,7 @@ import os
 
 import numpy as np
 import pytest
-from conftest import require_module, skip_without_module
+from optional_requirements import require_module, skip_without_module
 
 import crocopy
 from crocopy.experiments.box_fddp import initial_positions
