@@ -100,8 +100,7 @@ class DifferentialActionModelContactInvDynamics(DifferentialActionModelAbstract)
             force = ResidualModelContactForce(state, c.id, pin.Force.Zero(), c.nc, nv + nct, False)
             add_constraint(constraints, f"{name}_force", force, not item.active)
         super().__init__(state, nv + nct, costs.nr, constraints.ng, constraints.nh, constraints.ng_T, constraints.nh_T)
-        self.g_lb = np.array(constraints.g_lb, dtype=float)
-        self.g_ub = np.array(constraints.g_ub, dtype=float)
+        self._follow_constraints(constraints)
         self.actuation = actuation
         self.contacts = contacts
         self.costs = costs

@@ -115,8 +115,7 @@ class DifferentialActionModelFreeInvDynamics(DifferentialActionModelAbstract):
         if actuation.nu < nv:
             add_constraint(constraints, TAU, ResidualModelActuationFree(state, actuation.nu))
         super().__init__(state, nv, costs.nr, constraints.ng, constraints.nh, constraints.ng_T, constraints.nh_T)
-        self.g_lb = np.array(constraints.g_lb, dtype=float)
-        self.g_ub = np.array(constraints.g_ub, dtype=float)
+        self._follow_constraints(constraints)
         self.actuation = actuation
         self.costs = costs
         self.constraints = constraints
