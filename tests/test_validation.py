@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import pickle
 import warnings
 
 import numpy as np
@@ -68,6 +69,27 @@ def test_cost_added_after_create_data_raises():
     fresh = costs.createData(crocopy.DataCollectorAbstract())
     costs.calc(fresh, np.zeros(4), np.zeros(2))
     assert fresh.cost == pytest.approx(0.5 * 4.0)
+
+
+def test_cost_swapped_after_create_data_raises_and_copies_keep_their_pairing():
+    """Removing one cost and adding another keeps the count but not the names: still refused. A model
+    copied or pickled with its data stays a valid pair; a copy's change is seen by the copy's data."""
+    state = crocopy.StateVector(4)
+    costs = crocopy.CostModelSum(state, 2)
+    costs.addCost("u", crocopy.CostModelResidual(state, crocopy.ResidualModelControl(state, 2)), 1.0)
+    data = costs.createData(crocopy.DataCollectorAbstract())
+    costs.calc(data, np.zeros(4), np.ones(2))
+    pair = pickle.loads(pickle.dumps((costs, data)))
+    costs.removeCost("u")
+    costs.addCost("x", crocopy.CostModelResidual(state, crocopy.ResidualModelState(state, np.ones(4), 2)), 1.0)
+    with guards.unchecked(), pytest.raises(ValueError, match=r"data holds cost datas \['u'\] but the model has"):
+        costs.calc(data, np.zeros(4), np.zeros(2))
+    copied, copied_data = pair
+    copied.calc(copied_data, np.zeros(4), np.ones(2))
+    assert copied_data.cost == pytest.approx(1.0)
+    copied.addCost("x", crocopy.CostModelResidual(state, crocopy.ResidualModelState(state, np.ones(4), 2)), 1.0)
+    with pytest.raises(ValueError, match="a cost was added or removed after createData"):
+        copied.calc(copied_data, np.zeros(4), np.ones(2))
 
 
 # ---------------------------------------------------------------- reproducers 5 and 6: shapes, columns, lists

@@ -52,6 +52,13 @@ class CostModelSum(ModelItems, Guarded):
     _model_type = CostModelAbstract
     _guards = point_control_guards()
 
+    _items_token: object = None
+    """Replaced at every change of the items; a data created under another token is checked once."""
+
+    def _changed(self) -> None:
+        super()._changed()
+        self._items_token = object()
+
     @property
     def costs(self) -> dict[str, CostItem]:
         """All items (active or not), ordered by name as in Crocoddyl."""
@@ -96,11 +103,8 @@ class CostModelSum(ModelItems, Guarded):
         ValueError
             If ``data`` was created before a cost was added or removed (as Crocoddyl).
         """
-        if len(data.costs) != len(self._items):
-            raise ValueError(
-                f"data holds {len(data.costs)} cost datas but the model has {len(self._items)} costs:"
-                " a cost was added or removed after createData(); create the data again"
-            )
+        if data.items_token is not self._items_token:
+            self._check_data(data)
         total = data.stack.calc(x, u)
         for name in data.generic:
             item = self._items[name]
@@ -109,6 +113,15 @@ class CostModelSum(ModelItems, Guarded):
                 item.cost.calc(cd, x, u)
                 total += item.weight * cd.cost
         data.cost = total
+
+    def _check_data(self, data: "CostDataSum") -> None:
+        """After an item was added, removed or switched: ``data`` must hold one data per cost."""
+        if data.costs.keys() != self._items.keys():
+            raise ValueError(
+                f"data holds cost datas {sorted(data.costs)} but the model has costs {sorted(self._items)}:"
+                " a cost was added or removed after createData(); create the data again"
+            )
+        data.items_token = self._items_token
 
     def calcDiff(self, data: "CostDataSum", x: np.ndarray, u: np.ndarray | None = None) -> None:
         with_u = u is not None
@@ -138,6 +151,7 @@ class CostDataSum:
     def __init__(self, model: CostModelSum, data: DataCollectorAbstract | None) -> None:
         ndx, nu = model.state.ndx, model.nu
         self.shared = data
+        self.items_token = model._items_token
         self.costs = {name: item.cost.createData(data) for name, item in model.costs.items()}
         self.cost = 0.0
         self.Lx = np.zeros(ndx)
