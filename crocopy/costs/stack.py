@@ -29,7 +29,7 @@ import numpy as np
 
 from .. import kernels
 from ..kernels import log_fallback, overridden
-from ..versioning import ParametersSeen
+from ..versioning import ParametersSeen, ParametersVersion
 from . import stack_kernel
 
 
@@ -146,7 +146,10 @@ class CostStack:
 
     def calc(self, x: np.ndarray, u: np.ndarray | None) -> float:
         """Residuals and activation values of every active item; returns ``Σ weight · cost``."""
-        if self._terminal != (u is None) or self._seen.stale(self._parameter_owners):
+        seen = self._seen
+        if self._terminal != (u is None) or (
+            seen.value != ParametersVersion.value and seen.stale(self._parameter_owners)
+        ):
             self.refresh(u is None)
         for residual, rdata in self.active:
             residual.calc(rdata, x, u)
@@ -161,7 +164,10 @@ class CostStack:
 
     def calcDiff(self, data, x: np.ndarray, u: np.ndarray | None) -> None:
         """Residual Jacobians, activation derivatives and the weighted sums into ``data``."""
-        if self._terminal != (u is None) or self._seen.stale(self._parameter_owners):
+        seen = self._seen
+        if self._terminal != (u is None) or (
+            seen.value != ParametersVersion.value and seen.stale(self._parameter_owners)
+        ):
             self.refresh(u is None)
         for residual, rdata in self.active:
             residual.calcDiff(rdata, x, u)
