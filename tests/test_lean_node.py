@@ -153,3 +153,29 @@ def test_state_vector_in_place_forms_follow_diff_and_integrate(State):
     np.testing.assert_array_equal(out, state.diff(x0, x1))
     state._integrate_into(x0, dx, out)
     np.testing.assert_array_equal(out, state.integrate(x0, dx))
+
+
+def _control_cost_sum(residual: crocopy.ResidualModelControl) -> tuple:
+    state = crocopy.StateVector(4)
+    costs = crocopy.CostModelSum(state, 2)
+    costs.addCost("u", crocopy.CostModelResidual(state, residual), 2.0)
+    costs.addCost("x", crocopy.CostModelResidual(state, crocopy.ResidualModelState(state, 2)), 1.0)
+    return costs, costs.createData(crocopy.DataCollectorAbstract())
+
+
+def test_the_stack_skips_only_the_control_residuals_own_empty_calcDiff(monkeypatch):
+    calls = []
+
+    class Logged(crocopy.ResidualModelControl):
+        def calcDiff(self, data, x, u=None):
+            calls.append("subclass")
+
+    monkeypatch.setattr(crocopy.ResidualModelControl, "calcDiff", lambda self, data, x, u=None: calls.append("base"))
+    x, u = np.arange(4.0), np.array([0.5, -1.0])
+    for residual in (crocopy.ResidualModelControl(crocopy.StateVector(4), 2), Logged(crocopy.StateVector(4), 2)):
+        costs, data = _control_cost_sum(residual)
+        costs.calc(data, x, u)
+        costs.calcDiff(data, x, u)
+        np.testing.assert_allclose(data.Lu, 2.0 * u)
+        np.testing.assert_allclose(data.Luu, 2.0 * np.eye(2))
+    assert calls == ["subclass"]

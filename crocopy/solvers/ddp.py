@@ -471,7 +471,8 @@ class SolverDDP(SolverAbstract):
                        last_gap: bool = False) -> None:
         """The DDP family's rollout into ``xs_try``/``us_try``/``cost_try``; raises ForwardPassError on NaN.
 
-        ``û_t = clamp(u_t - α k_t - K_t (x̂_t ⊖ x_t), lb_t, ub_t)`` with ``bounds = (lbs, ubs)`` (no
+        ``û_t = clamp(u_t - α k_t - K_t (x̂_t ⊖ x_t), lb_t, ub_t)`` (one compiled call,
+        :func:`~crocopy.solvers.riccati_kernel.feedback_control`) with ``bounds = (lbs, ubs)`` (no
         ``bounds``, or ``None`` entries: no clamp) and ``x̂_{t+1} = f(x̂_t, û_t)``.  ``gaps`` keeps every
         gap open by ``(1 - α)``: ``x̂₀ = x0 ⊕ ((α-1) f₀)``, ``x̂_{t+1} = f(x̂_t, û_t) ⊕ ((α-1) f_{t+1})``
         (FDDP); ``last_gap`` keeps only the last one (Crocoddyl 3.2's Box-DDP from an infeasible
@@ -495,7 +496,8 @@ class SolverDDP(SolverAbstract):
         else:
             x[:] = x0
         lbs, ubs = (None, None) if bounds is None else bounds
-        feedback = self._feedback_control
+        us, k, K, unbounded = self.us, self.k, self.K, self._unbounded
+        feedback = riccati_kernel.feedback_control if kernels.active else riccati_kernel.feedback_control_numpy
         gap_at = problem.T if last_gap else -1
         cost = 0.0
         t = 0
@@ -509,10 +511,12 @@ class SolverDDP(SolverAbstract):
                 u = us_try[t]
                 if getrefcount(u) != _SOLE or u.base is not None or u.shape[0] != m.nu:
                     u = us_try[t] = np.empty(m.nu)
-                if lbs is None:
-                    feedback(t, steplength, dx, out=u)
+                lb = None if lbs is None else lbs[t]
+                if lb is None:
+                    lb, ub = unbounded[m.nu]
                 else:
-                    feedback(t, steplength, dx, lbs[t], ubs[t], out=u)
+                    ub = ubs[t]
+                feedback(us[t], k[t], K[t], dx, steplength, lb, ub, u)
                 m.calc(d, x, u)
             else:
                 m.calc(d, x, us_try[t])
@@ -531,19 +535,6 @@ class SolverDDP(SolverAbstract):
         if not np.isfinite(cost) or not np.isfinite(x).all():
             raise ForwardPassError("the rollout produced a non-finite state or cost")
         self.cost_try = cost
-
-    def _feedback_control(self, t: int, steplength: float, dx: np.ndarray, lb=None, ub=None,
-                          out: np.ndarray | None = None) -> np.ndarray:
-        """Rollout control ``clamp(u - α k - K dx, lb, ub)`` of node ``t`` into ``out`` (default: a new
-        array), returned; no clamp without bounds."""
-        u = self.us[t]
-        if lb is None:
-            lb, ub = self._unbounded[u.shape[0]]
-        if out is None:
-            out = np.empty(u.shape[0])
-        feedback = riccati_kernel.feedback_control if kernels.active else riccati_kernel.feedback_control_numpy
-        feedback(u, self.k[t], self.K[t], dx, steplength, lb, ub, out)
-        return out
 
     def stoppingCriteria(self) -> float:
         """``stop = |d₀ + ½ d₁|``: the expected reduction of a full step."""
