@@ -51,8 +51,16 @@ from .nonfinite import (
     trajectory_finite,
 )
 
-_SOLE = 3
-"""``getrefcount`` of an array held by one list only, read into a local name (see ``_trial_rollout``)."""
+
+def _sole_holder_count() -> int:
+    """``getrefcount`` of an array that one list holds, read into a local name, as ``_trial_rollout`` reads it
+    (3 on CPython 3.11-3.13: the list, the name, the argument; less where the interpreter borrows references)."""
+    held = [np.empty(1)]
+    a = held[0]
+    return getrefcount(a)
+
+
+_SOLE = _sole_holder_count()
 
 
 class SolverDDP(SolverAbstract):
@@ -479,8 +487,8 @@ class SolverDDP(SolverAbstract):
         iterate).  Stores ``x̂_t ⊖ x_t`` in ``_dx_try`` (the solver's arrays, rewritten by every rollout).
 
         No per-node allocation: an entry of ``xs_try``/``us_try`` is written in place when the list is
-        the only holder of that array (``getrefcount``: the list, the local name and the call's
-        argument, hence ``_SOLE``), else replaced by a new array, so that a state or control a user
+        the only holder of that array (its ``getrefcount`` is ``_SOLE``, measured at import on the same
+        pattern), else replaced by a new array, so that a state or control a user
         kept from ``xs``/``us`` (swapped with ``xs_try``/``us_try`` when a trial is accepted) never
         changes under them.
         """
