@@ -62,12 +62,12 @@ class IntegratedActionModelRK(IntegratedActionModelAbstract):
         dx = data.dx
         dx[:] = 0.0
         for i, (c, b) in enumerate(zip(self.rk_c, self.rk_b)):
+            y = data.y[i]
             if i == 0:
-                y = x
+                y[:] = x
             else:
                 np.multiply(data.ki[i - 1], c * dt, out=data.dyi[i])
-                y = state.integrate(x, data.dyi[i])
-            data.y[i][:] = y
+                state._integrate_into(x, data.dyi[i], y)
             dd = data.differential[i]
             self.differential.calc(dd, y, self._control_input(data.control[i], c, u))
             data.ki[i][:nv] = y[-nv:]
@@ -75,7 +75,7 @@ class IntegratedActionModelRK(IntegratedActionModelAbstract):
             if b:
                 dx += (b * dt) * data.ki[i]
                 cost += b * dd.cost
-        data.xnext[:] = state.integrate(x, dx)
+        state._integrate_into(x, dx, data.xnext)
         data.cost = dt * cost
         d0 = data.differential[0]
         if self.withCostResidual:
