@@ -13,6 +13,7 @@ import numpy as np
 
 from .enums import Jcomponent
 from .guards import Guard, Guarded
+from .kernels import overridden
 from .validation import as_count, as_vector, point_arg, tangent_arg
 
 
@@ -148,6 +149,7 @@ class StateVector(StateAbstract):
     def __init__(self, nx: int) -> None:
         super().__init__(nx, nx)
         self._eye = np.eye(self.nx)
+        self._vector_ops = not overridden(self, StateVector, ("diff", "integrate"))
 
     def zero(self) -> np.ndarray:
         return np.zeros(self.nx)
@@ -175,3 +177,15 @@ class StateVector(StateAbstract):
 
     def JintegrateTransport(self, x: np.ndarray, dx: np.ndarray, Jin: np.ndarray, firstsecond: Jcomponent) -> None:
         return None
+
+    def _integrate_into(self, x: np.ndarray, dx: np.ndarray, out: np.ndarray) -> None:
+        if self._vector_ops:
+            np.add(x, dx, out=out)
+        else:
+            out[:] = self.integrate(x, dx)
+
+    def _diff_into(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:
+        if self._vector_ops:
+            np.subtract(x1, x0, out=out)
+        else:
+            out[:] = self.diff(x0, x1)

@@ -234,7 +234,10 @@ class ActuationModelFloatingBaseThrusters(ActuationModelAbstract):
             np.dot(self._W, u, out=data.tau)
 
     def calcDiff(self, data: ActuationDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
-        data.dtau_du[:] = self._W
+        """``dtau_du = Wthrust`` (copied when the thrusters changed since ``data`` last got it)."""
+        if data._W_source is not self._W:
+            data.dtau_du[:] = self._W
+            data._W_source = self._W
 
     def commands(self, data: ActuationDataAbstract, x: np.ndarray, tau: np.ndarray) -> None:
         np.dot(self._Mtau, tau, out=data.u)
@@ -245,6 +248,7 @@ class ActuationModelFloatingBaseThrusters(ActuationModelAbstract):
     def createData(self) -> ActuationDataAbstract:
         data = ActuationDataAbstract(self)
         data.dtau_du[:] = self._W
+        data._W_source = self._W
         data.Mtau[:] = self._Mtau
         data.tau_set[:] = np.abs(self._W).sum(axis=1) > 1e-12
         return data

@@ -58,6 +58,7 @@ class ActuationStructure:
     ``dtau_dx_nonzero`` is False for the bundled actuations, whose ``τ`` does not depend on ``x``;
     ``u_columns`` is the slice of joints driven one-to-one by ``u`` when ``∂τ/∂u`` is a selection
     (full and floating-base actuations), so that ``A ∂τ/∂u = A[:, u_columns]``; ``None`` otherwise.
+    ``constant``: the actuation is exactly one of those two, whose ``calcDiff`` has nothing to do.
     """
 
     def __init__(self, actuation, nv: int) -> None:
@@ -65,6 +66,7 @@ class ActuationStructure:
             actuation, ActuationModelFull | ActuationModelFloatingBase | ActuationModelFloatingBaseThrusters
         )
         self.u_columns = None
+        self.constant = type(actuation) in (ActuationModelFull, ActuationModelFloatingBase)
         if type(actuation) is ActuationModelFull:
             self.u_columns = slice(0, nv)
         elif type(actuation) is ActuationModelFloatingBase:

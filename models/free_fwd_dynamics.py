@@ -127,7 +127,8 @@ class DifferentialActionModelFreeFwdDynamics(ArmatureMixin, DifferentialActionMo
             q, v = x[:nq], x[nq:]
             model, pd = self.pinocchio, data.pinocchio
             act = data.multibody.actuation
-            self.actuation.calcDiff(act, x, u)
+            if not self._act.constant:
+                self.actuation.calcDiff(act, x, u)
             if self._with_armature:
                 pin.computeRNEADerivatives(model, pd, q, v, data.xout)
                 data.Minv[:] = cho_solve(data.chol, data.eye, check_finite=False)
@@ -136,13 +137,13 @@ class DifferentialActionModelFreeFwdDynamics(ArmatureMixin, DifferentialActionMo
                 np.subtract(act.dtau_dx, data.dtau, out=data.dtau)
                 np.dot(data.Minv, data.dtau, out=data.Fx)
             else:
-                pin.computeABADerivatives(model, pd, q, v, act.tau)
-                Minv = data.Minv
-                Minv[:] = pd.Minv
-                data.Fx[:, :nv] = pd.ddq_dq
-                data.Fx[:, nv:] = pd.ddq_dv
+                ddq_dq, ddq_dv, Minv = pin.computeABADerivatives(model, pd, q, v, act.tau)  # views of pd's
+                data.Minv[:] = Minv
+                Fx = data.Fx
+                Fx[:, :nv] = ddq_dq
+                Fx[:, nv:] = ddq_dv
                 if self._act.dtau_dx_nonzero:
-                    data.Fx += Minv @ act.dtau_dx
+                    Fx += Minv @ act.dtau_dx
             self._act.times_dtau_du(data.Minv, act.dtau_du, data.Fu)
         self.costs.calcDiff(data.costs, x, u)
         if self.constraints is not None:

@@ -95,6 +95,8 @@ def test_thruster_wrenches():
     assert np.allclose(data.u, u)
     act.thrusters = [thrusters[1], thrusters[0]]
     assert np.allclose(act.Wthrust, expected[:, ::-1])
+    act.calcDiff(data, x, u)  # a data created before the change follows it
+    assert np.allclose(data.dtau_du, expected[:, ::-1])
     with pytest.raises(ValueError, match="thrusters"):
         act.thrusters = thrusters[:1]
     with pytest.raises(ValueError, match=r"thrusters\[0\]"):

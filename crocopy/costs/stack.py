@@ -19,6 +19,7 @@ level on the ``"crocopy"`` logger).
 
 Rows are ordered with the control-independent residuals first: ``Ju`` holds only the rows of the
 control-dependent residuals (the tail of ``Jx``), so their zero ``Ru`` never enters a product.
+``calcDiff`` does not call a control residual's own ``calcDiff`` (``Ru = I`` is set once).
 Weights, bounds and activity are cached and re-read when an item, its activation or the
 activation's bounds were touched since (:mod:`crocopy.versioning`), or the node kind changed.
 """
@@ -29,7 +30,8 @@ import numpy as np
 
 from .. import kernels
 from ..kernels import log_fallback, overridden
-from ..versioning import ParametersSeen
+from ..residuals.control import ResidualModelControl
+from ..versioning import ParametersSeen, ParametersVersion
 from . import stack_kernel
 
 
@@ -45,6 +47,12 @@ def _fused_form(activation) -> tuple | None:
         log_fallback(type(activation), steps, "the cost stack's fused activation step")
         return None
     return form
+
+
+def _constant_jacobians(residual) -> bool:
+    """True for a :class:`~crocopy.residuals.ResidualModelControl` whose ``calcDiff`` is the class's own
+    (it does nothing: ``Ru = I`` is set by ``createData``), which the stack then does not call."""
+    return isinstance(residual, ResidualModelControl) and not overridden(residual, ResidualModelControl, ("calcDiff",))
 
 
 class CostStack:
@@ -90,11 +98,12 @@ class CostStack:
         self._seen = ParametersSeen()
         self._terminal: bool | None = None
         self.active: list = []
+        self.varying: list = []
         self.unfused: list = []
 
     def __getstate__(self) -> dict:
         """Copy or pickle without the per-evaluation lists (they hold views; :meth:`refresh` rebuilds them)."""
-        return {**self.__dict__, "active": [], "unfused": []}
+        return {**self.__dict__, "active": [], "varying": [], "unfused": []}
 
     def _share(self, item, cdata, rows: slice, k: int) -> None:
         """Make the item's residual and activation arrays views into the stack."""
@@ -114,7 +123,7 @@ class CostStack:
 
     def refresh(self, terminal: bool) -> None:
         """Re-read weights, activity and activation parameters (for a terminal node if ``terminal``)."""
-        self.active, self.unfused = [], []
+        self.active, self.varying, self.unfused = [], [], []
         for k, ((_, item, cdata), rows) in enumerate(zip(self.items, self.slices)):
             cost = item.cost
             cdata.zero = terminal and cost._terminal_zero
@@ -131,6 +140,8 @@ class CostStack:
             self.lb[rows], self.ub[rows], self.act_weights[rows] = form
             if on:
                 self.active.append((cost.residual, cdata.residual))
+                if not _constant_jacobians(cost.residual):
+                    self.varying.append((cost.residual, cdata.residual))
             else:
                 self.r[rows] = 0.0
                 self.Jx[rows] = 0.0
@@ -146,7 +157,10 @@ class CostStack:
 
     def calc(self, x: np.ndarray, u: np.ndarray | None) -> float:
         """Residuals and activation values of every active item; returns ``Σ weight · cost``."""
-        if self._terminal != (u is None) or self._seen.stale(self._parameter_owners):
+        seen = self._seen
+        if self._terminal != (u is None) or (
+            seen.value != ParametersVersion.value and seen.stale(self._parameter_owners)
+        ):
             self.refresh(u is None)
         for residual, rdata in self.active:
             residual.calc(rdata, x, u)
@@ -161,9 +175,12 @@ class CostStack:
 
     def calcDiff(self, data, x: np.ndarray, u: np.ndarray | None) -> None:
         """Residual Jacobians, activation derivatives and the weighted sums into ``data``."""
-        if self._terminal != (u is None) or self._seen.stale(self._parameter_owners):
+        seen = self._seen
+        if self._terminal != (u is None) or (
+            seen.value != ParametersVersion.value and seen.stale(self._parameter_owners)
+        ):
             self.refresh(u is None)
-        for residual, rdata in self.active:
+        for residual, rdata in self.varying:
             residual.calcDiff(rdata, x, u)
         kernel = kernels.active
         derivatives = stack_kernel.activation_derivatives if kernel else stack_kernel.activation_derivatives_numpy

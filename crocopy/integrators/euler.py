@@ -50,16 +50,19 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
         if u is None:
             self._terminal_calc(data, ddata, x)
             return
-        self.differential.calc(ddata, x, self._control_input(data.control, 0.0, u))
+        self.differential.calc(ddata, x, u if self._identity_control else self._control_input(data.control, 0.0, u))
         dt = self._dt
         dx = data.dx
-        step = integrator_kernel.euler_step if kernels.active else integrator_kernel.euler_step_numpy
-        step(ddata.xout, x, dt, dx)
+        if kernels.active:
+            integrator_kernel.euler_step(ddata.xout, x, dt, dx)
+        else:
+            integrator_kernel.euler_step_numpy(ddata.xout, x, dt, dx)
         self.state._integrate_into(x, dx, data.xnext)
         data.cost = dt * ddata.cost
         if self.withCostResidual:
             data.r[:] = ddata.r
-        self._copy_constraints(data, ddata, diff=False)
+        if data.g.size or data.h.size:
+            self._copy_constraints(data, ddata, diff=False)
 
     def calcDiff(self, data: "IntegratedActionDataEuler", x: np.ndarray, u: np.ndarray | None = None) -> None:
         ddata = data.differential
@@ -67,17 +70,23 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
             self._terminal_calcDiff(data, ddata, x)
             return
         cdata = data.control
-        self.differential.calcDiff(ddata, x, self._control_input(cdata, 0.0, u))
-        Fu, Lu, Lxu, Luu = self._control_derivatives(cdata, ddata, 0.0, u, data.control_chain)
-        if self._euclidean or self._transport:
+        if self._identity_control:
+            self.differential.calcDiff(ddata, x, u)
+            Fu, Lu, Lxu, Luu = ddata.Fu, ddata.Lu, ddata.Lxu, ddata.Luu
+        else:
+            self.differential.calcDiff(ddata, x, self._control_input(cdata, 0.0, u))
+            Fu, Lu, Lxu, Luu = self._control_derivatives(cdata, ddata, 0.0, u, data.control_chain)
+        euclidean = self._euclidean
+        if euclidean or self._transport:
             chain = integrator_kernel.euler_chain if kernels.active else integrator_kernel.euler_chain_numpy
             chain(
-                ddata.Fx, Fu, ddata.Lx, Lu, ddata.Lxx, Lxu, Luu, self._dt, self._euclidean,
+                ddata.Fx, Fu, ddata.Lx, Lu, ddata.Lxx, Lxu, Luu, self._dt, euclidean,
                 data.Fx, data.Fu, data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu,
             )
-            if self._transport:
+            if not euclidean:
                 self.state._integrate_chain_rule(x, data.dx, data.Fx, data.Fu)
-            self._copy_constraints(data, ddata, diff=True, cdata=cdata)
+            if data.g.size or data.h.size:
+                self._copy_constraints(data, ddata, diff=True, cdata=cdata)
             return
         nv, dt = self.state.nv, self._dt
         dxdx, dxdu = data.ddx_dx, data.ddx_du

@@ -62,12 +62,12 @@ class IntegratedActionModelRK(IntegratedActionModelAbstract):
         dx = data.dx
         dx[:] = 0.0
         for i, (c, b) in enumerate(zip(self.rk_c, self.rk_b)):
+            y = data.y[i]
             if i == 0:
-                y = x
+                y[:] = x
             else:
                 np.multiply(data.ki[i - 1], c * dt, out=data.dyi[i])
-                y = state.integrate(x, data.dyi[i])
-            data.y[i][:] = y
+                state._integrate_into(x, data.dyi[i], y)
             dd = data.differential[i]
             self.differential.calc(dd, y, self._control_input(data.control[i], c, u))
             data.ki[i][:nv] = y[-nv:]
@@ -75,7 +75,7 @@ class IntegratedActionModelRK(IntegratedActionModelAbstract):
             if b:
                 dx += (b * dt) * data.ki[i]
                 cost += b * dd.cost
-        data.xnext[:] = state.integrate(x, dx)
+        state._integrate_into(x, dx, data.xnext)
         data.cost = dt * cost
         d0 = data.differential[0]
         if self.withCostResidual:
@@ -89,27 +89,23 @@ class IntegratedActionModelRK(IntegratedActionModelAbstract):
         nv, dt, state = self.state.nv, self._dt, self.state
         ndx = state.ndx
         dkdx_sum, dkdu_sum = data.dkdx_sum, data.dkdu_sum
-        dkdx_sum[:] = 0.0
-        dkdu_sum[:] = 0.0
-        for name in ("Lx", "Lu", "Lxx", "Lxu", "Luu"):
-            getattr(data, name)[:] = 0.0
         for i, (c, b) in enumerate(zip(self.rk_c, self.rk_b)):
             dydx, dydu = data.dydx[i], data.dydu[i]
-            if i == 0:
-                dydx[:] = np.eye(ndx)
-                dydu[:] = 0.0
-            else:
-                Jx, Jdy = state.Jintegrate(x, data.dyi[i], Jcomponent.both)
-                dydx[:] = Jx + (c * dt) * (Jdy @ data.dkdx[i - 1])
-                dydu[:] = (c * dt) * (Jdy @ data.dkdu[i - 1])
             dd, cd = data.differential[i], data.control[i]
+            dkdx, dkdu = data.dkdx[i], data.dkdu[i]
+            if i == 0:
+                self._first_stage_derivatives(data, dd, cd, x, u, b * dt)
+                continue
+            Jx, Jdy = state.Jintegrate(x, data.dyi[i], Jcomponent.both)
+            dydx[:] = Jx + (c * dt) * (Jdy @ data.dkdx[i - 1])
+            dydu[:] = (c * dt) * (Jdy @ data.dkdu[i - 1])
             self.differential.calcDiff(dd, data.y[i], self._control_input(cd, c, u))
             Fu, Lu, Lxu, Luu = self._control_derivatives(cd, dd, c, u, data.control_chain)
-            dkdx, dkdu = data.dkdx[i], data.dkdu[i]
             dkdx[:nv] = dydx[nv:]
             dkdu[:nv] = dydu[nv:]
-            dkdx[nv:] = dd.Fx @ dydx
-            dkdu[nv:] = dd.Fx @ dydu + Fu
+            np.dot(dd.Fx, dydx, out=dkdx[nv:])
+            np.dot(dd.Fx, dydu, out=dkdu[nv:])
+            dkdu[nv:] += Fu
             if b:
                 w = b * dt
                 dkdx_sum += w * dkdx
@@ -129,6 +125,29 @@ class IntegratedActionModelRK(IntegratedActionModelAbstract):
             data.Fx[:] = Jx + Jdx @ dkdx_sum
             data.Fu[:] = Jdx @ dkdu_sum
         self._copy_constraints(data, data.differential[0], diff=True, cdata=data.control[0])
+
+    def _first_stage_derivatives(self, data: "IntegratedActionDataRK", dd, cd, x: np.ndarray, u: np.ndarray,
+                                 w: float) -> None:
+        """Stage 0 (``y₀ = x``: ``∂y₀/∂x = I``, ``∂y₀/∂u = 0``): its ``k₀`` Jacobians, and the sums
+        started from its weighted terms (``w = b₀ dt``), without the products by ``I`` and ``0``."""
+        nv = self.state.nv
+        dydx, dydu, dkdx, dkdu = data.dydx[0], data.dydu[0], data.dkdx[0], data.dkdu[0]
+        dydx[:] = 0.0
+        dydx.reshape(-1)[:: dydx.shape[0] + 1] = 1.0
+        dydu[:] = 0.0
+        self.differential.calcDiff(dd, x, self._control_input(cd, 0.0, u))
+        Fu, Lu, Lxu, Luu = self._control_derivatives(cd, dd, 0.0, u, data.control_chain)
+        dkdx[:nv] = dydx[nv:]
+        dkdu[:nv] = 0.0
+        dkdx[nv:] = dd.Fx
+        dkdu[nv:] = Fu
+        sums = (data.dkdx_sum, data.dkdu_sum, data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu)
+        if not w:
+            for total in sums:
+                total[:] = 0.0
+            return
+        for term, total in zip((dkdx, dkdu, dd.Lx, Lu, dd.Lxx, Lxu, Luu), sums):
+            np.multiply(term, w, out=total)
 
 
 class IntegratedActionDataRK(IntegratedActionDataAbstract):

@@ -32,6 +32,8 @@ buffers when ``problem.updateModel``/``circularAppend`` changed a node's ``nx``,
 
 from __future__ import annotations
 
+from sys import getrefcount
+
 import numpy as np
 from scipy.linalg.lapack import dpotrf, dpotrs
 
@@ -48,6 +50,17 @@ from .nonfinite import (
     locate_in_rollout,
     trajectory_finite,
 )
+
+
+def _sole_holder_count() -> int:
+    """``getrefcount`` of an array that one list holds, read into a local name, as ``_trial_rollout`` reads it
+    (3 on CPython 3.11-3.13: the list, the name, the argument; less where the interpreter borrows references)."""
+    held = [np.empty(1)]
+    a = held[0]
+    return getrefcount(a)
+
+
+_SOLE = _sole_holder_count()
 
 
 class SolverDDP(SolverAbstract):
@@ -466,52 +479,73 @@ class SolverDDP(SolverAbstract):
                        last_gap: bool = False) -> None:
         """The DDP family's rollout into ``xs_try``/``us_try``/``cost_try``; raises ForwardPassError on NaN.
 
-        ``û_t = clamp(u_t - α k_t - K_t (x̂_t ⊖ x_t), lb_t, ub_t)`` with ``bounds = (lbs, ubs)`` (no
+        ``û_t = clamp(u_t - α k_t - K_t (x̂_t ⊖ x_t), lb_t, ub_t)`` (one compiled call,
+        :func:`~crocopy.solvers.riccati_kernel.feedback_control`) with ``bounds = (lbs, ubs)`` (no
         ``bounds``, or ``None`` entries: no clamp) and ``x̂_{t+1} = f(x̂_t, û_t)``.  ``gaps`` keeps every
         gap open by ``(1 - α)``: ``x̂₀ = x0 ⊕ ((α-1) f₀)``, ``x̂_{t+1} = f(x̂_t, û_t) ⊕ ((α-1) f_{t+1})``
         (FDDP); ``last_gap`` keeps only the last one (Crocoddyl 3.2's Box-DDP from an infeasible
-        iterate).  Stores ``x̂_t ⊖ x_t`` in ``_dx_try``.
+        iterate).  Stores ``x̂_t ⊖ x_t`` in ``_dx_try`` (the solver's arrays, rewritten by every rollout).
+
+        No per-node allocation: an entry of ``xs_try``/``us_try`` is written in place when the list is
+        the only holder of that array (its ``getrefcount`` is ``_SOLE``, measured at import on the same
+        pattern), else replaced by a new array, so that a state or control a user
+        kept from ``xs``/``us`` (swapped with ``xs_try``/``us_try`` when a trial is accepted) never
+        changes under them.
         """
         problem = self.problem
         xs, xs_try, us_try, fs, dx_try = self.xs, self.xs_try, self.us_try, self.fs, self._dx_try
         models = problem.runningModels
+        x0 = problem.x0
+        x = xs_try[0]
+        if getrefcount(x) != _SOLE or x.base is not None or x.shape != x0.shape:
+            x = xs_try[0] = np.empty_like(x0)
         if gaps:
-            first = models[0] if models else problem.terminalModel
-            xs_try[0] = first.state.integrate(problem.x0, (steplength - 1.0) * fs[0])
+            (models[0] if models else problem.terminalModel).state._integrate_into(x0, (steplength - 1.0) * fs[0], x)
         else:
-            xs_try[0] = problem.x0.copy()
-        last = problem.T - 1
+            x[:] = x0
+        lbs, ubs = (None, None) if bounds is None else bounds
+        us, k, K, unbounded = self.us, self.k, self.K, self._unbounded
+        feedback = riccati_kernel.feedback_control if kernels.active else riccati_kernel.feedback_control_numpy
+        gap_at = problem.T if last_gap else -1
         cost = 0.0
-        for t, (m, d) in enumerate(zip(models, problem.runningDatas)):
+        t = 0
+        for m, d in zip(models, problem.runningDatas):
+            state = m.state
             if m.nu:
-                dx = dx_try[t] = m.state.diff(xs[t], xs_try[t])
-                if bounds is None:
-                    us_try[t] = self._feedback_control(t, steplength, dx)
+                dx = dx_try[t]
+                if dx is None or dx.shape[0] != state.ndx:
+                    dx = dx_try[t] = np.empty(state.ndx)
+                state._diff_into(xs[t], x, dx)
+                u = us_try[t]
+                if getrefcount(u) != _SOLE or u.base is not None or u.shape[0] != m.nu:
+                    u = us_try[t] = np.empty(m.nu)
+                lb = None if lbs is None else lbs[t]
+                if lb is None:
+                    lb, ub = unbounded[m.nu]
                 else:
-                    us_try[t] = self._feedback_control(t, steplength, dx, bounds[0][t], bounds[1][t])
-            m.calc(d, xs_try[t], us_try[t])
-            cost += d.cost
-            if gaps or (last_gap and t == last):
-                xs_try[t + 1] = m.state.integrate(d.xnext, (steplength - 1.0) * fs[t + 1])
+                    ub = ubs[t]
+                feedback(us[t], k[t], K[t], dx, steplength, lb, ub, u)
+                m.calc(d, x, u)
             else:
-                xs_try[t + 1] = d.xnext.copy()
-        problem.terminalModel.calc(problem.terminalData, xs_try[-1])
+                m.calc(d, x, us_try[t])
+            cost += d.cost
+            t += 1
+            xnext = d.xnext
+            x = xs_try[t]
+            if getrefcount(x) != _SOLE or x.base is not None or x.shape != xnext.shape:
+                x = xs_try[t] = np.empty_like(xnext)
+            if gaps or t == gap_at:
+                state._integrate_into(xnext, (steplength - 1.0) * fs[t], x)
+            else:
+                x[:] = xnext
+        problem.terminalModel.calc(problem.terminalData, x)
         cost += problem.terminalData.cost
-        if not np.isfinite(cost) or not np.isfinite(xs_try[-1]).all():
+        if not np.isfinite(cost) or not np.isfinite(x).all():
             raise ForwardPassError("the rollout produced a non-finite state or cost")
         self.cost_try = cost
-
-    def _feedback_control(self, t: int, steplength: float, dx: np.ndarray, lb=None, ub=None) -> np.ndarray:
-        """Rollout control ``clamp(u - α k - K dx, lb, ub)`` of node ``t`` (a new array; no clamp without bounds)."""
-        u = self.us[t]
-        if lb is None:
-            lb, ub = self._unbounded[u.shape[0]]
-        out = np.empty(u.shape[0])
-        feedback = riccati_kernel.feedback_control if kernels.active else riccati_kernel.feedback_control_numpy
-        feedback(u, self.k[t], self.K[t], dx, steplength, lb, ub, out)
-        return out
 
     def stoppingCriteria(self) -> float:
         """``stop = |d₀ + ½ d₁|``: the expected reduction of a full step."""
         self.stop = abs(self.d[0] + 0.5 * self.d[1])
         return self.stop
+
