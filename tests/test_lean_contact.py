@@ -1,5 +1,7 @@
 """The lean paths of the contact and impulse nodes against the general ones and finite differences.
 
+- Contact and impulse sets bring their joint forces up to date when ``fext`` is read; a user's impulse
+  with an ``updateForce`` of its own is still called.
 - A contact node without active contacts runs Pinocchio's ABA and its derivatives; with
   ``computeAllContacts`` (which needs the full kinematics) it runs the general path.  Both give the
   same dynamics, derivatives and costs, and the derivatives match central differences.
@@ -8,8 +10,13 @@
 from __future__ import annotations
 
 import numpy as np
+import pinocchio as pin
 import pytest
 from test_contacts import CASES, assert_close, fd_dam, make_dam, random_point
+from test_impulses import FEET
+from test_impulses import make_model as make_impulse_node
+
+import crocopy
 
 
 def _matches_fd(dam, d, x, u):
@@ -87,3 +94,53 @@ def test_reactivated_contact_leaves_the_aba_path():
     dam.calcDiff(d, x, u)
     assert not d.aba
     _matches_fd(dam, d, x, u)
+
+
+# ---------------------------------------------------------------------------------- impulses
+@pytest.mark.parametrize("typ", [pin.LOCAL, pin.LOCAL_WORLD_ALIGNED], ids=["LOCAL", "LWA"])
+def test_impulse_joint_forces_are_brought_up_to_date_when_read(typ):
+    """After calc, reading ``fext`` gives each impulse's ``f_local``/``fext`` and the joint sums that the
+    eager per-impulse ``updateForce`` gives."""
+    node = make_impulse_node("anymal", "3333", typ, 0.3)
+    x = node.state.rand()
+    d = node.createData()
+    node.calc(d, x)
+    idata = d.multibody.impulses
+    assert idata.joint_forces_pending
+    fext = [f.vector.copy() for f in idata.fext]
+    assert not idata.joint_forces_pending
+    expected = [np.zeros(6) for _ in fext]
+    i = 0
+    for name, item in node.impulses.impulses.items():
+        md = idata.impulses[name]
+        lam = d.pinocchio.impulse_c[i:i + 3].copy()
+        f_local, joint_force = md.f_local.vector.copy(), md.fext.vector.copy()
+        item.impulse.updateForce(md, lam)
+        assert np.allclose(md.f_local.vector, f_local, atol=1e-12)
+        assert np.allclose(md.fext.vector, joint_force, atol=1e-12)
+        expected[md.joint] += md.fext.vector
+        i += 3
+    assert np.allclose(np.array(fext), np.array(expected), atol=1e-12)
+    assert np.abs(np.array(fext)).max() > 0.0
+
+
+def test_impulse_with_its_own_update_force_is_honoured():
+    """A user's impulse overriding ``updateForce`` (Crocoddyl's API) is still called by the impulse set."""
+    calls = []
+
+    class Recording(crocopy.ImpulseModel3D):
+        def updateForce(self, data, force):
+            calls.append(np.array(force))
+            data.f.linear = 2.0 * force
+            data.fext = data.jMf.act(data.f)
+
+    state = crocopy.StateMultibody(make_dam(*CASES[0]).state.pinocchio)
+    impulses = crocopy.ImpulseModelMultiple(state)
+    fid = state.pinocchio.getFrameId(FEET["anymal"][0])
+    impulses.addImpulse("foot", Recording(state, fid, pin.LOCAL))
+    data = impulses.createData(state.pinocchio.createData())
+    impulses.updateForce(data, np.array([1.0, 2.0, 3.0]))
+    assert len(calls) == 1 and np.array_equal(calls[0], [1.0, 2.0, 3.0])
+    joint = data.impulses["foot"].joint
+    expected = data.impulses["foot"].jMf.act(pin.Force(np.r_[2.0, 4.0, 6.0, 0.0, 0.0, 0.0]))
+    assert np.allclose(data.fext[joint].vector, expected.vector)
