@@ -15,6 +15,12 @@ impulses as external forces) and ``Jc(q)(v⁺ + e v⁻) = 0`` (``dv0_dq`` at vel
     K [∂v⁺/∂q; -∂Λ/∂q] = [-∂ID/∂q; -dv0_dq],    K [∂v⁺/∂v⁻; -∂Λ/∂v⁻] = [M; -e Jc]
 
 and ``Fx = [[I, 0], [∂v⁺/∂q, ∂v⁺/∂v⁻]]``.
+
+Kinematics contract with the impulses and residuals: after ``calc`` the node's ``pinocchio.Data`` holds
+``M`` (upper triangle), the joint Jacobians, placements and velocities at ``x`` and the frame placements
+(``crba`` in the WORLD convention, ``forwardKinematics``, ``updateFramePlacements``); after ``calcDiff``
+the kinematic derivatives at ``x`` (``computeForwardKinematicsDerivatives``).  Residuals update the
+centre of mass or momentum they need themselves.
 """
 
 from __future__ import annotations
@@ -32,6 +38,8 @@ from .data_collectors import DataCollectorMultibodyInImpulse
 from .dynamics_options import ArmatureMixin, KKTDampingMixin
 from .impulse_multiple import ImpulseModelMultiple
 from .redundant_kkt import solve_redundant_kkt
+
+_WORLD = pin.Convention.WORLD
 
 
 class ActionModelImpulseFwdDynamics(ArmatureMixin, KKTDampingMixin, ActionModelAbstract):
@@ -120,7 +128,8 @@ class ActionModelImpulseFwdDynamics(ArmatureMixin, KKTDampingMixin, ActionModelA
         nq, nc = state.nq, self.impulses.nc
         q, v = x[:nq], x[nq:]
         model, pd, idata = self.pinocchio, data.pinocchio, data.multibody.impulses
-        pin.computeAllTerms(model, pd, q, v)
+        pin.crba(model, pd, q, _WORLD)  # M and the joint Jacobians
+        pin.forwardKinematics(model, pd, q, v)
         pin.updateFramePlacements(model, pd)
         if self._with_armature:
             pd.M[data.diag, data.diag] += self._armature
