@@ -144,3 +144,42 @@ def test_impulse_with_its_own_update_force_is_honoured():
     joint = data.impulses["foot"].joint
     expected = data.impulses["foot"].jMf.act(pin.Force(np.r_[2.0, 4.0, 6.0, 0.0, 0.0, 0.0]))
     assert np.allclose(data.fext[joint].vector, expected.vector)
+
+
+# ---------------------------------------------------------------------------------- state
+@pytest.mark.parametrize("nu", [0, 1, 12])
+def test_chain_rule_on_scratch_rows_equals_jintegrate(nu):
+    """The Euler chain rule (on a per-thread scratch matrix) equals ``Jintegrate``'s for every control
+    size, twice in a row (the scratch matrix is reused)."""
+    state = make_dam(*CASES[0]).state
+    rng = np.random.default_rng(nu)
+    for _ in range(2):
+        x, dx = state.rand(), 0.3 * rng.normal(size=state.ndx)
+        Fx, Fu = rng.normal(size=(state.ndx, state.ndx)), rng.normal(size=(state.ndx, nu))
+        Jx, Jdx = state.Jintegrate(x, dx)
+        expected_x, expected_u = Jx + Jdx @ Fx, Jdx @ Fu
+        state._integrate_chain_rule(x, dx, Fx, Fu)
+        np.testing.assert_allclose(Fx, expected_x, atol=1e-12)
+        np.testing.assert_allclose(Fu, expected_u, atol=1e-12)
+
+
+def test_chain_rule_in_threads():
+    """Threads calling the chain rule on one state at once each get their own result."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    state = make_dam(*CASES[0]).state
+
+    def run(seed):
+        rng = np.random.default_rng(seed)
+        worst = 0.0
+        for _ in range(50):
+            x, dx = state.rand(), 0.3 * rng.normal(size=state.ndx)
+            Fx, Fu = rng.normal(size=(state.ndx, state.ndx)), rng.normal(size=(state.ndx, 12))
+            Jx, Jdx = state.Jintegrate(x, dx)
+            expected = np.hstack((Jx + Jdx @ Fx, Jdx @ Fu))
+            state._integrate_chain_rule(x, dx, Fx, Fu)
+            worst = max(worst, np.abs(np.hstack((Fx, Fu)) - expected).max())
+        return worst
+
+    with ThreadPoolExecutor(4) as pool:
+        assert max(pool.map(run, range(8))) < 1e-12
