@@ -45,12 +45,18 @@ from .dynamics_options import ActuationStructure, ArmatureMixin, KKTDampingMixin
 from .redundant_kkt import solve_redundant_kkt
 
 _LOCAL_CONVENTION = pin.Convention.LOCAL
+_all, _isfinite = np.logical_and.reduce, np.isfinite
 
 
 def check_vector_shape(value: np.ndarray, size: int, name: str) -> None:
     """Raise ``ValueError`` unless ``value`` is a vector of shape ``(size,)``."""
     if getattr(value, "shape", None) != (size,) and np.shape(value) != (size,):
         raise ValueError(f"{name} has shape {np.shape(value)}, expected ({size},)")
+
+
+def all_finite(values: np.ndarray) -> bool:
+    """True if every entry of ``values`` is finite (two compiled calls, no Python-level wrapper)."""
+    return bool(_all(_isfinite(values)))
 
 
 def link_cost_data(data: object, costs_data: object) -> None:
@@ -186,7 +192,7 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         if data.rigid is not None:
             cms, cds = data.rigid
             data.xout[:] = pin.constraintDynamics(self.pinocchio, pd, q, v, mb.actuation.tau, cms, cds, data.prox)
-            data.lstsq = not np.isfinite(data.xout).all()
+            data.lstsq = not all_finite(data.xout)
             data.rigid = None if data.lstsq else data.rigid
         if data.rigid is not None:
             pin.forwardKinematics(self.pinocchio, pd, q, v, data.zero_a)
@@ -200,7 +206,7 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
                     self.pinocchio, pd, mb.actuation.tau, mb.contacts.Jc[:nc], mb.contacts.a0[:nc], self._damping
                 )
                 lam = pd.lambda_c
-                data.lstsq = self._damping == 0.0 and not np.isfinite(data.xout).all()
+                data.lstsq = self._damping == 0.0 and not all_finite(data.xout)
             if data.lstsq:
                 lam = self._redundant_dynamics(data, nc)
         elif not self._with_armature and not self.contacts.computeAllContacts:

@@ -277,12 +277,17 @@ class ForceModelMultiple(ModelItems, Guarded):
             i += m.nc
 
     def _split(self, datas: dict, method: str, blocks: tuple, zero: str) -> None:
-        """Hand each active item its rows of every array in ``blocks`` through ``method``; call ``zero``
-        on the inactive ones."""
+        """Hand each active item its rows of the one or two arrays in ``blocks`` through ``method``; call
+        ``zero`` on the inactive ones."""
         i = 0
+        first, second = blocks if len(blocks) == 2 else (blocks[0], None)
         for name, m in self._active:
-            getattr(m, method)(datas[name], *(b[i:i + m.nc] for b in blocks))
-            i += m.nc
+            j = i + m.nc
+            if second is None:
+                getattr(m, method)(datas[name], first[i:j])
+            else:
+                getattr(m, method)(datas[name], first[i:j], second[i:j])
+            i = j
         for name, m in self._inactive:
             getattr(m, zero)(datas[name])
 

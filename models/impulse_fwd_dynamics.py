@@ -33,7 +33,7 @@ from crocopy.array_views import share_arrays
 from crocopy.constraints.manager import ConstraintModelManager
 from crocopy.costs.sum import CostModelSum
 
-from .contact_fwd_dynamics import check_vector_shape, link_cost_data
+from .contact_fwd_dynamics import all_finite, check_vector_shape, link_cost_data
 from .data_collectors import DataCollectorMultibodyInImpulse
 from .dynamics_options import ArmatureMixin, KKTDampingMixin
 from .impulse_multiple import ImpulseModelMultiple
@@ -140,7 +140,7 @@ class ActionModelImpulseFwdDynamics(ArmatureMixin, KKTDampingMixin, ActionModelA
         if nc and not data.lstsq:
             data.xnext[nq:] = pin.impulseDynamics(model, pd, v, idata.Jc[:nc], self._r_coeff, self._damping)
             lam = pd.impulse_c
-            data.lstsq = self._damping == 0.0 and not np.isfinite(data.xnext[nq:]).all()
+            data.lstsq = self._damping == 0.0 and not all_finite(data.xnext[nq:])
         if data.lstsq:
             Jc = idata.Jc[:nc]
             try:

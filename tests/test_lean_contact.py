@@ -183,3 +183,13 @@ def test_chain_rule_in_threads():
 
     with ThreadPoolExecutor(4) as pool:
         assert max(pool.map(run, range(8))) < 1e-12
+
+
+def test_all_finite():
+    from crocopy.models.contact_fwd_dynamics import all_finite
+
+    assert all_finite(np.array([1.0, -2.0, 0.0]))
+    assert all_finite(np.array([1e308, 1e308]))
+    assert not all_finite(np.array([1.0, np.nan]))
+    assert not all_finite(np.array([np.inf, 1.0]))
+    assert not all_finite(np.array([np.inf, -np.inf]))
