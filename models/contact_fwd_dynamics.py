@@ -165,7 +165,6 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
     ) -> None:
         """Contact dynamics ``xout`` and forces (``u`` given), costs and constraints."""
         state = self.state
-        check_vector_shape(x, state.nx, "x")
         q, v = x[: state.nq], x[state.nq :]
         mb = data.multibody
         if u is None:
@@ -177,7 +176,6 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
             if self.constraints is not None:
                 self.constraints.calc(data.constraints, x)
             return
-        check_vector_shape(u, self.nu, "u")
         nc = self.contacts.nc
         pd = data.pinocchio
         self.actuation.calc(mb.actuation, x, u)
@@ -249,7 +247,6 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         Assumes :meth:`calc` was called at the same ``(x, u)``.
         """
         state = self.state
-        check_vector_shape(x, state.nx, "x")
         if u is None:
             data.df_dx[:] = 0.0
             data.df_du[:] = 0.0
@@ -258,7 +255,6 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
             if self.constraints is not None:
                 self.constraints.calcDiff(data.constraints, x)
             return
-        check_vector_shape(u, self.nu, "u")
         nv, nc = state.nv, self.contacts.nc
         q, v = x[: state.nq], x[state.nq :]
         model, pd, mb = self.pinocchio, data.pinocchio, data.multibody

@@ -33,7 +33,7 @@ from crocopy.array_views import share_arrays
 from crocopy.constraints.manager import ConstraintModelManager
 from crocopy.costs.sum import CostModelSum
 
-from .contact_fwd_dynamics import all_finite, check_vector_shape, link_cost_data
+from .contact_fwd_dynamics import all_finite, link_cost_data
 from .data_collectors import DataCollectorMultibodyInImpulse
 from .dynamics_options import ArmatureMixin, KKTDampingMixin
 from .impulse_multiple import ImpulseModelMultiple
@@ -124,7 +124,6 @@ class ActionModelImpulseFwdDynamics(ArmatureMixin, KKTDampingMixin, ActionModelA
     def calc(self, data: "ActionDataImpulseFwdDynamics", x: np.ndarray, u: np.ndarray | None = None) -> None:
         """Velocity after impact ``xnext = (q, v⁺)``, impulses, costs and constraints."""
         state = self.state
-        check_vector_shape(x, state.nx, "x")
         nq, nc = state.nq, self.impulses.nc
         q, v = x[:nq], x[nq:]
         model, pd, idata = self.pinocchio, data.pinocchio, data.multibody.impulses
@@ -162,7 +161,6 @@ class ActionModelImpulseFwdDynamics(ArmatureMixin, KKTDampingMixin, ActionModelA
     def calcDiff(self, data: "ActionDataImpulseFwdDynamics", x: np.ndarray, u: np.ndarray | None = None) -> None:
         """``Fx``, impulse Jacobians (``enable_force``), cost and constraint derivatives (after :meth:`calc`)."""
         state = self.state
-        check_vector_shape(x, state.nx, "x")
         nq, nv, nc = state.nq, state.nv, self.impulses.nc
         q, v = x[:nq], x[nq:]
         model, pd, idata = self.pinocchio, data.pinocchio, data.multibody.impulses
