@@ -63,8 +63,9 @@ def _force_blocks(cd, ncf: int) -> tuple:
 
 
 class _ForceResidual(ResidualModelAbstract):
-    """Residual ``r = A f[:ncf]`` (``A = reference.A``) of the force of the contact on frame ``id`` (a contact of dimension at
-    least ``min_nc``; a 1D or 2D contact fills only some components of ``f``, its ``force_rows``)."""
+    """Residual ``r = A f[:ncf]`` (``A = reference.A``) of the force of the contact on frame ``id`` (a
+    contact of dimension at least ``min_nc``; a 1D or 2D contact fills only some components of ``f``, its
+    ``force_rows``)."""
 
     ncf = 3
     min_nc = 3
