@@ -14,7 +14,9 @@ impulses as external forces) and ``Jc(q)(v⁺ + e v⁻) = 0`` (``dv0_dq`` at vel
 
     K [∂v⁺/∂q; -∂Λ/∂q] = [-∂ID/∂q; -dv0_dq],    K [∂v⁺/∂v⁻; -∂Λ/∂v⁻] = [M; -e Jc]
 
-and ``Fx = [[I, 0], [∂v⁺/∂q, ∂v⁺/∂v⁻]]``.
+and ``Fx = [[I, 0], [∂v⁺/∂q, ∂v⁺/∂v⁻]]``.  As ``K⁻¹ [M; Jc] = [I; 0]`` (whatever the damped lower-right
+block), the second system is ``[∂v⁺/∂v⁻; -∂Λ/∂v⁻] = [I; 0] - (1 + e) K⁻¹[:, nv:] Jc`` (not on the
+least-squares path, whose ``K⁻¹`` is no inverse).
 
 Kinematics contract with the impulses and residuals: after ``calc`` the node's ``pinocchio.Data`` holds
 ``M`` (upper triangle), the joint Jacobians, placements and velocities at ``x`` and the frame placements
@@ -166,19 +168,27 @@ class ActionModelImpulseFwdDynamics(ArmatureMixin, KKTDampingMixin, ActionModelA
         model, pd, idata = self.pinocchio, data.pinocchio, data.multibody.impulses
         vnext = data.xnext[nq:]
         if nc:
-            rhs = data.rhs
-            M = pd.M
-            np.add(np.triu(M), np.triu(M, 1).T, out=rhs[:nv, nv:])
+            rhs, Jc = data.rhs, idata.Jc[:nc]
+            if data.lstsq:
+                M = pd.M
+                np.add(np.triu(M), np.triu(M, 1).T, out=rhs[:nv, nv:])
             pin.computeForwardKinematicsDerivatives(model, pd, q, vnext + self._r_coeff * v, data.zero_v)
             self.impulses.calcDiff(idata, x)
             pin.computeRNEADerivatives(self._model_nograv, pd, q, data.zero_v, vnext - v, idata.fext)
             self.impulses.updateRneaDiff(idata, pd)
-            if not data.lstsq:
-                data.Kinv[:] = pin.getKKTContactDynamicMatrixInverse(model, pd, idata.Jc[:nc])
             np.negative(pd.dtau_dq, out=rhs[:nv, :nv])
             np.negative(idata.dv0_dq[:nc], out=rhs[nv:, :nv])
-            np.multiply(idata.Jc[:nc], -self._r_coeff, out=rhs[nv:, nv:])
-            np.dot(data.Kinv, rhs, out=data.KinvRhs)
+            if data.lstsq:
+                np.multiply(Jc, -self._r_coeff, out=rhs[nv:, nv:])
+                np.dot(data.Kinv, rhs, out=data.KinvRhs)
+            else:  # K⁻¹ [M; -e Jc] = [I; 0] - (1 + e) K⁻¹[:, nv:] Jc, as K⁻¹ [M; Jc] = [I; 0]
+                Kinv = data.Kinv
+                Kinv[:] = pin.getKKTContactDynamicMatrixInverse(model, pd, Jc)
+                KinvRhs = data.KinvRhs
+                np.matmul(Kinv, rhs[:, :nv], out=KinvRhs[:, :nv])
+                np.matmul(Kinv[:, nv:], Jc, out=KinvRhs[:, nv:])
+                KinvRhs[:, nv:] *= -(1.0 + self._r_coeff)
+                KinvRhs.reshape(-1)[nv: nv * (2 * nv + 1): 2 * nv + 1] += 1.0
             data.Fx[nv:] = data.KinvRhs[:nv]
             self.impulses.updateVelocityDiff(idata, data.Fx[nv:])
             if self.enable_force:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
+import test_impulses
 from test_contacts import CASES, assert_close, fd_dam, make_dam, random_point
 from test_impulses import FEET
 from test_impulses import make_model as make_impulse_node
@@ -193,3 +194,21 @@ def test_all_finite():
     assert not all_finite(np.array([1.0, np.nan]))
     assert not all_finite(np.array([np.inf, 1.0]))
     assert not all_finite(np.array([np.inf, -np.inf]))
+
+
+@pytest.mark.parametrize("option", ["damping", "armature"])
+@pytest.mark.parametrize("case", [test_impulses.CASES[1], test_impulses.CASES[5]],
+                         ids=[test_impulses.IDS[1], test_impulses.IDS[5]])
+def test_impulse_derivatives_with_damping_or_armature(case, option, monkeypatch):
+    """The velocity-jump derivatives (``∂v⁺/∂v⁻ = I - (1 + e) B Jc`` from the KKT inverse) against central
+    differences, also with a damped KKT system or an armature."""
+    def with_option(*args, **kwargs):
+        node = make_impulse_node(*args, **kwargs)
+        if option == "damping":
+            node.JMinvJt_damping = 1e-3
+        else:
+            node.armature = np.full(node.state.nv, 0.05)
+        return node
+
+    monkeypatch.setattr(test_impulses, "make_model", with_option)
+    test_impulses.test_impulse_derivatives(case)
