@@ -5,6 +5,10 @@
 - A contact node without active contacts runs Pinocchio's ABA and its derivatives; with
   ``computeAllContacts`` (which needs the full kinematics) it runs the general path.  Both give the
   same dynamics, derivatives and costs, and the derivatives match central differences.
+- The impulse node's velocity-jump derivative (from the KKT inverse's identity) matches central
+  differences, also with a damped KKT system or an armature.
+- ``StateMultibody``'s Euler chain rule on its per-thread scratch matrix equals ``Jintegrate``'s, for any
+  control size and from several threads at once.
 """
 
 from __future__ import annotations
