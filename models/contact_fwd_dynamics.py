@@ -21,6 +21,12 @@ The force Jacobians are written to every contact's data (``df_dx``, ``df_du``) w
 ``da_dx = Fx``, ``da_du = Fu``) for the joint-effort/acceleration residuals, as under free dynamics.
 On a terminal node (no control) the contact forces and their Jacobians are set to zero, so that no
 residual reads the forces of an earlier evaluation.
+
+A node without active contacts (a flight phase), without armature and without ``computeAllContacts``
+is free dynamics: Pinocchio's ABA (LOCAL convention, then ``updateGlobalPlacements``) and
+``computeABADerivatives``, ``Fx = (∂ABA/∂q, ∂ABA/∂v) + M⁻¹ ∂τ/∂x``, ``Fu = M⁻¹ ∂τ/∂u``, with the
+kinematics contract of :mod:`~crocopy.models.free_fwd_dynamics` (residuals update the frames, centre
+of mass or momentum they need).
 """
 
 from __future__ import annotations
@@ -38,11 +44,19 @@ from .data_collectors import DataCollectorJointActMultibodyInContact
 from .dynamics_options import ActuationStructure, ArmatureMixin, KKTDampingMixin
 from .redundant_kkt import solve_redundant_kkt
 
+_LOCAL_CONVENTION = pin.Convention.LOCAL
+_all, _isfinite = np.logical_and.reduce, np.isfinite
+
 
 def check_vector_shape(value: np.ndarray, size: int, name: str) -> None:
     """Raise ``ValueError`` unless ``value`` is a vector of shape ``(size,)``."""
     if getattr(value, "shape", None) != (size,) and np.shape(value) != (size,):
         raise ValueError(f"{name} has shape {np.shape(value)}, expected ({size},)")
+
+
+def all_finite(values: np.ndarray) -> bool:
+    """True if every entry of ``values`` is finite (two compiled calls, no Python-level wrapper)."""
+    return bool(_all(_isfinite(values)))
 
 
 def link_cost_data(data: object, costs_data: object) -> None:
@@ -151,7 +165,6 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
     ) -> None:
         """Contact dynamics ``xout`` and forces (``u`` given), costs and constraints."""
         state = self.state
-        check_vector_shape(x, state.nx, "x")
         q, v = x[: state.nq], x[state.nq :]
         mb = data.multibody
         if u is None:
@@ -163,12 +176,12 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
             if self.constraints is not None:
                 self.constraints.calc(data.constraints, x)
             return
-        check_vector_shape(u, self.nu, "u")
         nc = self.contacts.nc
         pd = data.pinocchio
         self.actuation.calc(mb.actuation, x, u)
         mb.joint.tau[:] = u
         data.rigid = None
+        data.aba = False
         # redundant contacts (shared body) or a singular KKT system: least squares, see redundant_kkt.py
         data.lstsq = bool(nc) and self._damping == 0.0 and self.contacts._shared_joints
         if nc and self.use_pinocchio_constraints and not self._with_armature and self._damping == 0.0 \
@@ -177,7 +190,7 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         if data.rigid is not None:
             cms, cds = data.rigid
             data.xout[:] = pin.constraintDynamics(self.pinocchio, pd, q, v, mb.actuation.tau, cms, cds, data.prox)
-            data.lstsq = not np.isfinite(data.xout).all()
+            data.lstsq = not all_finite(data.xout)
             data.rigid = None if data.lstsq else data.rigid
         if data.rigid is not None:
             pin.forwardKinematics(self.pinocchio, pd, q, v, data.zero_a)
@@ -191,13 +204,19 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
                     self.pinocchio, pd, mb.actuation.tau, mb.contacts.Jc[:nc], mb.contacts.a0[:nc], self._damping
                 )
                 lam = pd.lambda_c
-                data.lstsq = self._damping == 0.0 and not np.isfinite(data.xout).all()
+                data.lstsq = self._damping == 0.0 and not all_finite(data.xout)
             if data.lstsq:
                 lam = self._redundant_dynamics(data, nc)
+        elif not self._with_armature and not self.contacts.computeAllContacts:
+            data.xout[:] = pin.aba(self.pinocchio, pd, q, v, mb.actuation.tau, _LOCAL_CONVENTION)
+            pin.updateGlobalPlacements(self.pinocchio, pd)
+            data.aba = True
+            lam = data.no_force
         else:
             self._kinematics(data, q, v)
+            np.add(np.triu(pd.M), np.triu(pd.M, 1).T, out=data.M)  # for calcDiff: the RNEA derivatives overwrite pd.M
             try:
-                data.xout[:] = np.linalg.solve(np.triu(pd.M) + np.triu(pd.M, 1).T, mb.actuation.tau - pd.nle)
+                data.xout[:] = np.linalg.solve(data.M, mb.actuation.tau - pd.nle)
             except np.linalg.LinAlgError:  # a diverged trial state (non-finite inertia): no acceleration
                 data.xout[:] = np.nan
             lam = data.no_force
@@ -228,7 +247,6 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         Assumes :meth:`calc` was called at the same ``(x, u)``.
         """
         state = self.state
-        check_vector_shape(x, state.nx, "x")
         if u is None:
             data.df_dx[:] = 0.0
             data.df_du[:] = 0.0
@@ -237,13 +255,15 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
             if self.constraints is not None:
                 self.constraints.calcDiff(data.constraints, x)
             return
-        check_vector_shape(u, self.nu, "u")
         nv, nc = state.nv, self.contacts.nc
         q, v = x[: state.nq], x[state.nq :]
         model, pd, mb = self.pinocchio, data.pinocchio, data.multibody
         cdata, adata = mb.contacts, mb.actuation
         if data.rigid is not None:
             self._calcDiff_rigid(data, x, u)
+            return
+        if data.aba:
+            self._calcDiff_aba(data, x, u)
             return
         pin.computeRNEADerivatives(model, pd, q, v, data.xout, cdata.fext)
         self.contacts.updateRneaDiff(cdata, pd)
@@ -265,7 +285,7 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
                 np.dot(Kinv[nv:, :nv], adata.dtau_du, out=data.df_du)
                 np.negative(data.df_du, out=data.df_du)
         else:
-            Minv = np.linalg.inv(np.triu(pd.M) + np.triu(pd.M, 1).T)
+            Minv = np.linalg.inv(data.M)
             np.dot(Minv, rhs, out=data.Fx)
             np.dot(Minv, adata.dtau_du, out=data.Fu)
         if self.enable_force:
@@ -296,6 +316,22 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
             self._chain_rule(adata, pd.dlambda_dq, pd.dlambda_dv, pd.dlambda_dtau, data.df_dx, data.df_du)
             self.contacts.updateAccelerationDiff(cdata, data.Fx)
             self.contacts.updateForceDiff(cdata, data.df_dx, data.df_du)
+        self.costs.calcDiff(data.costs, x, u)
+        if self.constraints is not None:
+            self.constraints.calcDiff(data.constraints, x, u)
+
+    def _calcDiff_aba(self, data: "DifferentialActionDataContactFwdDynamics", x: np.ndarray, u: np.ndarray) -> None:
+        """Derivatives of a node without active contacts, from Pinocchio's ABA derivatives:
+        ``Fx = (∂ABA/∂q, ∂ABA/∂v) + M⁻¹ ∂τ/∂x``, ``Fu = M⁻¹ ∂τ/∂u``."""
+        nq = self.state.nq
+        pd, mb = data.pinocchio, data.multibody
+        adata = mb.actuation
+        self.actuation.calcDiff(adata, x, u)
+        pin.computeABADerivatives(self.pinocchio, pd, x[:nq], x[nq:], adata.tau)
+        self._chain_rule(adata, pd.ddq_dq, pd.ddq_dv, pd.Minv, data.Fx, data.Fu)
+        if self.enable_force:
+            self.contacts.updateAccelerationDiff(mb.contacts, data.Fx)
+            self.contacts.updateForceDiff(mb.contacts, data.df_dx, data.df_du)
         self.costs.calcDiff(data.costs, x, u)
         if self.constraints is not None:
             self.constraints.calcDiff(data.constraints, x, u)
@@ -366,6 +402,8 @@ class DifferentialActionDataContactFwdDynamics(DifferentialActionDataAbstract):
         self.zero_force = np.zeros(nc)
         self.diag = np.arange(nv)
         self.zero_a = np.zeros(nv)
+        self.M = np.zeros((nv, nv))
         self.rigid = None
+        self.aba = False
         self.lstsq = False
         self.prox = pin.ProximalSettings(1e-12, 0.0, 1)

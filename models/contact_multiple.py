@@ -64,12 +64,6 @@ class ContactModelMultiple(ForceModelMultiple):
     def contacts(self) -> dict[str, ContactItem]:
         return self._items
 
-    def _recount(self) -> None:
-        super()._recount()
-        frames = self.state.pinocchio.frames
-        joints = [int(frames[c.id].parentJoint) for _, c in self._active]
-        self._idle_joints = sorted({int(frames[c.id].parentJoint) for _, c in self._inactive} - set(joints))
-
     def addContact(self, name: str, contact: ContactModelAbstract, active: bool = True) -> None:
         """Add ``contact`` under ``name``.
 
@@ -150,33 +144,15 @@ class ContactModelMultiple(ForceModelMultiple):
         data.ddv_dx[:] = ddv_dx
 
     def updateForce(self, data: "ContactDataMultiple", force: np.ndarray) -> None:
-        """Split ``force (nc,)`` into the active contacts and sum their joint forces into ``fext``.
+        """Split ``force (nc,)`` into the active contacts; their joint forces (``fext``) are brought up to
+        date when ``data.fext`` is read (:meth:`updateJointForces`).
 
         Raises
         ------
         ValueError
             If ``force`` does not have shape ``(nc,)``.
         """
-        if getattr(force, "shape", None) != (self.nc,):
-            force = np.asarray(force, dtype=float)
-            if force.shape != (self.nc,):
-                raise ValueError(f"force has shape {force.shape}, expected ({self.nc},)")
-        self._split(data.items, "storeForce", (force,), "setZeroForce")
-        data.joint_forces_pending = True
-
-    def updateJointForces(self, data: "ContactDataMultiple") -> None:
-        """Refresh every contact's ``f_local``/``fext`` and the per-joint sums ``data.fext``.
-
-        :meth:`updateForce` defers this work until ``data.fext`` is read.
-        """
-        fext, shared = data.fext_by_joint, self._shared_joints
-        for j in data.touched if shared else self._idle_joints:
-            fext[j] = data.zero_force
-        for name, c in self._active:
-            cd = data.items[name]
-            c.updateJointForce(cd)
-            fext[cd.joint] = fext[cd.joint] + cd.fext if shared else cd.fext
-        data.joint_forces_pending = False
+        self._store_forces(data, force)
 
     def updateForceDiff(self, data: "ContactDataMultiple", df_dx: np.ndarray, df_du: np.ndarray) -> None:
         """Split the force Jacobians ``df_dx (nc, ndx)`` and ``df_du (nc, nu)`` into the active contacts.
@@ -225,18 +201,9 @@ class ContactDataMultiple(ForceDataMultiple):
         self.da0_dx = np.zeros((nct, ndx))
         self.dv = np.zeros(nv)
         self.ddv_dx = np.zeros((nv, ndx))
-        self.joint_forces_pending = False
-        self._model = model
         self.rigid = None
         self.rigid_seen = ParametersSeen()
 
     def __getstate__(self) -> dict:
         """Copy or pickle without the Pinocchio constraint cache (``rigid``, rebuilt on first use)."""
         return {**self.__dict__, "rigid": None}
-
-    @property
-    def fext(self) -> pin.StdVec_Force:
-        """External force at each joint (``njoints`` ``pinocchio.Force``, the same object every time)."""
-        if self.joint_forces_pending:
-            self._model.updateJointForces(self)
-        return self.fext_by_joint

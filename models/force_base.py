@@ -255,6 +255,7 @@ class ForceModelMultiple(ModelItems, Guarded):
         frames = self.state.pinocchio.frames
         joints = [int(frames[m.id].parentJoint) for _, m in self._active]
         self._shared_joints = len(set(joints)) != len(joints)
+        self._idle_joints = sorted({int(frames[m.id].parentJoint) for _, m in self._inactive} - set(joints))
 
     def _add(self, name: str, model: ForceModelAbstract, item: object) -> None:
         """Insert ``item`` (holding ``model``) under ``name`` once ``_check_model`` accepts ``model``."""
@@ -276,14 +277,44 @@ class ForceModelMultiple(ModelItems, Guarded):
             i += m.nc
 
     def _split(self, datas: dict, method: str, blocks: tuple, zero: str) -> None:
-        """Hand each active item its rows of every array in ``blocks`` through ``method``; call ``zero``
-        on the inactive ones."""
+        """Hand each active item its rows of the one or two arrays in ``blocks`` through ``method``; call
+        ``zero`` on the inactive ones."""
         i = 0
+        first, second = blocks if len(blocks) == 2 else (blocks[0], None)
         for name, m in self._active:
-            getattr(m, method)(datas[name], *(b[i:i + m.nc] for b in blocks))
-            i += m.nc
+            j = i + m.nc
+            if second is None:
+                getattr(m, method)(datas[name], first[i:j])
+            else:
+                getattr(m, method)(datas[name], first[i:j], second[i:j])
+            i = j
         for name, m in self._inactive:
             getattr(m, zero)(datas[name])
+
+    def _store_forces(self, data: "ForceDataMultiple", force: np.ndarray) -> None:
+        """Hand each active item its rows of ``force (nc,)`` (``storeForce``), zero the inactive ones; the
+        joint forces wait for :meth:`updateJointForces` (when ``data.fext`` is read)."""
+        if getattr(force, "shape", None) != (self.nc,):
+            force = np.asarray(force, dtype=float)
+            if force.shape != (self.nc,):
+                raise ValueError(f"force has shape {force.shape}, expected ({self.nc},)")
+        self._split(data.items, "storeForce", (force,), "setZeroForce")
+        data.joint_forces_pending = True
+
+    def updateJointForces(self, data: "ForceDataMultiple") -> None:
+        """Refresh every active item's ``f_local``/``fext`` and the per-joint sums ``data.fext``.
+
+        ``updateForce`` defers this work until ``data.fext`` is read.
+        """
+        fext, shared = data.fext_by_joint, self._shared_joints
+        for j in data.touched if shared else self._idle_joints:
+            fext[j] = data.zero_force
+        datas = data.items
+        for name, m in self._active:
+            md = datas[name]
+            m.updateJointForce(md)
+            fext[md.joint] = fext[md.joint] + md.fext if shared else md.fext
+        data.joint_forces_pending = False
 
     def updateRneaDiff(self, data: "ForceDataMultiple", pinocchio: pin.Data) -> None:
         """Add to ``pinocchio.dtau_dq`` the terms of the forces not expressed in local coordinates."""
@@ -314,3 +345,13 @@ class ForceDataMultiple:
             self.fext_by_joint.append(pin.Force.Zero())
         self.zero_force = pin.Force.Zero()
         self.touched = sorted({md.joint for md in self.items.values()})
+        self.joint_forces_pending = False
+        self._model = model
+
+    @property
+    def fext(self) -> pin.StdVec_Force:
+        """External force at each joint (``njoints`` ``pinocchio.Force``, the same object every time),
+        brought up to date with the forces when read."""
+        if self.joint_forces_pending:
+            self._model.updateJointForces(self)
+        return self.fext_by_joint

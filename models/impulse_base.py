@@ -18,6 +18,8 @@ from crocopy.state import StateAbstract
 
 from .force_base import ForceDataAbstract, ForceModelAbstract, FrameForce
 
+_FRAME_UPDATE = FrameForce.updateForce
+
 
 class ImpulseModelAbstract(FrameForce, ForceModelAbstract):
     """Abstract impulse model (Crocoddyl's ``ImpulseModelAbstract(state, type, nc)`` or
@@ -46,6 +48,19 @@ class ImpulseModelAbstract(FrameForce, ForceModelAbstract):
     def createData(self, data: pin.Data) -> "ImpulseDataAbstract":
         """Allocate the impulse data; ``data`` is the node's ``pinocchio.Data``."""
         return ImpulseDataAbstract(self, data)
+
+    def storeForce(self, data: "ImpulseDataAbstract", force: np.ndarray) -> None:
+        """Store ``force (nc,)`` in ``data.f`` (``f_local``/``fext`` wait for :meth:`updateJointForce`); a
+        subclass with an ``updateForce`` of its own gets that called instead."""
+        if type(self).updateForce is _FRAME_UPDATE:
+            FrameForce.storeForce(self, data, force)
+        else:
+            self.updateForce(data, force)
+
+    def updateJointForce(self, data: "ImpulseDataAbstract") -> None:
+        """``f_local`` and ``fext`` from ``data.f`` (nothing left to do after a subclass's own ``updateForce``)."""
+        if type(self).updateForce is _FRAME_UPDATE:
+            FrameForce.updateJointForce(self, data)
 
     def updateForceDiff(self, data: "ImpulseDataAbstract", df_dx: np.ndarray) -> None:
         """Store the impulse Jacobian ``df_dx (nc, ndx)``."""

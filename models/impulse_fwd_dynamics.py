@@ -14,7 +14,15 @@ impulses as external forces) and ``Jc(q)(v⁺ + e v⁻) = 0`` (``dv0_dq`` at vel
 
     K [∂v⁺/∂q; -∂Λ/∂q] = [-∂ID/∂q; -dv0_dq],    K [∂v⁺/∂v⁻; -∂Λ/∂v⁻] = [M; -e Jc]
 
-and ``Fx = [[I, 0], [∂v⁺/∂q, ∂v⁺/∂v⁻]]``.
+and ``Fx = [[I, 0], [∂v⁺/∂q, ∂v⁺/∂v⁻]]``.  As ``K⁻¹ [M; Jc] = [I; 0]`` (whatever the damped lower-right
+block), the second system is ``[∂v⁺/∂v⁻; -∂Λ/∂v⁻] = [I; 0] - (1 + e) K⁻¹[:, nv:] Jc`` (not on the
+least-squares path, whose ``K⁻¹`` is no inverse).
+
+Kinematics contract with the impulses and residuals: after ``calc`` the node's ``pinocchio.Data`` holds
+``M`` (upper triangle), the joint Jacobians, placements and velocities at ``x`` and the frame placements
+(``crba`` in the WORLD convention, ``forwardKinematics``, ``updateFramePlacements``); after ``calcDiff``
+the kinematic derivatives at ``x`` (``computeForwardKinematicsDerivatives``).  Residuals update the
+centre of mass or momentum they need themselves.
 """
 
 from __future__ import annotations
@@ -27,11 +35,13 @@ from crocopy.array_views import share_arrays
 from crocopy.constraints.manager import ConstraintModelManager
 from crocopy.costs.sum import CostModelSum
 
-from .contact_fwd_dynamics import check_vector_shape, link_cost_data
+from .contact_fwd_dynamics import all_finite, link_cost_data
 from .data_collectors import DataCollectorMultibodyInImpulse
 from .dynamics_options import ArmatureMixin, KKTDampingMixin
 from .impulse_multiple import ImpulseModelMultiple
 from .redundant_kkt import solve_redundant_kkt
+
+_WORLD = pin.Convention.WORLD
 
 
 class ActionModelImpulseFwdDynamics(ArmatureMixin, KKTDampingMixin, ActionModelAbstract):
@@ -116,11 +126,11 @@ class ActionModelImpulseFwdDynamics(ArmatureMixin, KKTDampingMixin, ActionModelA
     def calc(self, data: "ActionDataImpulseFwdDynamics", x: np.ndarray, u: np.ndarray | None = None) -> None:
         """Velocity after impact ``xnext = (q, v⁺)``, impulses, costs and constraints."""
         state = self.state
-        check_vector_shape(x, state.nx, "x")
         nq, nc = state.nq, self.impulses.nc
         q, v = x[:nq], x[nq:]
         model, pd, idata = self.pinocchio, data.pinocchio, data.multibody.impulses
-        pin.computeAllTerms(model, pd, q, v)
+        pin.crba(model, pd, q, _WORLD)  # M and the joint Jacobians
+        pin.forwardKinematics(model, pd, q, v)
         pin.updateFramePlacements(model, pd)
         if self._with_armature:
             pd.M[data.diag, data.diag] += self._armature
@@ -131,7 +141,7 @@ class ActionModelImpulseFwdDynamics(ArmatureMixin, KKTDampingMixin, ActionModelA
         if nc and not data.lstsq:
             data.xnext[nq:] = pin.impulseDynamics(model, pd, v, idata.Jc[:nc], self._r_coeff, self._damping)
             lam = pd.impulse_c
-            data.lstsq = self._damping == 0.0 and not np.isfinite(data.xnext[nq:]).all()
+            data.lstsq = self._damping == 0.0 and not all_finite(data.xnext[nq:])
         if data.lstsq:
             Jc = idata.Jc[:nc]
             try:
@@ -153,25 +163,32 @@ class ActionModelImpulseFwdDynamics(ArmatureMixin, KKTDampingMixin, ActionModelA
     def calcDiff(self, data: "ActionDataImpulseFwdDynamics", x: np.ndarray, u: np.ndarray | None = None) -> None:
         """``Fx``, impulse Jacobians (``enable_force``), cost and constraint derivatives (after :meth:`calc`)."""
         state = self.state
-        check_vector_shape(x, state.nx, "x")
         nq, nv, nc = state.nq, state.nv, self.impulses.nc
         q, v = x[:nq], x[nq:]
         model, pd, idata = self.pinocchio, data.pinocchio, data.multibody.impulses
         vnext = data.xnext[nq:]
         if nc:
-            rhs = data.rhs
-            M = pd.M
-            np.add(np.triu(M), np.triu(M, 1).T, out=rhs[:nv, nv:])
+            rhs, Jc = data.rhs, idata.Jc[:nc]
+            if data.lstsq:
+                M = pd.M
+                np.add(np.triu(M), np.triu(M, 1).T, out=rhs[:nv, nv:])
             pin.computeForwardKinematicsDerivatives(model, pd, q, vnext + self._r_coeff * v, data.zero_v)
             self.impulses.calcDiff(idata, x)
             pin.computeRNEADerivatives(self._model_nograv, pd, q, data.zero_v, vnext - v, idata.fext)
             self.impulses.updateRneaDiff(idata, pd)
-            if not data.lstsq:
-                data.Kinv[:] = pin.getKKTContactDynamicMatrixInverse(model, pd, idata.Jc[:nc])
             np.negative(pd.dtau_dq, out=rhs[:nv, :nv])
             np.negative(idata.dv0_dq[:nc], out=rhs[nv:, :nv])
-            np.multiply(idata.Jc[:nc], -self._r_coeff, out=rhs[nv:, nv:])
-            np.dot(data.Kinv, rhs, out=data.KinvRhs)
+            if data.lstsq:
+                np.multiply(Jc, -self._r_coeff, out=rhs[nv:, nv:])
+                np.dot(data.Kinv, rhs, out=data.KinvRhs)
+            else:  # K⁻¹ [M; -e Jc] = [I; 0] - (1 + e) K⁻¹[:, nv:] Jc, as K⁻¹ [M; Jc] = [I; 0]
+                Kinv = data.Kinv
+                Kinv[:] = pin.getKKTContactDynamicMatrixInverse(model, pd, Jc)
+                KinvRhs = data.KinvRhs
+                np.matmul(Kinv, rhs[:, :nv], out=KinvRhs[:, :nv])
+                np.matmul(Kinv[:, nv:], Jc, out=KinvRhs[:, nv:])
+                KinvRhs[:, nv:] *= -(1.0 + self._r_coeff)
+                KinvRhs.reshape(-1)[nv: nv * (2 * nv + 1): 2 * nv + 1] += 1.0
             data.Fx[nv:] = data.KinvRhs[:nv]
             self.impulses.updateVelocityDiff(idata, data.Fx[nv:])
             if self.enable_force:

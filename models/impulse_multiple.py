@@ -89,16 +89,9 @@ class ImpulseModelMultiple(ForceModelMultiple):
         data.dvnext_dx[:] = dvnext_dx
 
     def updateForce(self, data: "ImpulseDataMultiple", force: np.ndarray) -> None:
-        """Split ``force (nc,)`` into the active impulses and sum their joint forces into ``fext``."""
-        if np.shape(force) != (self.nc,):
-            raise ValueError(f"force has shape {np.shape(force)}, expected ({self.nc},)")
-        fext = data.fext
-        for j in data.touched:
-            fext[j] = data.zero_force
-        self._split(data.items, "updateForce", (force,), "setZeroForce")
-        for name, _ in self._active:
-            cd = data.items[name]
-            fext[cd.joint] = fext[cd.joint] + cd.fext
+        """Split ``force (nc,)`` into the active impulses; their joint forces (``fext``) are brought up to
+        date when ``data.fext`` is read (``updateJointForces``)."""
+        self._store_forces(data, force)
 
     def updateForceDiff(self, data: "ImpulseDataMultiple", df_dx: np.ndarray) -> None:
         """Split the impulse Jacobian ``df_dx (nc, ndx)`` into the active impulses."""
@@ -109,7 +102,8 @@ class ImpulseModelMultiple(ForceModelMultiple):
 
 class ImpulseDataMultiple(ForceDataMultiple):
     """Data of :class:`ImpulseModelMultiple`: ``impulses`` (name → data), ``Jc (nc_total, nv)``,
-    ``dv0_dq (nc_total, nv)``, ``vnext (nv,)``, ``dvnext_dx (nv, ndx)`` and ``fext`` (per joint)."""
+    ``dv0_dq (nc_total, nv)``, ``vnext (nv,)``, ``dvnext_dx (nv, ndx)`` and ``fext`` (per joint; it and
+    the impulses' ``f_local``/``fext`` are brought up to date with the impulses when ``fext`` is read)."""
 
     def __init__(self, model: ImpulseModelMultiple, data: pin.Data) -> None:
         super().__init__(model, data)
@@ -118,4 +112,3 @@ class ImpulseDataMultiple(ForceDataMultiple):
         self.dv0_dq = np.zeros((model.nc_total, nv))
         self.vnext = np.zeros(nv)
         self.dvnext_dx = np.zeros((nv, ndx))
-        self.fext = self.fext_by_joint

@@ -71,9 +71,9 @@ class _ImpulseFrame(ImpulseModelAbstract):
         R = pd.oMf[fid].rotation
         Ja = data.fJf[3:]
         w = pin.getFrameVelocity(model, pd, fid, _LOCAL).vector
-        for k in range(0, nc, 3):
-            np.dot(R, vdq[k:k + 3], out=data.dv0_dq[k:k + 3])
-            data.dv0_dq[k:k + 3] -= (R @ _skew(w[k:k + 3])) @ Ja
+        np.dot(R, vdq[:3] - _skew(w[:3]) @ Ja, out=data.dv0_dq[:3])
+        if nc == 6:
+            np.dot(R, vdq[3:] - _skew(w[3:]) @ Ja, out=data.dv0_dq[3:])
 
 
 class ImpulseData3D(ImpulseDataAbstract):

@@ -63,8 +63,9 @@ def _force_blocks(cd, ncf: int) -> tuple:
 
 
 class _ForceResidual(ResidualModelAbstract):
-    """Residual ``r = A f[:ncf]`` of the force of the contact on frame ``id`` (a contact of dimension at
-    least ``min_nc``; a 1D or 2D contact fills only some components of ``f``, its ``force_rows``)."""
+    """Residual ``r = A f[:ncf]`` (``A = reference.A``) of the force of the contact on frame ``id`` (a
+    contact of dimension at least ``min_nc``; a 1D or 2D contact fills only some components of ``f``, its
+    ``force_rows``)."""
 
     ncf = 3
     min_nc = 3
@@ -78,16 +79,13 @@ class _ForceResidual(ResidualModelAbstract):
     def createData(self, data: DataCollectorAbstract | None = None) -> "ResidualDataContactForce":
         return ResidualDataContactForce(self, data)
 
-    def _matrix(self) -> np.ndarray:
-        raise NotImplementedError
-
     def calc(self, data: "ResidualDataContactForce", x: np.ndarray, u: np.ndarray | None = None) -> None:
-        f = data.contact.f.vector[: self.ncf]
-        np.dot(self._matrix(), f, out=data.r)
+        """``r = A f[:ncf]`` with ``A = reference.A`` (the cone's matrix)."""
+        np.dot(self.reference.A, data.contact.f.vector[: self.ncf], out=data.r)
 
     def calcDiff(self, data: "ResidualDataContactForce", x: np.ndarray, u: np.ndarray | None = None) -> None:
-        cd, cols, rows = data.contact, data.cols, data.rows
-        A = self._matrix()[:, cols]
+        cd, rows = data.contact, data.rows
+        A = self.reference.A if data.all_cols else self.reference.A[:, data.cols]
         np.dot(A, cd.df_dx[rows], out=data.Rx)
         if data.Ru.shape[1] and cd.df_du.shape[1] == data.Ru.shape[1]:
             np.dot(A, cd.df_du[rows], out=data.Ru)
@@ -101,6 +99,7 @@ class ResidualDataContactForce(ResidualDataAbstract):
         super().__init__(model, data)
         self.contact = _force_data(data, model.id, type(model).__name__, model.min_nc, model.min_nc == 1)
         self.cols, self.rows = _force_blocks(self.contact, model.ncf)
+        self.all_cols = isinstance(self.cols, slice) and self.cols == slice(0, model.ncf)
         self.impulses = getattr(data, "impulses", None)
 
 
@@ -178,9 +177,6 @@ class ResidualModelContactFrictionCone(_ForceResidual):
         super().__init__(state, id, fref.nf + 1, nu, fwddyn)
         self.reference = fref
 
-    def _matrix(self) -> np.ndarray:
-        return self.reference.A
-
 
 class ResidualModelContactWrenchCone(_ForceResidual):
     """Crocoddyl's ``ResidualModelContactWrenchCone(state, id, fref, nu=state.nv, fwddyn=True)``
@@ -199,9 +195,6 @@ class ResidualModelContactWrenchCone(_ForceResidual):
         super().__init__(state, id, fref.nf + 13, nu, fwddyn)
         self.reference = fref
 
-    def _matrix(self) -> np.ndarray:
-        return self.reference.A
-
 
 class ResidualModelContactCoPPosition(_ForceResidual):
     """Crocoddyl's ``ResidualModelContactCoPPosition(state, id, cref, nu=state.nv, fwddyn=True)``
@@ -219,9 +212,6 @@ class ResidualModelContactCoPPosition(_ForceResidual):
 
     def createData(self, data: DataCollectorAbstract | None = None) -> "ResidualDataContactCoPPosition":
         return ResidualDataContactCoPPosition(self, data)
-
-    def _matrix(self) -> np.ndarray:
-        return self.reference.A
 
 
 class ResidualDataContactCoPPosition(ResidualDataContactForce):

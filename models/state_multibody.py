@@ -21,6 +21,7 @@ operation at DEBUG level on the ``"crocopy"`` logger.
 from __future__ import annotations
 
 import copyreg
+import threading
 
 import numpy as np
 import pinocchio as pin
@@ -43,6 +44,19 @@ _IN_PLACE = {
     "_integrate_chain_rule": ("the compiled Euler chain rule", ("Jintegrate", "JintegrateTransport")),
 }
 """In-place form → (what it is, the public operations it must agree with)."""
+
+_ARG0, _ARG1 = pin.ARG0, pin.ARG1
+_SCRATCH = threading.local()
+"""Per thread: ``rows``, the ``[Fx[:nv] Fu[:nv]]`` matrices of the Euler chain rule by shape (filled and
+read within one call)."""
+
+
+def _scratch_rows(shape: tuple[int, int]) -> np.ndarray:
+    if not hasattr(_SCRATCH, "rows"):
+        _SCRATCH.rows = {}
+    rows = _SCRATCH.rows[shape] = np.empty(shape)
+    return rows
+
 
 _MODEL_VECTORS = ("lowerPositionLimit", "upperPositionLimit", "velocityLimit", "effortLimit", "armature")
 
@@ -219,16 +233,23 @@ class StateMultibody(StateAbstract):
 
     def _integrate_chain_rule(self, x: np.ndarray, dx: np.ndarray, Fx: np.ndarray, Fu: np.ndarray) -> None:
         """Chain rule through ``x ⊕ dx`` (see :meth:`StateAbstract._integrate_chain_rule`): Pinocchio's
-        ``dIntegrateTransport`` on the configuration rows of ``[Fx Fu]`` (one call), ``dIntegrate`` on the
-        configuration block and the identity on the velocity block."""
+        ``dIntegrateTransport`` on the configuration rows of ``[Fx Fu]`` (one call, copied into a per-thread
+        scratch matrix), ``dIntegrate`` on the configuration block and the identity on the velocity block."""
         if "_integrate_chain_rule" in self._generic:
             super()._integrate_chain_rule(x, dx, Fx, Fu)
             return
-        model, nv = self.pinocchio, self.nv
+        model, nv, ndx = self.pinocchio, self.nv, self.ndx
         q, dq = x[: self.nq], dx[:nv]
-        rows = pin.dIntegrateTransport(model, q, dq, np.hstack((Fx[:nv], Fu[:nv])), pin.ARG1)
+        shape = (nv, ndx + Fu.shape[1])
+        try:
+            rows = _SCRATCH.rows[shape]
+        except (AttributeError, KeyError):
+            rows = _scratch_rows(shape)
+        rows[:, :ndx] = Fx[:nv]
+        rows[:, ndx:] = Fu[:nv]
+        rows = pin.dIntegrateTransport(model, q, dq, rows, _ARG1)
         add = add_integrate_jacobian if kernels.active else add_integrate_jacobian_numpy
-        add(np.reshape(rows, (nv, -1)), pin.dIntegrate(model, q, dq, pin.ARG0), Fx, Fu)
+        add(rows if rows.ndim == 2 else np.reshape(rows, shape), pin.dIntegrate(model, q, dq, _ARG0), Fx, Fu)
 
     def __setstate__(self, state: dict) -> None:
         self.__dict__.update(state)
