@@ -57,6 +57,7 @@ from .user_cache import user_cache_dir
 
 try:
     import numba
+    import numba.extending
 except ImportError:  # pragma: no cover - exercised only without numba (tested in a subprocess)
     numba = None
 
@@ -104,6 +105,21 @@ def compiled(function: Callable) -> Callable:
         numba.config.CACHE_DIR = previous
     KERNELS.append(kernel)
     return kernel
+
+
+def _float64_pointer(typingctx, address):
+    """numba intrinsic: the integer ``address`` as a ``float64*`` (for ``numba.carray``), so that a kernel
+    reads arrays listed by address.  The caller keeps those arrays alive."""
+    signature = numba.types.CPointer(numba.types.float64)(address)
+
+    def codegen(context, builder, sig, args):
+        return builder.inttoptr(args[0], context.get_value_type(sig.return_type))
+
+    return signature, codegen
+
+
+float64_pointer = numba.extending.intrinsic(_float64_pointer) if available else _float64_pointer
+carray = numba.carray if available else None
 
 
 def is_cached(kernel: object) -> bool:

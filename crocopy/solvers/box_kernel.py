@@ -20,7 +20,18 @@ from __future__ import annotations
 import numpy as np
 
 from ..kernels import compiled
-from .riccati_kernel import action_value_function, cholesky_lower, finish_value_function
+from .horizon import QUU_INV
+from .riccati_kernel import (
+    action_value_function,
+    cholesky_lower,
+    finish_value_function,
+    matrix_at,
+    node_arrays,
+    node_riccati,
+    q_arrays,
+    q_terms,
+    scratch,
+)
 
 
 def _chol_inverse(H, idx, nf, out):
@@ -126,8 +137,15 @@ def _box_qp(H, q, lb, ub, x, th_grad, th_acc, maxiter, free, Hinv):
 
 def _box_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, u, lb, ub, th_grad, th_acc, warm, maxiter,
               general, Qxx, Qxu, Quu, Qx, Qu, K, k, Quu_inv, Vxx, Vx):
-    nu = Fu.shape[1]
     action_value_function(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu)
+    return box_gains_value(preg, fs, gaps, u, lb, ub, th_grad, th_acc, warm, maxiter, general, Qxx, Qxu, Quu, Qx,
+                           Qu, K, k, Quu_inv, Vxx, Vx)
+
+
+def _box_gains_value(preg, fs, gaps, u, lb, ub, th_grad, th_acc, warm, maxiter, general, Qxx, Qxu, Quu, Qx, Qu, K,
+                     k, Quu_inv, Vxx, Vx):
+    """:func:`box_step` after the Q terms: the box QP, the gains and the value function."""
+    nu = Quu.shape[0]
     x = warm * k
     free = np.empty(nu, dtype=np.bool_)
     Hinv = np.zeros((nu, nu))
@@ -162,4 +180,36 @@ def _box_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, u, lb,
 _chol_inverse = compiled(_chol_inverse)
 _free_set = compiled(_free_set)
 _box_qp = compiled(_box_qp)
+box_gains_value = compiled(_box_gains_value)
 box_step = compiled(_box_step)
+
+
+def _box_pass(daddr, saddr, dims, preg, gaps, boxed, lb, ub, u, uoff, th_grad, th_acc, warm, maxiter, general,
+              clamped, counts):
+    """The whole backward pass on the arrays listed by address (:mod:`.horizon`): the box QP at the nodes where
+    ``boxed[t]``, the Riccati step elsewhere.  ``lb``, ``ub``, ``u``: the stacked bounds and controls (node t
+    at ``uoff[t]``); ``clamped[t]`` is set per node, ``(factorizations, QP solves)`` added to ``counts``.
+    Returns -1, or the first node whose gains failed."""
+    S, idx = scratch(dims)
+    for t in range(dims.shape[0] - 2, -1, -1):
+        if not boxed[t]:
+            clamped[t] = False
+            if not node_riccati(daddr, saddr, dims, t, preg, gaps, S, idx):
+                return t
+            continue
+        m, a = dims[t, 1], uoff[t]
+        Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, fs = node_arrays(daddr, saddr, dims, t)
+        Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx = q_arrays(saddr, dims, t)
+        q_terms(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu, S)
+        ok, nfact, clamped[t] = box_gains_value(
+            preg, fs, gaps, u[a:a + m], lb[a:a + m], ub[a:a + m], th_grad, th_acc, warm, maxiter, general, Qxx, Qxu,
+            Quu, Qx, Qu, K, k, matrix_at(saddr[t, QUU_INV], m, m), Vxx, Vx,
+        )
+        counts[0] += nfact
+        counts[1] += 1
+        if not ok:
+            return t
+    return -1
+
+
+box_pass = compiled(_box_pass)
