@@ -1,15 +1,16 @@
 """The compiled kernels: the one place that imports numba, and the library-wide switch.
 
-Hot inner loops (a node's Riccati step, the box-QP node step, the rollout's control update, the
-cost stack's activations and Gauss-Newton sums, Euler's step and chain rule) exist twice: as a
-numba-compiled kernel and as a numpy twin that gives the same numbers to round-off (tested to
-1e-12).  Each kernel lives beside its twin:
+Hot inner loops (the backward pass, with or without box QPs, the FDDP expected improvement, the rollout's
+control update, the cost stack's activations and Gauss-Newton sums, Euler's step and chain rule) exist twice:
+as a numba-compiled kernel and as a numpy twin that gives the same numbers to round-off (tested to 1e-12).
+Each kernel lives beside its twin:
 
 =====================================  ==========================================================
-``solvers/riccati_kernel.py``          ``riccati_step`` (twin: ``SolverDDP.computeActionValueFunction``,
-                                       ``computeGains``, ``computeValueFunction``);
+``solvers/riccati_kernel.py``          ``riccati_pass`` (twin: ``SolverDDP.computeActionValueFunction``,
+                                       ``computeGains``, ``computeValueFunction`` over the horizon);
+                                       ``expected_terms`` (twin: ``SolverFDDP.updateExpectedImprovement``);
                                        ``feedback_control`` / ``feedback_control_numpy``
-``solvers/box_kernel.py``              ``box_step`` (twin: ``BoxSolverMixin.computeGains`` with
+``solvers/box_kernel.py``              ``box_pass`` (twin: ``BoxSolverMixin.computeGains`` with
                                        :class:`~crocopy.solvers.box_qp.BoxQP`)
 ``costs/stack_kernel.py``              ``activation_values``, ``activation_derivatives``,
                                        ``accumulate`` and their ``*_numpy`` twins

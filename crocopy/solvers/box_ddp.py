@@ -48,8 +48,8 @@ iterates to round-off (``crocopy bench --box-parity``):
 
 Crocopy extensions: ``compat_crocoddyl``; ``nfactorizations`` and ``nqp`` count box-QP Cholesky
 factorizations and QP solves since the last ``solve``.  While :func:`crocopy.kernels_enabled` the
-recursion runs the compiled node steps of :mod:`.box_kernel`, which give the numpy path's numbers to
-round-off; a subclass that overrides ``computeActionValueFunction``, ``computeGains`` or
+recursion is one compiled call, :func:`.box_kernel.box_pass` (:mod:`.horizon`), which gives the numpy
+path's numbers to round-off; a subclass that overrides ``computeActionValueFunction``, ``computeGains`` or
 ``computeValueFunction`` gets the numpy steps (logged once at DEBUG level on the ``"crocopy"`` logger).
 """
 
@@ -157,14 +157,13 @@ class BoxSolverMixin:
         return self._kernel_fact + sum(qp.nfactorizations for qp in self._qps.values())
 
     def backwardPass(self) -> None:
-        """Riccati recursion with box-QP gains; compiled node steps while :func:`crocopy.kernels_enabled`.
+        """Riccati recursion with box-QP gains; one compiled call while :func:`crocopy.kernels_enabled`.
 
-        The compiled path (:func:`.box_kernel.box_step`, :func:`.riccati_kernel.riccati_step`) gives the
-        numbers of the node steps ``computeActionValueFunction`` / ``computeGains`` /
-        ``computeValueFunction`` to round-off; a subclass overriding one of them gets the numpy steps
-        (logged once at DEBUG level on the ``"crocopy"`` logger).
+        The compiled pass (:func:`.box_kernel.box_pass`) gives the numbers of the node steps
+        ``computeActionValueFunction`` / ``computeGains`` / ``computeValueFunction`` to round-off; a subclass
+        overriding one of them gets the numpy steps (logged once at DEBUG level on the ``"crocopy"`` logger).
         """
-        if kernels.active and self._kernel_applies(SolverBoxDDP, "the compiled box-QP node step"):
+        if kernels.active and self._kernel_applies(SolverBoxDDP, "the compiled box-QP backward pass"):
             self._backward_pass_kernel()
         else:
             self._backward_pass_numpy()

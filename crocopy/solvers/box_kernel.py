@@ -1,18 +1,19 @@
-"""Compiled Box-DDP node step (numba), twin of the numpy path of :mod:`~crocopy.solvers.box_ddp` and
+"""Compiled Box-DDP backward pass (numba), twin of the numpy path of :mod:`~crocopy.solvers.box_ddp` and
 :mod:`crocopy.solvers.box_qp`.
 
-For node t with next value function ``(V'x, V'xx)`` (Crocoddyl's signs) it computes the Q terms
-(as :mod:`.riccati_kernel`), solves the box QP ``min ½ δuᵀ Quu δu + Quᵀ δu, lb ≤ δu ≤ ub`` by the
-same projected-Newton iteration as :class:`crocopy.solvers.box_qp.BoxQP` (warm start ``warm * k``, i.e. ``-k``,
-or ``+k`` in Crocoddyl-compatible mode; no extra regularisation; signed Armijo ratio ``th_acc`` over
-``2^-n``; stop on ``‖g_f‖∞ ≤ th_grad`` after the step), sets ``k = -δu``,
-``Quu_inv`` (free block inverse, zero-padded), ``K = Quu_inv Qux``, zeroes the ``Qu`` entries of
-clamped controls unless ``general``, and updates the value function (general gradient update when
-``general`` and a control is clamped).  Returns ``(ok, nfactorizations, clamped)``; ``ok`` is False
-when a free block is not positive definite.  Its numpy twin is
+:func:`box_pass` runs the whole recursion in one call on the arrays of :mod:`.horizon`: the Riccati step of
+:mod:`.riccati_kernel` at unbounded nodes (or on an infeasible iterate), and at a bounded node t with next
+value function ``(V'x, V'xx)`` (Crocoddyl's signs) it computes the Q terms (as :mod:`.riccati_kernel`), solves
+the box QP ``min ½ δuᵀ Quu δu + Quᵀ δu, lb ≤ δu ≤ ub`` by the same projected-Newton iteration as
+:class:`crocopy.solvers.box_qp.BoxQP` (warm start ``warm * k``, i.e. ``-k``, or ``+k`` in Crocoddyl-compatible
+mode; no extra regularisation; signed Armijo ratio ``th_acc`` over ``2^-n``; stop on ``‖g_f‖∞ ≤ th_grad``
+after the step), sets ``k = -δu``, ``Quu_inv`` (free block inverse, zero-padded), ``K = Quu_inv Qux``, zeroes
+the ``Qu`` entries of clamped controls unless ``general``, and updates the value function (general gradient
+update when ``general`` and a control is clamped). The first node whose free block is not positive definite
+stops the pass (its index is returned). Its numpy twin is
 :meth:`~crocopy.solvers.box_ddp.BoxSolverMixin.computeGains` with :class:`~crocopy.solvers.box_qp.BoxQP`
-between the Q terms and value function of :class:`~crocopy.solvers.ddp.SolverDDP`;
-:mod:`crocopy.kernels` chooses.
+between the Q terms and value function of :class:`~crocopy.solvers.ddp.SolverDDP`; :mod:`crocopy.kernels`
+chooses.
 """
 
 from __future__ import annotations
@@ -22,7 +23,6 @@ import numpy as np
 from ..kernels import compiled
 from .horizon import QUU_INV
 from .riccati_kernel import (
-    action_value_function,
     cholesky_lower,
     finish_value_function,
     matrix_at,
@@ -135,16 +135,9 @@ def _box_qp(H, q, lb, ub, x, th_grad, th_acc, maxiter, free, Hinv):
     return True, nfact, nf
 
 
-def _box_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, u, lb, ub, th_grad, th_acc, warm, maxiter,
-              general, Qxx, Qxu, Quu, Qx, Qu, K, k, Quu_inv, Vxx, Vx):
-    action_value_function(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu)
-    return box_gains_value(preg, fs, gaps, u, lb, ub, th_grad, th_acc, warm, maxiter, general, Qxx, Qxu, Quu, Qx,
-                           Qu, K, k, Quu_inv, Vxx, Vx)
-
-
 def _box_gains_value(preg, fs, gaps, u, lb, ub, th_grad, th_acc, warm, maxiter, general, Qxx, Qxu, Quu, Qx, Qu, K,
                      k, Quu_inv, Vxx, Vx):
-    """:func:`box_step` after the Q terms: the box QP, the gains and the value function."""
+    """A bounded node after its Q terms: the box QP, the gains and the value function; ``(ok, nfact, clamped)``."""
     nu = Quu.shape[0]
     x = warm * k
     free = np.empty(nu, dtype=np.bool_)
@@ -181,7 +174,6 @@ _chol_inverse = compiled(_chol_inverse)
 _free_set = compiled(_free_set)
 _box_qp = compiled(_box_qp)
 box_gains_value = compiled(_box_gains_value)
-box_step = compiled(_box_step)
 
 
 def _box_pass(daddr, saddr, dims, preg, gaps, boxed, lb, ub, u, uoff, th_grad, th_acc, warm, maxiter, general,

@@ -12,8 +12,9 @@ improvement ``dVexp(α) = α (d₀ + ½ α d₁)`` with ``d₀ = Σ Quᵀk``, ``
 stopping test is ``stop = |d₀ + ½ d₁| < th_stop`` on a feasible iterate.
 
 Subclass hooks: ``computeActionValueFunction``, ``computeGains`` and ``computeValueFunction`` are
-the three steps of one node of the backward pass, fused by the compiled
-:func:`~crocopy.solvers.riccati_kernel.riccati_step` while :func:`crocopy.kernels_enabled`.  A
+the three steps of one node of the backward pass; while :func:`crocopy.kernels_enabled` the whole
+recursion is one compiled call, :func:`~crocopy.solvers.riccati_kernel.riccati_pass`, on the solver's
+stacked arrays and the nodes' derivatives (:mod:`.horizon`).  A
 subclass that overrides any of them gets the numpy steps for the whole recursion (its override
 runs), logged once at DEBUG level on the ``"crocopy"`` logger.  ``forwardPass`` runs
 :meth:`SolverDDP._trial_rollout`, the rollout of the whole DDP family, parameterised by the gaps
@@ -333,10 +334,10 @@ class SolverDDP(SolverAbstract):
     def backwardPass(self) -> None:
         """Riccati recursion over the stored derivatives (fills Q terms, gains and value function).
 
-        Uses the compiled step of :mod:`.riccati_kernel` when :func:`crocopy.kernels_enabled` and no
+        Uses the compiled pass of :mod:`.riccati_kernel` when :func:`crocopy.kernels_enabled` and no
         subclass overrides a node step; otherwise the numpy steps below (same numbers to round-off).
         """
-        if kernels.active and self._kernel_applies(SolverDDP, "the compiled Riccati step"):
+        if kernels.active and self._kernel_applies(SolverDDP, "the compiled Riccati pass"):
             self._backward_pass_kernel()
         else:
             self._backward_pass_numpy()

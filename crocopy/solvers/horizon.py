@@ -1,32 +1,36 @@
 """The DDP family's backward pass in one compiled call: stacked solver buffers and the nodes' derivatives.
 
 One compiled call per backward pass (:func:`~crocopy.solvers.riccati_kernel.riccati_pass`,
-:func:`~crocopy.solvers.box_kernel.box_pass`) instead of one per node: the per-node dispatch of
-some twenty arrays to numba cost several µs, more than the node's arithmetic on small problems.
-The call receives two kinds of arrays.
+:func:`~crocopy.solvers.box_kernel.box_pass`) instead of one per node: numba's dispatch of some
+twenty arrays per node cost several µs, more than the node's arithmetic on small problems.  The call
+receives two integer tables of *addresses* (and the per-node dimensions :attr:`Horizon.dims`); the
+kernel views the memory there as arrays (``numba.carray``, :func:`crocopy.kernels.float64_pointer`),
+which costs nothing per node, where a numba typed list cost ~45 ns per item and a reshaped slice
+~40 ns.  The arrays are kept alive by the objects that list them.
 
-* **The solver's own** (``Vxx, Vx`` of the T+1 nodes; ``Qxx, Qxu, Quu, Qx, Qu, K, k`` and Box-DDP's
-  ``Quu_inv`` of the T running nodes; FDDP's ``Vxx fs`` and the gaps ``fs``): one flat float64
-  buffer :attr:`Horizon.buf`, with per-node offsets :attr:`Horizon.off` (``(T+1, NQ)``, columns
-  :data:`VXX` ... :data:`FS`).  The solver's lists (Crocoddyl's API) hold C-contiguous reshaped
-  views of their slices, so what the kernel writes is what ``solver.K[t]`` shows.  The solver
-  writes these arrays in place and never rebinds an entry; a rebound list (``solver.fs = ...``) is
-  copied into the buffer before the pass.
-* **The nodes' derivatives** (``Fx, Fu, Lxx, Lxu, Luu, Lx, Lu`` of ``problem.runningDatas``): two
-  numba typed lists (:class:`NodeDerivatives`), ``mats[5 t + j]`` for ``Fx, Fu, Lxx, Lxu, Luu``
-  and ``vecs[2 t + j]`` for ``Lx, Lu``, holding the datas' *own* arrays.  They are not moved into
-  a stack: a model's ``calcDiff`` keeps writing where it always did, and every writer (integrators,
-  action models, a cost sum sharing its memory with the data, squashing, control
-  parametrizations, a user's Python model) stays correct without an audit.  What the lists must
-  follow is a *rebinding*, ``data.Fx = M`` (Crocoddyl's bindings copy ``M`` into the existing
-  matrix; a plain Python attribute is rebound).  :class:`crocopy.watched.Watched` counts those on
-  the data classes, so the check before each pass is one list comparison (the same data objects?)
-  and one integer comparison (any rebinding since?); only when one fails are the arrays compared
-  one by one and the changed entries replaced.  A data class that does not watch an attribute (a
-  subclass turning it into a property or a slot) has that node compared at every pass, and an
-  array the kernel cannot read in place (not float64, not C-contiguous, or an ndarray subclass
-  that is not a view of one) is copied into a staging array at every pass.  Shapes are checked
-  when an entry is taken: the compiled pass trusts them.
+* **The solver's own arrays** (``Vxx, Vx`` of the T+1 nodes; ``Qxx, Qxu, Quu, Qx, Qu, K, k`` and
+  Box-DDP's ``Quu_inv`` of the T running nodes; FDDP's ``Vxx fs``; the gaps ``fs``): one flat float64
+  buffer :attr:`Horizon.buf` with per-node offsets :attr:`Horizon.off` (``(T+1, NQ)``, columns
+  :data:`VXX` ... :data:`FS`) and addresses :attr:`Horizon.addr`.  The solver's lists (Crocoddyl's
+  API) hold C-contiguous reshaped views of their slices, so what the kernel writes is what
+  ``solver.K[t]`` shows.  The solvers write these arrays in place and never rebind an entry; a
+  rebound ``solver.fs`` list is copied into the buffer before the pass.
+* **The nodes' derivatives** (``Fx, Fu, Lxx, Lxu, Luu, Lx, Lu`` of ``problem.runningDatas``):
+  :attr:`NodeDerivatives.addr` ``(T, 7)`` lists where the datas' *own* arrays are.  They are not
+  moved into a stack owned by the problem or the solver: a model's ``calcDiff`` keeps writing where
+  it always did, so every writer (integrators, action models, a cost sum sharing its memory with the
+  data, squashing, control parametrizations, a user's Python model) stays correct without relying on
+  an audit of all of them.  What the table must follow is a *rebinding*, ``data.Fx = M``
+  (Crocoddyl's bindings copy ``M`` into the existing matrix; in Python the attribute is rebound).
+  :class:`crocopy.watched.Watched` counts those on the data classes, so the check before each pass
+  is one list comparison (the same data objects?) and one integer comparison (any rebinding since?);
+  only when one fails are the arrays compared one by one and the changed rows rewritten.  A data
+  class that does not watch an attribute (a subclass turning it into a property or a slot) has its
+  node compared at every pass; an array the kernel cannot read in place (not float64 or not
+  C-contiguous) is copied into a staging array at every pass; shapes are checked when an array is
+  taken (a wrong size raises ValueError): the compiled pass trusts them.
+* A changed list of datas (``problem.updateModel``, ``circularAppend``) makes the solver follow the
+  problem first (``_sync_problem``: re-allocation when a node's dimensions changed).
 
 Nodes of different sizes share the buffers: each node has its own ``(ndx, nu)`` (an impulse node
 has ``nu = 0``: its ``Qu``, ``K``, ``k`` ... are empty and the kernel skips the gains).

@@ -1,20 +1,27 @@
-"""Compiled Riccati step of one node (numba), twin of the pure-numpy step in :mod:`.ddp`.
+"""Compiled Riccati backward pass (numba), twin of the pure-numpy node steps in :mod:`.ddp`.
 
-Computes, for node t with next value function ``(V'x, V'xx)`` (Crocoddyl signs)::
+:func:`riccati_pass` runs the whole recursion, t = T-1..0, in one call on the arrays listed by address
+(:mod:`.horizon`).  For node t with next value function ``(V'x, V'xx)`` (Crocoddyl signs)::
 
-    Qx = Lx + Fxᵀ V'x,  Qu = Lu + Fuᵀ V'x,  Qxx = Lxx + Fxᵀ V'xx Fx,
-    Qxu = Lxu + Fxᵀ V'xx Fu,  Quu = Luu + Fuᵀ V'xx Fu + preg I,
-    [k K] = L⁻ᵀ L⁻¹ [Qu Qux]  (Quu = L Lᵀ; L⁻¹ by LAPACK, the products by BLAS),
-    Vx = Qx - Qxu k,  Vxx = sym(Qxx - Qxu K) + preg I,  Vx += Vxx f  (if gaps are open)
+    Qx = Lx + Fxᵀ V'x,  Qu = Lu + Fuᵀ V'x,  Qxx = Lxx + (Fxᵀ V'xx) Fx,
+    Qxu = Lxu + (Fxᵀ V'xx) Fu,  Quu = Luu + (Fuᵀ V'xx) Fu + preg I,
+    [k K] = Quu⁻¹ [Qu Qux]  (Cholesky Quu = L Lᵀ and two triangular solves),
+    Vx = Qx - Kᵀ Qu,  Vxx = sym(Qxx - Qxu K) + preg I,  Vx += Vxx f  (if gaps are open)
+
+Nodes whose next tangent space is small (:data:`SMALL`) run loop kernels (no BLAS call, no allocation);
+larger ones :func:`riccati_step` (products by BLAS, ``L⁻¹`` by LAPACK).  A node without controls skips
+the gains.  The pass returns -1, or the first node (from the end) whose ``Quu`` is not positive definite
+or not finite (the caller tells them apart: it raises the regularisation, or stops on NaN/inf,
+:mod:`.nonfinite`).  :func:`expected_terms` gives FDDP's ``Σ Quᵀk - Σ Vxᵀf`` and
+``-Σ kᵀQuu k + Σ fᵀVxx f`` and stores ``Vxx f``.
 
 ``feedback_control(u, k, K, dx, α, lb, ub, out)`` writes the rollout's control
 ``clamp(u - α k - K dx, lb, ub)`` (infinite bounds for the unconstrained solvers).
 
-``riccati_step`` returns False when ``Quu`` is not positive definite or not finite (the caller
-tells them apart: it raises the regularisation, or stops on NaN/inf, :mod:`.nonfinite`).  Its
-numpy twin is the chain of :class:`~crocopy.solvers.ddp.SolverDDP`'s
-``computeActionValueFunction``, ``computeGains`` and ``computeValueFunction`` (Cholesky by LAPACK),
-``feedback_control``'s is :func:`feedback_control_numpy`; :mod:`crocopy.kernels` chooses.
+Numpy twins: the chain of :class:`~crocopy.solvers.ddp.SolverDDP`'s ``computeActionValueFunction``,
+``computeGains`` and ``computeValueFunction`` (Cholesky by LAPACK) over the horizon,
+:meth:`~crocopy.solvers.fddp.SolverFDDP.updateExpectedImprovement`, :func:`feedback_control_numpy`;
+:mod:`crocopy.kernels` chooses.
 """
 
 from __future__ import annotations
