@@ -157,47 +157,65 @@ matrix_at = compiled(_matrix_at)
 vector_at = compiled(_vector_at)
 
 
+def _mul(A, B, C, transpose):
+    """``C = A B``, or ``C = Aᵀ B`` if ``transpose``, in loops (``C`` is overwritten)."""
+    n, inner = (A.shape[1], A.shape[0]) if transpose else (A.shape[0], A.shape[1])
+    C[:, :] = 0.0
+    for i in range(n):
+        for p in range(inner):
+            a = A[p, i] if transpose else A[i, p]
+            for j in range(B.shape[1]):
+                C[i, j] += a * B[p, j]
+
+
+def _tvec(A, v, y):
+    """``y = Aᵀ v`` in loops."""
+    for i in range(A.shape[1]):
+        acc = 0.0
+        for p in range(A.shape[0]):
+            acc += A[p, i] * v[p]
+        y[i] = acc
+
+
+mul = compiled(_mul)
+tvec = compiled(_tvec)
+
+
 def _q_terms_loops(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu, W, Wu):
     """:func:`action_value_function` by loops (no BLAS call, no allocation) with the scratch
     ``W (ndx, ndx')``, ``Wu (nu, ndx')`` for ``Fxᵀ V'xx``, ``Fuᵀ V'xx`` (same association as the twin)."""
-    n1, n, m = Fx.shape[0], Fx.shape[1], Fu.shape[1]
-    W[:, :] = 0.0
-    Wu[:, :] = 0.0
-    for p in range(n1):
-        for i in range(n):
-            a = Fx[p, i]
-            for j in range(n1):
-                W[i, j] += a * Vxx_n[p, j]
-        for i in range(m):
-            a = Fu[p, i]
-            for j in range(n1):
-                Wu[i, j] += a * Vxx_n[p, j]
-    Qxx[:, :] = 0.0
-    Qxu[:, :] = 0.0
-    Quu[:, :] = 0.0
-    for i in range(n):
-        acc = 0.0
-        for p in range(n1):
-            acc += Fx[p, i] * Vx_n[p]
-            a = W[i, p]
-            for j in range(n):
-                Qxx[i, j] += a * Fx[p, j]
-            for j in range(m):
-                Qxu[i, j] += a * Fu[p, j]
-        Qx[i] = Lx[i] + acc
-    for i in range(m):
-        acc = 0.0
-        for p in range(n1):
-            acc += Fu[p, i] * Vx_n[p]
-            a = Wu[i, p]
-            for j in range(m):
-                Quu[i, j] += a * Fu[p, j]
-        Qu[i] = Lu[i] + acc
+    mul(Fx, Vxx_n, W, True)
+    mul(Fu, Vxx_n, Wu, True)
+    mul(W, Fx, Qxx, False)
+    mul(W, Fu, Qxu, False)
+    mul(Wu, Fu, Quu, False)
+    tvec(Fx, Vx_n, Qx)
+    tvec(Fu, Vx_n, Qu)
     Qxx += Lxx
     Qxu += Lxu
     Quu += Luu
-    for i in range(m):
+    Qx += Lx
+    Qu += Lu
+    for i in range(Quu.shape[0]):
         Quu[i, i] += preg
+
+
+def _triangular_solve(L, R, transpose):
+    """``R ← L⁻¹ R``, or ``R ← L⁻ᵀ R`` if ``transpose``, in loops (``L`` lower triangular)."""
+    m = R.shape[0]
+    for s in range(m):
+        i = m - 1 - s if transpose else s
+        lo, hi = (i + 1, m) if transpose else (0, i)
+        for p in range(lo, hi):
+            a = L[p, i] if transpose else L[i, p]
+            for j in range(R.shape[1]):
+                R[i, j] -= a * R[p, j]
+        d = L[i, i]
+        for j in range(R.shape[1]):
+            R[i, j] /= d
+
+
+triangular_solve = compiled(_triangular_solve)
 
 
 def _gains_loops(Quu, Qu, Qxu, K, k, idx, L, R):
@@ -210,22 +228,8 @@ def _gains_loops(Quu, Qu, Qxu, K, k, idx, L, R):
         for j in range(n):
             R[i, j] = Qxu[j, i]
         R[i, n] = Qu[i]
-    for i in range(m):
-        for p in range(i):
-            a = L[i, p]
-            for j in range(n + 1):
-                R[i, j] -= a * R[p, j]
-        d = L[i, i]
-        for j in range(n + 1):
-            R[i, j] /= d
-    for i in range(m - 1, -1, -1):
-        for p in range(i + 1, m):
-            a = L[p, i]
-            for j in range(n + 1):
-                R[i, j] -= a * R[p, j]
-        d = L[i, i]
-        for j in range(n + 1):
-            R[i, j] /= d
+    triangular_solve(L, R, False)
+    triangular_solve(L, R, True)
     for i in range(m):
         for j in range(n):
             K[i, j] = R[i, j]
@@ -235,17 +239,11 @@ def _gains_loops(Quu, Qu, Qxu, K, k, idx, L, R):
 
 def _value_loops(Qxx, Qxu, Qx, Qu, K, Vxx, Vx):
     """``Vxx = Qxx - Qxu K``, ``Vx = Qx - Kᵀ Qu`` in loops (before :func:`finish_value_function`)."""
-    n, m = Qxu.shape[0], Qxu.shape[1]
-    Vxx[:, :] = 0.0
-    for i in range(n):
-        acc = 0.0
-        for p in range(m):
-            acc += K[p, i] * Qu[p]
-            a = Qxu[i, p]
-            for j in range(n):
-                Vxx[i, j] += a * K[p, j]
-        Vx[i] = Qx[i] - acc
-        for j in range(n):
+    mul(Qxu, K, Vxx, False)
+    tvec(K, Qu, Vx)
+    for i in range(Vxx.shape[0]):
+        Vx[i] = Qx[i] - Vx[i]
+        for j in range(Vxx.shape[1]):
             Vxx[i, j] = Qxx[i, j] - Vxx[i, j]
 
 
