@@ -223,3 +223,73 @@ def test_registry_solves_with_kernels_and_with_twins_agree(name, Solver):
     compiled, twin = trace(True), trace(False)
     assert compiled[0] == twin[0] and len(compiled[1]) == len(twin[1]) > 0
     np.testing.assert_allclose(compiled[1], twin[1], rtol=1e-9)
+
+
+@pytest.mark.parametrize("Solver", SOLVERS, ids=lambda S: S.__name__)
+def test_a_deep_copy_of_a_solver_has_its_own_buffer(Solver):
+    import copy
+    import pickle
+
+    problem = _lqr_mixed(True)
+    solver = Solver(problem)
+    solver.solve(None, None, 3)
+    for make in (copy.deepcopy, lambda s: pickle.loads(pickle.dumps(s))):
+        twin = make(solver)
+        h = twin._horizon
+        assert h is not solver._horizon
+        for name in ("Vxx", "K", "k", "fs"):
+            for a, b in zip(getattr(twin, name), getattr(solver, name), strict=True):
+                assert a.base is h.buf
+                np.testing.assert_array_equal(a, b)
+        assert twin.solve(None, None, 50) == solver.solve(None, None, 50)
+        assert twin.iter == solver.iter
+        np.testing.assert_allclose(twin.cost, solver.cost, rtol=1e-12)
+
+
+def test_a_rebound_gap_list_is_read():
+    problem = _lqr_mixed(False)
+    solver = crocopy.SolverFDDP(problem)
+    xs, us = _iterate(problem, False, seed=2)
+    solver.setCandidate(xs, us, False)
+    solver.calcDiff()
+    solver.fs = [f.copy() for f in solver.fs]  # no longer the buffer's views
+    with crocopy.use_kernels(True):
+        solver.computeDirection(False)
+    compiled = [V.copy() for V in solver.Vx]
+    with crocopy.use_kernels(False):
+        solver.computeDirection(False)
+    assert any(np.abs(f).sum() > 0 for f in solver.fs)
+    for a, b in zip(compiled, solver.Vx, strict=True):
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12)
+
+
+class _PropertyData(crocopy.ActionDataAbstract):
+    """A data class whose ``Lx`` is a property: its rebinding is not counted, its node is compared each pass."""
+
+    @property
+    def Lx(self):
+        return self._lx
+
+    @Lx.setter
+    def Lx(self, value):
+        self._lx = value
+
+
+class _PropertyLQR(_RebindingLQR):
+    def createData(self):
+        return _PropertyData(self)
+
+
+def test_a_data_class_that_does_not_watch_its_arrays_is_compared_at_each_pass():
+    def solve(kernels_on: bool):
+        models = [_PropertyLQR(1) for _ in range(6)]
+        problem = crocopy.ShootingProblem(np.array([1.0, -0.5, 0.3]), models, _PropertyLQR(1))
+        solver = crocopy.SolverFDDP(problem)
+        with crocopy.use_kernels(kernels_on):
+            solver.solve(None, None, 20)
+        return solver
+
+    assert not watched.watches(_PropertyData, "Lx") and watched.watches(_PropertyData, "Fx")
+    compiled, twin = solve(True), solve(False)
+    assert compiled.iter == twin.iter
+    np.testing.assert_allclose(compiled.cost, twin.cost, rtol=1e-12)

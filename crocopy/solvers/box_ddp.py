@@ -86,12 +86,17 @@ class BoxSolverMixin:
     def _allocate_box(self) -> None:
         """Per-node box buffers, and one box QP per control dimension (kept across re-allocations)."""
         problem = self.problem
-        self.Quu_inv = self._horizon.views(horizon.QUU_INV, running=True)
         for m in problem.runningModels:
             if m.nu and m.nu not in self._qps:
                 qp = self._qps[m.nu] = BoxQP(m.nu, maxiter=100, th_acceptStep=0.1, th_grad=1e-5, reg=0.0)
                 qp.compat_crocoddyl = self._compat
         self._clamped = np.zeros(problem.T, dtype=np.bool_)
+
+    _views = (*SolverDDP._views, "Quu_inv")
+
+    def _bind_views(self) -> None:
+        super()._bind_views()
+        self.Quu_inv = self._horizon.views(horizon.QUU_INV, running=True)
 
     def _on_problem_change(self) -> bool:
         changed = super()._on_problem_change()

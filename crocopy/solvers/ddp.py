@@ -101,21 +101,39 @@ class SolverDDP(SolverAbstract):
         """The per-node arrays: views of one :class:`~crocopy.solvers.horizon.Horizon` buffer (zeros)."""
         problem = self.problem
         models = [*problem.runningModels, problem.terminalModel]
-        h = self._horizon = Horizon([m.state.ndx for m in models], [m.nu for m in problem.runningModels])
+        self._horizon = Horizon([m.state.ndx for m in models], [m.nu for m in problem.runningModels])
         self._node_dims = [(m.state.ndx, m.nu) for m in problem.runningModels]
         self._derivatives = NodeDerivatives(problem.runningDatas)
-        self.Vxx, self.Vx, self.fs = h.views(horizon.VXX), h.views(horizon.VX), h.views(horizon.FS)
-        self._fs_views = self.fs
-        self.Qxx, self.Qxu, self.Quu, self.Qx, self.Qu, self.K, self.k = (
-            h.views(j, running=True)
-            for j in (horizon.QXX, horizon.QXU, horizon.QUU, horizon.QX, horizon.QU, horizon.KM, horizon.KV)
-        )
+        self._bind_views()
         self._dx_try: list = [None] * (problem.T + 1)  # x_try ⊖ x of the last rollout, where it computed it
         self.xs_try = [m.state.zero() for m in models]
         self.us_try = [np.zeros(m.nu) for m in problem.runningModels]
         self._rhs = [np.zeros((m.nu, 1 + m.state.ndx)) for m in problem.runningModels]
         self._unbounded = {m.nu: (np.full(m.nu, -np.inf), np.full(m.nu, np.inf)) for m in problem.runningModels}
         self._synced = False
+
+    _views = ("Vxx", "Vx", "fs", "_fs_views", "Qxx", "Qxu", "Quu", "Qx", "Qu", "K", "k")
+    """Attributes holding views of the horizon's buffer: not pickled, bound again to the copy's buffer."""
+
+    def _bind_views(self) -> None:
+        """Point the per-node lists at the views of :attr:`_horizon` (after allocating or unpickling)."""
+        h = self._horizon
+        self.Vxx, self.Vx, self.fs = h.views(horizon.VXX), h.views(horizon.VX), h.views(horizon.FS)
+        self._fs_views = self.fs
+        self.Qxx, self.Qxu, self.Quu, self.Qx, self.Qu, self.K, self.k = (
+            h.views(j, running=True)
+            for j in (horizon.QXX, horizon.QXU, horizon.QUU, horizon.QX, horizon.QU, horizon.KM, horizon.KV)
+        )
+
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        for name in self._views:
+            state.pop(name, None)
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._bind_views()
 
     # ------------------------------------------------------------------ regularisation
     def increaseRegularization(self) -> None:

@@ -25,7 +25,6 @@ class SolverFDDP(SolverDDP):
         self.th_acceptNegStep = 2.0
         self._dg = 0.0
         self._dq = 0.0
-        self._Vxx_f: list[np.ndarray] = []
 
     def _accept(self, alpha: float) -> bool:
         if self.dVexp >= 0:
@@ -41,9 +40,12 @@ class SolverFDDP(SolverDDP):
         super().computeDirection(recalc)
         self.updateExpectedImprovement()
 
-    def _allocate(self) -> None:
-        super()._allocate()
+    _views = (*SolverDDP._views, "_Vxx_f_views", "_Vxx_f")
+
+    def _bind_views(self) -> None:
+        super()._bind_views()
         self._Vxx_f_views = self._horizon.views(horizon.VXX_F)
+        self._Vxx_f: list[np.ndarray] = []
 
     def updateExpectedImprovement(self) -> None:
         """Parts of the expected improvement that do not depend on the trial step (compiled while

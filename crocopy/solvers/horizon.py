@@ -82,6 +82,14 @@ class Horizon:
         """Where each array starts in memory (the kernels read them by address)."""
         self._views = [[self._view(t, j, shapes[t][j]) for t in range(T + 1)] for j in range(NQ)]
 
+    def __getstate__(self) -> dict:
+        return {"dims": self.dims, "buf": self.buf}
+
+    def __setstate__(self, state: dict) -> None:
+        dims = state["dims"]
+        self.__init__(dims[:, 0], dims[:-1, 1])
+        self.buf[:] = state["buf"]
+
     def _view(self, t: int, j: int, shape: tuple) -> np.ndarray:
         start = self.off[t, j]
         return self.buf[start:start + int(np.prod(shape))].reshape(shape)
@@ -117,6 +125,10 @@ class NodeDerivatives:
         self._staged: list[tuple[int, str, np.ndarray]] = []
         self.addr = np.zeros((0, len(NAMES)), dtype=np.int64)
         self._kept: list[list] = []
+
+    def __reduce__(self) -> tuple:
+        """A copy lists nothing yet (addresses are not valid in another process or object)."""
+        return NodeDerivatives, ([],)
 
     def same_datas(self, datas: list) -> bool:
         """True when ``datas`` are the data objects given last (at construction or to :meth:`update`)."""
