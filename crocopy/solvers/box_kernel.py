@@ -23,14 +23,17 @@ import numpy as np
 from ..kernels import compiled
 from .horizon import QUU_INV
 from .riccati_kernel import (
+    SMALL,
     cholesky_lower,
     finish_value_function,
     matrix_at,
+    mul,
     node_arrays,
     node_riccati,
     q_arrays,
     q_terms,
     scratch,
+    value_loops,
 )
 
 
@@ -68,6 +71,15 @@ def _free_set(x, g, lb, ub, free):
     return changed
 
 
+def _gradient(H, q, x, g):
+    """``g = q + H x`` in loops."""
+    for i in range(x.size):
+        acc = 0.0
+        for j in range(x.size):
+            acc += H[i, j] * x[j]
+        g[i] = q[i] + acc
+
+
 def _box_qp(H, q, lb, ub, x, th_grad, th_acc, maxiter, free, Hinv):
     """Projected Newton in place on ``x`` (``reg = 0``); returns (ok, nfact, nf) with ``Hinv[:nf,:nf]`` for ``free``.
 
@@ -79,10 +91,11 @@ def _box_qp(H, q, lb, ub, x, th_grad, th_acc, maxiter, free, Hinv):
         x[j] = min(max(x[j], lb[j]), ub[j])
     dx = np.empty(n)
     xa = np.empty(n)
+    g = np.empty(n)
     nf = -1
     nfact = 0
     for _ in range(maxiter):
-        g = q + H @ x
+        _gradient(H, q, x, g)
         changed = _free_set(x, g, lb, ub, free) or nf < 0
         if changed:
             nf = 0
@@ -104,14 +117,23 @@ def _box_qp(H, q, lb, ub, x, th_grad, th_acc, maxiter, free, Hinv):
             for b in range(nf):
                 s += Hinv[a, b] * g[idx[b]]
             dx[idx[a]] = -s
-        fold = 0.5 * (x @ (g + q))
+        fold = 0.0
+        for j in range(n):
+            fold += x[j] * (g[j] + q[j])
+        fold *= 0.5
         accepted = False
         alpha = 1.0
         for _i in range(10):
             for j in range(n):
                 xa[j] = min(max(x[j] + alpha * dx[j], lb[j]), ub[j])
-            fnew = 0.5 * (xa @ (H @ xa)) + q @ xa
-            if fold - fnew >= th_acc * (g @ (x - xa)):
+            fnew, decrease = 0.0, 0.0
+            for i in range(n):
+                acc = 0.0
+                for j in range(n):
+                    acc += H[i, j] * xa[j]
+                fnew += 0.5 * xa[i] * acc + q[i] * xa[i]
+                decrease += g[i] * (x[i] - xa[i])
+            if fold - fnew >= th_acc * decrease:
                 accepted = True
                 break
             alpha *= 0.5
@@ -121,7 +143,7 @@ def _box_qp(H, q, lb, ub, x, th_grad, th_acc, maxiter, free, Hinv):
         if gmax <= th_grad:
             break
     if nf < 0:  # maxiter = 0
-        g = q + H @ x
+        _gradient(H, q, x, g)
         _free_set(x, g, lb, ub, free)
         nf = 0
         for j in range(n):
@@ -156,14 +178,21 @@ def _box_gains_value(preg, fs, gaps, u, lb, ub, th_grad, th_acc, warm, maxiter, 
     for a in range(nf):
         for b in range(nf):
             Quu_inv[fidx[a], fidx[b]] = Hinv[a, b]
-    K[:, :] = Quu_inv @ Qxu.T
+    small = Qxx.shape[0] <= SMALL
+    if small:
+        mul(Quu_inv, Qxu.T, K, False)
+    else:
+        K[:, :] = Quu_inv @ Qxu.T
     clamped = nf < nu
     if clamped and not general:
         for j in range(nu):
             if not free[j]:
                 Qu[j] = 0.0
-    Vxx[:, :] = Qxx - Qxu @ K
-    Vx[:] = Qx - K.T @ Qu
+    if small:
+        value_loops(Qxx, Qxu, Qx, Qu, K, Vxx, Vx)
+    else:
+        Vxx[:, :] = Qxx - Qxu @ K
+        Vx[:] = Qx - K.T @ Qu
     if clamped and general:
         Vx[:] += K.T @ (Quu @ k) - Qxu @ k
     finish_value_function(Vxx, Vx, preg, fs, gaps)
@@ -172,6 +201,7 @@ def _box_gains_value(preg, fs, gaps, u, lb, ub, th_grad, th_acc, warm, maxiter, 
 
 _chol_inverse = compiled(_chol_inverse)
 _free_set = compiled(_free_set)
+_gradient = compiled(_gradient)
 _box_qp = compiled(_box_qp)
 box_gains_value = compiled(_box_gains_value)
 
