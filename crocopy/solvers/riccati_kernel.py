@@ -184,19 +184,43 @@ tvec = compiled(_tvec)
 def _q_terms_loops(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu, W, Wu):
     """:func:`action_value_function` by loops (no BLAS call, no allocation) with the scratch
     ``W (ndx, ndx')``, ``Wu (nu, ndx')`` for ``Fxᵀ V'xx``, ``Fuᵀ V'xx`` (same association as the twin)."""
-    mul(Fx, Vxx_n, W, True)
-    mul(Fu, Vxx_n, Wu, True)
-    mul(W, Fx, Qxx, False)
-    mul(W, Fu, Qxu, False)
-    mul(Wu, Fu, Quu, False)
-    tvec(Fx, Vx_n, Qx)
-    tvec(Fu, Vx_n, Qu)
+    n1, n, m = Fx.shape[0], Fx.shape[1], Fu.shape[1]
+    W[:, :] = 0.0
+    Wu[:, :] = 0.0
+    for p in range(n1):
+        for i in range(n):
+            a = Fx[p, i]
+            for j in range(n1):
+                W[i, j] += a * Vxx_n[p, j]
+        for i in range(m):
+            a = Fu[p, i]
+            for j in range(n1):
+                Wu[i, j] += a * Vxx_n[p, j]
+    Qxx[:, :] = 0.0
+    Qxu[:, :] = 0.0
+    Quu[:, :] = 0.0
+    for i in range(n):
+        acc = 0.0
+        for p in range(n1):
+            acc += Fx[p, i] * Vx_n[p]
+            a = W[i, p]
+            for j in range(n):
+                Qxx[i, j] += a * Fx[p, j]
+            for j in range(m):
+                Qxu[i, j] += a * Fu[p, j]
+        Qx[i] = Lx[i] + acc
+    for i in range(m):
+        acc = 0.0
+        for p in range(n1):
+            acc += Fu[p, i] * Vx_n[p]
+            a = Wu[i, p]
+            for j in range(m):
+                Quu[i, j] += a * Fu[p, j]
+        Qu[i] = Lu[i] + acc
     Qxx += Lxx
     Qxu += Lxu
     Quu += Luu
-    Qx += Lx
-    Qu += Lu
-    for i in range(Quu.shape[0]):
+    for i in range(m):
         Quu[i, i] += preg
 
 
