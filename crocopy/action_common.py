@@ -19,6 +19,7 @@ import numpy as np
 from .guards import Guard, Guarded, unchecked
 from .state import StateAbstract
 from .validation import as_count, as_vector, control_arg, data_arg, state_arg, warn_nonfinite
+from .watched import Watched
 
 
 def check_state_and_nu(state: StateAbstract, nu: int) -> int:
@@ -251,7 +252,12 @@ class ActionModelBase(ControlLimitsMixin, Guarded):
 class ActionDataBase:
     """Cost ``cost``, residual ``r (nr,)``, dynamics Jacobians ``Fx (nf, ndx)``, ``Fu (nf, nu)``, cost
     derivatives ``Lx, Lu, Lxx, Lxu, Luu`` and constraints ``g, Gx, Gu`` (``max(ng, ng_T)`` rows),
-    ``h, Hx, Hu`` (``max(nh, nh_T)`` rows)."""
+    ``h, Hx, Hu`` (``max(nh, nh_T)`` rows).
+
+    Rebinding a derivative (``data.Fx = M``) is counted (:mod:`crocopy.watched`): the solvers' compiled
+    backward pass holds these arrays and looks at them again after one."""
+
+    Fx, Fu, Lx, Lu, Lxx, Lxu, Luu = (Watched() for _ in range(7))
 
     def __init__(self, model: ActionModelBase, nf: int) -> None:
         ndx, nu = model.state.ndx, model.nu

@@ -1,15 +1,16 @@
 """The compiled kernels: the one place that imports numba, and the library-wide switch.
 
-Hot inner loops (a node's Riccati step, the box-QP node step, the rollout's control update, the
-cost stack's activations and Gauss-Newton sums, Euler's step and chain rule) exist twice: as a
-numba-compiled kernel and as a numpy twin that gives the same numbers to round-off (tested to
-1e-12).  Each kernel lives beside its twin:
+Hot inner loops (the backward pass, with or without box QPs, the FDDP expected improvement, the rollout's
+control update, the cost stack's activations and Gauss-Newton sums, Euler's step and chain rule) exist twice:
+as a numba-compiled kernel and as a numpy twin that gives the same numbers to round-off (tested to 1e-12).
+Each kernel lives beside its twin:
 
 =====================================  ==========================================================
-``solvers/riccati_kernel.py``          ``riccati_step`` (twin: ``SolverDDP.computeActionValueFunction``,
-                                       ``computeGains``, ``computeValueFunction``);
+``solvers/riccati_kernel.py``          ``riccati_pass`` (twin: ``SolverDDP.computeActionValueFunction``,
+                                       ``computeGains``, ``computeValueFunction`` over the horizon);
+                                       ``expected_terms`` (twin: ``SolverFDDP.updateExpectedImprovement``);
                                        ``feedback_control`` / ``feedback_control_numpy``
-``solvers/box_kernel.py``              ``box_step`` (twin: ``BoxSolverMixin.computeGains`` with
+``solvers/box_kernel.py``              ``box_pass`` (twin: ``BoxSolverMixin.computeGains`` with
                                        :class:`~crocopy.solvers.box_qp.BoxQP`)
 ``costs/stack_kernel.py``              ``activation_values``, ``activation_derivatives``,
                                        ``accumulate`` and their ``*_numpy`` twins
@@ -57,6 +58,7 @@ from .user_cache import user_cache_dir
 
 try:
     import numba
+    import numba.extending
 except ImportError:  # pragma: no cover - exercised only without numba (tested in a subprocess)
     numba = None
 
@@ -104,6 +106,21 @@ def compiled(function: Callable) -> Callable:
         numba.config.CACHE_DIR = previous
     KERNELS.append(kernel)
     return kernel
+
+
+def _float64_pointer(typingctx, address):
+    """numba intrinsic: the integer ``address`` as a ``float64*`` (for ``numba.carray``), so that a kernel
+    reads arrays listed by address.  The caller keeps those arrays alive."""
+    signature = numba.types.CPointer(numba.types.float64)(address)
+
+    def codegen(context, builder, sig, args):
+        return builder.inttoptr(args[0], context.get_value_type(sig.return_type))
+
+    return signature, codegen
+
+
+float64_pointer = numba.extending.intrinsic(_float64_pointer) if available else _float64_pointer
+carray = numba.carray if available else None
 
 
 def is_cached(kernel: object) -> bool:

@@ -122,9 +122,9 @@ def _solve_arm():
 
 # (module, kernel, numpy twin or None when the twin is a chain of methods, workload)
 CONSUMERS = [
-    (riccati_kernel, "riccati_step", None, _solve_lqr_ddp),
+    (riccati_kernel, "riccati_pass", None, _solve_lqr_ddp),
     (riccati_kernel, "feedback_control", "feedback_control_numpy", _solve_lqr_ddp),
-    (box_kernel, "box_step", None, _solve_box),
+    (box_kernel, "box_pass", None, _solve_box),
     (stack_kernel, "activation_values", "activation_values_numpy", _solve_arm),
     (stack_kernel, "activation_derivatives", "activation_derivatives_numpy", _solve_arm),
     (stack_kernel, "accumulate", "accumulate_numpy", _solve_arm),
@@ -216,7 +216,7 @@ def test_forcing_the_availability_flag_off_uses_the_twins(monkeypatch):
         crocopy.set_kernels(True)
     with crocopy.use_kernels(False):
         assert not crocopy.kernels_enabled()
-    box = _count(monkeypatch, box_kernel, "box_step")
+    box = _count(monkeypatch, box_kernel, "box_pass")
     feedback = _count(monkeypatch, riccati_kernel, "feedback_control")
     without = _trace(_unicycle_problem, crocopy.SolverBoxFDDP, 100)
     assert not box and not feedback

@@ -48,8 +48,8 @@ iterates to round-off (``crocopy bench --box-parity``):
 
 Crocopy extensions: ``compat_crocoddyl``; ``nfactorizations`` and ``nqp`` count box-QP Cholesky
 factorizations and QP solves since the last ``solve``.  While :func:`crocopy.kernels_enabled` the
-recursion runs the compiled node steps of :mod:`.box_kernel`, which give the numpy path's numbers to
-round-off; a subclass that overrides ``computeActionValueFunction``, ``computeGains`` or
+recursion is one compiled call, :func:`.box_kernel.box_pass` (:mod:`.horizon`), which gives the numpy
+path's numbers to round-off; a subclass that overrides ``computeActionValueFunction``, ``computeGains`` or
 ``computeValueFunction`` gets the numpy steps (logged once at DEBUG level on the ``"crocopy"`` logger).
 """
 
@@ -60,7 +60,7 @@ import numpy as np
 from .. import kernels
 from ..shooting import ShootingProblem
 from ..validation import check_bounds
-from . import box_kernel
+from . import box_kernel, horizon
 from .base import BackwardPassError
 from .box_qp import BoxQP, BoxQPError
 from .ddp import SolverDDP
@@ -86,12 +86,17 @@ class BoxSolverMixin:
     def _allocate_box(self) -> None:
         """Per-node box buffers, and one box QP per control dimension (kept across re-allocations)."""
         problem = self.problem
-        self.Quu_inv = [np.zeros((m.nu, m.nu)) for m in problem.runningModels]
         for m in problem.runningModels:
             if m.nu and m.nu not in self._qps:
                 qp = self._qps[m.nu] = BoxQP(m.nu, maxiter=100, th_acceptStep=0.1, th_grad=1e-5, reg=0.0)
                 qp.compat_crocoddyl = self._compat
-        self._clamped = [False] * problem.T
+        self._clamped = np.zeros(problem.T, dtype=np.bool_)
+
+    _views = (*SolverDDP._views, "Quu_inv")
+
+    def _bind_views(self) -> None:
+        super()._bind_views()
+        self.Quu_inv = self._horizon.views(horizon.QUU_INV, running=True)
 
     def _on_problem_change(self) -> bool:
         changed = super()._on_problem_change()
@@ -100,7 +105,8 @@ class BoxSolverMixin:
         return changed
 
     def _read_bounds(self) -> None:
-        """Fetch and check every running model's control bounds (called at each ``solve``)."""
+        """Fetch and check every running model's control bounds (called at each ``solve``); also stacked
+        for the compiled pass (infinite where a node is unbounded)."""
         self._lb, self._ub = [], []
         for t, m in enumerate(self.problem.runningModels):
             lb, ub = np.asarray(m.u_lb, dtype=float), np.asarray(m.u_ub, dtype=float)
@@ -112,6 +118,16 @@ class BoxSolverMixin:
             bounded = m.nu > 0 and bool(np.isfinite(lb).any() or np.isfinite(ub).any())
             self._lb.append(lb if bounded else None)
             self._ub.append(ub if bounded else None)
+        nus = [m.nu for m in self.problem.runningModels]
+        self._uoff = np.concatenate(([0], np.cumsum(nus, dtype=np.int64)))
+        self._bounded = np.array([lb is not None for lb in self._lb], dtype=np.bool_)
+        self._unboxed = np.zeros(len(nus), dtype=np.bool_)
+        self._lb_stack = np.concatenate([np.full(n, -np.inf) if lb is None else lb for n, lb in zip(nus, self._lb)]
+                                        or [np.zeros(0)])
+        self._ub_stack = np.concatenate([np.full(n, np.inf) if ub is None else ub for n, ub in zip(nus, self._ub)]
+                                        or [np.zeros(0)])
+        self._us_stack = np.zeros(self._uoff[-1])
+        self._bounds_for = self._horizon
 
     def _start(self, init_xs, init_us, is_feasible: bool, init_reg) -> None:
         self._read_bounds()
@@ -146,46 +162,38 @@ class BoxSolverMixin:
         return self._kernel_fact + sum(qp.nfactorizations for qp in self._qps.values())
 
     def backwardPass(self) -> None:
-        """Riccati recursion with box-QP gains; compiled node steps while :func:`crocopy.kernels_enabled`.
+        """Riccati recursion with box-QP gains; one compiled call while :func:`crocopy.kernels_enabled`.
 
-        The compiled path (:func:`.box_kernel.box_step`, :func:`.riccati_kernel.riccati_step`) gives the
-        numbers of the node steps ``computeActionValueFunction`` / ``computeGains`` /
-        ``computeValueFunction`` to round-off; a subclass overriding one of them gets the numpy steps
-        (logged once at DEBUG level on the ``"crocopy"`` logger).
+        The compiled pass (:func:`.box_kernel.box_pass`) gives the numbers of the node steps
+        ``computeActionValueFunction`` / ``computeGains`` / ``computeValueFunction`` to round-off; a subclass
+        overriding one of them gets the numpy steps (logged once at DEBUG level on the ``"crocopy"`` logger).
         """
-        if kernels.active and self._kernel_applies(SolverBoxDDP, "the compiled box-QP node step"):
+        if kernels.active and self._kernel_applies(SolverBoxDDP, "the compiled box-QP backward pass"):
             self._backward_pass_kernel()
         else:
             self._backward_pass_numpy()
 
-    def _kernel_node(self, preg: float, gaps: bool):
-        """This pass's compiled node step: :func:`.box_kernel.box_step` at the bounded nodes of a
-        feasible iterate, the Riccati step elsewhere."""
-        riccati = super()._kernel_node(preg, gaps)
-        box_mode, compat, general = self._box_mode(), self._compat, bool(self.general_value_update)
-        warm = 1.0 if compat else -1.0
-        step = box_kernel.box_step
-        lbs, ubs, us, qps, clamped = self._lb, self._ub, self.us, self._qps, self._clamped
-        Qxx, Qxu, Quu, Qx, Qu, K, k, Quu_inv, Vxx, Vx, fs = (
-            self.Qxx, self.Qxu, self.Quu, self.Qx, self.Qu, self.K, self.k, self.Quu_inv, self.Vxx, self.Vx, self.fs
+    def _compiled_pass(self, daddr: np.ndarray, preg: float, gaps: bool) -> int:
+        """:func:`.box_kernel.box_pass`: the box QP at the bounded nodes of a feasible iterate, the Riccati
+        step elsewhere; -1, or the first node (from the end) whose gains failed."""
+        if self._bounds_for is not self._horizon:  # re-allocated since the bounds were read
+            self._read_bounds()
+        boxed = self._bounded if self._box_mode() else self._unboxed
+        if boxed is self._bounded and self.us:
+            np.concatenate(self.us, out=self._us_stack)
+        compat = self._compat
+        qp = next(iter(self._qps.values()), None)  # the QPs of every control size share their settings
+        th_grad, th_acc, maxiter = (1e-5, 0.1, 100) if qp is None else (qp.th_grad, qp.th_acceptStep, qp.maxiter)
+        counts = np.zeros(2, dtype=np.int64)
+        h = self._horizon
+        t = box_kernel.box_pass(
+            daddr, h.addr, h.dims, preg, gaps, boxed, self._lb_stack, self._ub_stack, self._us_stack,
+            self._uoff, th_grad, -th_acc if compat else th_acc, 1.0 if compat else -1.0, maxiter,
+            bool(self.general_value_update), self._clamped, counts,
         )
-
-        def node(t: int, d) -> bool:
-            lb = lbs[t]
-            if lb is None or not box_mode:
-                clamped[t] = False
-                return riccati(t, d)
-            qp = qps[lb.size]
-            ok, nfact, clamped[t] = step(
-                d.Fx, d.Fu, d.Lxx, d.Lxu, d.Luu, d.Lx, d.Lu, Vxx[t + 1], Vx[t + 1], preg, fs[t], gaps, us[t], lb,
-                ubs[t], qp.th_grad, -qp.th_acceptStep if compat else qp.th_acceptStep, warm, qp.maxiter, general,
-                Qxx[t], Qxu[t], Quu[t], Qx[t], Qu[t], K[t], k[t], Quu_inv[t], Vxx[t], Vx[t],
-            )
-            self._kernel_fact += nfact
-            self.nqp += 1
-            return ok
-
-        return node
+        self._kernel_fact += int(counts[0])
+        self.nqp += int(counts[1])
+        return t
 
     def _box_mode(self) -> bool:
         return self.isFeasible

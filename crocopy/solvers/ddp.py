@@ -12,8 +12,9 @@ improvement ``dVexp(α) = α (d₀ + ½ α d₁)`` with ``d₀ = Σ Quᵀk``, ``
 stopping test is ``stop = |d₀ + ½ d₁| < th_stop`` on a feasible iterate.
 
 Subclass hooks: ``computeActionValueFunction``, ``computeGains`` and ``computeValueFunction`` are
-the three steps of one node of the backward pass, fused by the compiled
-:func:`~crocopy.solvers.riccati_kernel.riccati_step` while :func:`crocopy.kernels_enabled`.  A
+the three steps of one node of the backward pass; while :func:`crocopy.kernels_enabled` the whole
+recursion is one compiled call, :func:`~crocopy.solvers.riccati_kernel.riccati_pass`, on the solver's
+stacked arrays and the nodes' derivatives (:mod:`.horizon`).  A
 subclass that overrides any of them gets the numpy steps for the whole recursion (its override
 runs), logged once at DEBUG level on the ``"crocopy"`` logger.  ``forwardPass`` runs
 :meth:`SolverDDP._trial_rollout`, the rollout of the whole DDP family, parameterised by the gaps
@@ -40,8 +41,9 @@ from scipy.linalg.lapack import dpotrf, dpotrs
 from .. import kernels
 from ..kernels import log_fallback, overridden
 from ..shooting import ShootingProblem
-from . import riccati_kernel
+from . import horizon, riccati_kernel
 from .base import BackwardPassError, ForwardPassError, SolverAbstract
+from .horizon import Horizon, NodeDerivatives
 from .nonfinite import (
     NonFiniteError,
     locate_cost,
@@ -105,28 +107,46 @@ class SolverDDP(SolverAbstract):
         models = self._models
         self.xs = [m.state.zero() for m in models]
         self.us = [np.zeros(m.nu) for m in models[:-1]]
-        self.fs = [np.zeros(m.state.ndx) for m in models]
         self._allocate()
         return True
 
     def _allocate(self) -> None:
+        """The per-node arrays: views of one :class:`~crocopy.solvers.horizon.Horizon` buffer (zeros)."""
         problem = self.problem
         models = [*problem.runningModels, problem.terminalModel]
-        self.Vxx = [np.zeros((m.state.ndx, m.state.ndx)) for m in models]
-        self.Vx = [np.zeros(m.state.ndx) for m in models]
-        self.Qxx = [np.zeros((m.state.ndx, m.state.ndx)) for m in problem.runningModels]
-        self.Qxu = [np.zeros((m.state.ndx, m.nu)) for m in problem.runningModels]
-        self.Quu = [np.zeros((m.nu, m.nu)) for m in problem.runningModels]
-        self.Qx = [np.zeros(m.state.ndx) for m in problem.runningModels]
-        self.Qu = [np.zeros(m.nu) for m in problem.runningModels]
-        self.K = [np.zeros((m.nu, m.state.ndx)) for m in problem.runningModels]
-        self.k = [np.zeros(m.nu) for m in problem.runningModels]
+        self._horizon = Horizon([m.state.ndx for m in models], [m.nu for m in problem.runningModels])
+        self._node_dims = [(m.state.ndx, m.nu) for m in problem.runningModels]
+        self._derivatives = NodeDerivatives(problem.runningDatas)
+        self._bind_views()
         self._dx_try: list = [None] * (problem.T + 1)  # x_try ⊖ x of the last rollout, where it computed it
         self.xs_try = [m.state.zero() for m in models]
         self.us_try = [np.zeros(m.nu) for m in problem.runningModels]
         self._rhs = [np.zeros((m.nu, 1 + m.state.ndx)) for m in problem.runningModels]
         self._unbounded = {m.nu: (np.full(m.nu, -np.inf), np.full(m.nu, np.inf)) for m in problem.runningModels}
         self._synced = False
+
+    _views = ("Vxx", "Vx", "fs", "_fs_views", "Qxx", "Qxu", "Quu", "Qx", "Qu", "K", "k")
+    """Attributes holding views of the horizon's buffer: not pickled, bound again to the copy's buffer."""
+
+    def _bind_views(self) -> None:
+        """Point the per-node lists at the views of :attr:`_horizon` (after allocating or unpickling)."""
+        h = self._horizon
+        self.Vxx, self.Vx, self.fs = h.views(horizon.VXX), h.views(horizon.VX), h.views(horizon.FS)
+        self._fs_views = self.fs
+        self.Qxx, self.Qxu, self.Quu, self.Qx, self.Qu, self.K, self.k = (
+            h.views(j, running=True)
+            for j in (horizon.QXX, horizon.QXU, horizon.QUU, horizon.QX, horizon.QU, horizon.KM, horizon.KV)
+        )
+
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        for name in self._views:
+            state.pop(name, None)
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._bind_views()
 
     # ------------------------------------------------------------------ regularisation
     def increaseRegularization(self) -> None:
@@ -345,10 +365,10 @@ class SolverDDP(SolverAbstract):
     def backwardPass(self) -> None:
         """Riccati recursion over the stored derivatives (fills Q terms, gains and value function).
 
-        Uses the compiled step of :mod:`.riccati_kernel` when :func:`crocopy.kernels_enabled` and no
+        Uses the compiled pass of :mod:`.riccati_kernel` when :func:`crocopy.kernels_enabled` and no
         subclass overrides a node step; otherwise the numpy steps below (same numbers to round-off).
         """
-        if kernels.active and self._kernel_applies(SolverDDP, "the compiled Riccati step"):
+        if kernels.active and self._kernel_applies(SolverDDP, "the compiled Riccati pass"):
             self._backward_pass_kernel()
         else:
             self._backward_pass_numpy()
@@ -380,28 +400,23 @@ class SolverDDP(SolverAbstract):
         return gaps
 
     def _backward_pass_kernel(self) -> None:
-        """The recursion through the compiled node step of :meth:`_kernel_node`."""
-        problem = self.problem
+        """The whole recursion in one compiled call (:meth:`_compiled_pass`) over the stacked arrays of
+        :mod:`.horizon`; the first node whose ``Quu`` is not positive definite or not finite raises."""
+        datas = self.problem.runningDatas
+        if not self._derivatives.same_datas(datas):
+            self._sync_problem()  # updateModel/circularAppend since the last solve
         gaps = self._terminal_value_function()
-        node = self._kernel_node(float(self.preg), gaps)
-        datas = problem.runningDatas
-        for t in range(problem.T - 1, -1, -1):
-            if not node(t, datas[t]):
-                raise self._node_failure(t)
+        if self.fs is not self._fs_views:
+            self._horizon.load(self.fs, horizon.FS)
+        t = self._compiled_pass(self._derivatives.update(datas, self._node_dims), float(self.preg), gaps)
+        if t >= 0:
+            raise self._node_failure(t)
 
-    def _kernel_node(self, preg: float, gaps: bool):
-        """This pass's compiled node step ``node(t, data) -> ok`` (:func:`.riccati_kernel.riccati_step`;
-        ``ok`` is False when ``Quu`` is not positive definite or not finite)."""
-        step = riccati_kernel.riccati_step
-        Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx, fs = (
-            self.Qxx, self.Qxu, self.Quu, self.Qx, self.Qu, self.K, self.k, self.Vxx, self.Vx, self.fs
-        )
-
-        def node(t: int, d) -> bool:
-            return step(d.Fx, d.Fu, d.Lxx, d.Lxu, d.Luu, d.Lx, d.Lu, Vxx[t + 1], Vx[t + 1], preg, fs[t], gaps,
-                        Qxx[t], Qxu[t], Quu[t], Qx[t], Qu[t], K[t], k[t], Vxx[t], Vx[t])
-
-        return node
+    def _compiled_pass(self, daddr: np.ndarray, preg: float, gaps: bool) -> int:
+        """:func:`.riccati_kernel.riccati_pass` (``daddr``: the derivatives' addresses); -1, or the first node
+        (from the end) whose gains failed."""
+        h = self._horizon
+        return riccati_kernel.riccati_pass(daddr, h.addr, h.dims, preg, gaps)
 
     def computeActionValueFunction(self, t: int, model, data) -> None:
         """Q terms of node ``t`` from its derivatives and the next value function."""

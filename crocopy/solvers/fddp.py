@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import kernels
 from ..shooting import ShootingProblem
+from . import horizon, riccati_kernel
 from .ddp import SolverDDP
 
 
@@ -23,7 +25,6 @@ class SolverFDDP(SolverDDP):
         self.th_acceptNegStep = 2.0
         self._dg = 0.0
         self._dq = 0.0
-        self._Vxx_f: list[np.ndarray] = []
 
     def _accept(self, alpha: float) -> bool:
         if self.dVexp >= 0:
@@ -39,15 +40,31 @@ class SolverFDDP(SolverDDP):
         super().computeDirection(recalc)
         self.updateExpectedImprovement()
 
+    _views = (*SolverDDP._views, "_Vxx_f_views", "_Vxx_f")
+
+    def _bind_views(self) -> None:
+        super()._bind_views()
+        self._Vxx_f_views = self._horizon.views(horizon.VXX_F)
+        self._Vxx_f: list[np.ndarray] = []
+
     def updateExpectedImprovement(self) -> None:
-        """Parts of the expected improvement that do not depend on the trial step."""
+        """Parts of the expected improvement that do not depend on the trial step (compiled while
+        :func:`crocopy.kernels_enabled`, over the stacked arrays of :mod:`.horizon`)."""
+        gaps = not self.isFeasible
+        if kernels.active:
+            h = self._horizon
+            if self.fs is not self._fs_views:
+                h.load(self.fs, horizon.FS)
+            self._dg, self._dq = riccati_kernel.expected_terms(h.addr, h.dims, gaps)
+            self._Vxx_f = self._Vxx_f_views if gaps else []
+            return
         dg = dq = 0.0
         for Qu, Quu, k in zip(self.Qu, self.Quu, self.k):
             if k.size:
                 dg += Qu @ k
                 dq -= k @ Quu @ k
         self._Vxx_f = []
-        if not self.isFeasible:
+        if gaps:
             self._Vxx_f = [Vxx @ f for Vxx, f in zip(self.Vxx, self.fs)]
             for Vx, Vxx_f, f in zip(self.Vx, self._Vxx_f, self.fs):
                 dg -= Vx @ f

@@ -1,27 +1,35 @@
-"""Compiled Riccati step of one node (numba), twin of the pure-numpy step in :mod:`.ddp`.
+"""Compiled Riccati backward pass (numba), twin of the pure-numpy node steps in :mod:`.ddp`.
 
-Computes, for node t with next value function ``(V'x, V'xx)`` (Crocoddyl signs)::
+:func:`riccati_pass` runs the whole recursion, t = T-1..0, in one call on the arrays listed by address
+(:mod:`.horizon`).  For node t with next value function ``(V'x, V'xx)`` (Crocoddyl signs)::
 
-    Qx = Lx + Fxᵀ V'x,  Qu = Lu + Fuᵀ V'x,  Qxx = Lxx + Fxᵀ V'xx Fx,
-    Qxu = Lxu + Fxᵀ V'xx Fu,  Quu = Luu + Fuᵀ V'xx Fu + preg I,
-    [k K] = L⁻ᵀ L⁻¹ [Qu Qux]  (Quu = L Lᵀ; L⁻¹ by LAPACK, the products by BLAS),
-    Vx = Qx - Qxu k,  Vxx = sym(Qxx - Qxu K) + preg I,  Vx += Vxx f  (if gaps are open)
+    Qx = Lx + Fxᵀ V'x,  Qu = Lu + Fuᵀ V'x,  Qxx = Lxx + (Fxᵀ V'xx) Fx,
+    Qxu = Lxu + (Fxᵀ V'xx) Fu,  Quu = Luu + (Fuᵀ V'xx) Fu + preg I,
+    [k K] = Quu⁻¹ [Qu Qux]  (Cholesky Quu = L Lᵀ and two triangular solves),
+    Vx = Qx - Kᵀ Qu,  Vxx = sym(Qxx - Qxu K) + preg I,  Vx += Vxx f  (if gaps are open)
+
+Nodes whose next tangent space is small (:data:`SMALL`) run loop kernels (no BLAS call, no allocation);
+larger ones :func:`riccati_step` (products by BLAS, ``L⁻¹`` by LAPACK).  A node without controls skips
+the gains.  The pass returns -1, or the first node (from the end) whose ``Quu`` is not positive definite
+or not finite (the caller tells them apart: it raises the regularisation, or stops on NaN/inf,
+:mod:`.nonfinite`).  :func:`expected_terms` gives FDDP's ``Σ Quᵀk - Σ Vxᵀf`` and
+``-Σ kᵀQuu k + Σ fᵀVxx f`` and stores ``Vxx f``.
 
 ``feedback_control(u, k, K, dx, α, lb, ub, out)`` writes the rollout's control
 ``clamp(u - α k - K dx, lb, ub)`` (infinite bounds for the unconstrained solvers).
 
-``riccati_step`` returns False when ``Quu`` is not positive definite or not finite (the caller
-tells them apart: it raises the regularisation, or stops on NaN/inf, :mod:`.nonfinite`).  Its
-numpy twin is the chain of :class:`~crocopy.solvers.ddp.SolverDDP`'s
-``computeActionValueFunction``, ``computeGains`` and ``computeValueFunction`` (Cholesky by LAPACK),
-``feedback_control``'s is :func:`feedback_control_numpy`; :mod:`crocopy.kernels` chooses.
+Numpy twins: the chain of :class:`~crocopy.solvers.ddp.SolverDDP`'s ``computeActionValueFunction``,
+``computeGains`` and ``computeValueFunction`` (Cholesky by LAPACK) over the horizon,
+:meth:`~crocopy.solvers.fddp.SolverFDDP.updateExpectedImprovement`, :func:`feedback_control_numpy`;
+:mod:`crocopy.kernels` chooses.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..kernels import compiled
+from ..kernels import carray, compiled, float64_pointer
+from .horizon import FS, KM, KV, QU, QUU, QX, QXU, QXX, VX, VXX, VXX_F
 
 
 def _finish_value_function(Vxx, Vx, preg, fs, gaps):
@@ -34,7 +42,11 @@ def _finish_value_function(Vxx, Vx, preg, fs, gaps):
             Vxx[j, i] = m
         Vxx[i, i] += preg
     if gaps:
-        Vx[:] += Vxx @ fs
+        for i in range(n):
+            acc = 0.0
+            for j in range(n):
+                acc += Vxx[i, j] * fs[j]
+            Vx[i] += acc
 
 
 finish_value_function = compiled(_finish_value_function)
@@ -129,3 +141,263 @@ def _feedback_control(u, k, K, dx, alpha, lb, ub, out):
 
 
 feedback_control = compiled(_feedback_control)
+
+
+def _matrix_at(address, n, m):
+    """The C-contiguous ``(n, m)`` float64 array at ``address`` (kept alive by the caller)."""
+    return carray(float64_pointer(address), (n, m))
+
+
+def _vector_at(address, n):
+    """The float64 vector of length ``n`` at ``address`` (kept alive by the caller)."""
+    return carray(float64_pointer(address), (n,))
+
+
+matrix_at = compiled(_matrix_at)
+vector_at = compiled(_vector_at)
+
+
+def _mul(A, B, C, transpose):
+    """``C = A B``, or ``C = Aᵀ B`` if ``transpose``, in loops (``C`` is overwritten)."""
+    n, inner = (A.shape[1], A.shape[0]) if transpose else (A.shape[0], A.shape[1])
+    C[:, :] = 0.0
+    for i in range(n):
+        for p in range(inner):
+            a = A[p, i] if transpose else A[i, p]
+            for j in range(B.shape[1]):
+                C[i, j] += a * B[p, j]
+
+
+def _tvec(A, v, y):
+    """``y = Aᵀ v`` in loops."""
+    for i in range(A.shape[1]):
+        acc = 0.0
+        for p in range(A.shape[0]):
+            acc += A[p, i] * v[p]
+        y[i] = acc
+
+
+mul = compiled(_mul)
+tvec = compiled(_tvec)
+
+
+def _q_terms_loops(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu, W, Wu):
+    """:func:`action_value_function` by loops (no BLAS call, no allocation) with the scratch
+    ``W (ndx, ndx')``, ``Wu (nu, ndx')`` for ``Fxᵀ V'xx``, ``Fuᵀ V'xx`` (same association as the twin)."""
+    n1, n, m = Fx.shape[0], Fx.shape[1], Fu.shape[1]
+    W[:, :] = 0.0
+    Wu[:, :] = 0.0
+    for p in range(n1):
+        for i in range(n):
+            a = Fx[p, i]
+            for j in range(n1):
+                W[i, j] += a * Vxx_n[p, j]
+        for i in range(m):
+            a = Fu[p, i]
+            for j in range(n1):
+                Wu[i, j] += a * Vxx_n[p, j]
+    Qxx[:, :] = 0.0
+    Qxu[:, :] = 0.0
+    Quu[:, :] = 0.0
+    for i in range(n):
+        acc = 0.0
+        for p in range(n1):
+            acc += Fx[p, i] * Vx_n[p]
+            a = W[i, p]
+            for j in range(n):
+                Qxx[i, j] += a * Fx[p, j]
+            for j in range(m):
+                Qxu[i, j] += a * Fu[p, j]
+        Qx[i] = Lx[i] + acc
+    for i in range(m):
+        acc = 0.0
+        for p in range(n1):
+            acc += Fu[p, i] * Vx_n[p]
+            a = Wu[i, p]
+            for j in range(m):
+                Quu[i, j] += a * Fu[p, j]
+        Qu[i] = Lu[i] + acc
+    Qxx += Lxx
+    Qxu += Lxu
+    Quu += Luu
+    for i in range(m):
+        Quu[i, i] += preg
+
+
+def _triangular_solve(L, R, transpose):
+    """``R ← L⁻¹ R``, or ``R ← L⁻ᵀ R`` if ``transpose``, in loops (``L`` lower triangular)."""
+    m = R.shape[0]
+    for s in range(m):
+        i = m - 1 - s if transpose else s
+        lo, hi = (i + 1, m) if transpose else (0, i)
+        for p in range(lo, hi):
+            a = L[p, i] if transpose else L[i, p]
+            for j in range(R.shape[1]):
+                R[i, j] -= a * R[p, j]
+        d = L[i, i]
+        for j in range(R.shape[1]):
+            R[i, j] /= d
+
+
+triangular_solve = compiled(_triangular_solve)
+
+
+def _gains_loops(Quu, Qu, Qxu, K, k, idx, L, R):
+    """``[k K] = Quu⁻¹ [Qu Qux]`` by Cholesky and two triangular solves in loops (scratch ``L (nu, nu)``,
+    ``R (nu, ndx + 1)``); False when ``Quu`` is not positive definite or not finite."""
+    m, n = Qxu.shape[1], Qxu.shape[0]
+    if not cholesky_lower(Quu, idx, m, L):
+        return False
+    for i in range(m):
+        for j in range(n):
+            R[i, j] = Qxu[j, i]
+        R[i, n] = Qu[i]
+    triangular_solve(L, R, False)
+    triangular_solve(L, R, True)
+    for i in range(m):
+        for j in range(n):
+            K[i, j] = R[i, j]
+        k[i] = R[i, n]
+    return True
+
+
+def _value_loops(Qxx, Qxu, Qx, Qu, K, Vxx, Vx):
+    """``Vxx = Qxx - Qxu K``, ``Vx = Qx - Kᵀ Qu`` in loops (before :func:`finish_value_function`)."""
+    mul(Qxu, K, Vxx, False)
+    tvec(K, Qu, Vx)
+    for i in range(Vxx.shape[0]):
+        Vx[i] = Qx[i] - Vx[i]
+        for j in range(Vxx.shape[1]):
+            Vxx[i, j] = Qxx[i, j] - Vxx[i, j]
+
+
+q_terms_loops = compiled(_q_terms_loops)
+gains_loops = compiled(_gains_loops)
+value_loops = compiled(_value_loops)
+
+SMALL = 24
+"""Nodes whose next tangent space has at most this dimension run the loop kernels (no BLAS call and no
+allocation: faster on small matrices); larger ones call BLAS/LAPACK as :func:`riccati_step` does."""
+
+
+def _scratch(dims):
+    """Scratch for the loop kernels of every node of ``dims``, and the index ``0..nu_max-1``."""
+    n, m = 0, 0
+    for t in range(dims.shape[0]):
+        n, m = max(n, dims[t, 0]), max(m, dims[t, 1])
+    return np.empty(max(n * n + m * n, m * m + m * (n + 1), 1)), np.arange(max(m, 1))
+
+
+def _q_terms(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu, S):
+    """The Q terms of a node: by loops in the scratch ``S`` when small (:data:`SMALL`), else by BLAS."""
+    n1, n, m = Fx.shape[0], Fx.shape[1], Fu.shape[1]
+    if n1 <= SMALL:
+        at = S.ctypes.data
+        q_terms_loops(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu,
+                      matrix_at(at, n, n1), matrix_at(at + 8 * n * n1, m, n1))
+    else:
+        action_value_function(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu)
+
+
+q_terms = compiled(_q_terms)
+
+
+def _node_arrays(daddr, saddr, dims, t):
+    """Node ``t``'s derivatives ``Fx, Fu, Lxx, Lxu, Luu, Lx, Lu`` (``daddr``), the next value function
+    ``V'xx, V'x`` and its gap ``fs`` (``saddr``, :mod:`.horizon`)."""
+    n, m, n1 = dims[t, 0], dims[t, 1], dims[t + 1, 0]
+    d, o, o1 = daddr[t], saddr[t], saddr[t + 1]
+    return (matrix_at(d[0], n, n), matrix_at(d[1], n, m), matrix_at(d[2], n, n), matrix_at(d[3], n, m),
+            matrix_at(d[4], m, m), vector_at(d[5], n), vector_at(d[6], m), matrix_at(o1[VXX], n1, n1),
+            vector_at(o1[VX], n1), vector_at(o[FS], n))
+
+
+def _q_arrays(saddr, dims, t):
+    """Node ``t``'s ``Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx`` in the solver's buffer (``saddr``)."""
+    n, m = dims[t, 0], dims[t, 1]
+    o = saddr[t]
+    return (matrix_at(o[QXX], n, n), matrix_at(o[QXU], n, m), matrix_at(o[QUU], m, m), vector_at(o[QX], n),
+            vector_at(o[QU], m), matrix_at(o[KM], m, n), vector_at(o[KV], m), matrix_at(o[VXX], n, n),
+            vector_at(o[VX], n))
+
+
+node_arrays = compiled(_node_arrays)
+q_arrays = compiled(_q_arrays)
+
+
+def _node_riccati(daddr, saddr, dims, t, preg, gaps, S, idx):
+    """The Riccati step of node ``t`` on the arrays listed by address (:mod:`.horizon`): the loop kernels
+    when small, else :func:`riccati_step`; False when ``Quu`` is not positive definite or not finite."""
+    n, m, n1 = dims[t, 0], dims[t, 1], dims[t + 1, 0]
+    Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, fs = node_arrays(daddr, saddr, dims, t)
+    Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx = q_arrays(saddr, dims, t)
+    if n1 > SMALL:
+        return riccati_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, Qxx, Qxu, Quu, Qx, Qu, K, k,
+                            Vxx, Vx)
+    q_terms(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu, S)
+    if m > 0:
+        at = S.ctypes.data
+        if not gains_loops(Quu, Qu, Qxu, K, k, idx, matrix_at(at, m, m), matrix_at(at + 8 * m * m, m, n + 1)):
+            return False
+        value_loops(Qxx, Qxu, Qx, Qu, K, Vxx, Vx)
+    else:
+        Vxx[:, :] = Qxx
+        Vx[:] = Qx
+    finish_value_function(Vxx, Vx, preg, fs, gaps)
+    return True
+
+
+def _riccati_pass(daddr, saddr, dims, preg, gaps):
+    """The whole Riccati recursion (t = T-1..0); -1, or the first node whose gains failed."""
+    S, idx = scratch(dims)
+    for t in range(dims.shape[0] - 2, -1, -1):
+        if not node_riccati(daddr, saddr, dims, t, preg, gaps, S, idx):
+            return t
+    return -1
+
+
+def _expected_terms(saddr, dims, gaps):
+    """``(Σ Quᵀk - Σ Vxᵀf, -Σ kᵀQuu k + Σ fᵀVxx f)`` (gap sums only if ``gaps``), ``Vxx f`` into its column."""
+    T = dims.shape[0] - 1
+    dg = 0.0
+    dq = 0.0
+    for t in range(T):
+        m = dims[t, 1]
+        o = saddr[t]
+        k, Qu, Quu = vector_at(o[KV], m), vector_at(o[QU], m), matrix_at(o[QUU], m, m)
+        if m == 0:
+            continue
+        qk = 0.0
+        kqk = 0.0
+        for j in range(m):
+            qk += Qu[j] * k[j]
+            acc = 0.0
+            for i in range(m):
+                acc += k[i] * Quu[i, j]
+            kqk += acc * k[j]
+        dg += qk
+        dq -= kqk
+    if gaps:
+        for t in range(T + 1):
+            n = dims[t, 0]
+            o = saddr[t]
+            f, Vx, Vxx_f = vector_at(o[FS], n), vector_at(o[VX], n), vector_at(o[VXX_F], n)
+            Vxx = matrix_at(o[VXX], n, n)
+            vf = 0.0
+            fvf = 0.0
+            for i in range(n):
+                acc = 0.0
+                for j in range(n):
+                    acc += Vxx[i, j] * f[j]
+                Vxx_f[i] = acc
+                vf += Vx[i] * f[i]
+                fvf += f[i] * acc
+            dg -= vf
+            dq += fvf
+    return dg, dq
+
+
+scratch = compiled(_scratch)
+node_riccati = compiled(_node_riccati)
+riccati_pass = compiled(_riccati_pass)
+expected_terms = compiled(_expected_terms)

@@ -1,0 +1,188 @@
+"""The DDP family's backward pass in one compiled call: stacked solver buffers and the nodes' derivatives.
+
+One compiled call per backward pass (:func:`~crocopy.solvers.riccati_kernel.riccati_pass`,
+:func:`~crocopy.solvers.box_kernel.box_pass`) instead of one per node: numba's dispatch of some
+twenty arrays per node cost several µs, more than the node's arithmetic on small problems.  The call
+receives two integer tables of *addresses* (and the per-node dimensions :attr:`Horizon.dims`); the
+kernel views the memory there as arrays (``numba.carray``, :func:`crocopy.kernels.float64_pointer`),
+which costs nothing per node, where a numba typed list cost ~45 ns per item and a reshaped slice
+~40 ns.  The arrays are kept alive by the objects that list them.
+
+* **The solver's own arrays** (``Vxx, Vx`` of the T+1 nodes; ``Qxx, Qxu, Quu, Qx, Qu, K, k`` and
+  Box-DDP's ``Quu_inv`` of the T running nodes; FDDP's ``Vxx fs``; the gaps ``fs``): one flat float64
+  buffer :attr:`Horizon.buf` with per-node offsets :attr:`Horizon.off` (``(T+1, NQ)``, columns
+  :data:`VXX` ... :data:`FS`) and addresses :attr:`Horizon.addr`.  The solver's lists (Crocoddyl's
+  API) hold C-contiguous reshaped views of their slices, so what the kernel writes is what
+  ``solver.K[t]`` shows.  The solvers write these arrays in place and never rebind an entry; a
+  rebound ``solver.fs`` list is copied into the buffer before the pass.
+* **The nodes' derivatives** (``Fx, Fu, Lxx, Lxu, Luu, Lx, Lu`` of ``problem.runningDatas``):
+  :attr:`NodeDerivatives.addr` ``(T, 7)`` lists where the datas' *own* arrays are.  They are not
+  moved into a stack owned by the problem or the solver: a model's ``calcDiff`` keeps writing where
+  it always did, so every writer (integrators, action models, a cost sum sharing its memory with the
+  data, squashing, control parametrizations, a user's Python model) stays correct without relying on
+  an audit of all of them.  What the table must follow is a *rebinding*, ``data.Fx = M``
+  (Crocoddyl's bindings copy ``M`` into the existing matrix; in Python the attribute is rebound).
+  :class:`crocopy.watched.Watched` counts those on the data classes, so the check before each pass
+  is one list comparison (the same data objects?) and one integer comparison (any rebinding since?);
+  only when one fails are the arrays compared one by one and the changed rows rewritten.  A data
+  class that does not watch an attribute (a subclass turning it into a property or a slot) has its
+  node compared at every pass; an array the kernel cannot read in place (not float64 or not
+  C-contiguous) is copied into a staging array at every pass; shapes are checked when an array is
+  taken (a wrong size raises ValueError): the compiled pass trusts them.
+* A changed list of datas (``problem.updateModel``, ``circularAppend``) makes the solver follow the
+  problem first (``_sync_problem``: re-allocation when a node's dimensions changed).
+
+Nodes of different sizes share the buffers: each node has its own ``(ndx, nu)`` (an impulse node
+has ``nu = 0``: its ``Qu``, ``K``, ``k`` ... are empty and the kernel skips the gains).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from .. import watched
+
+VXX, VX, QXX, QXU, QUU, QX, QU, KM, KV, QUU_INV, VXX_F, FS = range(12)
+"""Columns of :attr:`Horizon.off`: where each per-node array of the solver starts in :attr:`Horizon.buf`."""
+NQ = 12
+
+NAMES = ("Fx", "Fu", "Lxx", "Lxu", "Luu", "Lx", "Lu")
+"""The derivatives of a running data the compiled pass reads, in the columns of :attr:`NodeDerivatives.addr`."""
+
+
+class Horizon:
+    """The solver's per-node arrays as views of one buffer.
+
+    Parameters
+    ----------
+    ndx : sequence of int
+        Tangent dimension of the T+1 nodes.
+    nu : sequence of int
+        Control dimension of the T running nodes.
+    """
+
+    def __init__(self, ndx: Sequence[int], nu: Sequence[int]) -> None:
+        T = len(nu)
+        self.T = T
+        self.off = np.zeros((T + 1, NQ), dtype=np.int64)
+        self.dims = np.array([(int(ndx[t]), int(nu[t]) if t < T else 0) for t in range(T + 1)], dtype=np.int64)
+        shapes: list[list[tuple]] = []
+        pos = 0
+        for t in range(T + 1):
+            n, m = int(ndx[t]), int(nu[t]) if t < T else 0
+            node = [(n, n), (n,), (n, n), (n, m), (m, m), (n,), (m,), (m, n), (m,), (m, m), (n,), (n,)]
+            for j, shape in enumerate(node):
+                self.off[t, j] = pos
+                pos += int(np.prod(shape))
+            shapes.append(node)
+        self.buf = np.zeros(pos)
+        self.addr = address(self.buf) + 8 * self.off
+        """Where each array starts in memory (the kernels read them by address)."""
+        self._views = [[self._view(t, j, shapes[t][j]) for t in range(T + 1)] for j in range(NQ)]
+
+    def __getstate__(self) -> dict:
+        return {"dims": self.dims, "buf": self.buf}
+
+    def __setstate__(self, state: dict) -> None:
+        dims = state["dims"]
+        self.__init__(dims[:, 0], dims[:-1, 1])
+        self.buf[:] = state["buf"]
+
+    def _view(self, t: int, j: int, shape: tuple) -> np.ndarray:
+        start = self.off[t, j]
+        return self.buf[start:start + int(np.prod(shape))].reshape(shape)
+
+    def views(self, j: int, running: bool = False) -> list[np.ndarray]:
+        """A new list of the views of column ``j`` (the T running nodes only if ``running``)."""
+        return list(self._views[j][: self.T if running else self.T + 1])
+
+    def load(self, arrays: Sequence[np.ndarray], j: int) -> None:
+        """Copy ``arrays`` into column ``j`` (for a list the solver's user rebound)."""
+        for dst, src in zip(self._views[j], arrays):
+            dst[...] = src
+
+
+def address(a: np.ndarray) -> int:
+    """Where the first element of ``a`` is in memory."""
+    return a.__array_interface__["data"][0]
+
+
+class NodeDerivatives:
+    """The addresses of the running datas' own derivative arrays, kept in step with rebindings.
+
+    :attr:`addr` ``(T, 7)``: row t holds where ``Fx, Fu, Lxx, Lxu, Luu, Lx, Lu`` (:data:`NAMES`) of
+    ``datas[t]`` are.  The arrays are referenced here as long as their address is listed.
+    """
+
+    def __init__(self, datas: list) -> None:
+        self._datas = list(datas)
+        self._generation = -1
+        self._seen: list[list] = []
+        self._shapes: list[list[tuple]] = []
+        self._stale: list[int] = []
+        self._staged: list[tuple[int, str, np.ndarray]] = []
+        self.addr = np.zeros((0, len(NAMES)), dtype=np.int64)
+        self._kept: list[list] = []
+
+    def __reduce__(self) -> tuple:
+        """A copy lists nothing yet (addresses are not valid in another process or object)."""
+        return NodeDerivatives, ([],)
+
+    def same_datas(self, datas: list) -> bool:
+        """True when ``datas`` are the data objects given last (at construction or to :meth:`update`)."""
+        return datas == self._datas
+
+    def update(self, datas: list, dims: Sequence[tuple[int, int]]) -> np.ndarray:
+        """:attr:`addr` for the current arrays of ``datas`` (``dims[t] = (ndx, nu)`` of node t).
+
+        Raises
+        ------
+        ValueError
+            If a derivative array does not have the size of its node's ``(ndx, nu)``.
+        """
+        if len(self.addr) != len(datas) or datas != self._datas or watched.generation[0] != self._generation:
+            self._sync(datas, dims)
+        elif self._stale:
+            self._refresh(self._stale, datas)
+        for t, name, stage in self._staged:
+            np.copyto(stage, np.reshape(getattr(datas[t], name), stage.shape))
+        return self.addr
+
+    def _sync(self, datas: list, dims: Sequence[tuple[int, int]]) -> None:
+        shapes = [[(n, n), (n, m), (n, n), (n, m), (m, m), (n,), (m,)] for n, m in dims]
+        if len(self.addr) != len(datas) or shapes != self._shapes:
+            self._shapes = shapes
+            self._seen = [[None] * len(NAMES) for _ in datas]
+            self._kept = [[None] * len(NAMES) for _ in datas]
+            self.addr = np.zeros((len(datas), len(NAMES)), dtype=np.int64)
+        self._datas = list(datas)
+        self._generation = watched.generation[0]
+        self._stale = [t for t, d in enumerate(datas) if not all(watched.watches(type(d), name) for name in NAMES)]
+        self._refresh(range(len(datas)), datas)
+
+    def _refresh(self, nodes, datas: list) -> None:
+        """Take the arrays of ``nodes`` that are not the ones taken before."""
+        for t in nodes:
+            d, seen = datas[t], self._seen[t]
+            for i, name in enumerate(NAMES):
+                a = getattr(d, name)
+                if a is seen[i]:
+                    continue
+                self._staged = [s for s in self._staged if s[:2] != (t, name)]
+                seen[i] = a
+                shape = self._shapes[t][i]
+                if _readable(a, shape):
+                    entry = a
+                else:
+                    entry = np.zeros(shape)
+                    np.copyto(entry, np.reshape(a, shape))
+                    self._staged.append((t, name, entry))
+                self._kept[t][i] = entry
+                self.addr[t, i] = address(entry)
+
+
+def _readable(a: object, shape: tuple) -> bool:
+    """True when a kernel can read ``a`` in place as a C-contiguous float64 array of ``shape``."""
+    return isinstance(a, np.ndarray) and a.dtype == np.float64 and a.shape == shape and a.flags.c_contiguous
