@@ -46,14 +46,15 @@ def _chromium() -> str:
     return require_chromium()
 
 
-def _screenshot(html: str, png: str, profile: str, attempts: int = 2) -> np.ndarray:
-    """Render ``html`` headless and return the RGB screenshot; retries once on a hang."""
+def _screenshot(html: str, png: str, profile: str, attempts: int = 3) -> np.ndarray:
+    """Render ``html`` headless and return the RGB screenshot; tries again (fresh profile) when Chromium
+    hangs or exits without one, which happens on a loaded machine (two hangs of 90 s seen at load 5)."""
     cmd = [_chromium(), *FLAGS, f"--user-data-dir={profile}", f"--screenshot={png}", f"file://{html}"]
     for _ in range(attempts):
         shutil.rmtree(profile, ignore_errors=True)
         proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
         try:
-            proc.wait(timeout=90)
+            proc.wait(timeout=120)
         except subprocess.TimeoutExpired:
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
