@@ -216,9 +216,10 @@ def _solve(args: argparse.Namespace) -> int:
     converged = solver.solve(xs, us, args.maxiter or spec.maxiter, False)
     elapsed = time.perf_counter() - t0
     iters = max(solver.iter, 1)
+    why = "" if converged else f" ({solver.reason})"
     print(
         f"{args.problem}: {SOLVERS[args.solver]} {'converged' if converged else 'did not converge'}"
-        f" ({solver.reason}) after {solver.iter} iterations, cost {solver.cost:.6g},"
+        f"{why} after {solver.iter} iterations, cost {solver.cost:.6g},"
         f" {elapsed:.2f} s ({1e3 * elapsed / iters:.1f} ms/iteration)"
     )
     if args.plot:
