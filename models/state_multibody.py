@@ -151,33 +151,17 @@ class StateMultibody(StateAbstract):
         return np.concatenate([q, np.random.rand(self.nv) * 2.0 - 1.0])
 
     def diff(self, x0: np.ndarray, x1: np.ndarray) -> np.ndarray:
-        dx = np.empty(self.ndx)
-        self._write_diff(x0, x1, dx)
-        return dx
+        nq = self.nq
+        return np.concatenate([pin.difference(self.pinocchio, x0[:nq], x1[:nq]), x1[nq:] - x0[nq:]])
 
     def integrate(self, x: np.ndarray, dx: np.ndarray) -> np.ndarray:
-        xout = np.empty(self.nx)
-        self._write_integrate(x, dx, xout)
-        return xout
-
-    def _write_diff(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:
-        nq = self.nq
-        out[: self.nv] = pin.difference(self.pinocchio, x0[:nq], x1[:nq])
-        np.subtract(x1[nq:], x0[nq:], out=out[self.nv :])
-
-    def _write_integrate(self, x: np.ndarray, dx: np.ndarray, out: np.ndarray) -> None:
         nq, nv = self.nq, self.nv
-        out[:nq] = pin.integrate(self.pinocchio, x[:nq], dx[:nv])
-        np.add(x[nq:], dx[nv:], out=out[nq:])
-
-    def _write_block(self, Jq: np.ndarray, sign: float, out: np.ndarray) -> None:
-        """``out = [[Jq, 0], [0, ±I]]``."""
-        out[:] = self._Jpos if sign > 0.0 else self._Jneg
-        out[: self.nv, : self.nv] = Jq
+        return np.concatenate([pin.integrate(self.pinocchio, x[:nq], dx[:nv]), x[nq:] + dx[nv:]])
 
     def _block(self, Jq: np.ndarray, sign: float) -> np.ndarray:
-        J = np.empty((self.ndx, self.ndx))
-        self._write_block(Jq, sign, J)
+        """``[[Jq, 0], [0, ±I]]``."""
+        J = (self._Jpos if sign > 0.0 else self._Jneg).copy()
+        J[: self.nv, : self.nv] = Jq
         return J
 
     def Jdiff(self, x0: np.ndarray, x1: np.ndarray, firstsecond: Jcomponent = Jcomponent.both) -> list:
@@ -213,23 +197,29 @@ class StateMultibody(StateAbstract):
         rows[...] = np.reshape(pin.dIntegrateTransport(self.pinocchio, x[: self.nq], dx[:nv], rows, arg), rows.shape)
 
     def _integrate_into(self, x: np.ndarray, dx: np.ndarray, out: np.ndarray) -> None:
-        if "_integrate_into" in self._generic:
+        if self._generic and "_integrate_into" in self._generic:
             super()._integrate_into(x, dx, out)
             return
-        self._write_integrate(x, dx, out)
+        nq, nv = self.nq, self.nv
+        out[:nq] = pin.integrate(self.pinocchio, x[:nq], dx[:nv])
+        np.add(x[nq:], dx[nv:], out=out[nq:])
 
     def _diff_into(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:
-        if "_diff_into" in self._generic:
+        if self._generic and "_diff_into" in self._generic:
             super()._diff_into(x0, x1, out)
             return
-        self._write_diff(x0, x1, out)
+        nq, nv = self.nq, self.nv
+        out[:nv] = pin.difference(self.pinocchio, x0[:nq], x1[:nq])
+        np.subtract(x1[nq:], x0[nq:], out=out[nv:])
 
     def _Jdiff_second_into(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:
-        if "_Jdiff_second_into" in self._generic:
+        """``out = [[∂(x1 ⊖ x0)/∂q1, 0], [0, I]]``."""
+        if self._generic and "_Jdiff_second_into" in self._generic:
             super()._Jdiff_second_into(x0, x1, out)
             return
-        nq = self.nq
-        self._write_block(pin.dDifference(self.pinocchio, x0[:nq], x1[:nq], pin.ARG1), 1.0, out)
+        nq, nv = self.nq, self.nv
+        out[:] = self._Jpos
+        out[:nv, :nv] = pin.dDifference(self.pinocchio, x0[:nq], x1[:nq], _ARG1)
 
     def _integrate_chain_rule(self, x: np.ndarray, dx: np.ndarray, Fx: np.ndarray, Fu: np.ndarray) -> None:
         """Chain rule through ``x ⊕ dx`` (see :meth:`StateAbstract._integrate_chain_rule`): Pinocchio's

@@ -126,8 +126,7 @@ CONSUMERS = [
     (riccati_kernel, "feedback_control", "feedback_control_numpy", _solve_lqr_ddp),
     (box_kernel, "box_pass", None, _solve_box),
     (stack_kernel, "activation_values", "activation_values_numpy", _solve_arm),
-    (stack_kernel, "activation_derivatives", "activation_derivatives_numpy", _solve_arm),
-    (stack_kernel, "accumulate", "accumulate_numpy", _solve_arm),
+    (stack_kernel, "derivatives_and_sums", "derivatives_and_sums_numpy", _solve_arm),
     (euler_kernel, "euler_step", "euler_step_numpy", _solve_vector_euler),
     (euler_kernel, "euler_chain", "euler_chain_numpy", _solve_vector_euler),
     (state_multibody, "add_integrate_jacobian", "add_integrate_jacobian_numpy", _solve_arm),
@@ -199,6 +198,13 @@ def test_stack_kernels_equal_their_twins_on_random_rows():
         getattr(stack_kernel, "accumulate" + suffix)(
             weights, Ar, Arr, Jx, Ju, u_start, True, np.zeros_like(Jx), np.zeros_like(Jx), np.zeros_like(Ju),
             np.zeros_like(Ju), *L)
+        fused = [np.zeros(nr), np.zeros(nr), np.zeros(ndx), np.zeros(nu), np.zeros((ndx, ndx)),
+                 np.zeros((ndx, nu)), np.zeros((nu, nu))]
+        getattr(stack_kernel, "derivatives_and_sums" + suffix)(
+            r, lb, ub, act_w, weights, *fused[:2], Jx, Ju, u_start, True, np.zeros_like(Jx), np.zeros_like(Jx),
+            np.zeros_like(Ju), np.zeros_like(Ju), *fused[2:])
+        for a, b in zip([Ar, Arr, *L], fused, strict=True):
+            np.testing.assert_array_equal(a, b)
         outs.append([np.array(total), item_costs, Ar, Arr, *L])
     assert np.any(outs[0][3] == 0.0) and np.any(outs[0][3] != 0.0)
     for a, b in zip(*outs):

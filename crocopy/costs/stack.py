@@ -68,7 +68,8 @@ class CostStack:
     Notes
     -----
     The activations and sums run :mod:`~crocopy.costs.stack_kernel`'s compiled kernels while
-    :func:`crocopy.kernels_enabled`, else their numpy twins.
+    :func:`crocopy.kernels_enabled`, else their numpy twins; ``calcDiff`` makes one kernel call
+    (``derivatives_and_sums``) unless some activation runs item by item.
     """
 
     def __init__(self, items: list, ndx: int, nu: int) -> None:
@@ -183,6 +184,14 @@ class CostStack:
         for residual, rdata in self.varying:
             residual.calcDiff(rdata, x, u)
         kernel = kernels.active
+        if not self.unfused:
+            fused = stack_kernel.derivatives_and_sums if kernel else stack_kernel.derivatives_and_sums_numpy
+            fused(
+                self.r, self.lb, self.ub, self.act_weights, self.weights, self.Ar, self.Arr, self.Jx, self.Ju,
+                self.u_start, u is not None, self.Jc, self.HJx, self.Juc, self.HJu,
+                data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu,
+            )
+            return
         derivatives = stack_kernel.activation_derivatives if kernel else stack_kernel.activation_derivatives_numpy
         derivatives(self.r, self.lb, self.ub, self.act_weights, self.Ar, self.Arr)
         for activation, adata, r in self.unfused:

@@ -6,7 +6,8 @@ Both compute (rows ``i``, items ``k``)::
     Arᵢ = aᵢ eᵢ,   Arrᵢ = aᵢ [rᵢ ≤ lbᵢ or rᵢ ≥ ubᵢ]
     Lx = Jxᵀ (w ∘ Ar),   Lxx = Jxᵀ diag(w ∘ Arr) Jx,   Lu, Lxu, Luu likewise with the ``Ju`` rows
 
-One call replaces a dozen small numpy calls, and rows whose weighted curvature is zero (a barrier
+:func:`derivatives_and_sums` runs the last two in one call (the stack's ``calcDiff`` when every
+activation is fused).  One call replaces a dozen small numpy calls, and rows whose weighted curvature is zero (a barrier
 row inside its bounds, an inactive item) are left out of the matrix products.  Each kernel has a
 numpy twin (``*_numpy``, same arguments) giving the same numbers to round-off (tested);
 :mod:`crocopy.kernels` chooses.
@@ -51,6 +52,13 @@ def accumulate_numpy(weights, Ar, Arr, Jx, Ju, u_start, with_u, Jc, Hx, Juc, Hu,
         np.multiply(wArr[u_start:, None], Ju, out=Hu)
         np.dot(Jx[u_start:].T, Hu, out=Lxu)
         np.dot(Ju.T, Hu, out=Luu)
+
+
+def derivatives_and_sums_numpy(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, with_u, Jc, Hx, Juc, Hu,
+                               Lx, Lu, Lxx, Lxu, Luu) -> None:
+    """Numpy twin of :func:`derivatives_and_sums`."""
+    activation_derivatives_numpy(r, lb, ub, act_w, Ar, Arr)
+    accumulate_numpy(weights, Ar, Arr, Jx, Ju, u_start, with_u, Jc, Hx, Juc, Hu, Lx, Lu, Lxx, Lxu, Luu)
 
 
 def _activation_values(r, lb, ub, act_w, starts, item_costs, item_weights):
@@ -128,3 +136,13 @@ def _accumulate(weights, Ar, Arr, Jx, Ju, u_start, with_u, Jc, Hx, Juc, Hu, Lx, 
 activation_values = compiled(_activation_values)
 activation_derivatives = compiled(_activation_derivatives)
 accumulate = compiled(_accumulate)
+
+
+def _derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, with_u, Jc, Hx, Juc, Hu,
+                          Lx, Lu, Lxx, Lxu, Luu):
+    """:func:`activation_derivatives` then :func:`accumulate`, one call from Python."""
+    activation_derivatives(r, lb, ub, act_w, Ar, Arr)
+    accumulate(weights, Ar, Arr, Jx, Ju, u_start, with_u, Jc, Hx, Juc, Hu, Lx, Lu, Lxx, Lxu, Luu)
+
+
+derivatives_and_sums = compiled(_derivatives_and_sums)
