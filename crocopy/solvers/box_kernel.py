@@ -24,14 +24,16 @@ from ..kernels import compiled
 from .horizon import QUU_INV
 from .riccati_kernel import (
     SMALL,
+    action_value_function,
     cholesky_lower,
     finish_value_function,
     matrix_at,
     node_arrays,
     node_riccati,
     q_arrays,
-    q_terms,
+    q_terms_loops,
     scratch,
+    value_blas,
     value_loops,
 )
 
@@ -182,7 +184,7 @@ def _box_gains_value(preg, fs, gaps, u, lb, ub, th_grad, th_acc, warm, maxiter, 
     if small:
         mul_bt(Quu_inv, Qxu, K)
     else:
-        K[:, :] = Quu_inv @ Qxu.T
+        np.dot(Quu_inv, Qxu.T, K)
     clamped = nf < nu
     if clamped and not general:
         for j in range(nu):
@@ -191,8 +193,7 @@ def _box_gains_value(preg, fs, gaps, u, lb, ub, th_grad, th_acc, warm, maxiter, 
     if small:
         value_loops(Qxx, Qxu, Qx, Qu, K, Vxx, Vx)
     else:
-        Vxx[:, :] = Qxx - Qxu @ K
-        Vx[:] = Qx - K.T @ Qu
+        value_blas(Qxx, Qxu, Qx, Qu, K, Vxx, Vx)
     if clamped and general:
         _general_gradient(Quu, Qxu, K, k, Vx, W[1])
     finish_value_function(Vxx, Vx, preg, fs, gaps)
@@ -261,7 +262,12 @@ def _box_pass(daddr, saddr, dims, preg, gaps, boxed, lb, ub, u, uoff, th_grad, t
         m, a = dims[t, 1], uoff[t]
         Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, fs = node_arrays(daddr, saddr, dims, t)
         Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx = q_arrays(saddr, dims, t)
-        q_terms(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu, S)
+        if dims[t + 1, 0] <= SMALL:
+            n, n1, at = dims[t, 0], dims[t + 1, 0], S.ctypes.data
+            q_terms_loops(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu,
+                          matrix_at(at, n, n1), matrix_at(at + 8 * n * n1, m, n1))
+        else:
+            action_value_function(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu)
         ok, nfact, clamped[t] = box_gains_value(
             preg, fs, gaps, u[a:a + m], lb[a:a + m], ub[a:a + m], th_grad, th_acc, warm, maxiter, general, Qxx, Qxu,
             Quu, Qx, Qu, K, k, matrix_at(saddr[t, QUU_INV], m, m), Vxx, Vx, W, bidx, free, Hinv, L,
