@@ -75,22 +75,50 @@ def _cholesky_lower(A, idx, n, L):
 cholesky_lower = compiled(_cholesky_lower)
 
 
+def _combine(A, C, sign):
+    """``C ← A + sign C`` entrywise in loops (2-D; ``sign = ±1``).  Loops, not array expressions: numba's
+    broadcast checks compile seconds of error-message code into each kernel."""
+    for i in range(C.shape[0]):
+        for j in range(C.shape[1]):
+            C[i, j] = A[i, j] + sign * C[i, j]
+
+
+def _combine1(a, c, sign):
+    """:func:`combine` for vectors."""
+    for i in range(c.shape[0]):
+        c[i] = a[i] + sign * c[i]
+
+
+combine1 = compiled(_combine1)
+combine = compiled(_combine)
+
+
+def _value_blas(Qxx, Qxu, Qx, Qu, K, Vxx, Vx):
+    """``Vxx = Qxx - Qxu K`` (BLAS), ``Vx = Qx - Kᵀ Qu`` (before :func:`finish_value_function`)."""
+    np.dot(Qxu, K, Vxx)
+    combine(Qxx, Vxx, -1.0)
+    tvec(K, Qu, Vx)
+    combine1(Qx, Vx, -1.0)
+
+
 def _action_value_function(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu):
     """The Q terms of a node (``preg`` on the diagonal of ``Quu``; no control terms when ``nu = 0``)."""
     nu = Fu.shape[1]
     FxTV = Fx.T @ Vxx_n
-    Qxx[:, :] = Lxx + FxTV @ Fx
-    Qx[:] = Lx + Fx.T @ Vx_n
+    np.dot(FxTV, Fx, Qxx)
+    combine(Lxx, Qxx, 1.0)
+    tvec(Fx, Vx_n, Qx)
+    combine1(Lx, Qx, 1.0)
     if nu > 0:
         FuTV = Fu.T @ Vxx_n
-        Quu[:, :] = Luu + FuTV @ Fu
-        Qxu[:, :] = Lxu + FxTV @ Fu
-        Qu[:] = Lu + Fu.T @ Vx_n
+        np.dot(FuTV, Fu, Quu)
+        combine(Luu, Quu, 1.0)
+        np.dot(FxTV, Fu, Qxu)
+        combine(Lxu, Qxu, 1.0)
+        tvec(Fu, Vx_n, Qu)
+        combine1(Lu, Qu, 1.0)
         for i in range(nu):
             Quu[i, i] += preg
-
-
-action_value_function = compiled(_action_value_function)
 
 
 def _riccati_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx):
@@ -103,21 +131,28 @@ def _riccati_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, Qx
             return False
         Linv = np.linalg.inv(L)
         rhs = np.empty((nu, ndx + 1))
-        rhs[:, :ndx] = Qxu.T
-        rhs[:, ndx] = Qu
+        for i in range(nu):
+            for j in range(ndx):
+                rhs[i, j] = Qxu[j, i]
+            rhs[i, ndx] = Qu[i]
         rhs = Linv.T @ (Linv @ rhs)
-        K[:, :] = rhs[:, :ndx]
-        k[:] = rhs[:, ndx]
-        Vxx[:, :] = Qxx - Qxu @ K
-        Vx[:] = Qx - K.T @ Qu
+        for i in range(nu):
+            for j in range(ndx):
+                K[i, j] = rhs[i, j]
+            k[i] = rhs[i, ndx]
+        value_blas(Qxx, Qxu, Qx, Qu, K, Vxx, Vx)
     else:
-        Vxx[:, :] = Qxx
-        Vx[:] = Qx
+        copy(Qxx, Qx, Vxx, Vx)
     finish_value_function(Vxx, Vx, preg, fs, gaps)
     return True
 
 
-riccati_step = compiled(_riccati_step)
+def _copy(Qxx, Qx, Vxx, Vx):
+    """``Vxx = Qxx``, ``Vx = Qx`` in loops (a node without controls)."""
+    for i in range(Qxx.shape[0]):
+        Vx[i] = Qx[i]
+        for j in range(Qxx.shape[1]):
+            Vxx[i, j] = Qxx[i, j]
 
 
 def feedback_control_numpy(u, k, K, dx, alpha, lb, ub, out) -> None:
@@ -217,10 +252,14 @@ def _q_terms_loops(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Q
             for j in range(m):
                 Quu[i, j] += a * Fu[p, j]
         Qu[i] = Lu[i] + acc
-    Qxx += Lxx
-    Qxu += Lxu
-    Quu += Luu
+    for i in range(n):
+        for j in range(n):
+            Qxx[i, j] = Lxx[i, j] + Qxx[i, j]
+        for j in range(m):
+            Qxu[i, j] = Lxu[i, j] + Qxu[i, j]
     for i in range(m):
+        for j in range(m):
+            Quu[i, j] = Luu[i, j] + Quu[i, j]
         Quu[i, i] += preg
 
 
@@ -271,6 +310,10 @@ def _value_loops(Qxx, Qxu, Qx, Qu, K, Vxx, Vx):
             Vxx[i, j] = Qxx[i, j] - Vxx[i, j]
 
 
+value_blas = compiled(_value_blas)
+action_value_function = compiled(_action_value_function)
+copy = compiled(_copy)
+riccati_step = compiled(_riccati_step)
 q_terms_loops = compiled(_q_terms_loops)
 gains_loops = compiled(_gains_loops)
 value_loops = compiled(_value_loops)
@@ -286,20 +329,6 @@ def _scratch(dims):
     for t in range(dims.shape[0]):
         n, m = max(n, dims[t, 0]), max(m, dims[t, 1])
     return np.empty(max(n * n + m * n, m * m + m * (n + 1), 1)), np.arange(max(m, 1))
-
-
-def _q_terms(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu, S):
-    """The Q terms of a node: by loops in the scratch ``S`` when small (:data:`SMALL`), else by BLAS."""
-    n1, n, m = Fx.shape[0], Fx.shape[1], Fu.shape[1]
-    if n1 <= SMALL:
-        at = S.ctypes.data
-        q_terms_loops(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu,
-                      matrix_at(at, n, n1), matrix_at(at + 8 * n * n1, m, n1))
-    else:
-        action_value_function(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu)
-
-
-q_terms = compiled(_q_terms)
 
 
 def _node_arrays(daddr, saddr, dims, t):
@@ -334,15 +363,15 @@ def _node_riccati(daddr, saddr, dims, t, preg, gaps, S, idx):
     if n1 > SMALL:
         return riccati_step(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, fs, gaps, Qxx, Qxu, Quu, Qx, Qu, K, k,
                             Vxx, Vx)
-    q_terms(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu, S)
+    at = S.ctypes.data
+    q_terms_loops(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu,
+                  matrix_at(at, n, n1), matrix_at(at + 8 * n * n1, m, n1))
     if m > 0:
-        at = S.ctypes.data
         if not gains_loops(Quu, Qu, Qxu, K, k, idx, matrix_at(at, m, m), matrix_at(at + 8 * m * m, m, n + 1)):
             return False
         value_loops(Qxx, Qxu, Qx, Qu, K, Vxx, Vx)
     else:
-        Vxx[:, :] = Qxx
-        Vx[:] = Qx
+        copy(Qxx, Qx, Vxx, Vx)
     finish_value_function(Vxx, Vx, preg, fs, gaps)
     return True
 
