@@ -38,7 +38,7 @@ converge, ``2`` usage error (also a missing optional extra, e.g. ``bench --vs`` 
 
 Before ``solve`` times the solve, one iteration of the same solver on the same problem loads the
 compiled (numba) kernels; on the first run after installation (unless ``crocopy compile`` ran) they
-are compiled, which takes 15-25 s and is announced by a ``compiling kernels (first run only) ...``
+are compiled, which takes 25-40 s and is announced by a ``compiling kernels (first run only) ...``
 line, printed at launch when numba's cache lacks a kernel (:func:`crocopy.kernels.cache_is_cold`)
 and otherwise as soon as a compilation starts.  The reported solve time excludes that warm-up.
 """

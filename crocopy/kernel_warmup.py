@@ -1,7 +1,7 @@
 """Getting the compiled kernels ready: the first-run notice, the warm-up call, and ``crocopy compile``.
 
 A kernel (:mod:`crocopy.kernels`) is compiled on its first call with new argument types, unless
-numba's on-disk cache holds it; compiling all of them takes 15-25 s, loading them from the cache a
+numba's on-disk cache holds it; compiling all of them takes 25-40 s, loading them from the cache a
 fraction of a second.  Here:
 
 * :func:`announce_cold_cache` prints :data:`COMPILING_NOTICE` at once when the cache lacks a kernel
