@@ -11,7 +11,7 @@ from ..data_collector import DataCollectorAbstract
 from ..guards import Guarded, point_control_guards
 from ..named_items import ModelItems
 from ..validation import as_bool, as_number
-from ..versioning import touch
+from ..versioning import ParametersSeen, ParametersVersion, touch
 from .base import CostModelAbstract, CostModelResidual
 from .stack import CostStack
 
@@ -51,13 +51,6 @@ class CostModelSum(ModelItems, Guarded):
     _kind = "cost"
     _model_type = CostModelAbstract
     _guards = point_control_guards()
-
-    _items_token: object = None
-    """Replaced at every change of the items; a data created under another token is checked once."""
-
-    def _changed(self) -> None:
-        super()._changed()
-        self._items_token = object()
 
     @property
     def costs(self) -> dict[str, CostItem]:
@@ -103,7 +96,8 @@ class CostModelSum(ModelItems, Guarded):
         ValueError
             If ``data`` was created before a cost was added or removed (as Crocoddyl).
         """
-        if data.items_token is not self._items_token:
+        seen = data.items_seen
+        if seen.value != ParametersVersion.value and seen.stale(self._items_owner):
             self._check_data(data)
         total = data.stack.calc(x, u)
         for name in data.generic:
@@ -121,7 +115,11 @@ class CostModelSum(ModelItems, Guarded):
                 f"data holds cost datas {sorted(data.costs)} but the model has costs {sorted(self._items)}:"
                 " a cost was added or removed after createData(); create the data again"
             )
-        data.items_token = self._items_token
+        data.items_seen.filled()
+
+    def _items_owner(self) -> tuple:
+        """What a data's ``items_seen`` follows: this sum (touched when an item is added, removed or switched)."""
+        return (self,)
 
     def calcDiff(self, data: "CostDataSum", x: np.ndarray, u: np.ndarray | None = None) -> None:
         with_u = u is not None
@@ -151,7 +149,8 @@ class CostDataSum:
     def __init__(self, model: CostModelSum, data: DataCollectorAbstract | None) -> None:
         ndx, nu = model.state.ndx, model.nu
         self.shared = data
-        self.items_token = model._items_token
+        self.items_seen = ParametersSeen()
+        self.items_seen.filled()
         self.costs = {name: item.cost.createData(data) for name, item in model.costs.items()}
         self.cost = 0.0
         self.Lx = np.zeros(ndx)
