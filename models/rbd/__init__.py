@@ -1,0 +1,1 @@
+"""Compiled rigid-body algorithms on a lowered Pinocchio model (numba kernels called from compiled nodes)."""
