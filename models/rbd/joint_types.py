@@ -13,6 +13,10 @@ The axis of a revolute or prismatic joint is stored apart (``RigidBodyModel.axis
 unaligned joints share a code.
 """
 
+from __future__ import annotations
+
+import numpy as np
+
 FREEFLYER = 0
 REVOLUTE = 1
 REVOLUTE_UB = 2
@@ -20,3 +24,51 @@ PRISMATIC = 3
 
 NQ = {FREEFLYER: 7, REVOLUTE: 1, REVOLUTE_UB: 2, PRISMATIC: 1}
 NV = {FREEFLYER: 6, REVOLUTE: 1, REVOLUTE_UB: 1, PRISMATIC: 1}
+
+_ALIGNED = {
+    "JointModelRX": (REVOLUTE, 0),
+    "JointModelRY": (REVOLUTE, 1),
+    "JointModelRZ": (REVOLUTE, 2),
+    "JointModelRUBX": (REVOLUTE_UB, 0),
+    "JointModelRUBY": (REVOLUTE_UB, 1),
+    "JointModelRUBZ": (REVOLUTE_UB, 2),
+    "JointModelPX": (PRISMATIC, 0),
+    "JointModelPY": (PRISMATIC, 1),
+    "JointModelPZ": (PRISMATIC, 2),
+}
+_UNALIGNED = {
+    "JointModelRevoluteUnaligned": REVOLUTE,
+    "JointModelRevoluteUnboundedUnaligned": REVOLUTE_UB,
+    "JointModelPrismaticUnaligned": PRISMATIC,
+}
+
+
+class NotLowerable(ValueError):
+    """A Pinocchio model the compiled kernels cannot represent (the message names the joint and its type)."""
+
+
+def joint_arrays(model: object) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(jtype, idx_q, idx_v, axis)`` of a ``pinocchio.Model``; shapes ``(njoints,)`` ×3 and ``(njoints, 3)``.
+
+    Entry 0 is the universe (``jtype[0] = -1``).  Raises :class:`NotLowerable` for any other joint type.
+    """
+    njoints = model.njoints
+    jtype = np.full(njoints, -1, dtype=np.int64)
+    idx_q = np.zeros(njoints, dtype=np.int64)
+    idx_v = np.zeros(njoints, dtype=np.int64)
+    axis = np.zeros((njoints, 3))
+    for i in range(1, njoints):
+        joint = model.joints[i]
+        kind = joint.shortname()
+        if kind == "JointModelFreeFlyer":
+            jtype[i] = FREEFLYER
+        elif kind in _ALIGNED:
+            jtype[i], k = _ALIGNED[kind]
+            axis[i, k] = 1.0
+        elif kind in _UNALIGNED:
+            jtype[i] = _UNALIGNED[kind]
+            axis[i] = np.asarray(joint.extract().axis, dtype=float)
+        else:
+            raise NotLowerable(f"joint {model.names[i]!r} is a {kind}, which the compiled kernels do not support")
+        idx_q[i], idx_v[i] = joint.idx_q, joint.idx_v
+    return jtype, idx_q, idx_v, axis
