@@ -1,0 +1,654 @@
+"""Lie-group maps of SO(3)/SE(3) and the configuration space of a lowered multibody model (numba kernels).
+
+Every function is compiled with :func:`crocopy.kernels.compiled`, callable from Python and from other
+compiled functions, and writes into its ``out`` argument(s) (float64, C-contiguous); nothing is
+allocated.  Conventions are Pinocchio's.
+
+SO(3) and SE(3)
+---------------
+A rotation is ``R`` (3, 3); a placement ``M = (R, p)`` is ``R`` (3, 3) and ``p`` (3,), acting on points as
+``x ↦ R x + p``; a twist is ``ν = [v; ω]`` (6,), linear part first.  With ``θ = |ω|`` and ``[ω]`` the
+skew matrix of ``ω``:
+
+* ``exp3(ω) = I + sin θ/θ [ω] + (1 - cos θ)/θ² [ω]²``; ``log3`` is its inverse with ``θ ∈ [0, π]``
+  (the axis is read from the symmetric part of ``R`` near ``π``).
+* ``jexp3(ω) = Jr(ω) = I - (1 - cos θ)/θ² [ω] + (θ - sin θ)/θ³ [ω]²`` (right Jacobian:
+  ``exp3(ω + δ) ≈ exp3(ω) exp3(Jr δ)``) and ``jlog3(R) = Jr(log3 R)⁻¹
+  = I + [ω]/2 + (1/θ² - (1 + cos θ)/(2 θ sin θ)) [ω]²``.
+* ``exp6(ν) = (exp3 ω, Jl(ω) v)`` with the left Jacobian ``Jl(ω) = Jr(ω)ᵀ``; ``log6`` is its inverse.
+* ``jexp6(ν) = [[Jr(ω), Q(-v, -ω)], [0, Jr(ω)]]`` (6, 6), with Barfoot's ``Q(ρ, φ)``
+  (Barfoot & Furgale 2014, eq. 102 of Solà et al., "A micro Lie theory ...", 2018), and
+  ``jlog6(M) = jexp6(log6 M)⁻¹ = [[A, -A Q A], [0, A]]`` with ``A = Jr(ω)⁻¹``.
+* ``adjoint(M) = [[R, [p] R], [0, R]]`` (Pinocchio's ``SE3.action``); ``relative_placement(Ma, Mb)
+  = Ma⁻¹ Mb``; ``se3_compose(Ma, Mb) = Ma Mb``.
+* Quaternions are stored ``[x, y, z, w]`` (Pinocchio's configuration order).
+
+Small angles use Taylor series below ``θ = 1e-2`` (truncation error below 1e-16).
+
+Configuration space
+-------------------
+The model is given by ``(jtype, idx_q, idx_v)`` of :func:`~crocopy.models.rbd.joint_types.joint_arrays`
+(int64, (njoints,); entry 0, the universe, is skipped).  Per joint, ``q ⊕ v`` and ``q1 ⊖ q0`` are:
+
+* ``FREEFLYER``: ``q = [p, quaternion]``; ``M(q) exp6(v)`` (the quaternion is the product of ``q``'s and
+  ``exp3(ω)``'s, sign-aligned with ``q``'s and first-order normalised) and ``log6(M(q0)⁻¹ M(q1))``;
+  ``∂(q ⊕ v)/∂q = Ad(exp6(v))⁻¹``, ``∂(q ⊕ v)/∂v = jexp6(v)``, ``∂(q1 ⊖ q0)/∂q1 = jlog6(M)`` and
+  ``∂(q1 ⊖ q0)/∂q0 = -jlog6(M) Ad(M)⁻¹`` with ``M = M(q0)⁻¹ M(q1)``;
+* ``REVOLUTE``, ``PRISMATIC``: ``q + v`` and ``q1 - q0``, Jacobians ``±1``;
+* ``REVOLUTE_UB``: ``q = [cos θ, sin θ]`` rotated by ``v`` and the angle from ``q0`` to ``q1``,
+  Jacobians ``±1``.
+
+``integrate``/``difference`` write ``(nq,)``/``(nv,)``; ``dintegrate``/``ddifference`` write the block
+diagonal ``(nv, nv)`` Jacobian (``arg`` 0: w.r.t. the first argument, 1: the second);
+``dintegrate_transport`` writes ``J_out = dintegrate(q, v, arg) @ J_in`` for ``J_in`` (nv, ncols) (in place
+when ``J_out is J_in``).  The configuration arrays are read at ``idx_q``/``idx_v`` only, so ``q`` may be a
+whole state ``x = [q, v]``.
+
+The state functions are those of :class:`~crocopy.models.state_multibody.StateMultibody`
+(``x = [q, v]`` (nq + nv,), ``dx = [dq, dv]`` (2 nv,)):
+``state_diff = [q1 ⊖ q0, v1 - v0]``, ``state_integrate = [q ⊕ dq, v + dv]``,
+``state_jdiff(first) = diag(∂(q1 ⊖ q0)/∂q0, -I)`` or ``diag(∂(q1 ⊖ q0)/∂q1, I)`` and
+``state_jintegrate(first) = diag(∂(q ⊕ dq)/∂q, I)`` or ``diag(∂(q ⊕ dq)/∂dq, I)``, each (2 nv, 2 nv).
+"""
+
+from __future__ import annotations
+
+import math
+
+from crocopy.kernels import compiled
+
+from .joint_types import FREEFLYER, REVOLUTE_UB
+
+_SMALL = 1e-2
+"""Below this angle the trigonometric coefficients use their Taylor series."""
+
+
+# --- 3x3 matrices as row-major 9-tuples (values, no allocation) --------------------------------------
+
+
+@compiled
+def _mm(a, b):
+    """``a @ b``."""
+    return (
+        a[0] * b[0] + a[1] * b[3] + a[2] * b[6], a[0] * b[1] + a[1] * b[4] + a[2] * b[7],
+        a[0] * b[2] + a[1] * b[5] + a[2] * b[8],
+        a[3] * b[0] + a[4] * b[3] + a[5] * b[6], a[3] * b[1] + a[4] * b[4] + a[5] * b[7],
+        a[3] * b[2] + a[4] * b[5] + a[5] * b[8],
+        a[6] * b[0] + a[7] * b[3] + a[8] * b[6], a[6] * b[1] + a[7] * b[4] + a[8] * b[7],
+        a[6] * b[2] + a[7] * b[5] + a[8] * b[8],
+    )
+
+
+@compiled
+def _tr(a):
+    """``aᵀ``."""
+    return (a[0], a[3], a[6], a[1], a[4], a[7], a[2], a[5], a[8])
+
+
+@compiled
+def _skew(x, y, z):
+    """``[(x, y, z)]``, the matrix of the cross product."""
+    return (0.0, -z, y, z, 0.0, -x, -y, x, 0.0)
+
+
+@compiled
+def _poly(a, b, w, ww):
+    """``I + a W + b WW``."""
+    return (
+        1.0 + a * w[0] + b * ww[0], a * w[1] + b * ww[1], a * w[2] + b * ww[2],
+        a * w[3] + b * ww[3], 1.0 + a * w[4] + b * ww[4], a * w[5] + b * ww[5],
+        a * w[6] + b * ww[6], a * w[7] + b * ww[7], 1.0 + a * w[8] + b * ww[8],
+    )
+
+
+@compiled
+def _lin(a, x, b, y, c, z, d, u):
+    """``a x + b y + c z + d u`` for 9-tuples."""
+    return (
+        a * x[0] + b * y[0] + c * z[0] + d * u[0], a * x[1] + b * y[1] + c * z[1] + d * u[1],
+        a * x[2] + b * y[2] + c * z[2] + d * u[2], a * x[3] + b * y[3] + c * z[3] + d * u[3],
+        a * x[4] + b * y[4] + c * z[4] + d * u[4], a * x[5] + b * y[5] + c * z[5] + d * u[5],
+        a * x[6] + b * y[6] + c * z[6] + d * u[6], a * x[7] + b * y[7] + c * z[7] + d * u[7],
+        a * x[8] + b * y[8] + c * z[8] + d * u[8],
+    )
+
+
+@compiled
+def _add(a, b):
+    """``a + b``."""
+    return (a[0] + b[0], a[1] + b[1], a[2] + b[2], a[3] + b[3], a[4] + b[4], a[5] + b[5], a[6] + b[6],
+            a[7] + b[7], a[8] + b[8])
+
+
+@compiled
+def _mv(a, x, y, z):
+    """``a @ (x, y, z)``."""
+    return (
+        a[0] * x + a[1] * y + a[2] * z,
+        a[3] * x + a[4] * y + a[5] * z,
+        a[6] * x + a[7] * y + a[8] * z,
+    )
+
+
+@compiled
+def _load(R):
+    """A (3, 3) array as a 9-tuple."""
+    return (R[0, 0], R[0, 1], R[0, 2], R[1, 0], R[1, 1], R[1, 2], R[2, 0], R[2, 1], R[2, 2])
+
+
+@compiled
+def _store(a, out, r0, c0):
+    """``out[r0:r0+3, c0:c0+3] = a``."""
+    for i in range(3):
+        for j in range(3):
+            out[r0 + i, c0 + j] = a[3 * i + j]
+
+
+# --- SO(3) coefficients --------------------------------------------------------------------------------
+
+
+@compiled
+def _series(t2, m, weighted):
+    """``Σ_k (-t2)^k w_k/(2k + m)!`` with ``w_k = k + 1`` (``weighted``) or 1, to round-off for ``t2 < 1``."""
+    term = 1.0
+    for i in range(2, m + 1):
+        term /= i
+    total = term
+    for k in range(1, 12):
+        term *= -t2 / ((2 * k + m - 1) * (2 * k + m))
+        total += term * (k + 1) if weighted else term
+    return total
+
+
+@compiled
+def _coefs(t):
+    """``(sin t/t, (1 - cos t)/t², (t - sin t)/t³)``."""
+    if t < 1.0:
+        t2 = t * t
+        return _series(t2, 1, False), _series(t2, 2, False), _series(t2, 3, False)
+    s, c = math.sin(t), math.cos(t)
+    return (s / t, (1.0 - c) / (t * t), (t - s) / (t * t * t))
+
+
+@compiled
+def _inv_coef(t):
+    """``1/t² - (1 + cos t)/(2 t sin t)``, the ``[ω]²`` coefficient of ``Jr(ω)⁻¹`` (``t ∈ [0, π]``)."""
+    if t < _SMALL:
+        t2 = t * t
+        return 1.0 / 12.0 + t2 / 720.0 + t2 * t2 / 30240.0
+    h = 0.5 * t
+    return 1.0 / (t * t) - math.cos(h) / (2.0 * t * math.sin(h))
+
+
+@compiled
+def _exp3_t(x, y, z):
+    t = math.sqrt(x * x + y * y + z * z)
+    a, b, _ = _coefs(t)
+    w = _skew(x, y, z)
+    return _poly(a, b, w, _mm(w, w))
+
+
+@compiled
+def _jr_t(x, y, z, sign):
+    """``Jr(ω)`` (``sign = -1``) or ``Jl(ω) = Jr(ω)ᵀ`` (``sign = 1``)."""
+    t = math.sqrt(x * x + y * y + z * z)
+    _, b, c = _coefs(t)
+    w = _skew(x, y, z)
+    return _poly(sign * b, c, w, _mm(w, w))
+
+
+@compiled
+def _jr_inv_t(x, y, z, sign):
+    """``Jr(ω)⁻¹`` (``sign = 1``) or ``Jl(ω)⁻¹`` (``sign = -1``)."""
+    t = math.sqrt(x * x + y * y + z * z)
+    w = _skew(x, y, z)
+    return _poly(0.5 * sign, _inv_coef(t), w, _mm(w, w))
+
+
+@compiled
+def _log3_t(R):
+    """``log3(R)`` as ``(x, y, z)``."""
+    ax, ay, az = 0.5 * (R[7] - R[5]), 0.5 * (R[2] - R[6]), 0.5 * (R[3] - R[1])
+    s = math.sqrt(ax * ax + ay * ay + az * az)
+    c = 0.5 * (R[0] + R[4] + R[8] - 1.0)
+    t = math.atan2(s, c)
+    if c > -0.5:
+        if t < _SMALL:
+            t2 = t * t
+            k = 1.0 + t2 / 6.0 + 7.0 * t2 * t2 / 360.0
+        else:
+            k = t / s
+        return (k * ax, k * ay, k * az)
+    # near π: θ² k kᵀ = θ² (sym(R) - c I)/(1 - c); the largest diagonal entry fixes the axis, ``a`` its sign
+    i = 0
+    if R[4] > R[0]:
+        i = 1
+    if R[8] > R[3 * i + i]:
+        i = 2
+    d = 1.0 - c
+    ki = math.sqrt(max((R[4 * i] - c) / d, 0.0))
+    ai = ax if i == 0 else (ay if i == 1 else az)
+    if ai < 0.0:
+        ki = -ki
+    f = 1.0 / (d * ki)
+    k0 = ki if i == 0 else 0.5 * (R[i] + R[3 * i]) * f
+    k1 = ki if i == 1 else 0.5 * (R[3 + i] + R[3 * i + 1]) * f
+    k2 = ki if i == 2 else 0.5 * (R[6 + i] + R[3 * i + 2]) * f
+    return (t * k0, t * k1, t * k2)
+
+
+@compiled
+def _q_t(rx, ry, rz, x, y, z):
+    """Barfoot's ``Q(ρ, φ)``, the upper-right block of SE(3)'s left Jacobian."""
+    t2 = x * x + y * y + z * z
+    if t2 < 1.0:
+        c2, c3, c4 = _series(t2, 3, False), _series(t2, 4, False), _series(t2, 5, True)
+    else:
+        t = math.sqrt(t2)
+        s, c = math.sin(t), math.cos(t)
+        c2 = (t - s) / (t2 * t)
+        c3 = (t2 + 2.0 * c - 2.0) / (2.0 * t2 * t2)
+        c4 = (2.0 * t - 3.0 * s + t * c) / (2.0 * t2 * t2 * t)
+    P = _skew(rx, ry, rz)
+    W = _skew(x, y, z)
+    WP, PW = _mm(W, P), _mm(P, W)
+    WPW = _mm(WP, W)
+    WWP, PWW = _mm(W, WP), _mm(PW, W)
+    WPWW, WWPW = _mm(WPW, W), _mm(W, WPW)
+    first = _lin(0.5, P, c2, WP, c2, PW, c2 - 3.0 * c3, WPW)
+    second = _lin(c3, WWP, c3, PWW, c4, WPWW, c4, WWPW)
+    return _add(first, second)
+
+
+# --- public SO(3) -------------------------------------------------------------------------------------
+
+
+@compiled
+def exp3(w, R_out):
+    """``R_out (3, 3) = exp3(w (3,))``."""
+    _store(_exp3_t(w[0], w[1], w[2]), R_out, 0, 0)
+
+
+@compiled
+def log3(R, w_out):
+    """``w_out (3,) = log3(R (3, 3))``, angle in ``[0, π]``."""
+    w_out[0], w_out[1], w_out[2] = _log3_t(_load(R))
+
+
+@compiled
+def jexp3(w, J_out):
+    """``J_out (3, 3) = Jexp3(w)``, the right Jacobian of ``exp3``."""
+    _store(_jr_t(w[0], w[1], w[2], -1.0), J_out, 0, 0)
+
+
+@compiled
+def jlog3(R, J_out):
+    """``J_out (3, 3) = Jlog3(R) = Jexp3(log3 R)⁻¹``."""
+    x, y, z = _log3_t(_load(R))
+    _store(_jr_inv_t(x, y, z, 1.0), J_out, 0, 0)
+
+
+# --- SE(3) ---------------------------------------------------------------------------------------------
+
+
+@compiled
+def _exp6_t(vx, vy, vz, x, y, z):
+    """``exp6([v; ω])`` as ``(R, p)`` tuples."""
+    return _exp3_t(x, y, z), _mv(_jr_t(x, y, z, 1.0), vx, vy, vz)
+
+
+@compiled
+def _log6_t(R, px, py, pz):
+    """``log6(R, p)`` as ``(ρx, ρy, ρz, φx, φy, φz)``."""
+    x, y, z = _log3_t(R)
+    rx, ry, rz = _mv(_jr_inv_t(x, y, z, -1.0), px, py, pz)
+    return rx, ry, rz, x, y, z
+
+
+@compiled
+def _jexp6_into(vx, vy, vz, x, y, z, J, r0, c0):
+    """``J[r0:r0+6, c0:c0+6] = jexp6([v; ω])``."""
+    A = _jr_t(x, y, z, -1.0)
+    _store(A, J, r0, c0)
+    _store(A, J, r0 + 3, c0 + 3)
+    _store(_q_t(-vx, -vy, -vz, -x, -y, -z), J, r0, c0 + 3)
+    for i in range(3):
+        for j in range(3):
+            J[r0 + 3 + i, c0 + j] = 0.0
+
+
+@compiled
+def _jlog6_into(R, px, py, pz, J, r0, c0):
+    """``J[r0:r0+6, c0:c0+6] = jlog6(R, p)``."""
+    rx, ry, rz, x, y, z = _log6_t(R, px, py, pz)
+    A = _jr_inv_t(x, y, z, 1.0)
+    _store(A, J, r0, c0)
+    _store(A, J, r0 + 3, c0 + 3)
+    B = _mm(_mm(A, _q_t(-rx, -ry, -rz, -x, -y, -z)), A)
+    for i in range(3):
+        for j in range(3):
+            J[r0 + i, c0 + 3 + j] = -B[3 * i + j]
+            J[r0 + 3 + i, c0 + j] = 0.0
+
+
+@compiled
+def _adjoint_into(R, px, py, pz, J, r0, c0):
+    """``J[r0:r0+6, c0:c0+6] = Ad(R, p) = [[R, [p] R], [0, R]]``."""
+    _store(R, J, r0, c0)
+    _store(R, J, r0 + 3, c0 + 3)
+    _store(_mm(_skew(px, py, pz), R), J, r0, c0 + 3)
+    for i in range(3):
+        for j in range(3):
+            J[r0 + 3 + i, c0 + j] = 0.0
+
+
+@compiled
+def _inverse_t(R, px, py, pz):
+    """``(R, p)⁻¹ = (Rᵀ, -Rᵀ p)`` as tuples."""
+    Rt = _tr(R)
+    qx, qy, qz = _mv(Rt, px, py, pz)
+    return Rt, (-qx, -qy, -qz)
+
+
+@compiled
+def exp6(nu, R_out, p_out):
+    """``(R_out (3, 3), p_out (3,)) = exp6(nu (6,))``, ``nu = [v; ω]``."""
+    R, p = _exp6_t(nu[0], nu[1], nu[2], nu[3], nu[4], nu[5])
+    _store(R, R_out, 0, 0)
+    p_out[0], p_out[1], p_out[2] = p
+
+
+@compiled
+def log6(R, p, out6):
+    """``out6 (6,) = log6(R, p) = [v; ω]``."""
+    res = _log6_t(_load(R), p[0], p[1], p[2])
+    for k in range(6):
+        out6[k] = res[k]
+
+
+@compiled
+def jexp6(nu, J_out):
+    """``J_out (6, 6) = Jexp6(nu)``, the right Jacobian of ``exp6``."""
+    _jexp6_into(nu[0], nu[1], nu[2], nu[3], nu[4], nu[5], J_out, 0, 0)
+
+
+@compiled
+def jlog6(R, p, J_out):
+    """``J_out (6, 6) = Jlog6(R, p)``."""
+    _jlog6_into(_load(R), p[0], p[1], p[2], J_out, 0, 0)
+
+
+@compiled
+def adjoint(R, p, Ad_out):
+    """``Ad_out (6, 6) = Ad(R, p)`` (Pinocchio's ``SE3(R, p).action``)."""
+    _adjoint_into(_load(R), p[0], p[1], p[2], Ad_out, 0, 0)
+
+
+@compiled
+def se3_compose(Ra, pa, Rb, pb, R_out, p_out):
+    """``(R_out, p_out) = Ma Mb = (Ra Rb, Ra pb + pa)``."""
+    A = _load(Ra)
+    _store(_mm(A, _load(Rb)), R_out, 0, 0)
+    x, y, z = _mv(A, pb[0], pb[1], pb[2])
+    p_out[0], p_out[1], p_out[2] = x + pa[0], y + pa[1], z + pa[2]
+
+
+@compiled
+def relative_placement(Ra, pa, Rb, pb, R_out, p_out):
+    """``(R_out, p_out) = Ma⁻¹ Mb = (Raᵀ Rb, Raᵀ (pb - pa))``."""
+    At = _tr(_load(Ra))
+    _store(_mm(At, _load(Rb)), R_out, 0, 0)
+    p_out[0], p_out[1], p_out[2] = _mv(At, pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2])
+
+
+@compiled
+def se3_act(R, p, x, out):
+    """``out (3,) = R x + p``, the placement acting on a point."""
+    a, b, c = _mv(_load(R), x[0], x[1], x[2])
+    out[0], out[1], out[2] = a + p[0], b + p[1], c + p[2]
+
+
+# --- quaternions [x, y, z, w] -------------------------------------------------------------------------
+
+
+@compiled
+def _quat_rot_t(x, y, z, w):
+    """The rotation of a unit quaternion (Eigen's ``toRotationMatrix`` formula)."""
+    return (
+        1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w),
+        2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w),
+        2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y),
+    )
+
+
+@compiled
+def quat_to_rot(quat, R_out):
+    """``R_out (3, 3)`` = rotation of the unit quaternion ``quat = [x, y, z, w]``."""
+    _store(_quat_rot_t(quat[0], quat[1], quat[2], quat[3]), R_out, 0, 0)
+
+
+@compiled
+def rot_to_quat(R, quat_out):
+    """``quat_out = [x, y, z, w]``, a unit quaternion of ``R`` (Shepperd's method; ``w ≥ 0`` when
+    ``trace R > 0``, the sign is otherwise that of the largest of ``x, y, z``)."""
+    t = R[0, 0] + R[1, 1] + R[2, 2]
+    if t > 0.0:
+        s = 2.0 * math.sqrt(t + 1.0)
+        w, x, y, z = 0.25 * s, (R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s
+    elif R[0, 0] >= R[1, 1] and R[0, 0] >= R[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + R[0, 0] - R[1, 1] - R[2, 2])
+        w, x, y, z = (R[2, 1] - R[1, 2]) / s, 0.25 * s, (R[0, 1] + R[1, 0]) / s, (R[0, 2] + R[2, 0]) / s
+    elif R[1, 1] >= R[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + R[1, 1] - R[0, 0] - R[2, 2])
+        w, x, y, z = (R[0, 2] - R[2, 0]) / s, (R[0, 1] + R[1, 0]) / s, 0.25 * s, (R[1, 2] + R[2, 1]) / s
+    else:
+        s = 2.0 * math.sqrt(1.0 + R[2, 2] - R[0, 0] - R[1, 1])
+        w, x, y, z = (R[1, 0] - R[0, 1]) / s, (R[0, 2] + R[2, 0]) / s, (R[1, 2] + R[2, 1]) / s, 0.25 * s
+    quat_out[0], quat_out[1], quat_out[2], quat_out[3] = x, y, z, w
+
+
+# --- configuration space --------------------------------------------------------------------------------
+
+
+@compiled
+def _placement_t(q, i):
+    """``M(q[i:i+7])`` of a free-flyer configuration as ``(R, p)`` tuples."""
+    return _quat_rot_t(q[i + 3], q[i + 4], q[i + 5], q[i + 6]), (q[i], q[i + 1], q[i + 2])
+
+
+@compiled
+def _relative_t(q0, q1, i):
+    """``M(q0)⁻¹ M(q1)`` of the free flyer at ``q[i:i+7]`` as ``(R, p)`` tuples."""
+    R0, p0 = _placement_t(q0, i)
+    R1, p1 = _placement_t(q1, i)
+    R0t = _tr(R0)
+    return _mm(R0t, R1), _mv(R0t, p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2])
+
+
+@compiled
+def _integrate_freeflyer(q, iq, v, iv, q_out):
+    x0, y0, z0, w0 = q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6]
+    wx, wy, wz = v[iv + 3], v[iv + 4], v[iv + 5]
+    t = math.sqrt(wx * wx + wy * wy + wz * wz)
+    if t < _SMALL:
+        t2 = t * t
+        k = 0.5 - t2 / 48.0 + t2 * t2 / 3840.0
+    else:
+        k = math.sin(0.5 * t) / t
+    ex, ey, ez, ew = k * wx, k * wy, k * wz, math.cos(0.5 * t)
+    x = w0 * ex + ew * x0 + y0 * ez - z0 * ey
+    y = w0 * ey + ew * y0 + z0 * ex - x0 * ez
+    z = w0 * ez + ew * z0 + x0 * ey - y0 * ex
+    w = w0 * ew - x0 * ex - y0 * ey - z0 * ez
+    if x * x0 + y * y0 + z * z0 + w * w0 < 0.0:
+        x, y, z, w = -x, -y, -z, -w
+    f = 0.5 * (3.0 - (x * x + y * y + z * z + w * w))
+    R0 = _quat_rot_t(x0, y0, z0, w0)
+    tx, ty, tz = _mv(_jr_t(wx, wy, wz, 1.0), v[iv], v[iv + 1], v[iv + 2])
+    dx, dy, dz = _mv(R0, tx, ty, tz)
+    q_out[iq], q_out[iq + 1], q_out[iq + 2] = q[iq] + dx, q[iq + 1] + dy, q[iq + 2] + dz
+    q_out[iq + 3], q_out[iq + 4], q_out[iq + 5], q_out[iq + 6] = f * x, f * y, f * z, f * w
+
+
+@compiled
+def integrate(jtype, idx_q, idx_v, q, v, q_out):
+    """``q_out (nq,) = q ⊕ v`` (``pinocchio.integrate``)."""
+    for j in range(1, jtype.shape[0]):
+        kind, iq, iv = jtype[j], idx_q[j], idx_v[j]
+        if kind == FREEFLYER:
+            _integrate_freeflyer(q, iq, v, iv, q_out)
+        elif kind == REVOLUTE_UB:
+            c0, s0 = q[iq], q[iq + 1]
+            ca, sa = math.cos(v[iv]), math.sin(v[iv])
+            c, s = c0 * ca - s0 * sa, s0 * ca + c0 * sa
+            f = 0.5 * (3.0 - (c * c + s * s))
+            q_out[iq], q_out[iq + 1] = f * c, f * s
+        else:
+            q_out[iq] = q[iq] + v[iv]
+
+
+@compiled
+def difference(jtype, idx_q, idx_v, q0, q1, v_out):
+    """``v_out (nv,) = q1 ⊖ q0`` (``pinocchio.difference``)."""
+    for j in range(1, jtype.shape[0]):
+        kind, iq, iv = jtype[j], idx_q[j], idx_v[j]
+        if kind == FREEFLYER:
+            R, p = _relative_t(q0, q1, iq)
+            res = _log6_t(R, p[0], p[1], p[2])
+            for k in range(6):
+                v_out[iv + k] = res[k]
+        elif kind == REVOLUTE_UB:
+            c0, s0, c1, s1 = q0[iq], q0[iq + 1], q1[iq], q1[iq + 1]
+            v_out[iv] = math.atan2(c0 * s1 - s0 * c1, c0 * c1 + s0 * s1)
+        else:
+            v_out[iv] = q1[iq] - q0[iq]
+
+
+@compiled
+def _ddifference_blocks(jtype, idx_q, idx_v, q0, q1, arg, J):
+    """The diagonal blocks of ``∂(q1 ⊖ q0)/∂(q0 or q1)`` into ``J`` at ``(idx_v, idx_v)``."""
+    for j in range(1, jtype.shape[0]):
+        kind, iq, iv = jtype[j], idx_q[j], idx_v[j]
+        if kind != FREEFLYER:
+            J[iv, iv] = 1.0 if arg == 1 else -1.0
+            continue
+        R, p = _relative_t(q0, q1, iq)
+        _jlog6_into(R, p[0], p[1], p[2], J, iv, iv)
+        if arg == 1:
+            continue
+        # J ← -Jlog6 Ad(M⁻¹), row by row, with Ad(M⁻¹) = [[Rᵀ, -Rᵀ[p]], [0, Rᵀ]]
+        Rt = _tr(R)
+        B = _mm(Rt, _skew(p[0], p[1], p[2]))
+        for r in range(6):
+            a0, a1, a2 = J[iv + r, iv], J[iv + r, iv + 1], J[iv + r, iv + 2]
+            b0, b1, b2 = J[iv + r, iv + 3], J[iv + r, iv + 4], J[iv + r, iv + 5]
+            for c in range(3):
+                left = a0 * Rt[c] + a1 * Rt[3 + c] + a2 * Rt[6 + c]
+                right = -(a0 * B[c] + a1 * B[3 + c] + a2 * B[6 + c]) + b0 * Rt[c] + b1 * Rt[3 + c] + b2 * Rt[6 + c]
+                J[iv + r, iv + c] = -left
+                J[iv + r, iv + 3 + c] = -right
+
+
+@compiled
+def _dintegrate_blocks(jtype, idx_q, idx_v, v, arg, J):
+    """The diagonal blocks of ``∂(q ⊕ v)/∂(q or v)`` into ``J`` at ``(idx_v, idx_v)`` (independent of ``q``)."""
+    for j in range(1, jtype.shape[0]):
+        kind, iv = jtype[j], idx_v[j]
+        if kind != FREEFLYER:
+            J[iv, iv] = 1.0
+        elif arg == 1:
+            _jexp6_into(v[iv], v[iv + 1], v[iv + 2], v[iv + 3], v[iv + 4], v[iv + 5], J, iv, iv)
+        else:
+            R, p = _exp6_t(v[iv], v[iv + 1], v[iv + 2], v[iv + 3], v[iv + 4], v[iv + 5])
+            Rt, pt = _inverse_t(R, p[0], p[1], p[2])
+            _adjoint_into(Rt, pt[0], pt[1], pt[2], J, iv, iv)
+
+
+@compiled
+def _zero(J):
+    for r in range(J.shape[0]):
+        for c in range(J.shape[1]):
+            J[r, c] = 0.0
+
+
+@compiled
+def dintegrate(jtype, idx_q, idx_v, q, v, arg, J_out):
+    """``J_out (nv, nv) = ∂(q ⊕ v)/∂q`` (``arg = 0``) or ``∂(q ⊕ v)/∂v`` (``arg = 1``) (``pinocchio.dIntegrate``)."""
+    _zero(J_out)
+    _dintegrate_blocks(jtype, idx_q, idx_v, v, arg, J_out)
+
+
+@compiled
+def ddifference(jtype, idx_q, idx_v, q0, q1, arg, J_out):
+    """``J_out (nv, nv) = ∂(q1 ⊖ q0)/∂q0`` (``arg = 0``) or ``∂/∂q1`` (``arg = 1``) (``pinocchio.dDifference``)."""
+    _zero(J_out)
+    _ddifference_blocks(jtype, idx_q, idx_v, q0, q1, arg, J_out)
+
+
+@compiled
+def dintegrate_transport(jtype, idx_q, idx_v, q, v, J_in, arg, J_out):
+    """``J_out (nv, ncols) = dintegrate(q, v, arg) @ J_in (nv, ncols)`` (``pinocchio.dIntegrateTransport``);
+    ``J_out`` may be ``J_in``."""
+    ncols = J_in.shape[1]
+    for j in range(1, jtype.shape[0]):
+        kind, iv = jtype[j], idx_v[j]
+        if kind != FREEFLYER:
+            for c in range(ncols):
+                J_out[iv, c] = J_in[iv, c]
+            continue
+        vx, vy, vz, x, y, z = v[iv], v[iv + 1], v[iv + 2], v[iv + 3], v[iv + 4], v[iv + 5]
+        if arg == 1:  # [[Jr, Q(-v, -ω)], [0, Jr]]
+            A = _jr_t(x, y, z, -1.0)
+            B = _q_t(-vx, -vy, -vz, -x, -y, -z)
+        else:  # Ad(exp6(v))⁻¹ = [[Rᵀ, -Rᵀ[p]], [0, Rᵀ]]
+            R, p = _exp6_t(vx, vy, vz, x, y, z)
+            A = _tr(R)
+            S = _mm(A, _skew(p[0], p[1], p[2]))
+            B = (-S[0], -S[1], -S[2], -S[3], -S[4], -S[5], -S[6], -S[7], -S[8])
+        for c in range(ncols):
+            a0, a1, a2 = J_in[iv, c], J_in[iv + 1, c], J_in[iv + 2, c]
+            b0, b1, b2 = J_in[iv + 3, c], J_in[iv + 4, c], J_in[iv + 5, c]
+            top = _mv(A, a0, a1, a2)
+            top2 = _mv(B, b0, b1, b2)
+            bottom = _mv(A, b0, b1, b2)
+            for k in range(3):
+                J_out[iv + k, c] = top[k] + top2[k]
+                J_out[iv + 3 + k, c] = bottom[k]
+
+
+# --- multibody state x = [q, v] ---------------------------------------------------------------------------
+
+
+@compiled
+def state_diff(jtype, idx_q, idx_v, nq, nv, x0, x1, out):
+    """``out (2 nv,) = [q1 ⊖ q0, v1 - v0]`` (``StateMultibody.diff``)."""
+    difference(jtype, idx_q, idx_v, x0, x1, out)
+    for k in range(nv):
+        out[nv + k] = x1[nq + k] - x0[nq + k]
+
+
+@compiled
+def state_integrate(jtype, idx_q, idx_v, nq, nv, x, dx, out):
+    """``out (nq + nv,) = [q ⊕ dq, v + dv]`` (``StateMultibody.integrate``)."""
+    integrate(jtype, idx_q, idx_v, x, dx, out)
+    for k in range(nv):
+        out[nq + k] = x[nq + k] + dx[nv + k]
+
+
+@compiled
+def state_jdiff(jtype, idx_q, idx_v, nq, nv, x0, x1, first, J_out):
+    """``J_out (2 nv, 2 nv)``: ``StateMultibody.Jdiff(x0, x1)[0]`` (``first``) or ``[1]``."""
+    _zero(J_out)
+    _ddifference_blocks(jtype, idx_q, idx_v, x0, x1, 0 if first else 1, J_out)
+    d = -1.0 if first else 1.0
+    for k in range(nv):
+        J_out[nv + k, nv + k] = d
+
+
+@compiled
+def state_jintegrate(jtype, idx_q, idx_v, nq, nv, x, dx, first, J_out):
+    """``J_out (2 nv, 2 nv)``: ``StateMultibody.Jintegrate(x, dx)[0]`` (``first``) or ``[1]``."""
+    _zero(J_out)
+    _dintegrate_blocks(jtype, idx_q, idx_v, dx, 0 if first else 1, J_out)
+    for k in range(nv):
+        J_out[nv + k, nv + k] = 1.0
