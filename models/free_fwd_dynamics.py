@@ -33,6 +33,7 @@ from crocopy.validation import as_vector
 
 from .data_collectors import DataCollectorJointActMultibody
 from .dynamics_options import ActuationStructure, ArmatureMixin
+from .rbd.euler_node import euler_node
 from .residuals_frame import check_same_robot
 from .state_multibody import StateMultibody
 
@@ -148,6 +149,13 @@ class DifferentialActionModelFreeFwdDynamics(ArmatureMixin, DifferentialActionMo
         self.costs.calcDiff(data.costs, x, u)
         if self.constraints is not None:
             self.constraints.calcDiff(data.constraints, x, u)
+
+    def _compiled_euler_node(self, iam, data, terminal: bool, memo: dict) -> object | None:
+        """The compiled evaluator of the Euler node ``(iam, data)`` over this model
+        (:func:`.rbd.euler_node.euler_node`), or None for a subclass or a node it cannot compile."""
+        if type(self) is not DifferentialActionModelFreeFwdDynamics:
+            return None
+        return euler_node(iam, data, terminal, memo)
 
     def quasiStatic(
         self, data: "DifferentialActionDataFreeFwdDynamics", x: np.ndarray, maxiter: int = 100, tol: float = 1e-9

@@ -42,6 +42,15 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
             kernel = "the compiled Euler chain rule"
             log_fallback(type(self.state), ["JintegrateTransport"], kernel, how="does not implement")
 
+    def _compiled_node(self, data: "IntegratedActionDataEuler", terminal: bool, memo: dict) -> object | None:
+        """This node's compiled evaluator for a solve (:mod:`crocopy.solvers.compiled_nodes`), offered by the
+        differential model (``_compiled_euler_node``) when it has one; None for a subclass (its overrides
+        run) or another control parametrization."""
+        if type(self) is not IntegratedActionModelEuler or not self._identity_control:
+            return None
+        make = getattr(self.differential, "_compiled_euler_node", None)
+        return None if make is None else make(self, data, terminal, memo)
+
     def createData(self) -> "IntegratedActionDataEuler":
         return IntegratedActionDataEuler(self)
 

@@ -249,6 +249,8 @@ class SolverBoxDDP(BoxSolverMixin, SolverDDP):
         Problem whose running models carry the control bounds ``u_lb``/``u_ub``.
     """
 
+    _nodes_compiled = True
+
     def __init__(self, problem: ShootingProblem) -> None:
         super().__init__(problem)
         self._init_box()

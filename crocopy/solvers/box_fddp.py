@@ -40,6 +40,8 @@ class SolverBoxFDDP(BoxSolverMixin, SolverFDDP):
         Problem whose running models carry the control bounds ``u_lb``/``u_ub``.
     """
 
+    _nodes_compiled = True
+
     def __init__(self, problem: ShootingProblem) -> None:
         super().__init__(problem)
         self._init_box()

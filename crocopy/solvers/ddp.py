@@ -41,7 +41,7 @@ from scipy.linalg.lapack import dpotrf, dpotrs
 from .. import kernels
 from ..kernels import log_fallback, overridden
 from ..shooting import ShootingProblem
-from . import horizon, riccati_kernel
+from . import compiled_nodes, horizon, riccati_kernel
 from .base import BackwardPassError, ForwardPassError, SolverAbstract
 from .horizon import Horizon, NodeDerivatives
 from .nonfinite import (
@@ -67,6 +67,9 @@ _SOLE = _sole_holder_count()
 
 class SolverDDP(SolverAbstract):
     """Crocoddyl's ``SolverDDP(problem)``: regularised DDP with a backtracking line search."""
+
+    _nodes_compiled = True
+    _nodes: compiled_nodes.CompiledNodes | None = None
 
     def __init__(self, problem: ShootingProblem) -> None:
         super().__init__(problem)
@@ -140,7 +143,7 @@ class SolverDDP(SolverAbstract):
 
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
-        for name in self._views:
+        for name in (*self._views, "_nodes"):
             state.pop(name, None)
         return state
 
@@ -195,13 +198,21 @@ class SolverDDP(SolverAbstract):
             If the cost of the guess is not finite (the message names the node).
         """
         self._start(init_xs, init_us, is_feasible, init_reg)
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-            try:
-                return self._iterate(maxiter)
-            except NonFiniteError as exc:
-                if exc.where == "problem evaluation" and self.iter == 0:
-                    raise ValueError(f"solve: the cost of the initial guess is not finite ({exc})") from exc
-                return self._fail(f"{exc} (kept the best finite iterate)", nonfinite=True)
+        self._nodes = compiled_nodes.select(self)
+        try:
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+                try:
+                    solved = self._iterate(maxiter)
+                except NonFiniteError as exc:
+                    if exc.where == "problem evaluation" and self.iter == 0:
+                        raise ValueError(f"solve: the cost of the initial guess is not finite ({exc})") from exc
+                    solved = self._fail(f"{exc} (kept the best finite iterate)", nonfinite=True)
+        finally:
+            compiled, self._nodes = self._nodes is not None, None
+        if compiled:
+            self.problem.calc(self.xs, self.us)
+            self.problem.calcDiff(self.xs, self.us)
+        return solved
 
     def _iterate(self, maxiter: int) -> bool:
         """The iterations of :meth:`solve`; raises NonFiniteError where NaN/inf arise."""
@@ -339,9 +350,12 @@ class SolverDDP(SolverAbstract):
     def calcDiff(self) -> float:
         """Evaluate (if needed) and differentiate every node at the current iterate; update the gaps."""
         problem = self.problem
-        if not self._synced:
-            problem.calc(self.xs, self.us)
-        self.cost = problem.calcDiff(self.xs, self.us)
+        if self._nodes is not None:
+            self.cost = self._nodes.calcDiff(problem, self.xs, self.us, self._synced)
+        else:
+            if not self._synced:
+                problem.calc(self.xs, self.us)
+            self.cost = problem.calcDiff(self.xs, self.us)
         self._synced = True
         if not np.isfinite(self.cost):
             raise locate_cost(problem)
@@ -522,10 +536,33 @@ class SolverDDP(SolverAbstract):
         us, k, K, unbounded = self.us, self.k, self.K, self._unbounded
         feedback = riccati_kernel.feedback_control if kernels.active else riccati_kernel.feedback_control_numpy
         gap_at = problem.T if last_gap else -1
+        calcs, steps = (None, None) if self._nodes is None else (self._nodes.calcs, self._nodes.steps)
         cost = 0.0
         t = 0
         for m, d in zip(models, problem.runningDatas):
             state = m.state
+            step = None if steps is None else steps[t]
+            if step is not None:
+                dx = dx_try[t]
+                if dx is None or dx.shape[0] != state.ndx:
+                    dx = dx_try[t] = np.empty(state.ndx)
+                u = us_try[t]
+                if getrefcount(u) != _SOLE or u.base is not None or u.shape[0] != m.nu:
+                    u = us_try[t] = np.empty(m.nu)
+                lb = None if lbs is None else lbs[t]
+                if lb is None:
+                    lb, ub = unbounded[m.nu]
+                else:
+                    ub = ubs[t]
+                x_next = xs_try[t + 1]
+                if getrefcount(x_next) != _SOLE or x_next.base is not None or x_next.shape[0] != state.nx:
+                    x_next = xs_try[t + 1] = np.empty(state.nx)
+                d.cost = c = step(xs[t], x, us[t], k[t], K[t], steplength, lb, ub, u, dx, x_next, fs[t + 1],
+                                  gaps or t + 1 == gap_at)
+                cost += c
+                x = x_next
+                t += 1
+                continue
             if m.nu:
                 dx = dx_try[t]
                 if dx is None or dx.shape[0] != state.ndx:
@@ -540,9 +577,12 @@ class SolverDDP(SolverAbstract):
                 else:
                     ub = ubs[t]
                 feedback(us[t], k[t], K[t], dx, steplength, lb, ub, u)
+            else:
+                u = us_try[t]
+            if calcs is None:
                 m.calc(d, x, u)
             else:
-                m.calc(d, x, us_try[t])
+                calcs[t](x, u)
             cost += d.cost
             t += 1
             xnext = d.xnext
@@ -553,7 +593,10 @@ class SolverDDP(SolverAbstract):
                 state._integrate_into(xnext, (steplength - 1.0) * fs[t], x)
             else:
                 x[:] = xnext
-        problem.terminalModel.calc(problem.terminalData, x)
+        if calcs is None:
+            problem.terminalModel.calc(problem.terminalData, x)
+        else:
+            calcs[-1](x, None)
         cost += problem.terminalData.cost
         if not np.isfinite(cost) or not np.isfinite(x).all():
             raise ForwardPassError("the rollout produced a non-finite state or cost")

@@ -20,6 +20,8 @@ from .ddp import SolverDDP
 class SolverFDDP(SolverDDP):
     """Crocoddyl's ``SolverFDDP(problem)``."""
 
+    _nodes_compiled = True
+
     def __init__(self, problem: ShootingProblem) -> None:
         super().__init__(problem)
         self.th_acceptNegStep = 2.0

@@ -1,0 +1,99 @@
+"""Compiled node evaluations inside a solve of the DDP family.
+
+A node whose model can be evaluated by one compiled call offers an *evaluator*:
+``model._compiled_node(data, terminal, memo)``, called at the start of every solve, returns an object
+that has re-read the model's parameters (references, weights, time step) and has
+
+* ``calc(x, u)``: writes ``data.xnext`` and ``data.cost`` (``u = None`` for the terminal node);
+* ``calcDiff(x, u, synced)``: evaluates the node again and writes ``data.xnext``, ``data.cost``,
+  ``Fx``, ``Fu``, ``Lx``, ``Lu``, ``Lxx``, ``Lxu`` and ``Luu`` (self-contained: it never relies on an
+  earlier ``calc``, so rollouts that call ``model.calc`` directly mix freely with it);
+* optionally ``rollout_step(x_ref, x, u_ref, k, K, alpha, lb, ub, u, dx, x_next, f, gap) -> cost``: one
+  node of the rollout (``dx = x ⊖ x_ref``, the clamped feedback control ``u``, ``calc``, and
+  ``x_next = xnext``, or ``xnext ⊕ ((alpha - 1) f)`` when ``gap``) in one call; the caller stores the
+  returned cost in ``data.cost``;
+
+or ``None`` (models without the method, or nodes it cannot compile).  ``terminal`` tells whether the node is the
+problem's terminal node; ``memo`` is a dictionary shared by the nodes of one solve (for what they
+derive once from shared models).  Today the Euler-integrated free forward dynamics of
+a multibody system with residual costs has one (:mod:`crocopy.models.rbd.euler_node`).
+
+Inside ``solve`` those evaluators replace ``model.calc``/``model.calcDiff`` in the derivatives and the
+rollout.  They write only the action data fields above, not the nested datas (differential, costs,
+residuals, Pinocchio data): when ``solve`` returns, one ``problem.calc`` and ``problem.calcDiff`` at the
+final iterate fill every data exactly as a solve without compiled nodes leaves them.  The compiled
+nodes are used only while :func:`crocopy.kernels_enabled`, by the solver classes that declare
+``_nodes_compiled = True`` in their own body (DDP, FDDP, Box-DDP, Box-FDDP; a subclass may read nested
+datas mid-solve, so it opts in explicitly), and when every callback is one of crocopy's (a user
+callback may read nested datas).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from .. import kernels
+
+
+def _python_calc(model, data) -> Callable:
+    def calc(x, u):
+        model.calc(data, x, u)
+
+    return calc
+
+
+def _python_calc_diff(model, data) -> Callable:
+    def calc_diff(x, u, synced):
+        if not synced:
+            model.calc(data, x, u)
+        model.calcDiff(data, x, u)
+
+    return calc_diff
+
+
+class CompiledNodes:
+    """Per-node ``calc(x, u)`` and ``calcDiff(x, u, synced)`` of one solve: the compiled evaluators
+    where the nodes offer one, the models' own methods elsewhere (the terminal node last)."""
+
+    def __init__(self, calcs: list[Callable], calc_diffs: list[Callable], steps: list[Callable | None]) -> None:
+        self.calcs = calcs
+        self.calc_diffs = calc_diffs
+        self.steps = steps
+
+    def calcDiff(self, problem, xs, us, synced: bool) -> float:
+        """Derivatives (and values, unless ``synced``) of every node; returns the total cost."""
+        cost = 0.0
+        for calc_diff, d, x, u in zip(self.calc_diffs, problem.runningDatas, xs, us):
+            calc_diff(x, u, synced)
+            cost += d.cost
+        self.calc_diffs[-1](xs[-1], None, synced)
+        cost += problem.terminalData.cost
+        problem.cost = cost
+        return cost
+
+
+def select(solver) -> CompiledNodes | None:
+    """The compiled nodes of ``solver.problem`` for this solve, or None (no node has one, or the
+    solver, a callback or the kernel switch rules them out; see the module docstring)."""
+    if not kernels.active or not type(solver).__dict__.get("_nodes_compiled", False):
+        return None
+    if any(not type(c).__module__.startswith("crocopy.") for c in solver.getCallbacks()):
+        return None
+    problem = solver.problem
+    calcs, calc_diffs, steps = [], [], []
+    found = False
+    memo: dict = {}
+    nodes = [*zip(problem.runningModels, problem.runningDatas), (problem.terminalModel, problem.terminalData)]
+    for t, (model, data) in enumerate(nodes):
+        make = getattr(model, "_compiled_node", None)
+        evaluator = None if make is None else make(data, t == problem.T, memo)
+        if evaluator is None:
+            calcs.append(_python_calc(model, data))
+            calc_diffs.append(_python_calc_diff(model, data))
+            steps.append(None)
+        else:
+            found = True
+            calcs.append(evaluator.calc)
+            calc_diffs.append(evaluator.calcDiff)
+            steps.append(getattr(evaluator, "rollout_step", None) if model.nu else None)
+    return CompiledNodes(calcs, calc_diffs, steps[:-1]) if found else None

@@ -1,0 +1,219 @@
+"""Compiled Euler nodes of free forward dynamics: one numba call per node evaluation inside a solve.
+
+:class:`EulerNode` is the evaluator (:mod:`crocopy.solvers.compiled_nodes`) of a node whose whole
+``calc``/``calcDiff`` the kernels of :mod:`.euler_node_kernel` can do.  A node qualifies when, on the
+exact classes (a subclass may override a step, so it keeps the Python path):
+
+* ``IntegratedActionModelEuler`` with the identity control parametrization, over a
+  ``DifferentialActionModelFreeFwdDynamics`` without constraints;
+* its ``StateMultibody``'s Pinocchio model lowers (:func:`.lowering.lower_model`);
+* its actuation is ``ActuationModelFull``, ``ActuationModelFloatingBase`` or
+  ``ActuationModelFloatingBaseThrusters`` (``τ = S u`` with a constant ``S``);
+* every cost is a ``CostModelResidual`` in the cost stack with an activation of the quadratic-barrier
+  family (:mod:`crocopy.costs.stack`), and every active one's residual is a ``ResidualModelState``,
+  ``ResidualModelControl``, ``ResidualModelFramePlacement``, ``ResidualModelFrameTranslation``,
+  ``ResidualModelFrameRotation`` or ``ResidualModelFrameVelocity``.
+
+:meth:`EulerNode.refresh` (at the start of every solve) re-reads everything the kernels take from the
+models: the lowered Pinocchio model, the armature (the Pinocchio model's, which Pinocchio's own
+``crba``/``aba`` add, plus the dynamics model's ``armature``), ``S``, the time step, the cost stack's weights and
+activation bounds, the residuals' references; and the addresses of the data arrays the kernels write
+(``xnext``, ``Fx``, ... of the node's data, the stack's arrays).  Evaluators are cached per node data
+(weakly: a copied or unpickled data gets its own).
+"""
+
+from __future__ import annotations
+
+import weakref
+from collections.abc import Callable
+from functools import partial
+
+import numpy as np
+import pinocchio as pin
+
+from crocopy.costs.base import CostModelResidual
+from crocopy.kernels import address
+from crocopy.residuals.control import ResidualModelControl
+from crocopy.residuals.state import ResidualModelState
+
+from ..actuations import ActuationModelFloatingBase, ActuationModelFloatingBaseThrusters, ActuationModelFull
+from ..residuals_frame import (
+    ResidualModelFramePlacement,
+    ResidualModelFrameRotation,
+    ResidualModelFrameTranslation,
+    ResidualModelFrameVelocity,
+)
+from ..state_multibody import StateMultibody
+from . import euler_node_kernel as kernel
+from .joint_types import NotLowerable
+from .lowering import RigidBodyModel, lower_model, make_workspace
+
+ACTUATIONS = (ActuationModelFull, ActuationModelFloatingBase, ActuationModelFloatingBaseThrusters)
+KINDS = {
+    ResidualModelState: kernel.STATE,
+    ResidualModelControl: kernel.CONTROL,
+    ResidualModelFramePlacement: kernel.PLACEMENT,
+    ResidualModelFrameTranslation: kernel.TRANSLATION,
+    ResidualModelFrameRotation: kernel.ROTATION,
+    ResidualModelFrameVelocity: kernel.VELOCITY,
+}
+
+_NODES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+"""Node data → its :class:`EulerNode`."""
+
+
+def lowered(model: pin.Model, memo: dict) -> RigidBodyModel | None:
+    """``lower_model(model)``, once per model and ``memo`` (one solve); None if it does not lower."""
+    key = id(model)
+    if key not in memo:
+        try:
+            memo[key] = lower_model(model)
+        except NotLowerable:
+            memo[key] = None
+    return memo[key]
+
+
+def euler_node(iam, data, terminal: bool, memo: dict) -> EulerNode | None:
+    """The refreshed evaluator of node ``(iam, data)``, or None if the node does not qualify (the caller,
+    ``DifferentialActionModelFreeFwdDynamics``, has checked its own class and the integrator's)."""
+    dam = iam.differential
+    if dam.constraints is not None or type(dam.state) is not StateMultibody or type(dam.actuation) not in ACTUATIONS:
+        return None
+    rb = lowered(dam.state.pinocchio, memo)
+    if rb is None:
+        return None
+    node = _NODES.get(data)
+    if node is None or node.model is not iam or node.terminal != terminal:
+        node = EulerNode(iam, data, terminal, rb)
+        _NODES[data] = node
+    return node if node.refresh(rb) else None
+
+
+def _address(array: np.ndarray) -> int:
+    if not array.flags.c_contiguous or array.dtype not in (np.float64, np.int64):
+        raise TypeError(f"compiled node: an array of dtype {array.dtype} that is not C-contiguous")
+    return address(array)
+
+
+class EulerNode:
+    """The compiled ``calc``/``calcDiff`` of one Euler node of free forward dynamics (see the module docstring).
+
+    ``calc(x, u)`` writes ``data.xnext`` and ``data.cost``; ``calcDiff(x, u, synced)`` also ``Fx``, ``Fu``,
+    ``Lx``, ``Lu``, ``Lxx``, ``Lxu``, ``Luu`` (and the cost stack's residuals, Jacobians and activation
+    derivatives, which the stack shares with the residual and activation datas).
+    """
+
+    def __init__(self, iam, data, terminal: bool, rb: RigidBodyModel) -> None:
+        self.model = iam
+        self.terminal = terminal
+        self._data = weakref.ref(data)
+        nv, nu = rb.nv, iam.nu
+        ndx = 2 * nv
+        self.workspace = make_workspace(rb)
+        self.scratch = {
+            "S": np.zeros((nv, nu)), "tau": np.zeros(nv), "dtau_dq": np.zeros((nv, nv)), "dtau_dv": np.zeros((nv, nv)),
+            "J6": np.zeros((6, nv)), "K6": np.zeros((6, nv)), "m6": np.zeros((6, 6)), "R3": np.zeros((3, 3)),
+            "p3": np.zeros(3), "v6": np.zeros(6), "Jq": np.zeros((nv, nv)), "Jv": np.zeros((nv, nv)),
+            "rows": np.zeros((nv, ndx + nu)), "gap": np.zeros(ndx),
+        }
+        self.no_control = np.zeros(0)
+
+    def refresh(self, rb: RigidBodyModel) -> bool:
+        """Re-read the models' parameters and the data arrays' addresses; False if the node no longer qualifies."""
+        data = self._data()
+        iam = self.model
+        dam, ddata = iam.differential, data.differential
+        stack = ddata.costs.stack
+        stack.refresh(self.terminal)
+        if stack.unfused or ddata.costs.generic:
+            return False
+        items, par = [], [float(iam.dt)]
+        for (_, item, cdata), rows in zip(stack.items, stack.slices):
+            if type(item.cost) is not CostModelResidual:
+                return False
+            if not item.active or cdata.zero:
+                continue
+            residual = item.cost.residual
+            kind = KINDS.get(type(residual))
+            if kind is None:
+                return False
+            items += [kind, rows.start, rows.stop - rows.start, getattr(residual, "id", 0), 0, len(par)]
+            par += self._parameters(kind, residual, items)
+        rb = rb._replace(armature=rb.armature + dam.armature)
+        self._actuation_matrix(dam, ddata)
+        self.par = np.array(par)
+        self._table(rb, data, ddata, stack, items)
+        return True
+
+    @staticmethod
+    def _parameters(kind: int, residual, items: list) -> list[float]:
+        """The residual's reference in the layout :mod:`.euler_node_kernel` reads (``items[-2]``: its frame type)."""
+        if kind == kernel.STATE:
+            return list(residual.xref)
+        if kind == kernel.CONTROL:
+            return list(residual.uref)
+        if kind == kernel.PLACEMENT:
+            inverse = residual.reference.inverse()
+            return [*inverse.rotation.reshape(-1), *inverse.translation]
+        if kind == kernel.TRANSLATION:
+            return list(residual.reference)
+        if kind == kernel.ROTATION:
+            return list(np.asarray(residual.reference).T.reshape(-1))
+        items[-2] = int(residual.type)
+        return list(residual.reference.vector)
+
+    def _actuation_matrix(self, dam, ddata) -> None:
+        """``S = ∂τ/∂u`` of the (linear, state-independent) actuation."""
+        if self.terminal:
+            return
+        act = ddata.multibody.actuation
+        x, u = dam.state.zero(), np.zeros(dam.nu)
+        dam.actuation.calc(act, x, u)
+        dam.actuation.calcDiff(act, x, u)
+        self.scratch["S"][:] = act.dtau_du
+
+    def _table(self, rb: RigidBodyModel, data, ddata, stack, items: list) -> None:
+        """The addresses and dimensions of every array the kernels read or write, and the integer program."""
+        arrays = [getattr(rb, name) for name in rb._fields[4:]] + list(self.workspace)
+        fields = {
+            "xnext": data.xnext, "dx": data.dx, "Fx": data.Fx, "Fu": data.Fu, "Lx": data.Lx, "Lu": data.Lu,
+            "Lxx": data.Lxx, "Lxu": data.Lxu, "Luu": data.Luu,
+            "a": ddata.xout, "dFx": ddata.Fx, "dFu": ddata.Fu, "Minv": ddata.Minv, "dLx": ddata.Lx, "dLu": ddata.Lu,
+            "dLxx": ddata.Lxx, "dLxu": ddata.Lxu, "dLuu": ddata.Luu,
+            "r": stack.r, "lb": stack.lb, "ub": stack.ub, "act_weights": stack.act_weights,
+            "item_costs": stack.item_costs, "item_weights": stack.item_weights, "weights": stack.weights,
+            "Ar": stack.Ar, "Arr": stack.Arr, "Jx": stack.Jx, "Ju": stack.Ju, "Jc": stack.Jc, "HJx": stack.HJx,
+            "Juc": stack.Juc, "HJu": stack.HJu, **self.scratch,
+        }
+        arrays += [fields[name] for name in kernel.NODE_ARRAYS]
+        n = len(arrays)
+        shapes = np.zeros(3 * n, dtype=np.int64)
+        for k, a in enumerate(arrays):
+            shapes[3 * k: 3 * k + a.ndim] = a.shape
+        header = np.zeros(kernel.SHAPES, dtype=np.int64)
+        header[[kernel.NQ, kernel.NV, kernel.NU, kernel.NR, kernel.U_START]] = (
+            rb.nq, rb.nv, self.model.nu, stack.r.shape[0], stack.u_start)
+        header[[kernel.N_ITEMS, kernel.EUCLIDEAN, kernel.NJOINTS, kernel.NFRAMES, kernel.N_STACK]] = (
+            len(items) // kernel.ITEM_FIELDS, self.model._euclidean, rb.njoints, rb.nframes, len(stack.starts))
+        header[kernel.ITEMS] = kernel.SHAPES + 3 * n
+        header[kernel.STARTS] = header[kernel.ITEMS] + len(items)
+        header[kernel.TERMINAL] = self.terminal
+        self.ints = np.concatenate([header, shapes, np.array(items, dtype=np.int64),
+                                    np.asarray(stack.starts, dtype=np.int64)])
+        self.tbl = np.array([_address(a) for a in arrays], dtype=np.int64)
+        self._arrays = arrays
+
+    def calc(self, x: np.ndarray, u: np.ndarray | None) -> None:
+        self._data().cost = kernel.node_calc(self.tbl, self.ints, self.par, x, self.no_control if u is None else u)
+
+    @property
+    def rollout_step(self) -> Callable:
+        """One node of the DDP family's rollout (:func:`.euler_node_kernel.node_rollout_step` on this node's
+        arrays): ``rollout_step(x_ref, x, u_ref, k, K, alpha, lb, ub, u, dx, x_next, f, gap) -> cost``
+        (the caller stores the cost in the node's data)."""
+        return partial(kernel.node_rollout_step, self.tbl, self.ints, self.par)
+
+    def calcDiff(self, x: np.ndarray, u: np.ndarray | None, synced: bool) -> None:
+        self._data().cost = kernel.node_calc_diff(
+            self.tbl, self.ints, self.par, x, self.no_control if u is None else u
+        )

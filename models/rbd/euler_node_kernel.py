@@ -1,0 +1,408 @@
+"""The compiled calc and calcDiff of an Euler node of free forward dynamics (see :mod:`.euler_node`).
+
+One call evaluates a whole node: ``τ = S u`` (constant actuation matrix ``S (nv, nu)``), the forward
+dynamics ``a = (M + diag(ε))⁻¹ (τ - b)``, the residuals of the cost stack, the activations and weighted
+sums, the symplectic Euler step ``dx = ((v + a dt) dt, a dt)``, ``xnext = x ⊕ dx`` and, in ``calcDiff``,
+
+    ∂a/∂x = -(M + diag(ε))⁻¹ (∂RNEA/∂q, ∂RNEA/∂v),   ∂a/∂u = (M + diag(ε))⁻¹ S,
+
+the residual Jacobians and the Euler chain rule of :mod:`crocopy.integrators.euler_kernel` (plus the
+configuration's ``∂(q ⊕ dq)/∂(q, dq)`` on a Lie group).  The terminal node (``terminal`` set) has only
+the costs of ``x``; its ``Fx`` is the identity.
+
+The arrays arrive by address: ``tbl[k]`` is the address of entry ``k`` (a C-contiguous array), its
+dimensions are ``ints[SHAPES + 3k : SHAPES + 3k + 3]``.  The entries are the fields of the lowered
+model and of its workspace (:mod:`.lowering`), then ``NODE_ARRAYS``.  ``ints`` also holds the sizes
+(``NQ`` .. ``NFRAMES``), the compiled residual items (``ITEM_FIELDS`` integers each, from
+``ints[ITEMS]``: kind, first stack row, rows, frame, reference frame, offset of its parameters in
+``par``) and the cost stack's item starts (from ``ints[STARTS]``); ``par[0]`` is the time step.
+"""
+
+from __future__ import annotations
+
+from crocopy.costs.stack_kernel import activation_values, derivatives_and_sums
+from crocopy.integrators.euler_kernel import add_integrate_jacobian, euler_chain
+from crocopy.kernels import carray, compiled, float64_pointer, int64_pointer
+from crocopy.solvers.riccati_kernel import feedback_control
+
+from .dynamics_kernel import (
+    dynamics_derivatives,
+    forward_dynamics,
+    forward_kinematics,
+    frame_jacobian,
+    frame_placement,
+    frame_velocity,
+    frame_velocity_derivatives,
+    mass_inverse,
+)
+from .lie_kernel import dintegrate, jlog3, jlog6, log3, log6, state_diff, state_integrate, state_jdiff
+from .lowering import RigidBodyModel, RigidBodyWorkspace
+
+STATE, CONTROL, PLACEMENT, TRANSLATION, ROTATION, VELOCITY = range(6)
+"""Residual kinds."""
+
+WORLD, LOCAL, LOCAL_WORLD_ALIGNED = 0, 1, 2
+"""Pinocchio's reference frames (``int(pinocchio.ReferenceFrame)``)."""
+
+NQ, NV, NU, NR, U_START, N_ITEMS, EUCLIDEAN, NJOINTS, NFRAMES, N_STACK, ITEMS, STARTS, TERMINAL = range(13)
+SHAPES = 13
+ITEM_FIELDS = 6
+
+RB_INT_FIELDS = ("jtype", "idx_q", "idx_v", "nvj", "parent", "subtree_end", "depth", "dof_joint", "frame_joint")
+NODE_ARRAYS = (
+    "xnext", "dx", "Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu",
+    "a", "dFx", "dFu", "Minv", "dLx", "dLu", "dLxx", "dLxu", "dLuu",
+    "r", "lb", "ub", "act_weights", "item_costs", "item_weights", "weights", "Ar", "Arr",
+    "Jx", "Ju", "Jc", "HJx", "Juc", "HJu",
+    "S", "tau", "dtau_dq", "dtau_dv", "J6", "K6", "m6", "R3", "p3", "v6", "Jq", "Jv", "rows", "gap",
+)
+N_RB, N_WS = len(RigidBodyModel._fields) - 4, len(RigidBodyWorkspace._fields)
+NODE = N_RB + N_WS
+(E_XNEXT, E_DX, E_FX, E_FU, E_LX, E_LU, E_LXX, E_LXU, E_LUU,
+ E_A, E_DFX, E_DFU, E_MINV, E_DLX, E_DLU, E_DLXX, E_DLXU, E_DLUU,
+ E_R, E_LB, E_UB, E_ACT_W, E_ITEM_COSTS, E_ITEM_WEIGHTS, E_WEIGHTS, E_AR, E_ARR,
+ E_JX, E_JU, E_JC, E_HJX, E_JUC, E_HJU,
+ E_S, E_TAU, E_DTAU_DQ, E_DTAU_DV, E_J6, E_K6, E_M6, E_R3, E_P3, E_V6, E_JQ, E_JV,
+ E_ROWS, E_GAP) = range(NODE, NODE + len(NODE_ARRAYS))
+
+
+@compiled
+def _vec(tbl, ints, k):
+    return carray(float64_pointer(tbl[k]), (ints[SHAPES + 3 * k],))
+
+
+@compiled
+def _mat(tbl, ints, k):
+    return carray(float64_pointer(tbl[k]), (ints[SHAPES + 3 * k], ints[SHAPES + 3 * k + 1]))
+
+
+@compiled
+def _cube(tbl, ints, k):
+    s = SHAPES + 3 * k
+    return carray(float64_pointer(tbl[k]), (ints[s], ints[s + 1], ints[s + 2]))
+
+
+@compiled
+def _index(tbl, ints, k):
+    return carray(int64_pointer(tbl[k]), (ints[SHAPES + 3 * k],))
+
+
+@compiled
+def _model(tbl, ints):
+    """The lowered model, from entries ``0 .. N_RB - 1`` (its fields' order)."""
+    return RigidBodyModel(
+        ints[NQ], ints[NV], ints[NJOINTS], ints[NFRAMES],
+        _index(tbl, ints, 0), _index(tbl, ints, 1), _index(tbl, ints, 2), _index(tbl, ints, 3),
+        _mat(tbl, ints, 4), _index(tbl, ints, 5), _index(tbl, ints, 6), _index(tbl, ints, 7),
+        _index(tbl, ints, 8), _cube(tbl, ints, 9), _mat(tbl, ints, 10), _vec(tbl, ints, 11),
+        _mat(tbl, ints, 12), _cube(tbl, ints, 13), _index(tbl, ints, 14), _cube(tbl, ints, 15),
+        _mat(tbl, ints, 16), _vec(tbl, ints, 17), _vec(tbl, ints, 18),
+    )
+
+
+@compiled
+def _workspace(tbl, ints):
+    """The workspace, from entries ``N_RB .. NODE - 1`` (its fields' order)."""
+    k = N_RB
+    return RigidBodyWorkspace(
+        _cube(tbl, ints, k), _mat(tbl, ints, k + 1), _mat(tbl, ints, k + 2), _mat(tbl, ints, k + 3),
+        _mat(tbl, ints, k + 4), _mat(tbl, ints, k + 5), _cube(tbl, ints, k + 6), _mat(tbl, ints, k + 7),
+        _mat(tbl, ints, k + 8), _mat(tbl, ints, k + 9), _cube(tbl, ints, k + 10), _mat(tbl, ints, k + 11),
+        _mat(tbl, ints, k + 12), _vec(tbl, ints, k + 13), _vec(tbl, ints, k + 14), _mat(tbl, ints, k + 15),
+        _mat(tbl, ints, k + 16), _mat(tbl, ints, k + 17), _mat(tbl, ints, k + 18), _mat(tbl, ints, k + 19),
+        _vec(tbl, ints, k + 20),
+    )
+
+
+@compiled
+def _matmul(A, B, out, rows, cols, inner, scale):
+    """``out[:rows, :cols] = scale A[:rows, :inner] B[:inner, :cols]``."""
+    for i in range(rows):
+        for j in range(cols):
+            acc = 0.0
+            for k in range(inner):
+                acc += A[i, k] * B[k, j]
+            out[i, j] = scale * acc
+
+
+@compiled
+def _relative_frame(rb, ws, fid, par, o, R3, p3):
+    """``pref⁻¹ oMf`` into ``(R3, p3)``; ``par[o:o+9]`` is ``pref⁻¹``'s rotation (row-major), then its translation."""
+    frame_placement(rb, ws, fid, ws.Rf, ws.pf)
+    for i in range(3):
+        for j in range(3):
+            acc = 0.0
+            for k in range(3):
+                acc += par[o + 3 * i + k] * ws.Rf[k, j]
+            R3[i, j] = acc
+        acc = par[o + 9 + i]
+        for k in range(3):
+            acc += par[o + 3 * i + k] * ws.pf[k]
+        p3[i] = acc
+
+
+@compiled
+def _rotation_error(rb, ws, fid, par, o, R3):
+    """``Rrefᵀ oRf`` into ``R3``; ``par[o:o+9]`` is ``Rrefᵀ`` (row-major)."""
+    frame_placement(rb, ws, fid, ws.Rf, ws.pf)
+    for i in range(3):
+        for j in range(3):
+            acc = 0.0
+            for k in range(3):
+                acc += par[o + 3 * i + k] * ws.Rf[k, j]
+            R3[i, j] = acc
+
+
+@compiled
+def _residuals(tbl, ints, par, rb, ws, x, u):
+    """Every compiled item's residual rows of the stack."""
+    nq, nv = ints[NQ], ints[NV]
+    r, R3, p3, v6 = _vec(tbl, ints, E_R), _mat(tbl, ints, E_R3), _vec(tbl, ints, E_P3), _vec(tbl, ints, E_V6)
+    for n in range(ints[N_ITEMS]):
+        b = ints[ITEMS] + ITEM_FIELDS * n
+        kind, start, nr, fid, ref, o = ints[b], ints[b + 1], ints[b + 2], ints[b + 3], ints[b + 4], ints[b + 5]
+        rows = r[start: start + nr]
+        if kind == STATE:
+            state_diff(rb.jtype, rb.idx_q, rb.idx_v, nq, nv, par[o: o + nq + nv], x, rows)
+        elif kind == CONTROL:
+            for i in range(nr):
+                rows[i] = u[i] - par[o + i]
+        elif kind == PLACEMENT:
+            _relative_frame(rb, ws, fid, par, o, R3, p3)
+            log6(R3, p3, rows)
+        elif kind == TRANSLATION:
+            frame_placement(rb, ws, fid, ws.Rf, ws.pf)
+            for i in range(3):
+                rows[i] = ws.pf[i] - par[o + i]
+        elif kind == ROTATION:
+            _rotation_error(rb, ws, fid, par, o, R3)
+            log3(R3, rows)
+        else:
+            frame_velocity(rb, ws, fid, ref, v6)
+            for i in range(6):
+                rows[i] = v6[i] - par[o + i]
+
+
+@compiled
+def _jacobians(tbl, ints, par, rb, ws, x):
+    """Every compiled item's rows of the stacked ``Jx`` (a control residual's are zero and stay so)."""
+    nq, nv = ints[NQ], ints[NV]
+    Jx, J6, K6, m6 = _mat(tbl, ints, E_JX), _mat(tbl, ints, E_J6), _mat(tbl, ints, E_K6), _mat(tbl, ints, E_M6)
+    R3, p3, v6 = _mat(tbl, ints, E_R3), _vec(tbl, ints, E_P3), _vec(tbl, ints, E_V6)
+    ndx = 2 * nv
+    for n in range(ints[N_ITEMS]):
+        b = ints[ITEMS] + ITEM_FIELDS * n
+        kind, start, nr, fid, ref, o = ints[b], ints[b + 1], ints[b + 2], ints[b + 3], ints[b + 4], ints[b + 5]
+        if kind == CONTROL:
+            continue
+        rows = Jx[start: start + nr]
+        if kind == STATE:
+            state_jdiff(rb.jtype, rb.idx_q, rb.idx_v, nq, nv, par[o: o + nq + nv], x, False, rows)
+            continue
+        if kind == VELOCITY:
+            _velocity_jacobian(rb, ws, fid, ref, J6, K6, m6, v6, rows, nv)
+            continue
+        for i in range(nr):
+            for j in range(nv, ndx):
+                rows[i, j] = 0.0
+        if kind == TRANSLATION:
+            frame_jacobian(rb, ws, fid, LOCAL_WORLD_ALIGNED, J6)
+            for i in range(3):
+                for j in range(nv):
+                    rows[i, j] = J6[i, j]
+        elif kind == PLACEMENT:
+            frame_jacobian(rb, ws, fid, LOCAL, J6)
+            _relative_frame(rb, ws, fid, par, o, R3, p3)
+            jlog6(R3, p3, m6)
+            _matmul(m6, J6, rows, 6, nv, 6, 1.0)
+        else:
+            frame_jacobian(rb, ws, fid, LOCAL, J6)
+            _rotation_error(rb, ws, fid, par, o, R3)
+            jlog3(R3, m6[:3, :3])
+            for i in range(3):
+                for j in range(nv):
+                    acc = 0.0
+                    for k in range(3):
+                        acc += m6[i, k] * J6[3 + k, j]
+                    rows[i, j] = acc
+
+
+@compiled
+def _velocity_jacobian(rb, ws, fid, ref, dq, dv, m6, v6, rows, nv):
+    """``(∂v_f/∂q, ∂v_f/∂v)`` in frame ``ref``; LOCAL_WORLD_ALIGNED as ``R (∂v_l/∂q - [v_l]× J_ω)`` (see
+    :class:`~crocopy.models.ResidualModelFrameVelocity`), ``R`` the frame rotation."""
+    if ref != LOCAL_WORLD_ALIGNED:
+        frame_velocity_derivatives(rb, ws, fid, ref, dq, dv)
+        for i in range(6):
+            for j in range(nv):
+                rows[i, j] = dq[i, j]
+                rows[i, nv + j] = dv[i, j]
+        return
+    frame_velocity_derivatives(rb, ws, fid, LOCAL, dq, dv)
+    frame_velocity(rb, ws, fid, LOCAL, v6)
+    frame_placement(rb, ws, fid, ws.Rf, ws.pf)
+    R = ws.Rf
+    for half in range(2):
+        s = 3 * half
+        for j in range(nv):
+            # (∂v_l/∂q - [v_l]× J_ω) column j for rows s..s+2, J_ω = dv[3:6] (the LOCAL Jacobian)
+            c0 = dq[s, j] - (v6[s + 1] * dv[5, j] - v6[s + 2] * dv[4, j])
+            c1 = dq[s + 1, j] - (v6[s + 2] * dv[3, j] - v6[s] * dv[5, j])
+            c2 = dq[s + 2, j] - (v6[s] * dv[4, j] - v6[s + 1] * dv[3, j])
+            for i in range(3):
+                rows[s + i, j] = R[i, 0] * c0 + R[i, 1] * c1 + R[i, 2] * c2
+                rows[s + i, nv + j] = R[i, 0] * dv[s, j] + R[i, 1] * dv[s + 1, j] + R[i, 2] * dv[s + 2, j]
+
+
+@compiled
+def _values(tbl, ints, par, x, u, rb, ws):
+    """Dynamics (running node) and residuals at ``(x, u)``; returns the cost stack's weighted sum."""
+    nq, nv, nu = ints[NQ], ints[NV], ints[NU]
+    q, v = x[:nq], x[nq:]
+    if ints[TERMINAL]:
+        forward_kinematics(rb, ws, q, v)
+    else:
+        Sm, tau, a = _mat(tbl, ints, E_S), _vec(tbl, ints, E_TAU), _vec(tbl, ints, E_A)
+        for i in range(nv):
+            acc = 0.0
+            for j in range(nu):
+                acc += Sm[i, j] * u[j]
+            tau[i] = acc
+        forward_dynamics(rb, ws, q, v, tau, a)
+    _residuals(tbl, ints, par, rb, ws, x, u)
+    starts = ints[ints[STARTS]: ints[STARTS] + ints[N_STACK]]
+    return activation_values(
+        _vec(tbl, ints, E_R), _vec(tbl, ints, E_LB), _vec(tbl, ints, E_UB), _vec(tbl, ints, E_ACT_W), starts,
+        _vec(tbl, ints, E_ITEM_COSTS), _vec(tbl, ints, E_ITEM_WEIGHTS),
+    )
+
+
+@compiled
+def _step(tbl, ints, par, x, rb):
+    """``dx`` and ``xnext`` of the Euler step (``xnext = x`` at the terminal node)."""
+    nq, nv = ints[NQ], ints[NV]
+    xnext = _vec(tbl, ints, E_XNEXT)
+    if ints[TERMINAL]:
+        for i in range(nq + nv):
+            xnext[i] = x[i]
+        return
+    dt, a, dx = par[0], _vec(tbl, ints, E_A), _vec(tbl, ints, E_DX)
+    for i in range(nv):
+        dv = a[i] * dt
+        dx[nv + i] = dv
+        dx[i] = (x[nq + i] + dv) * dt
+    state_integrate(rb.jtype, rb.idx_q, rb.idx_v, nq, nv, x, dx, xnext)
+
+
+@compiled
+def node_calc(tbl, ints, par, x, u):
+    """``xnext`` of the node at ``(x, u)``; returns its cost (``dt`` times the stack's for a running node)."""
+    rb, ws = _model(tbl, ints), _workspace(tbl, ints)
+    cost = _values(tbl, ints, par, x, u, rb, ws)
+    _step(tbl, ints, par, x, rb)
+    return cost if ints[TERMINAL] else par[0] * cost
+
+
+@compiled
+def node_rollout_step(tbl, ints, par, x_ref, x, u_ref, k, K, alpha, lb, ub, u, dx, x_next, f, gap):
+    """One node of the DDP family's rollout (``SolverDDP._trial_rollout``): ``dx = x ⊖ x_ref``,
+    ``u = clamp(u_ref - α k - K dx, lb, ub)``, the node at ``(x, u)``, and ``x_next = xnext``, or
+    ``xnext ⊕ ((α - 1) f)`` if ``gap``; returns the node's cost."""
+    rb = _model(tbl, ints)
+    nq, nv = ints[NQ], ints[NV]
+    state_diff(rb.jtype, rb.idx_q, rb.idx_v, nq, nv, x_ref, x, dx)
+    feedback_control(u_ref, k, K, dx, alpha, lb, ub, u)
+    cost = node_calc(tbl, ints, par, x, u)
+    xnext = _vec(tbl, ints, E_XNEXT)
+    if gap:
+        step = _vec(tbl, ints, E_GAP)
+        for i in range(2 * nv):
+            step[i] = (alpha - 1.0) * f[i]
+        state_integrate(rb.jtype, rb.idx_q, rb.idx_v, nq, nv, xnext, step, x_next)
+    else:
+        for i in range(nq + nv):
+            x_next[i] = xnext[i]
+    return cost
+
+
+@compiled
+def _dynamics_jacobians(tbl, ints, x, rb, ws):
+    """``dFx = -(M + diag ε)⁻¹ ∂RNEA/∂(q, v)`` and ``dFu = (M + diag ε)⁻¹ S`` at the last ``calc`` point."""
+    nq, nv, nu = ints[NQ], ints[NV], ints[NU]
+    Minv, dq, dv = _mat(tbl, ints, E_MINV), _mat(tbl, ints, E_DTAU_DQ), _mat(tbl, ints, E_DTAU_DV)
+    dFx, dFu, Sm, a = _mat(tbl, ints, E_DFX), _mat(tbl, ints, E_DFU), _mat(tbl, ints, E_S), _vec(tbl, ints, E_A)
+    dynamics_derivatives(rb, ws, x[:nq], x[nq:], a, dq, dv)
+    mass_inverse(rb, ws, Minv)
+    for i in range(nv):
+        for j in range(nv):
+            sq = 0.0
+            sv = 0.0
+            for k in range(nv):
+                sq += Minv[i, k] * dq[k, j]
+                sv += Minv[i, k] * dv[k, j]
+            dFx[i, j] = -sq
+            dFx[i, nv + j] = -sv
+        for j in range(nu):
+            acc = 0.0
+            for k in range(nv):
+                acc += Minv[i, k] * Sm[k, j]
+            dFu[i, j] = acc
+
+
+@compiled
+def _integrate_chain(tbl, ints, x, rb):
+    """Lie-group end of the Euler chain rule: ``rows = Jv [Fx Fu][:nv]`` (the transport), then
+    :func:`~crocopy.integrators.euler_kernel.add_integrate_jacobian` with ``Jq``."""
+    nq, nv, nu = ints[NQ], ints[NV], ints[NU]
+    Fx, Fu, dx = _mat(tbl, ints, E_FX), _mat(tbl, ints, E_FU), _vec(tbl, ints, E_DX)
+    Jq, Jv, rows = _mat(tbl, ints, E_JQ), _mat(tbl, ints, E_JV), _mat(tbl, ints, E_ROWS)
+    q = x[:nq]
+    dintegrate(rb.jtype, rb.idx_q, rb.idx_v, q, dx[:nv], 0, Jq)
+    dintegrate(rb.jtype, rb.idx_q, rb.idx_v, q, dx[:nv], 1, Jv)
+    ndx = 2 * nv
+    for i in range(nv):
+        for j in range(ndx + nu):
+            acc = 0.0
+            for k in range(nv):
+                acc += Jv[i, k] * (Fx[k, j] if j < ndx else Fu[k, j - ndx])
+            rows[i, j] = acc
+    add_integrate_jacobian(rows, Jq, Fx, Fu)
+
+
+@compiled
+def node_calc_diff(tbl, ints, par, x, u):
+    """Values and derivatives of the node at ``(x, u)`` (self-contained); returns its cost."""
+    rb, ws = _model(tbl, ints), _workspace(tbl, ints)
+    cost = _values(tbl, ints, par, x, u, rb, ws)
+    _step(tbl, ints, par, x, rb)
+    terminal = ints[TERMINAL] != 0
+    _jacobians(tbl, ints, par, rb, ws, x)
+    Lx, Lu, Lxx = _vec(tbl, ints, E_LX), _vec(tbl, ints, E_LU), _mat(tbl, ints, E_LXX)
+    Lxu, Luu = _mat(tbl, ints, E_LXU), _mat(tbl, ints, E_LUU)
+    r, lb, ub, act_w = _vec(tbl, ints, E_R), _vec(tbl, ints, E_LB), _vec(tbl, ints, E_UB), _vec(tbl, ints, E_ACT_W)
+    weights, Ar, Arr = _vec(tbl, ints, E_WEIGHTS), _vec(tbl, ints, E_AR), _vec(tbl, ints, E_ARR)
+    Jx, Ju, u_start = _mat(tbl, ints, E_JX), _mat(tbl, ints, E_JU), ints[U_START]
+    Jc, HJx, Juc, HJu = _mat(tbl, ints, E_JC), _mat(tbl, ints, E_HJX), _mat(tbl, ints, E_JUC), _mat(tbl, ints, E_HJU)
+    if terminal:
+        derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, False, Jc, HJx, Juc, HJu,
+                             Lx, Lu, Lxx, Lxu, Luu)
+        Fx = _mat(tbl, ints, E_FX)
+        n = Fx.shape[0]
+        for i in range(n):
+            for j in range(n):
+                Fx[i, j] = 1.0 if i == j else 0.0
+        return cost
+    dLx, dLu, dLxx, dLxu, dLuu = (_vec(tbl, ints, E_DLX), _vec(tbl, ints, E_DLU), _mat(tbl, ints, E_DLXX),
+                                  _mat(tbl, ints, E_DLXU), _mat(tbl, ints, E_DLUU))
+    derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, True, Jc, HJx, Juc, HJu,
+                         dLx, dLu, dLxx, dLxu, dLuu)
+    _dynamics_jacobians(tbl, ints, x, rb, ws)
+    euclidean = ints[EUCLIDEAN] != 0
+    euler_chain(
+        _mat(tbl, ints, E_DFX), _mat(tbl, ints, E_DFU), dLx, dLu, dLxx, dLxu, dLuu, par[0], euclidean,
+        _mat(tbl, ints, E_FX), _mat(tbl, ints, E_FU), Lx, Lu, Lxx, Lxu, Luu,
+    )
+    if not euclidean:
+        _integrate_chain(tbl, ints, x, rb)
+    return par[0] * cost
+

@@ -1,0 +1,207 @@
+"""The compiled Euler node of free forward dynamics equals the Python node and finite differences.
+
+Factory: robots (free flyer with thrusters or a floating base, unbounded revolute joints, armature,
+fixed base) x every compiled residual kind x quadratic-family activations, running and terminal.
+"""
+
+from __future__ import annotations
+
+import copy
+import pickle
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import crocopy
+
+from robots import frame, load
+
+pytestmark = pytest.mark.skipif(not crocopy.kernels_enabled(), reason="compiled nodes need numba")
+
+ROBOTS = ("iris", "kinova", "talos_arm", "anymal", "double_pendulum")
+FRAMES = {"iris": "iris__rotor_2", "double_pendulum": "link2"}
+KINDS = ("state", "control", "placement", "translation", "rotation", "velocity_local", "velocity_world",
+         "velocity_lwa")
+
+
+def robot_frame(robot: str) -> str:
+    return FRAMES[robot] if robot in FRAMES else frame(robot)
+
+
+def actuation(robot: str, state):
+    if robot == "iris":
+        thrusters = [crocopy.Thruster(pin.SE3(np.eye(3), np.array([0.2 * np.cos(a), 0.2 * np.sin(a), 0.0])),
+                                      0.02, crocopy.ThrusterType.CW if i % 2 else crocopy.ThrusterType.CCW)
+                     for i, a in enumerate(np.linspace(0.3, 6.0, 4))]
+        return crocopy.ActuationModelFloatingBaseThrusters(state, thrusters)
+    if robot == "anymal":
+        return crocopy.ActuationModelFloatingBase(state)
+    return crocopy.ActuationModelFull(state)
+
+
+def residual(kind: str, state, nu: int, fid: int, rng: np.random.Generator):
+    if kind == "state":
+        np.random.seed(int(rng.integers(1 << 30)))
+        return crocopy.ResidualModelState(state, state.rand(), nu)
+    if kind == "control":
+        return crocopy.ResidualModelControl(state, rng.standard_normal(nu))
+    if kind == "placement":
+        return crocopy.ResidualModelFramePlacement(state, fid, pin.SE3.Random(), nu)
+    if kind == "translation":
+        return crocopy.ResidualModelFrameTranslation(state, fid, rng.standard_normal(3), nu)
+    if kind == "rotation":
+        return crocopy.ResidualModelFrameRotation(state, fid, pin.SE3.Random().rotation, nu)
+    reference = {"local": pin.LOCAL, "world": pin.WORLD, "lwa": pin.LOCAL_WORLD_ALIGNED}[kind.split("_")[1]]
+    return crocopy.ResidualModelFrameVelocity(state, fid, pin.Motion.Random(), reference, nu)
+
+
+def node(robot: str, kinds: tuple, seed: int = 0, dt: float = 0.01):
+    """An Euler node of ``robot`` with one cost per kind (activations cycling through the quadratic family)."""
+    rng = np.random.default_rng(seed)
+    model = load(robot) if robot not in ("iris", "double_pendulum") else _extra(robot)
+    state = crocopy.StateMultibody(model)
+    act = actuation(robot, state)
+    fid = model.getFrameId(robot_frame(robot))
+    costs = crocopy.CostModelSum(state, act.nu)
+    for n, kind in enumerate(kinds):
+        res = residual(kind, state, act.nu, fid, rng)
+        if n % 3 == 0:
+            activation = crocopy.ActivationModelQuad(res.nr)
+        elif n % 3 == 1:
+            activation = crocopy.ActivationModelWeightedQuad(rng.uniform(0.5, 2.0, res.nr))
+        else:
+            bounds = crocopy.ActivationBounds(-0.1 * np.ones(res.nr), 0.1 * np.ones(res.nr))
+            activation = crocopy.ActivationModelQuadraticBarrier(bounds)
+        costs.addCost(kind, crocopy.CostModelResidual(state, activation, res), rng.uniform(0.5, 3.0))
+    dam = crocopy.DifferentialActionModelFreeFwdDynamics(state, act, costs)
+    if robot == "talos_arm":
+        dam.armature = 0.05 * np.ones(state.nv)
+    return crocopy.IntegratedActionModelEuler(dam, dt), state
+
+
+def _extra(robot: str) -> pin.Model:
+    import example_robot_data
+
+    return example_robot_data.load(robot).model
+
+
+def point(state, nu: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(100 + seed)
+    np.random.seed(100 + seed)
+    x = state.rand()
+    x[state.nq:] = rng.standard_normal(state.nv)
+    return x, rng.standard_normal(nu)
+
+
+FIELDS = ("xnext", "Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu")
+
+
+def compare(iam, state, terminal: bool, seed: int = 0) -> None:
+    """The compiled node's outputs equal the Python node's at a random point."""
+    x, u = point(state, iam.nu, seed)
+    fast, slow = iam.createData(), iam.createData()
+    evaluator = iam._compiled_node(fast, terminal, {})
+    assert evaluator is not None
+    uu = None if terminal else u
+    evaluator.calcDiff(x, uu, False)
+    iam.calc(slow, x, uu)
+    iam.calcDiff(slow, x, uu)
+    assert fast.cost == pytest.approx(slow.cost, rel=1e-10, abs=1e-12)
+    fields = ("xnext", "Fx", "Lx", "Lxx") if terminal else FIELDS
+    for name in fields:
+        np.testing.assert_allclose(getattr(fast, name), getattr(slow, name), rtol=1e-8, atol=1e-9, err_msg=name)
+    other = iam.createData()
+    evaluator.calc(x, uu)
+    iam.calc(other, x, uu)
+    assert fast.cost == pytest.approx(other.cost, rel=1e-10, abs=1e-12)
+    np.testing.assert_allclose(fast.xnext, other.xnext, rtol=1e-10, atol=1e-12)
+
+
+@pytest.mark.parametrize("robot", ROBOTS)
+@pytest.mark.parametrize("terminal", [False, True])
+def test_every_residual_kind_matches_the_python_node(robot, terminal):
+    iam, state = node(robot, KINDS)
+    compare(iam, state, terminal)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_each_kind_alone_on_a_floating_base(kind):
+    iam, state = node("anymal", (kind,), seed=3)
+    compare(iam, state, False, seed=3)
+
+
+@pytest.mark.parametrize("robot", ["iris", "kinova"])
+def test_derivatives_match_finite_differences(robot):
+    """``Fx, Fu, Lx, Lu`` of the compiled node against central differences of its own ``calc``."""
+    iam, state = node(robot, KINDS, seed=5)
+    x, u = point(state, iam.nu, 5)
+    data = iam.createData()
+    evaluator = iam._compiled_node(data, False, {})
+    evaluator.calcDiff(x, u, False)
+    Fx, Fu, Lx, Lu = (getattr(data, n).copy() for n in ("Fx", "Fu", "Lx", "Lu"))
+    h = 1e-6
+
+    def at(dx, du):
+        evaluator.calc(state.integrate(x, dx), u + du)
+        return data.xnext.copy(), data.cost
+
+    ndx, nu = state.ndx, iam.nu
+    xnext0 = at(np.zeros(ndx), np.zeros(nu))[0]
+    for j in range(ndx + nu):
+        e = np.zeros(ndx + nu)
+        e[j] = h
+        (xp, cp), (xm, cm) = at(e[:ndx], e[ndx:]), at(-e[:ndx], -e[ndx:])
+        column = (state.diff(xnext0, xp) - state.diff(xnext0, xm)) / (2 * h)
+        jac = Fx[:, j] if j < ndx else Fu[:, j - ndx]
+        grad = Lx[j] if j < ndx else Lu[j - ndx]
+        np.testing.assert_allclose(column, jac, rtol=1e-4, atol=1e-5)
+        assert (cp - cm) / (2 * h) == pytest.approx(grad, rel=1e-4, abs=1e-5)
+
+
+def test_nodes_that_do_not_qualify():
+    iam, state = node("kinova", ("state", "control"))
+    data = iam.createData()
+
+    class Euler(crocopy.IntegratedActionModelEuler):
+        pass
+
+    assert Euler(iam.differential, 0.01)._compiled_node(Euler(iam.differential, 0.01).createData(), False, {}) is None
+    rk = crocopy.IntegratedActionModelRK(iam.differential, crocopy.RKType.four, 0.01)
+    assert not hasattr(rk, "_compiled_node") or rk._compiled_node(rk.createData(), False, {}) is None
+    costs = iam.differential.costs
+    costs.addCost("com", crocopy.CostModelResidual(state, crocopy.ResidualModelCoMPosition(state, np.zeros(3),
+                                                                                          iam.nu)), 1.0)
+    dam = crocopy.DifferentialActionModelFreeFwdDynamics(state, iam.differential.actuation, costs)
+    other = crocopy.IntegratedActionModelEuler(dam, 0.01)
+    assert other._compiled_node(other.createData(), False, {}) is None
+    costs.changeCostStatus("com", False)
+    assert other._compiled_node(other.createData(), False, {}) is not None
+    assert iam._compiled_node(data, False, {}) is not None
+
+
+def test_copies_and_pickles_of_a_data_get_their_own_evaluator():
+    iam, state = node("iris", ("state", "placement", "control"))
+    data = iam.createData()
+    first = iam._compiled_node(data, False, {})
+    for other in (copy.deepcopy(data), copy.copy(data), pickle.loads(pickle.dumps(data))):
+        evaluator = iam._compiled_node(other, False, {})
+        assert evaluator is not first
+        x, u = point(state, iam.nu, 1)
+        evaluator.calcDiff(x, u, False)
+        assert np.isfinite(other.Fx).all()
+    assert iam._compiled_node(data, False, {}) is first
+
+
+def test_parameters_are_read_again_at_each_refresh():
+    iam, state = node("kinova", ("state", "translation", "control"))
+    data, slow = iam.createData(), iam.createData()
+    x, u = point(state, iam.nu, 2)
+    iam.differential.costs.costs["translation"].weight = 7.0
+    iam.differential.costs.costs["translation"].cost.residual.reference = np.array([0.1, 0.2, 0.3])
+    iam.dt = 0.02
+    iam._compiled_node(data, False, {}).calcDiff(x, u, False)
+    iam.calc(slow, x, u)
+    iam.calcDiff(slow, x, u)
+    assert data.cost == pytest.approx(slow.cost, rel=1e-10)
+    np.testing.assert_allclose(data.Lx, slow.Lx, rtol=1e-8, atol=1e-10)
