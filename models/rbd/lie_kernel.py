@@ -35,8 +35,9 @@ The model is given by ``(jtype, idx_q, idx_v)`` of :func:`~crocopy.models.rbd.jo
   ``∂(q ⊕ v)/∂q = Ad(exp6(v))⁻¹``, ``∂(q ⊕ v)/∂v = jexp6(v)``, ``∂(q1 ⊖ q0)/∂q1 = jlog6(M)`` and
   ``∂(q1 ⊖ q0)/∂q0 = -jlog6(M) Ad(M)⁻¹`` with ``M = M(q0)⁻¹ M(q1)``;
 * ``REVOLUTE``, ``PRISMATIC``: ``q + v`` and ``q1 - q0``, Jacobians ``±1``;
-* ``REVOLUTE_UB``: ``q = [cos θ, sin θ]`` rotated by ``v`` and the angle from ``q0`` to ``q1``,
-  Jacobians ``±1``.
+* ``REVOLUTE_UB``: ``q = [cos θ, sin θ]`` rotated by ``v`` (first-order normalised) and the angle
+  ``atan2(s, c)`` from ``q0`` to ``q1`` (``c = q0·q1``, ``s = q0 × q1``), Jacobians ``±1``.  As
+  Pinocchio does, the angle is 0 when the rounded ``c`` exceeds 1 (angles below about 1.5e-8 apart).
 
 ``integrate``/``difference`` write ``(nq,)``/``(nv,)``; ``dintegrate``/``ddifference`` write the block
 diagonal ``(nv, nv)`` Jacobian (``arg`` 0: w.r.t. the first argument, 1: the second);
@@ -519,7 +520,8 @@ def difference(jtype, idx_q, idx_v, q0, q1, v_out):
                 v_out[iv + k] = res[k]
         elif kind == REVOLUTE_UB:
             c0, s0, c1, s1 = q0[iq], q0[iq + 1], q1[iq], q1[iq + 1]
-            v_out[iv] = math.atan2(c0 * s1 - s0 * c1, c0 * c1 + s0 * s1)
+            c = c0 * c1 + s0 * s1
+            v_out[iv] = 0.0 if c > 1.0 else math.atan2(c0 * s1 - s0 * c1, c)
         else:
             v_out[iv] = q1[iq] - q0[iq]
 
