@@ -264,6 +264,11 @@ def test_state_operations_equal_state_multibody(robot, seed):
         close(J, state.Jdiff(x0, x1)[k])
         lie.state_jintegrate(jtype, idx_q, idx_v, nq, nv, x0, dx, first, J)
         close(J, state.Jintegrate(x0, dx)[k])
+        J_in = rng.normal(size=(state.ndx, 3))
+        transported = J_in.copy()
+        state.JintegrateTransport(x0, dx, transported, crocopy.Jcomponent.first if first else crocopy.Jcomponent.second)
+        lie.dintegrate_transport(jtype, idx_q, idx_v, x0, dx, J_in, 1 - int(first), J_in)
+        close(J_in, transported)
 
 
 def test_non_unit_joint_configurations_are_handled_as_pinocchio_does():
