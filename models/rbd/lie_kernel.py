@@ -16,14 +16,17 @@ skew matrix of ``ω``:
   ``exp3(ω + δ) ≈ exp3(ω) exp3(Jr δ)``) and ``jlog3(R) = Jr(log3 R)⁻¹
   = I + [ω]/2 + (1/θ² - (1 + cos θ)/(2 θ sin θ)) [ω]²``.
 * ``exp6(ν) = (exp3 ω, Jl(ω) v)`` with the left Jacobian ``Jl(ω) = Jr(ω)ᵀ``; ``log6`` is its inverse.
-* ``jexp6(ν) = [[Jr(ω), Q(-v, -ω)], [0, Jr(ω)]]`` (6, 6), with Barfoot's ``Q(ρ, φ)``
-  (Barfoot & Furgale 2014, eq. 102 of Solà et al., "A micro Lie theory ...", 2018), and
+* ``jexp6(ν) = [[Jr(ω), Q(-v, -ω)], [0, Jr(ω)]]`` (6, 6), with the block ``Q(ρ, φ)`` of SE(3)'s left
+  Jacobian (Barfoot & Furgale 2014; Solà et al., "A micro Lie theory for state estimation in
+  robotics", 2018), and
   ``jlog6(M) = jexp6(log6 M)⁻¹ = [[A, -A Q A], [0, A]]`` with ``A = Jr(ω)⁻¹``.
 * ``adjoint(M) = [[R, [p] R], [0, R]]`` (Pinocchio's ``SE3.action``); ``relative_placement(Ma, Mb)
   = Ma⁻¹ Mb``; ``se3_compose(Ma, Mb) = Ma Mb``.
 * Quaternions are stored ``[x, y, z, w]`` (Pinocchio's configuration order).
 
-Small angles use Taylor series below ``θ = 1e-2`` (truncation error below 1e-16).
+The coefficients of ``exp3``, ``Jr`` and ``Q`` are summed from their power series for ``θ < 1`` (to
+round-off), ``θ/sin θ``, ``sin(θ/2)/θ`` and ``Jr⁻¹``'s from a Taylor polynomial below ``θ = 1e-2``.
+Pinocchio's own ``Jexp6``/``Jlog6`` lose up to 1e-7 for ``θ`` between about 1e-4 and 1e-2; these do not.
 
 Configuration space
 -------------------
@@ -35,14 +38,17 @@ The model is given by ``(jtype, idx_q, idx_v)`` of :func:`~crocopy.models.rbd.jo
   ``∂(q ⊕ v)/∂q = Ad(exp6(v))⁻¹``, ``∂(q ⊕ v)/∂v = jexp6(v)``, ``∂(q1 ⊖ q0)/∂q1 = jlog6(M)`` and
   ``∂(q1 ⊖ q0)/∂q0 = -jlog6(M) Ad(M)⁻¹`` with ``M = M(q0)⁻¹ M(q1)``;
 * ``REVOLUTE``, ``PRISMATIC``: ``q + v`` and ``q1 - q0``, Jacobians ``±1``;
-* ``REVOLUTE_UB``: ``q = [cos θ, sin θ]`` rotated by ``v`` and the angle from ``q0`` to ``q1``,
-  Jacobians ``±1``.
+* ``REVOLUTE_UB``: ``q = [cos θ, sin θ]`` rotated by ``v`` (first-order normalised) and the angle
+  ``atan2(s, c)`` from ``q0`` to ``q1`` (``c = q0·q1``, ``s = q0 × q1``), Jacobians ``±1``.  As
+  Pinocchio does, the angle is 0 when the rounded ``c`` exceeds 1 (angles below about 1.5e-8 apart).
 
 ``integrate``/``difference`` write ``(nq,)``/``(nv,)``; ``dintegrate``/``ddifference`` write the block
 diagonal ``(nv, nv)`` Jacobian (``arg`` 0: w.r.t. the first argument, 1: the second);
 ``dintegrate_transport`` writes ``J_out = dintegrate(q, v, arg) @ J_in`` for ``J_in`` (nv, ncols) (in place
-when ``J_out is J_in``).  The configuration arrays are read at ``idx_q``/``idx_v`` only, so ``q`` may be a
-whole state ``x = [q, v]``.
+when ``J_out is J_in``).  The arrays are read and written at ``idx_q``/``idx_v`` only, so ``q`` may be a
+whole state ``x = [q, v]``, ``v`` a state tangent ``dx = [dq, dv]`` and ``J_in``/``J_out`` have more than
+``nv`` rows: ``dintegrate_transport(jtype, idx_q, idx_v, x, dx, J, arg, J)`` is
+``StateMultibody.JintegrateTransport(x, dx, J, first/second)`` (only the first ``nv`` rows change).
 
 The state functions are those of :class:`~crocopy.models.state_multibody.StateMultibody`
 (``x = [q, v]`` (nq + nv,), ``dx = [dq, dv]`` (2 nv,)):
@@ -519,7 +525,8 @@ def difference(jtype, idx_q, idx_v, q0, q1, v_out):
                 v_out[iv + k] = res[k]
         elif kind == REVOLUTE_UB:
             c0, s0, c1, s1 = q0[iq], q0[iq + 1], q1[iq], q1[iq + 1]
-            v_out[iv] = math.atan2(c0 * s1 - s0 * c1, c0 * c1 + s0 * s1)
+            c = c0 * c1 + s0 * s1
+            v_out[iv] = 0.0 if c > 1.0 else math.atan2(c0 * s1 - s0 * c1, c)
         else:
             v_out[iv] = q1[iq] - q0[iq]
 
