@@ -12,10 +12,9 @@ import pickle
 import numpy as np
 import pinocchio as pin
 import pytest
+from robots import frame, load
 
 import crocopy
-
-from robots import frame, load
 
 pytestmark = pytest.mark.skipif(not crocopy.kernels_enabled(), reason="compiled nodes need numba")
 

@@ -1,0 +1,118 @@
+"""Solves with compiled nodes give the iterations, costs and datas of solves without them."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import crocopy
+from crocopy.problems import registry
+from crocopy.solvers import compiled_nodes
+
+pytestmark = pytest.mark.skipif(not crocopy.kernels_enabled(), reason="compiled nodes need numba")
+
+SOLVERS = ("SolverDDP", "SolverFDDP", "SolverBoxDDP", "SolverBoxFDDP")
+
+
+def solve(name: str, solver: str, compiled: bool, maxiter: int = 40, **overrides):
+    problem, xs, us = registry.build(name, **overrides)
+    cls = getattr(crocopy, solver)
+    s = cls(problem)
+    if not compiled:
+        s.__class__ = type("Uncompiled" + solver, (cls,), {"_nodes_compiled": False})
+    s.solve(xs, us, maxiter)
+    return s, problem
+
+
+CASES = [("quad-goal", solver) for solver in SOLVERS]
+CASES += [("arm", solver) for solver in SOLVERS if solver != "SolverBoxDDP"]
+"""Converged solves.  Box-DDP stops within its tolerance at points whose costs are 1e-6 apart (round-off;
+the quadrotor's pitch rate is nearly free there, ±5e-5 rad/s at the last nodes), so only its iterations and
+cost are compared.  Box-DDP on the arm is left out: its first trial from the builder's infeasible guess is an
+unstable rollout that DDP accepts whatever its cost, and round-off (1e-13 at node 5) grows to O(1) by node 75, so the two
+evaluations take different paths from the first iteration on."""
+
+
+@pytest.mark.parametrize(("name", "solver"), CASES)
+def test_same_iterations_and_cost(name, solver):
+    fast, _ = solve(name, solver, True, maxiter=500)
+    slow, _ = solve(name, solver, False, maxiter=500)
+    assert fast.iter == slow.iter
+    assert fast.reason == slow.reason == "converged"
+    assert fast.cost == pytest.approx(slow.cost, rel=1e-6 if solver == "SolverBoxDDP" else 1e-10)
+    if solver != "SolverBoxDDP":
+        for a, b in zip([*fast.xs, *fast.us], [*slow.xs, *slow.us]):
+            np.testing.assert_allclose(a, b, rtol=1e-7, atol=1e-7)
+
+
+def test_datas_after_the_solve_are_those_of_the_final_iterate():
+    s, problem = solve("quad-goal", "SolverBoxFDDP", True, maxiter=5)
+    cost = problem.cost
+    nested = [d.differential.costs.costs["state"].residual.r.copy() for d in problem.runningDatas]
+    derivatives = [d.Fx.copy() for d in problem.runningDatas]
+    problem.calc(s.xs, s.us)
+    problem.calcDiff(s.xs, s.us)
+    assert problem.cost == pytest.approx(cost, rel=1e-12)
+    for d, r, Fx in zip(problem.runningDatas, nested, derivatives):
+        np.testing.assert_array_equal(d.differential.costs.costs["state"].residual.r, r)
+        np.testing.assert_array_equal(d.Fx, Fx)
+    assert s.cost == pytest.approx(cost, rel=1e-10)
+
+
+def test_compiled_nodes_are_selected_only_where_they_apply():
+    problem, xs, us = registry.build("quad-goal")
+    s = crocopy.SolverFDDP(problem)
+    assert compiled_nodes.select(s) is not None
+    assert all(step is not None for step in compiled_nodes.select(s).steps)
+
+    class Subclass(crocopy.SolverFDDP):
+        pass
+
+    assert compiled_nodes.select(Subclass(problem)) is None
+
+    class UserCallback(crocopy.CallbackAbstract):
+        def __call__(self, solver):
+            pass
+
+    s.setCallbacks([crocopy.CallbackVerbose(), UserCallback()])
+    assert compiled_nodes.select(s) is None
+    s.setCallbacks([crocopy.CallbackVerbose()])
+    assert compiled_nodes.select(s) is not None
+    with crocopy.use_kernels(False):
+        assert compiled_nodes.select(s) is None
+    pend, _, _ = registry.build("pend")
+    assert compiled_nodes.select(crocopy.SolverFDDP(pend)) is None
+
+
+def test_a_user_callback_reads_nested_datas_of_the_current_iterate():
+    problem, xs, us = registry.build("quad-goal")
+    s = crocopy.SolverFDDP(problem)
+    seen = []
+
+    class Reader(crocopy.CallbackAbstract):
+        def __call__(self, solver):
+            d = solver.problem.runningDatas[0]
+            seen.append(d.differential.costs.cost * problem.runningModels[0].dt - d.cost)
+
+    s.setCallbacks([Reader()])
+    s.solve(xs, us, 5)
+    assert seen and max(abs(v) for v in seen) < 1e-12
+
+
+def test_mixed_problem_compiles_the_nodes_it_can():
+    problem, xs, us = registry.build("quad-goal")
+    models = list(problem.runningModels)
+    dam = models[3].differential
+
+    class Euler(crocopy.IntegratedActionModelEuler):
+        pass
+
+    models[3] = Euler(dam, models[3].dt)
+    mixed = crocopy.ShootingProblem(problem.x0, models, problem.terminalModel)
+    nodes = compiled_nodes.select(crocopy.SolverFDDP(mixed))
+    assert nodes.steps[3] is None and nodes.steps[2] is not None
+    fast = crocopy.SolverFDDP(mixed)
+    fast.solve(xs, us, 30)
+    reference, _ = solve("quad-goal", "SolverFDDP", False, maxiter=30)
+    assert fast.iter == reference.iter
+    assert fast.cost == pytest.approx(reference.cost, rel=1e-9)
