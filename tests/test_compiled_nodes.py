@@ -29,8 +29,8 @@ CASES += [("arm", solver) for solver in SOLVERS if solver != "SolverBoxDDP"]
 """Converged solves.  Box-DDP stops within its tolerance at points whose costs are 1e-6 apart (round-off;
 the quadrotor's pitch rate is nearly free there, ±5e-5 rad/s at the last nodes), so only its iterations and
 cost are compared.  Box-DDP on the arm is left out: its first trial from the builder's infeasible guess is an
-unstable rollout that DDP accepts whatever its cost, and round-off (1e-13 at node 5) grows to O(1) by node 75, so the two
-evaluations take different paths from the first iteration on."""
+unstable rollout that DDP accepts whatever its cost, and round-off (1e-13 at node 5) grows to O(1) by node 75,
+so the two evaluations take different paths from the first iteration on."""
 
 
 @pytest.mark.parametrize(("name", "solver"), CASES)
