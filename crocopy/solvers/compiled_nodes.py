@@ -12,6 +12,10 @@ that has re-read the model's parameters (references, weights, time step) and has
   node of the rollout (``dx = x ⊖ x_ref``, the clamped feedback control ``u``, ``calc``, and
   ``x_next = xnext``, or ``xnext ⊕ ((alpha - 1) f)`` when ``gap``) in one call; the caller stores the
   returned cost in ``data.cost``;
+* optionally, on its class, ``horizon(evaluators) -> rollout``: when every running node has an evaluator of
+  that class, ``rollout(xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs, alpha, gaps, gap_at) -> (total,
+  costs)`` runs those rollout steps for ``t = 0 .. T-1`` in one call (``gap_at``: the one node whose gap
+  stays open besides ``gaps``, -1 for none); the caller stores ``costs[t]`` in the datas;
 
 or ``None`` (models without the method, or nodes it cannot compile).  ``terminal`` tells whether the node is the
 problem's terminal node; ``memo`` is a dictionary shared by the nodes of one solve (for what they
@@ -55,10 +59,12 @@ class CompiledNodes:
     """Per-node ``calc(x, u)`` and ``calcDiff(x, u, synced)`` of one solve: the compiled evaluators
     where the nodes offer one, the models' own methods elsewhere (the terminal node last)."""
 
-    def __init__(self, calcs: list[Callable], calc_diffs: list[Callable], steps: list[Callable | None]) -> None:
+    def __init__(self, calcs: list[Callable], calc_diffs: list[Callable], steps: list[Callable | None],
+                 horizon: Callable | None = None) -> None:
         self.calcs = calcs
         self.calc_diffs = calc_diffs
         self.steps = steps
+        self.horizon = horizon
 
     def calcDiff(self, problem, xs, us, synced: bool) -> float:
         """Derivatives (and values, unless ``synced``) of every node; returns the total cost."""
@@ -80,13 +86,14 @@ def select(solver) -> CompiledNodes | None:
     if any(not type(c).__module__.startswith("crocopy.") for c in solver.getCallbacks()):
         return None
     problem = solver.problem
-    calcs, calc_diffs, steps = [], [], []
+    calcs, calc_diffs, steps, evaluators = [], [], [], []
     found = False
     memo: dict = {}
     nodes = [*zip(problem.runningModels, problem.runningDatas), (problem.terminalModel, problem.terminalData)]
     for t, (model, data) in enumerate(nodes):
         make = getattr(model, "_compiled_node", None)
         evaluator = None if make is None else make(data, t == problem.T, memo)
+        evaluators.append(evaluator)
         if evaluator is None:
             calcs.append(_python_calc(model, data))
             calc_diffs.append(_python_calc_diff(model, data))
@@ -96,4 +103,12 @@ def select(solver) -> CompiledNodes | None:
             calcs.append(evaluator.calc)
             calc_diffs.append(evaluator.calcDiff)
             steps.append(getattr(evaluator, "rollout_step", None) if model.nu else None)
-    return CompiledNodes(calcs, calc_diffs, steps[:-1]) if found else None
+    if not found:
+        return None
+    running = evaluators[:-1]
+    kind = type(running[0]) if running else None
+    horizon = None
+    if running and all(type(e) is kind and step is not None for e, step in zip(running, steps)):
+        make_horizon = getattr(kind, "horizon", None)
+        horizon = None if make_horizon is None else make_horizon(running)
+    return CompiledNodes(calcs, calc_diffs, steps[:-1], horizon)

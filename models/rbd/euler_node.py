@@ -62,15 +62,32 @@ _NODES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 """Node data → its :class:`EulerNode`."""
 
 
-def lowered(model: pin.Model, memo: dict) -> RigidBodyModel | None:
+class Lowered:
+    """A lowered Pinocchio model with the addresses and dimensions of its arrays (the first entries of every
+    node's table, see :mod:`.euler_node_kernel`; the armature's entry is each node's own)."""
+
+    def __init__(self, rb: RigidBodyModel) -> None:
+        self.rb = rb
+        self.addresses, self.shapes = table_entries([getattr(rb, name) for name in rb._fields[4:]])
+
+
+def lowered(model: pin.Model, memo: dict) -> Lowered | None:
     """``lower_model(model)``, once per model and ``memo`` (one solve); None if it does not lower."""
     key = id(model)
     if key not in memo:
         try:
-            memo[key] = lower_model(model)
+            memo[key] = Lowered(lower_model(model))
         except NotLowerable:
             memo[key] = None
     return memo[key]
+
+
+def table_entries(arrays: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """``(addresses, dimensions)`` of ``arrays``: shapes ``(n,)`` and ``(3 n,)`` (unused dimensions zero)."""
+    shapes = np.zeros(3 * len(arrays), dtype=np.int64)
+    for k, a in enumerate(arrays):
+        shapes[3 * k: 3 * k + a.ndim] = a.shape
+    return np.array([_address(a) for a in arrays], dtype=np.int64), shapes
 
 
 def euler_node(iam, data, terminal: bool, memo: dict) -> EulerNode | None:
@@ -79,14 +96,14 @@ def euler_node(iam, data, terminal: bool, memo: dict) -> EulerNode | None:
     dam = iam.differential
     if dam.constraints is not None or type(dam.state) is not StateMultibody or type(dam.actuation) not in ACTUATIONS:
         return None
-    rb = lowered(dam.state.pinocchio, memo)
-    if rb is None:
+    low = lowered(dam.state.pinocchio, memo)
+    if low is None:
         return None
     node = _NODES.get(data)
-    if node is None or node.model is not iam or node.terminal != terminal:
-        node = EulerNode(iam, data, terminal, rb)
+    if node is None or node.model is not iam or node.terminal != terminal or node.nv != low.rb.nv:
+        node = EulerNode(iam, data, terminal, low.rb)
         _NODES[data] = node
-    return node if node.refresh(rb) else None
+    return node if node.refresh(low) else None
 
 
 def _address(array: np.ndarray) -> int:
@@ -109,6 +126,8 @@ class EulerNode:
         self._data = weakref.ref(data)
         nv, nu = rb.nv, iam.nu
         ndx = 2 * nv
+        self.nv = nv
+        self.armature = np.zeros(nv)
         self.workspace = make_workspace(rb)
         self.scratch = {
             "S": np.zeros((nv, nu)), "tau": np.zeros(nv), "dtau_dq": np.zeros((nv, nv)), "dtau_dv": np.zeros((nv, nv)),
@@ -117,8 +136,12 @@ class EulerNode:
             "rows": np.zeros((nv, ndx + nu)), "gap": np.zeros(ndx),
         }
         self.no_control = np.zeros(0)
+        self._armature_entry = table_entries([self.armature])
+        self._workspace_entries = table_entries(list(self.workspace))
+        self._data_arrays: list = []
+        self._data_entries = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
 
-    def refresh(self, rb: RigidBodyModel) -> bool:
+    def refresh(self, low: Lowered) -> bool:
         """Re-read the models' parameters and the data arrays' addresses; False if the node no longer qualifies."""
         data = self._data()
         iam = self.model
@@ -139,10 +162,10 @@ class EulerNode:
                 return False
             items += [kind, rows.start, rows.stop - rows.start, getattr(residual, "id", 0), 0, len(par)]
             par += self._parameters(kind, residual, items)
-        rb = rb._replace(armature=rb.armature + dam.armature)
+        np.add(low.rb.armature, dam.armature, out=self.armature)
         self._actuation_matrix(dam, ddata)
         self.par = np.array(par)
-        self._table(rb, data, ddata, stack, items)
+        self._table(low, data, ddata, stack, items)
         return True
 
     @staticmethod
@@ -172,9 +195,12 @@ class EulerNode:
         dam.actuation.calcDiff(act, x, u)
         self.scratch["S"][:] = act.dtau_du
 
-    def _table(self, rb: RigidBodyModel, data, ddata, stack, items: list) -> None:
-        """The addresses and dimensions of every array the kernels read or write, and the integer program."""
-        arrays = [getattr(rb, name) for name in rb._fields[4:]] + list(self.workspace)
+    def _table(self, low: Lowered, data, ddata, stack, items: list) -> None:
+        """The addresses and dimensions of every array the kernels read or write, and the integer program.
+
+        Entries: the lowered model's arrays (the armature is this node's, model's plus dynamics'), the
+        workspace, then :data:`.euler_node_kernel.NODE_ARRAYS`; the data arrays' addresses are read again
+        only for arrays that are not those of the last refresh."""
         fields = {
             "xnext": data.xnext, "dx": data.dx, "Fx": data.Fx, "Fu": data.Fu, "Lx": data.Lx, "Lu": data.Lu,
             "Lxx": data.Lxx, "Lxu": data.Lxu, "Luu": data.Luu,
@@ -185,11 +211,19 @@ class EulerNode:
             "Ar": stack.Ar, "Arr": stack.Arr, "Jx": stack.Jx, "Ju": stack.Ju, "Jc": stack.Jc, "HJx": stack.HJx,
             "Juc": stack.Juc, "HJu": stack.HJu, **self.scratch,
         }
-        arrays += [fields[name] for name in kernel.NODE_ARRAYS]
-        n = len(arrays)
-        shapes = np.zeros(3 * n, dtype=np.int64)
-        for k, a in enumerate(arrays):
-            shapes[3 * k: 3 * k + a.ndim] = a.shape
+        arrays = [fields[name] for name in kernel.NODE_ARRAYS]
+        known = self._data_arrays
+        if len(known) != len(arrays) or any(a is not b for a, b in zip(arrays, known)):
+            self._data_entries = table_entries(arrays)
+            self._data_arrays = arrays
+        rb = low.rb
+        armature = kernel.RB_ARMATURE
+        parts = [(low.addresses[:armature], low.shapes[:3 * armature]), self._armature_entry,
+                 (low.addresses[armature + 1:], low.shapes[3 * armature + 3:]), self._workspace_entries,
+                 self._data_entries]
+        addresses = np.concatenate([p[0] for p in parts])
+        shapes = np.concatenate([p[1] for p in parts])
+        n = addresses.shape[0]
         header = np.zeros(kernel.SHAPES, dtype=np.int64)
         header[[kernel.NQ, kernel.NV, kernel.NU, kernel.NR, kernel.U_START]] = (
             rb.nq, rb.nv, self.model.nu, stack.r.shape[0], stack.u_start)
@@ -200,8 +234,8 @@ class EulerNode:
         header[kernel.TERMINAL] = self.terminal
         self.ints = np.concatenate([header, shapes, np.array(items, dtype=np.int64),
                                     np.asarray(stack.starts, dtype=np.int64)])
-        self.tbl = np.array([_address(a) for a in arrays], dtype=np.int64)
-        self._arrays = arrays
+        self.tbl = addresses
+        self._lowered = low
 
     def calc(self, x: np.ndarray, u: np.ndarray | None) -> None:
         self._data().cost = kernel.node_calc(self.tbl, self.ints, self.par, x, self.no_control if u is None else u)
@@ -217,3 +251,67 @@ class EulerNode:
         self._data().cost = kernel.node_calc_diff(
             self.tbl, self.ints, self.par, x, self.no_control if u is None else u
         )
+
+    @staticmethod
+    def horizon(nodes: list[EulerNode]) -> EulerHorizon:
+        """The rollout of running nodes ``nodes`` (all of this class) in one compiled call."""
+        return EulerHorizon(nodes)
+
+
+class AddressCache:
+    """Addresses of the arrays of a list, read again only for entries that are not the arrays seen last time
+    (weak references: the cache never keeps an array alive, nor changes its reference count); ``None``
+    entries get address 0 (never read by the kernel)."""
+
+    def __init__(self) -> None:
+        self.refs: list = []
+        self.values = np.zeros(0, dtype=np.int64)
+
+    def __call__(self, arrays: list[np.ndarray]) -> np.ndarray:
+        refs = self.refs
+        if len(refs) != len(arrays):
+            self.refs = refs = [None] * len(arrays)
+            self.values = np.zeros(len(arrays), dtype=np.int64)
+        values = self.values
+        for t, a in enumerate(arrays):
+            ref = refs[t]
+            if ref is None or ref() is not a:
+                values[t] = 0 if a is None else _address(a)
+                refs[t] = None if a is None else weakref.ref(a)
+        return values
+
+
+class EulerHorizon:
+    """The rollout of the DDP family over running Euler nodes (:func:`.euler_node_kernel.horizon_rollout`):
+    ``rollout(xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs, alpha, gaps, gap_at) -> (total, costs)``."""
+
+    def __init__(self, nodes: list[EulerNode]) -> None:
+        self.tbls = np.stack([n.tbl for n in nodes])
+        self.ioff = np.cumsum([0] + [n.ints.shape[0] for n in nodes], dtype=np.int64)
+        self.poff = np.cumsum([0] + [n.par.shape[0] for n in nodes], dtype=np.int64)
+        self.ints = np.concatenate([n.ints for n in nodes])
+        self.par = np.concatenate([n.par for n in nodes])
+        self.nus = np.array([n.model.nu for n in nodes], dtype=np.int64)
+        self.nx, self.ndx = nodes[0].model.state.nx, nodes[0].model.state.ndx
+        self.costs = np.zeros(len(nodes))
+        self.fixed = [AddressCache() for _ in range(6)]
+        self.trajectories: dict[int, AddressCache] = {}
+
+    def _trajectory(self, arrays: list) -> np.ndarray:
+        """Addresses of a trajectory list, cached per list object (a solver swaps ``xs`` and ``xs_try`` whole)."""
+        cache = self.trajectories.get(id(arrays))
+        if cache is None:
+            if len(self.trajectories) > 8:
+                self.trajectories.clear()
+            cache = self.trajectories[id(arrays)] = AddressCache()
+        return cache(arrays)
+
+    def __call__(self, xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs, alpha: float, gaps: bool,
+                 gap_at: int) -> tuple[float, list[float]]:
+        f, trajectory = self.fixed, self._trajectory
+        total = kernel.horizon_rollout(
+            self.tbls, self.ints, self.ioff, self.par, self.poff, trajectory(xs), trajectory(us), trajectory(xs_try),
+            trajectory(us_try), f[0](dxs), f[1](ks), f[2](Ks), f[3](fs), f[4](lbs), f[5](ubs), self.nus, self.nx,
+            self.ndx, alpha, gaps, gap_at, self.costs,
+        )
+        return total, self.costs.tolist()

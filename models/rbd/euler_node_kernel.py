@@ -57,6 +57,8 @@ NODE_ARRAYS = (
     "S", "tau", "dtau_dq", "dtau_dv", "J6", "K6", "m6", "R3", "p3", "v6", "Jq", "Jv", "rows", "gap",
 )
 N_RB, N_WS = len(RigidBodyModel._fields) - 4, len(RigidBodyWorkspace._fields)
+RB_ARMATURE = RigidBodyModel._fields.index("armature") - 4
+"""Entry of the armature (each node's own: the Pinocchio model's plus the dynamics model's)."""
 NODE = N_RB + N_WS
 (E_XNEXT, E_DX, E_FX, E_FU, E_LX, E_LU, E_LXX, E_LXU, E_LUU,
  E_A, E_DFX, E_DFU, E_MINV, E_DLX, E_DLU, E_DLXX, E_DLXU, E_DLUU,
@@ -323,6 +325,35 @@ def node_rollout_step(tbl, ints, par, x_ref, x, u_ref, k, K, alpha, lb, ub, u, d
         for i in range(nq + nv):
             x_next[i] = xnext[i]
     return cost
+
+
+@compiled
+def horizon_rollout(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs, nus, nx, ndx,
+                    alpha, gaps, gap_at, costs):
+    """:func:`node_rollout_step` over the running nodes ``t = 0 .. T-1`` in one call; returns the sum of their costs
+    (each into ``costs[t]``).
+
+    Node ``t``'s table is ``tbls[t]``, its integers ``ints[ioff[t]:ioff[t+1]]``, its parameters
+    ``par[poff[t]:poff[t+1]]``; the trajectories, gains, gaps and bounds arrive as addresses (``xs[t]`` the
+    address of the state ``t``, ...): states of size ``nx``, tangents ``ndx``, controls ``nus[t]``, ``K[t]``
+    of shape ``(nus[t], ndx)``.  The gap of node ``t+1`` is kept open (``(α - 1) fs[t+1]``) when ``gaps`` or
+    ``t + 1 == gap_at``.
+    """
+    total = 0.0
+    for t in range(tbls.shape[0]):
+        nu = nus[t]
+        cost = node_rollout_step(
+            tbls[t], ints[ioff[t]: ioff[t + 1]], par[poff[t]: poff[t + 1]],
+            carray(float64_pointer(xs[t]), (nx,)), carray(float64_pointer(xs_try[t]), (nx,)),
+            carray(float64_pointer(us[t]), (nu,)), carray(float64_pointer(ks[t]), (nu,)),
+            carray(float64_pointer(Ks[t]), (nu, ndx)), alpha, carray(float64_pointer(lbs[t]), (nu,)),
+            carray(float64_pointer(ubs[t]), (nu,)), carray(float64_pointer(us_try[t]), (nu,)),
+            carray(float64_pointer(dxs[t]), (ndx,)), carray(float64_pointer(xs_try[t + 1]), (nx,)),
+            carray(float64_pointer(fs[t + 1]), (ndx,)), gaps or t + 1 == gap_at,
+        )
+        costs[t] = cost
+        total += cost
+    return total
 
 
 @compiled
