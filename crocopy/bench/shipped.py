@@ -32,6 +32,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from ..solvers import compiled_nodes
 from . import compat
 from .side_by_side import require_crocoddyl
 from .timing import limit_threads, loops_for, sample_ms
@@ -91,12 +92,18 @@ class Worker:
 
 
 def phase_calls(solver: Any) -> dict[str, Callable[[], object]]:
-    """The timed phases on the solver's solution (evaluated once here, so the backward pass has its data)."""
+    """The timed phases on the solver's solution (evaluated once here, so the backward pass has its data);
+    crocopy's as its solve runs them (on compiled nodes where they apply)."""
     problem, xs, us = solver.problem, list(solver.xs), list(solver.us)
     problem.calc(xs, us)
     problem.calcDiff(xs, us)
-    return {"calc": lambda: problem.calc(xs, us), "calcDiff": lambda: problem.calcDiff(xs, us),
-            "backward": lambda: solver.computeDirection(False)}
+    calls = {"calc": lambda: problem.calc(xs, us), "calcDiff": lambda: problem.calcDiff(xs, us),
+             "backward": lambda: solver.computeDirection(False)}
+    nodes = compiled_nodes.attach(solver) if type(solver).__module__.startswith("crocopy.") else None
+    if nodes is not None:
+        calls["calc"] = lambda: nodes.calc(problem, xs, us)
+        calls["calcDiff"] = lambda: nodes.calcDiff(problem, xs, us, True)
+    return calls
 
 
 def serve(library: str, job: str) -> int:

@@ -21,7 +21,9 @@ and the Kinova arm) the same builder makes the problem with each library (Crocod
   sample so load drift hits both.  A short phase is looped within a sample to last ≥ 20 ms.  The
   step length is the largest of 1, 1/2, ... whose rollout stays finite for both libraries.
   ``total`` = calcDiff + backward + forward: the work of one iteration with one line-search trial
-  (the forward pass does the iteration's calc).
+  (the forward pass does the iteration's calc).  crocopy's phases run as its solve runs them: with
+  the compiled nodes where they apply (:func:`crocopy.solvers.compiled_nodes.attach`; ``calc`` and
+  ``calcDiff`` are then those nodes' evaluations, whose ``calcDiff`` also evaluates the node).
 
 :mod:`crocopy.bench.report` turns the results into the markdown report.
 """
@@ -41,7 +43,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from types import ModuleType
 
-from ..solvers import SOLVERS
+from ..solvers import SOLVERS, compiled_nodes
 from .timing import limit_threads, loops_for, sample_ms
 
 VS_PROBLEMS = ("pend", "quad-goal", "quad-loop", "quad-narrow", "man", "taichi", "jump", "hop", "bar", "walk", "arm")
@@ -175,6 +177,7 @@ def _phase_calls(
     """
     solver = make_solver(lib, problem, solver_name)
     solver.setCandidate(xs, us, False)
+    nodes = compiled_nodes.attach(solver) if lib.__name__ == "crocopy" else None
     solver.computeDirection(True)
     xs_c, us_c = list(solver.xs), list(solver.us)
     steplength = [1.0]
@@ -184,6 +187,9 @@ def _phase_calls(
         "backward": lambda: solver.computeDirection(False),
         "forward": lambda: solver.tryStep(steplength[0]),
     }
+    if nodes is not None:
+        calls["calc"] = lambda: nodes.calc(problem, xs_c, us_c)
+        calls["calcDiff"] = lambda: nodes.calcDiff(problem, xs_c, us_c, True)
     return calls, steplength
 
 

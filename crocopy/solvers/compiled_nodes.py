@@ -66,6 +66,17 @@ class CompiledNodes:
         self.steps = steps
         self.horizon = horizon
 
+    def calc(self, problem, xs, us) -> float:
+        """Every node's value at ``(xs, us)``; returns the total cost."""
+        cost = 0.0
+        for calc, d, x, u in zip(self.calcs, problem.runningDatas, xs, us):
+            calc(x, u)
+            cost += d.cost
+        self.calcs[-1](xs[-1], None)
+        cost += problem.terminalData.cost
+        problem.cost = cost
+        return cost
+
     def calcDiff(self, problem, xs, us, synced: bool) -> float:
         """Derivatives (and values, unless ``synced``) of every node; returns the total cost."""
         cost = 0.0
@@ -112,3 +123,12 @@ def select(solver) -> CompiledNodes | None:
         make_horizon = getattr(kind, "horizon", None)
         horizon = None if make_horizon is None else make_horizon(running)
     return CompiledNodes(calcs, calc_diffs, steps[:-1], horizon)
+
+
+def attach(solver) -> CompiledNodes | None:
+    """Select the compiled nodes for ``solver`` and keep them on it, as ``solve`` does for its duration, so that
+    ``solver.calcDiff``/``tryStep`` called outside ``solve`` run them too (benchmarks timing a solve's phases).
+    The datas are then those of a solve (the nested ones not updated) until ``problem.calc``/``calcDiff``."""
+    solver._nodes = select(solver)
+    return solver._nodes
+
