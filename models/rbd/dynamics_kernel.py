@@ -46,260 +46,251 @@ LOCAL = 1
 LOCAL_WORLD_ALIGNED = 2
 
 
-@compiled
-def _motion_cross_add(m, n, scale, out):
-    """``out += scale · (m × n)`` (``out`` may alias ``m`` or ``n``)."""
-    x = m[4] * n[2] - m[5] * n[1] + m[1] * n[5] - m[2] * n[4]
-    y = m[5] * n[0] - m[3] * n[2] + m[2] * n[3] - m[0] * n[5]
-    z = m[3] * n[1] - m[4] * n[0] + m[0] * n[4] - m[1] * n[3]
-    wx = m[4] * n[5] - m[5] * n[4]
-    wy = m[5] * n[3] - m[3] * n[5]
-    wz = m[3] * n[4] - m[4] * n[3]
-    out[0] += scale * x
-    out[1] += scale * y
-    out[2] += scale * z
-    out[3] += scale * wx
-    out[4] += scale * wy
-    out[5] += scale * wz
+ZERO6 = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
 @compiled
-def _force_cross_add(m, f, scale, out):
-    """``out += scale · (m ×* f)`` (``out`` may alias ``m`` or ``f``)."""
-    x = m[4] * f[2] - m[5] * f[1]
-    y = m[5] * f[0] - m[3] * f[2]
-    z = m[3] * f[1] - m[4] * f[0]
-    nx = m[4] * f[5] - m[5] * f[4] + m[1] * f[2] - m[2] * f[1]
-    ny = m[5] * f[3] - m[3] * f[5] + m[2] * f[0] - m[0] * f[2]
-    nz = m[3] * f[4] - m[4] * f[3] + m[0] * f[1] - m[1] * f[0]
-    out[0] += scale * x
-    out[1] += scale * y
-    out[2] += scale * z
-    out[3] += scale * nx
-    out[4] += scale * ny
-    out[5] += scale * nz
+def _get6(A, i):
+    """Row ``i`` of an ``(n, 6)`` array as a tuple."""
+    return A[i, 0], A[i, 1], A[i, 2], A[i, 3], A[i, 4], A[i, 5]
 
 
 @compiled
-def _inertia_add(inertia, m, scale, out):
-    """``out += scale · inertia @ m`` for a 6x6 ``inertia`` (``out`` must not alias ``m``)."""
-    for r in range(6):
-        acc = 0.0
-        for c in range(6):
-            acc += inertia[r, c] * m[c]
-        out[r] += scale * acc
+def _set6(A, i, m):
+    """``A[i] = m``."""
+    A[i, 0], A[i, 1], A[i, 2], A[i, 3], A[i, 4], A[i, 5] = m
 
 
 @compiled
-def _dot6(a, b):
-    """``aᵀ b`` of two 6-vectors."""
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] + a[4] * b[4] + a[5] * b[5]
+def _plus(m, n):
+    """``m + n`` of two 6-tuples."""
+    return m[0] + n[0], m[1] + n[1], m[2] + n[2], m[3] + n[3], m[4] + n[4], m[5] + n[5]
 
 
 @compiled
-def _joint_transform(rb, i, q, R, p):
-    """``M_J(q)`` of joint ``i`` into ``R (3, 3)``, ``p (3,)``."""
-    kind = rb.jtype[i]
-    iq = rb.idx_q[i]
-    for r in range(3):
-        p[r] = 0.0
-        for c in range(3):
-            R[r, c] = 1.0 if r == c else 0.0
+def _minus(m, n):
+    """``m - n`` of two 6-tuples."""
+    return m[0] - n[0], m[1] - n[1], m[2] - n[2], m[3] - n[3], m[4] - n[4], m[5] - n[5]
+
+
+@compiled
+def _times(m, x):
+    """``x m`` of a 6-tuple and a scalar."""
+    return m[0] * x, m[1] * x, m[2] * x, m[3] * x, m[4] * x, m[5] * x
+
+
+@compiled
+def _dot(m, n):
+    """``mᵀ n`` of two 6-tuples."""
+    return m[0] * n[0] + m[1] * n[1] + m[2] * n[2] + m[3] * n[3] + m[4] * n[4] + m[5] * n[5]
+
+
+@compiled
+def _mcross(m, n):
+    """``m × n`` of two motions (6-tuples)."""
+    return (
+        m[4] * n[2] - m[5] * n[1] + m[1] * n[5] - m[2] * n[4],
+        m[5] * n[0] - m[3] * n[2] + m[2] * n[3] - m[0] * n[5],
+        m[3] * n[1] - m[4] * n[0] + m[0] * n[4] - m[1] * n[3],
+        m[4] * n[5] - m[5] * n[4],
+        m[5] * n[3] - m[3] * n[5],
+        m[3] * n[4] - m[4] * n[3],
+    )
+
+
+@compiled
+def _fcross(m, f):
+    """``m ×* f`` of a motion and a force (6-tuples)."""
+    return (
+        m[4] * f[2] - m[5] * f[1],
+        m[5] * f[0] - m[3] * f[2],
+        m[3] * f[1] - m[4] * f[0],
+        m[4] * f[5] - m[5] * f[4] + m[1] * f[2] - m[2] * f[1],
+        m[5] * f[3] - m[3] * f[5] + m[2] * f[0] - m[0] * f[2],
+        m[3] * f[4] - m[4] * f[3] + m[0] * f[1] - m[1] * f[0],
+    )
+
+
+@compiled
+def _imul(inertia, i, m):
+    """``inertia[i] @ m`` for an ``(n, 6, 6)`` array and a 6-tuple."""
+    out0 = out1 = out2 = out3 = out4 = out5 = 0.0
+    for c in range(6):
+        x = m[c]
+        out0 += inertia[i, 0, c] * x
+        out1 += inertia[i, 1, c] * x
+        out2 += inertia[i, 2, c] * x
+        out3 += inertia[i, 3, c] * x
+        out4 += inertia[i, 4, c] * x
+        out5 += inertia[i, 5, c] * x
+    return out0, out1, out2, out3, out4, out5
+
+
+@compiled
+def _joint_transform(kind, ax, ay, az, q, iq):
+    """``M_J(q)`` of a joint of code ``kind``, axis ``(ax, ay, az)``, configuration at ``q[iq:]``:
+    the tuple ``(R00, R01, R02, R10, R11, R12, R20, R21, R22, px, py, pz)``."""
     if kind == FREEFLYER:
-        p[0], p[1], p[2] = q[iq], q[iq + 1], q[iq + 2]
         x, y, z, w = q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6]
-        R[0, 0] = 1.0 - 2.0 * (y * y + z * z)
-        R[0, 1] = 2.0 * (x * y - z * w)
-        R[0, 2] = 2.0 * (x * z + y * w)
-        R[1, 0] = 2.0 * (x * y + z * w)
-        R[1, 1] = 1.0 - 2.0 * (x * x + z * z)
-        R[1, 2] = 2.0 * (y * z - x * w)
-        R[2, 0] = 2.0 * (x * z - y * w)
-        R[2, 1] = 2.0 * (y * z + x * w)
-        R[2, 2] = 1.0 - 2.0 * (x * x + y * y)
-    elif kind == PRISMATIC:
-        for r in range(3):
-            p[r] = rb.axis[i, r] * q[iq]
-    else:
-        if kind == REVOLUTE:
-            c, s = math.cos(q[iq]), math.sin(q[iq])
-        else:  # REVOLUTE_UB: q = [cos θ, sin θ]
-            c, s = q[iq], q[iq + 1]
-        ax, ay, az = rb.axis[i, 0], rb.axis[i, 1], rb.axis[i, 2]
-        t = 1.0 - c
-        R[0, 0] = c + t * ax * ax
-        R[0, 1] = t * ax * ay - s * az
-        R[0, 2] = t * ax * az + s * ay
-        R[1, 0] = t * ax * ay + s * az
-        R[1, 1] = c + t * ay * ay
-        R[1, 2] = t * ay * az - s * ax
-        R[2, 0] = t * ax * az - s * ay
-        R[2, 1] = t * ay * az + s * ax
-        R[2, 2] = c + t * az * az
-
-
-@compiled
-def _world_inertia(rb, ws, i):
-    """``ws.oI[i]``: the body inertia of joint ``i`` in the world frame at the origin (6x6)."""
-    R = ws.oR[i]
-    out = ws.oI[i]
-    m = rb.mass[i]
-    cx = ws.op[i, 0] + R[0, 0] * rb.com[i, 0] + R[0, 1] * rb.com[i, 1] + R[0, 2] * rb.com[i, 2]
-    cy = ws.op[i, 1] + R[1, 0] * rb.com[i, 0] + R[1, 1] * rb.com[i, 1] + R[1, 2] * rb.com[i, 2]
-    cz = ws.op[i, 2] + R[2, 0] * rb.com[i, 0] + R[2, 1] * rb.com[i, 1] + R[2, 2] * rb.com[i, 2]
-    for r in range(3):
-        for c in range(3):
-            acc = 0.0
-            for k in range(3):
-                for n in range(3):
-                    acc += R[r, k] * rb.inertia[i, k, n] * R[c, n]
-            out[3 + r, 3 + c] = acc
-            out[r, c] = m if r == c else 0.0
-    # m [c]x in the lower-left block, its transpose (-m [c]x) upper-right, -m [c]x [c]x added to the inertia
-    out[3, 0], out[3, 1], out[3, 2] = 0.0, -m * cz, m * cy
-    out[4, 0], out[4, 1], out[4, 2] = m * cz, 0.0, -m * cx
-    out[5, 0], out[5, 1], out[5, 2] = -m * cy, m * cx, 0.0
-    for r in range(3):
-        for c in range(3):
-            out[c, 3 + r] = out[3 + r, c]
-    out[3, 3] += m * (cy * cy + cz * cz)
-    out[4, 4] += m * (cx * cx + cz * cz)
-    out[5, 5] += m * (cx * cx + cy * cy)
-    out[3, 4] -= m * cx * cy
-    out[4, 3] -= m * cx * cy
-    out[3, 5] -= m * cx * cz
-    out[5, 3] -= m * cx * cz
-    out[4, 5] -= m * cy * cz
-    out[5, 4] -= m * cy * cz
+        return (
+            1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w),
+            2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w),
+            2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y),
+            q[iq], q[iq + 1], q[iq + 2],
+        )
+    if kind == PRISMATIC:
+        return 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, ax * q[iq], ay * q[iq], az * q[iq]
+    if kind == REVOLUTE:
+        c, s = math.cos(q[iq]), math.sin(q[iq])
+    else:  # REVOLUTE_UB: q = [cos θ, sin θ]
+        c, s = q[iq], q[iq + 1]
+    t = 1.0 - c
+    return (
+        c + t * ax * ax, t * ax * ay - s * az, t * ax * az + s * ay,
+        t * ax * ay + s * az, c + t * ay * ay, t * ay * az - s * ax,
+        t * ax * az - s * ay, t * ay * az + s * ax, c + t * az * az,
+        0.0, 0.0, 0.0,
+    )
 
 
 @compiled
 def forward_kinematics(rb: RigidBodyModel, ws: RigidBodyWorkspace, q: np.ndarray, v: np.ndarray) -> None:
     """``ws.oR, ws.op`` (``oMi``), ``ws.oS`` (world motion subspace), ``ws.ov``, ``ws.ow`` and ``ws.oI``."""
+    oR, op, oS, ov, ow, oI = ws.oR, ws.op, ws.oS, ws.ov, ws.ow, ws.oI
+    jR, jp, axis, com, Ic = rb.jR, rb.jp, rb.axis, rb.com, rb.inertia
     for r in range(3):
-        ws.op[0, r] = 0.0
+        op[0, r] = 0.0
         for c in range(3):
-            ws.oR[0, r, c] = 1.0 if r == c else 0.0
+            oR[0, r, c] = 1.0 if r == c else 0.0
     for r in range(6):
-        ws.ov[0, r] = 0.0
-        ws.ow[0, r] = 0.0
-    RJ = ws.tmp[0:3, 0:3]
-    A = ws.tmp[3:6, 0:3]
-    pJ = ws.tmp[0, 3:6]
+        ov[0, r] = 0.0
+        ow[0, r] = 0.0
+    A = ws.tmp
     for i in range(1, rb.njoints):
         par = rb.parent[i]
-        _joint_transform(rb, i, q, RJ, pJ)
-        Rp = ws.oR[par]
+        kind = rb.jtype[i]
+        ax, ay, az = axis[i, 0], axis[i, 1], axis[i, 2]
+        J = _joint_transform(kind, ax, ay, az, q, rb.idx_q[i])
         for r in range(3):
-            acc = ws.op[par, r]
+            acc = op[par, r]
             for c in range(3):
-                acc += Rp[r, c] * rb.jp[i, c]
-                x = 0.0
-                for k in range(3):
-                    x += Rp[r, k] * rb.jR[i, k, c]
-                A[r, c] = x
-            ws.op[i, r] = acc
+                acc += oR[par, r, c] * jp[i, c]
+                A[r, c] = oR[par, r, 0] * jR[i, 0, c] + oR[par, r, 1] * jR[i, 1, c] + oR[par, r, 2] * jR[i, 2, c]
+            op[i, r] = acc + A[r, 0] * J[9] + A[r, 1] * J[10] + A[r, 2] * J[11]
         for r in range(3):
             for c in range(3):
-                ws.oR[i, r, c] = A[r, 0] * RJ[0, c] + A[r, 1] * RJ[1, c] + A[r, 2] * RJ[2, c]
-            ws.op[i, r] += A[r, 0] * pJ[0] + A[r, 1] * pJ[1] + A[r, 2] * pJ[2]
-        R = ws.oR[i]
-        px, py, pz = ws.op[i, 0], ws.op[i, 1], ws.op[i, 2]
+                oR[i, r, c] = A[r, 0] * J[c] + A[r, 1] * J[3 + c] + A[r, 2] * J[6 + c]
+        px, py, pz = op[i, 0], op[i, 1], op[i, 2]
         iv = rb.idx_v[i]
+        wx = oR[i, 0, 0] * ax + oR[i, 0, 1] * ay + oR[i, 0, 2] * az
+        wy = oR[i, 1, 0] * ax + oR[i, 1, 1] * ay + oR[i, 1, 2] * az
+        wz = oR[i, 2, 0] * ax + oR[i, 2, 1] * ay + oR[i, 2, 2] * az
         for d in range(rb.nvj[i]):
-            col = ws.oS[iv + d]
             lin_x = lin_y = lin_z = ang_x = ang_y = ang_z = 0.0
-            if rb.jtype[i] == FREEFLYER:
+            if kind == FREEFLYER:
                 if d < 3:
-                    lin_x, lin_y, lin_z = R[0, d], R[1, d], R[2, d]
+                    lin_x, lin_y, lin_z = oR[i, 0, d], oR[i, 1, d], oR[i, 2, d]
                 else:
-                    ang_x, ang_y, ang_z = R[0, d - 3], R[1, d - 3], R[2, d - 3]
+                    ang_x, ang_y, ang_z = oR[i, 0, d - 3], oR[i, 1, d - 3], oR[i, 2, d - 3]
+            elif kind == PRISMATIC:
+                lin_x, lin_y, lin_z = wx, wy, wz
             else:
-                ax, ay, az = rb.axis[i, 0], rb.axis[i, 1], rb.axis[i, 2]
-                wx = R[0, 0] * ax + R[0, 1] * ay + R[0, 2] * az
-                wy = R[1, 0] * ax + R[1, 1] * ay + R[1, 2] * az
-                wz = R[2, 0] * ax + R[2, 1] * ay + R[2, 2] * az
-                if rb.jtype[i] == PRISMATIC:
-                    lin_x, lin_y, lin_z = wx, wy, wz
-                else:
-                    ang_x, ang_y, ang_z = wx, wy, wz
-            col[0] = lin_x + py * ang_z - pz * ang_y
-            col[1] = lin_y + pz * ang_x - px * ang_z
-            col[2] = lin_z + px * ang_y - py * ang_x
-            col[3], col[4], col[5] = ang_x, ang_y, ang_z
+                ang_x, ang_y, ang_z = wx, wy, wz
+            k = iv + d
+            oS[k, 0] = lin_x + py * ang_z - pz * ang_y
+            oS[k, 1] = lin_y + pz * ang_x - px * ang_z
+            oS[k, 2] = lin_z + px * ang_y - py * ang_x
+            oS[k, 3], oS[k, 4], oS[k, 5] = ang_x, ang_y, ang_z
         for r in range(6):
             acc = 0.0
             for d in range(rb.nvj[i]):
-                acc += ws.oS[iv + d, r] * v[iv + d]
-            ws.ow[i, r] = acc
-            ws.ov[i, r] = ws.ov[par, r] + acc
-        _world_inertia(rb, ws, i)
+                acc += oS[iv + d, r] * v[iv + d]
+            ow[i, r] = acc
+            ov[i, r] = ov[par, r] + acc
+        # body inertia at the world origin: [[m, -m[c]x], [m[c]x, R Ic Rᵀ - m [c]x [c]x]], c the world com
+        m = rb.mass[i]
+        cx = px + oR[i, 0, 0] * com[i, 0] + oR[i, 0, 1] * com[i, 1] + oR[i, 0, 2] * com[i, 2]
+        cy = py + oR[i, 1, 0] * com[i, 0] + oR[i, 1, 1] * com[i, 1] + oR[i, 1, 2] * com[i, 2]
+        cz = pz + oR[i, 2, 0] * com[i, 0] + oR[i, 2, 1] * com[i, 1] + oR[i, 2, 2] * com[i, 2]
+        for r in range(3):
+            for c in range(3):
+                A[3 + r, c] = oR[i, r, 0] * Ic[i, 0, c] + oR[i, r, 1] * Ic[i, 1, c] + oR[i, r, 2] * Ic[i, 2, c]
+        for r in range(3):
+            for c in range(3):
+                oI[i, 3 + r, 3 + c] = A[3 + r, 0] * oR[i, c, 0] + A[3 + r, 1] * oR[i, c, 1] + A[3 + r, 2] * oR[i, c, 2]
+                oI[i, r, c] = m if r == c else 0.0
+        oI[i, 3, 0], oI[i, 3, 1], oI[i, 3, 2] = 0.0, -m * cz, m * cy
+        oI[i, 4, 0], oI[i, 4, 1], oI[i, 4, 2] = m * cz, 0.0, -m * cx
+        oI[i, 5, 0], oI[i, 5, 1], oI[i, 5, 2] = -m * cy, m * cx, 0.0
+        for r in range(3):
+            for c in range(3):
+                oI[i, c, 3 + r] = oI[i, 3 + r, c]
+        oI[i, 3, 3] += m * (cy * cy + cz * cz)
+        oI[i, 4, 4] += m * (cx * cx + cz * cz)
+        oI[i, 5, 5] += m * (cx * cx + cy * cy)
+        oI[i, 3, 4] -= m * cx * cy
+        oI[i, 4, 3] -= m * cx * cy
+        oI[i, 3, 5] -= m * cx * cz
+        oI[i, 5, 3] -= m * cx * cz
+        oI[i, 4, 5] -= m * cy * cz
+        oI[i, 5, 4] -= m * cy * cz
 
 
 @compiled
 def _rnea_pass(rb, ws, a, tau):
     """RNEA on the kinematics in ``ws``: ``ws.oa, ws.oh, ws.oIa``, ``ws.of`` (subtree forces), ``tau (nv,)``."""
-    for r in range(6):
-        ws.oa[0, r] = -rb.gravity[r]
+    oS, ov, ow, oa, oI, oh, oIa, of = ws.oS, ws.ov, ws.ow, ws.oa, ws.oI, ws.oh, ws.oIa, ws.of
+    g = rb.gravity
+    _set6(oa, 0, (-g[0], -g[1], -g[2], -g[3], -g[4], -g[5]))
     for i in range(1, rb.njoints):
-        par = rb.parent[i]
         iv = rb.idx_v[i]
-        oa = ws.oa[i]
-        for r in range(6):
-            acc = ws.oa[par, r]
-            for d in range(rb.nvj[i]):
-                acc += ws.oS[iv + d, r] * a[iv + d]
-            oa[r] = acc
-        _motion_cross_add(ws.ov[i], ws.ow[i], 1.0, oa)
-        for r in range(6):
-            ws.oh[i, r] = 0.0
-            ws.oIa[i, r] = 0.0
-        _inertia_add(ws.oI[i], ws.ov[i], 1.0, ws.oh[i])
-        _inertia_add(ws.oI[i], oa, 1.0, ws.oIa[i])
-        for r in range(6):
-            ws.of[i, r] = ws.oIa[i, r]
-        _force_cross_add(ws.ov[i], ws.oh[i], 1.0, ws.of[i])
+        acc = _get6(oa, rb.parent[i])
+        for d in range(rb.nvj[i]):
+            acc = _plus(acc, _times(_get6(oS, iv + d), a[iv + d]))
+        ovi = _get6(ov, i)
+        acc = _plus(acc, _mcross(ovi, _get6(ow, i)))
+        _set6(oa, i, acc)
+        h = _imul(oI, i, ovi)
+        Ia = _imul(oI, i, acc)
+        _set6(oh, i, h)
+        _set6(oIa, i, Ia)
+        _set6(of, i, _plus(Ia, _fcross(ovi, h)))
     for i in range(rb.njoints - 1, 0, -1):
         iv = rb.idx_v[i]
+        fi = _get6(of, i)
         for d in range(rb.nvj[i]):
-            tau[iv + d] = _dot6(ws.oS[iv + d], ws.of[i]) + rb.armature[iv + d] * a[iv + d]
+            tau[iv + d] = _dot(_get6(oS, iv + d), fi) + rb.armature[iv + d] * a[iv + d]
         par = rb.parent[i]
         if par > 0:
-            for r in range(6):
-                ws.of[par, r] += ws.of[i, r]
+            _set6(of, par, _plus(_get6(of, par), fi))
 
 
 @compiled
 def _crba(rb, ws):
     """``ws.M``: the joint-space inertia matrix (armature included), from the composite inertias ``ws.oIc``."""
+    M, oS, oIc = ws.M, ws.oS, ws.oIc
     for r in range(rb.nv):
         for c in range(rb.nv):
-            ws.M[r, c] = 0.0
-    for i in range(rb.njoints):
-        for r in range(6):
-            for c in range(6):
-                ws.oIc[i, r, c] = ws.oI[i, r, c]
-    F = ws.tmp[0]
+            M[r, c] = 0.0
+    oIc[:] = ws.oI
     for i in range(rb.njoints - 1, 0, -1):
         iv = rb.idx_v[i]
         for d in range(rb.nvj[i]):
-            for r in range(6):
-                F[r] = 0.0
-            _inertia_add(ws.oIc[i], ws.oS[iv + d], 1.0, F)
+            F = _imul(oIc, i, _get6(oS, iv + d))
             j = i
             while j > 0:
                 jv = rb.idx_v[j]
                 for e in range(rb.nvj[j]):
-                    x = _dot6(ws.oS[jv + e], F)
-                    ws.M[jv + e, iv + d] = x
-                    ws.M[iv + d, jv + e] = x
+                    x = _dot(_get6(oS, jv + e), F)
+                    M[jv + e, iv + d] = x
+                    M[iv + d, jv + e] = x
                 j = rb.parent[j]
-            ws.M[iv + d, iv + d] += rb.armature[iv + d]
+            M[iv + d, iv + d] += rb.armature[iv + d]
         par = rb.parent[i]
         if par > 0:
             for r in range(6):
                 for c in range(6):
-                    ws.oIc[par, r, c] += ws.oIc[i, r, c]
+                    oIc[par, r, c] += oIc[i, r, c]
 
 
 @compiled
@@ -385,36 +376,6 @@ def gravity_torque(rb: RigidBodyModel, ws: RigidBodyWorkspace, q: np.ndarray, ou
 
 
 @compiled
-def _subtree_torques(rb, ws, j, k, with_q, out):
-    """Column ``k`` of a RNEA derivative from the tangents ``ws.df`` of the subtree of ``j`` (summed here)."""
-    end = rb.subtree_end[j]
-    for r in range(rb.nv):
-        out[r, k] = 0.0
-    for i in range(end - 1, j, -1):
-        par = rb.parent[i]
-        for r in range(6):
-            ws.df[par, r] += ws.df[i, r]
-    s = ws.oS[k]
-    dS = ws.tmp[3]
-    for i in range(j, end):
-        iv = rb.idx_v[i]
-        for d in range(rb.nvj[i]):
-            x = _dot6(ws.oS[iv + d], ws.df[i])
-            if with_q:
-                for r in range(6):
-                    dS[r] = 0.0
-                _motion_cross_add(s, ws.oS[iv + d], 1.0, dS)
-                x += _dot6(dS, ws.of[i])
-            out[iv + d, k] = x
-    a = rb.parent[j]
-    while a > 0:
-        av = rb.idx_v[a]
-        for d in range(rb.nvj[a]):
-            out[av + d, k] = _dot6(ws.oS[av + d], ws.df[j])
-        a = rb.parent[a]
-
-
-@compiled
 def dynamics_derivatives(
     rb: RigidBodyModel,
     ws: RigidBodyWorkspace,
@@ -428,104 +389,95 @@ def dynamics_derivatives(
     ``ws.M``).  Runs the kinematics and a RNEA pass itself; leaves ``ws.L`` untouched."""
     forward_kinematics(rb, ws, q, v)
     _rnea_pass(rb, ws, a, ws.tau)
-    dw = ws.tmp[0]
-    acc = ws.tmp[1]
-    dh = ws.tmp[2]
+    oS, ov, ow, oa, oI, oh, oIa, of = ws.oS, ws.ov, ws.ow, ws.oa, ws.oI, ws.oh, ws.oIa, ws.of
+    dv, da, df = ws.dv, ws.da, ws.df
+    parent, idx_v, nvj = rb.parent, rb.idx_v, rb.nvj
     for k in range(rb.nv):
         j = rb.dof_joint[k]
-        s = ws.oS[k]
+        s = _get6(oS, k)
         end = rb.subtree_end[j]
-        # configuration tangent
-        for i in range(j, end):
-            par = rb.parent[i]
-            iv = rb.idx_v[i]
-            dvi = ws.dv[i]
-            dai = ws.da[i]
-            for r in range(6):
-                dw[r] = 0.0
-                acc[r] = 0.0
-                for d in range(rb.nvj[i]):
-                    acc[r] += ws.oS[iv + d, r] * a[iv + d]
-                dvi[r] = ws.dv[par, r] if i != j else 0.0
-                dai[r] = ws.da[par, r] if i != j else 0.0
-            _motion_cross_add(s, ws.ow[i], 1.0, dw)
-            for r in range(6):
-                dvi[r] += dw[r]
-            _motion_cross_add(s, acc, 1.0, dai)
-            _motion_cross_add(dvi, ws.ow[i], 1.0, dai)
-            _motion_cross_add(ws.ov[i], dw, 1.0, dai)
-            # dh = s ×* h + oI (dv - s × ov);  df = s ×* oIa + oI (da - s × oa) + dv ×* h + ov ×* dh
-            for r in range(6):
-                acc[r] = dvi[r]
-                dh[r] = 0.0
-            _motion_cross_add(s, ws.ov[i], -1.0, acc)
-            _inertia_add(ws.oI[i], acc, 1.0, dh)
-            _force_cross_add(s, ws.oh[i], 1.0, dh)
-            dfi = ws.df[i]
-            for r in range(6):
-                acc[r] = dai[r]
-                dfi[r] = 0.0
-            _motion_cross_add(s, ws.oa[i], -1.0, acc)
-            _inertia_add(ws.oI[i], acc, 1.0, dfi)
-            _force_cross_add(s, ws.oIa[i], 1.0, dfi)
-            _force_cross_add(dvi, ws.oh[i], 1.0, dfi)
-            _force_cross_add(ws.ov[i], dh, 1.0, dfi)
-        _subtree_torques(rb, ws, j, k, True, dtau_dq_out)
-        # velocity tangent
-        for i in range(j, end):
-            par = rb.parent[i]
-            dvi = ws.dv[i]
-            dai = ws.da[i]
-            for r in range(6):
-                dvi[r] = ws.dv[par, r] if i != j else s[r]
-                dai[r] = ws.da[par, r] if i != j else 0.0
-            _motion_cross_add(dvi, ws.ow[i], 1.0, dai)
-            if i == j:
-                _motion_cross_add(ws.ov[i], s, 1.0, dai)
-            dfi = ws.df[i]
-            for r in range(6):
-                dh[r] = 0.0
-                dfi[r] = 0.0
-            _inertia_add(ws.oI[i], dvi, 1.0, dh)
-            _inertia_add(ws.oI[i], dai, 1.0, dfi)
-            _force_cross_add(dvi, ws.oh[i], 1.0, dfi)
-            _force_cross_add(ws.ov[i], dh, 1.0, dfi)
-        _subtree_torques(rb, ws, j, k, False, dtau_dv_out)
+        for mode in range(2):  # 0: configuration tangent δq_k, 1: velocity tangent δv_k
+            out = dtau_dq_out if mode == 0 else dtau_dv_out
+            for i in range(j, end):
+                par = parent[i]
+                iv = idx_v[i]
+                ovi, owi = _get6(ov, i), _get6(ow, i)
+                dvi = ZERO6 if i == j else _get6(dv, par)
+                dai = ZERO6 if i == j else _get6(da, par)
+                if mode == 0:
+                    acc = ZERO6
+                    for d in range(nvj[i]):
+                        acc = _plus(acc, _times(_get6(oS, iv + d), a[iv + d]))
+                    dw = _mcross(s, owi)
+                    dvi = _plus(dvi, dw)
+                    dai = _plus(_plus(dai, _mcross(s, acc)), _plus(_mcross(dvi, owi), _mcross(ovi, dw)))
+                    # d(oI m) = s ×* (oI m) + oI (dm - s × m)
+                    dh = _plus(_fcross(s, _get6(oh, i)), _imul(oI, i, _minus(dvi, _mcross(s, ovi))))
+                    dfi = _plus(_fcross(s, _get6(oIa, i)), _imul(oI, i, _minus(dai, _mcross(s, _get6(oa, i)))))
+                else:
+                    if i == j:
+                        dvi = s
+                        dai = _mcross(ovi, s)
+                    dai = _plus(dai, _mcross(dvi, owi))
+                    dh = _imul(oI, i, dvi)
+                    dfi = _imul(oI, i, dai)
+                dfi = _plus(dfi, _plus(_fcross(dvi, _get6(oh, i)), _fcross(ovi, dh)))
+                _set6(dv, i, dvi)
+                _set6(da, i, dai)
+                _set6(df, i, dfi)
+            for r in range(rb.nv):
+                out[r, k] = 0.0
+            for i in range(end - 1, j, -1):
+                _set6(df, parent[i], _plus(_get6(df, parent[i]), _get6(df, i)))
+            for i in range(j, end):
+                iv = idx_v[i]
+                dfi = _get6(df, i)
+                for d in range(nvj[i]):
+                    col = _get6(oS, iv + d)
+                    x = _dot(col, dfi)
+                    if mode == 0:
+                        x += _dot(_mcross(s, col), _get6(of, i))
+                    out[iv + d, k] = x
+            dfj = _get6(df, j)
+            i = parent[j]
+            while i > 0:
+                for d in range(nvj[i]):
+                    out[idx_v[i] + d, k] = _dot(_get6(oS, idx_v[i] + d), dfj)
+                i = parent[i]
 
 
 @compiled
 def _frame_pose(rb, ws, fid):
     """``ws.Rf, ws.pf``: ``oMf`` of frame ``fid``; returns its parent joint."""
     i = rb.frame_joint[fid]
+    oR, Rf, fR = ws.oR, ws.Rf, rb.fR
     for r in range(3):
         acc = ws.op[i, r]
         for c in range(3):
-            acc += ws.oR[i, r, c] * rb.fp[fid, c]
-            x = 0.0
-            for k in range(3):
-                x += ws.oR[i, r, k] * rb.fR[fid, k, c]
-            ws.Rf[r, c] = x
+            acc += oR[i, r, c] * rb.fp[fid, c]
+            Rf[r, c] = oR[i, r, 0] * fR[fid, 0, c] + oR[i, r, 1] * fR[fid, 1, c] + oR[i, r, 2] * fR[fid, 2, c]
         ws.pf[r] = acc
     return i
 
 
 @compiled
-def _to_reference(ws, m, reference, out):
-    """``out (6,)``: the world motion ``m`` read in ``reference`` at the frame ``ws.Rf, ws.pf``."""
-    vx, vy, vz, wx, wy, wz = m[0], m[1], m[2], m[3], m[4], m[5]
-    if reference != WORLD:
-        px, py, pz = ws.pf[0], ws.pf[1], ws.pf[2]
-        vx, vy, vz = vx - (py * wz - pz * wy), vy - (pz * wx - px * wz), vz - (px * wy - py * wx)
-    if reference == LOCAL:
-        R = ws.Rf
-        out[0] = R[0, 0] * vx + R[1, 0] * vy + R[2, 0] * vz
-        out[1] = R[0, 1] * vx + R[1, 1] * vy + R[2, 1] * vz
-        out[2] = R[0, 2] * vx + R[1, 2] * vy + R[2, 2] * vz
-        out[3] = R[0, 0] * wx + R[1, 0] * wy + R[2, 0] * wz
-        out[4] = R[0, 1] * wx + R[1, 1] * wy + R[2, 1] * wz
-        out[5] = R[0, 2] * wx + R[1, 2] * wy + R[2, 2] * wz
-    else:
-        out[0], out[1], out[2], out[3], out[4], out[5] = vx, vy, vz, wx, wy, wz
+def _to_reference(R, p, m, reference):
+    """The world motion ``m`` (6-tuple) read in ``reference`` at the frame ``(R (3, 3), p (3,))``."""
+    vx, vy, vz, wx, wy, wz = m
+    if reference == WORLD:
+        return m
+    px, py, pz = p[0], p[1], p[2]
+    vx, vy, vz = vx - (py * wz - pz * wy), vy - (pz * wx - px * wz), vz - (px * wy - py * wx)
+    if reference == LOCAL_WORLD_ALIGNED:
+        return vx, vy, vz, wx, wy, wz
+    return (
+        R[0, 0] * vx + R[1, 0] * vy + R[2, 0] * vz,
+        R[0, 1] * vx + R[1, 1] * vy + R[2, 1] * vz,
+        R[0, 2] * vx + R[1, 2] * vy + R[2, 2] * vz,
+        R[0, 0] * wx + R[1, 0] * wy + R[2, 0] * wz,
+        R[0, 1] * wx + R[1, 1] * wy + R[2, 1] * wz,
+        R[0, 2] * wx + R[1, 2] * wy + R[2, 2] * wz,
+    )
 
 
 @compiled
@@ -542,14 +494,14 @@ def frame_placement(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int, R_out:
 def frame_jacobian(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int, reference: int, J_out: np.ndarray) -> None:
     """``J_out (6, nv)``: the Jacobian of frame ``fid`` in ``reference`` (zero outside its support)."""
     i = _frame_pose(rb, ws, fid)
+    Rf, pf, oS = ws.Rf, ws.pf, ws.oS
     for r in range(6):
         for c in range(rb.nv):
             J_out[r, c] = 0.0
-    col = ws.tmp[5]
     while i > 0:
         iv = rb.idx_v[i]
         for d in range(rb.nvj[i]):
-            _to_reference(ws, ws.oS[iv + d], reference, col)
+            col = _to_reference(Rf, pf, _get6(oS, iv + d), reference)
             for r in range(6):
                 J_out[r, iv + d] = col[r]
         i = rb.parent[i]
@@ -559,7 +511,9 @@ def frame_jacobian(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int, referen
 def frame_velocity(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int, reference: int, out6: np.ndarray) -> None:
     """``out6 (6,)``: the spatial velocity of frame ``fid`` in ``reference``, linear then angular."""
     i = _frame_pose(rb, ws, fid)
-    _to_reference(ws, ws.ov[i], reference, out6)
+    m = _to_reference(ws.Rf, ws.pf, _get6(ws.ov, i), reference)
+    for r in range(6):
+        out6[r] = m[r]
 
 
 @compiled
@@ -575,31 +529,22 @@ def frame_velocity_derivatives(
     """
     frame_jacobian(rb, ws, fid, reference, dv_dv_out)
     i = rb.frame_joint[fid]
+    Rf, pf, oS, ov = ws.Rf, ws.pf, ws.oS, ws.ov
     for r in range(6):
         for c in range(rb.nv):
             dv_dq_out[r, c] = 0.0
-    t = ws.tmp[0]
-    out = ws.tmp[1]
+    ovi = _get6(ov, i)
     j = i
     while j > 0:
         par = rb.parent[j]
         jv = rb.idx_v[j]
+        ovp = _get6(ov, par)
         for d in range(rb.nvj[j]):
-            s = ws.oS[jv + d]
-            for r in range(6):
-                t[r] = 0.0
+            s = _get6(oS, jv + d)
             if reference == LOCAL:
-                _motion_cross_add(ws.ov[par], s, 1.0, t)
-                _to_reference(ws, t, LOCAL, out)
+                col = _to_reference(Rf, pf, _mcross(ovp, s), LOCAL)
             else:
-                for r in range(6):
-                    out[r] = ws.ov[i, r] - ws.ov[par, r]
-                _motion_cross_add(s, out, 1.0, t)
-                if reference == WORLD:
-                    for r in range(6):
-                        out[r] = t[r]
-                else:
-                    _to_reference(ws, t, LOCAL_WORLD_ALIGNED, out)
+                col = _to_reference(Rf, pf, _mcross(s, _minus(ovi, ovp)), reference)
             for r in range(6):
-                dv_dq_out[r, jv + d] = out[r]
+                dv_dq_out[r, jv + d] = col[r]
         j = par
