@@ -21,8 +21,11 @@ where ``m × n = [m_ω × n_v + m_v × n_ω; m_ω × n_ω]`` and ``m ×* f = [m_
 Derivatives.  A configuration is perturbed in the joint's local frame, ``M_J(q ⊕ δ) = M_J(q) exp(S δ)``, so a
 tangent ``δ_k`` of dof ``k`` of joint ``j`` (world column ``s = oS_k``) moves every placement of the subtree of
 ``j`` as ``d oX_i = s × oX_i``: ``d oS_i = s × oS_i``, ``d (oI_i m) = s ×* (oI_i m) - oI_i (s × m)``.
-:func:`dynamics_derivatives` propagates these tangents through the recursions above (forward mode, one dof
-at a time over its subtree; cost ``O(nv · subtree)``); the ancestors of ``j`` see ``d τ_l = oS_lᵀ dF_j``.
+:func:`dynamics_derivatives` propagates these tangents through the recursions above in closed form: the
+subtree's velocities and accelerations move rigidly plus the terms ``ψ̇ = ov_λ(j) × s``, ``ψ̈ = oa_λ(j) × s +
+ov_λ(j) × ψ̇`` (configuration) and ``φ = ψ̇ + ov_j × s`` (velocity), so each column only needs the composite
+inertias ``Ic`` and composite ``Bc = Σ (ov ×* oI - oI ov× + (·) ×* oI ov)`` over subtrees (cost ``O(nv · depth)``
+6x6 products); the ancestors of ``j`` see ``d τ_l = oS_lᵀ dF_j``.
 As in Pinocchio (4.0 and 4.1, measured), RNEA and CRBA include the armature, so ``∂τ/∂a = M``.
 
 Frames.  ``reference`` is ``int(pin.WORLD) = 0``, ``int(pin.LOCAL) = 1`` or ``int(pin.LOCAL_WORLD_ALIGNED) = 2``.
@@ -268,11 +271,14 @@ def _rnea_pass(rb, ws, a, tau):
 @compiled
 def _crba(rb, ws):
     """``ws.M``: the joint-space inertia matrix (armature included), from the composite inertias ``ws.oIc``."""
-    M, oS, oIc = ws.M, ws.oS, ws.oIc
+    M, oS, oI, oIc = ws.M, ws.oS, ws.oI, ws.oIc
     for r in range(rb.nv):
         for c in range(rb.nv):
             M[r, c] = 0.0
-    oIc[:] = ws.oI
+    for i in range(rb.njoints):
+        for r in range(6):
+            for c in range(6):
+                oIc[i, r, c] = oI[i, r, c]
     for i in range(rb.njoints - 1, 0, -1):
         iv = rb.idx_v[i]
         for d in range(rb.nvj[i]):
@@ -376,6 +382,29 @@ def gravity_torque(rb: RigidBodyModel, ws: RigidBodyWorkspace, q: np.ndarray, ou
 
 
 @compiled
+def _composite_coriolis(rb, ws):
+    """``ws.oIc``, ``ws.oBc``: composite inertias and composite ``B_i = ov_i ×* oI_i - oI_i (ov_i ×) + (· ×* h_i)``."""
+    oI, oIc, oBc, ov, oh = ws.oI, ws.oIc, ws.oBc, ws.ov, ws.oh
+    for i in range(1, rb.njoints):
+        ovi, h = _get6(ov, i), _get6(oh, i)
+        for c in range(6):
+            e = (1.0 if c == 0 else 0.0, 1.0 if c == 1 else 0.0, 1.0 if c == 2 else 0.0,
+                 1.0 if c == 3 else 0.0, 1.0 if c == 4 else 0.0, 1.0 if c == 5 else 0.0)
+            Ie = (oI[i, 0, c], oI[i, 1, c], oI[i, 2, c], oI[i, 3, c], oI[i, 4, c], oI[i, 5, c])
+            col = _plus(_minus(_fcross(ovi, Ie), _imul(oI, i, _mcross(ovi, e))), _fcross(e, h))
+            for r in range(6):
+                oBc[i, r, c] = col[r]
+                oIc[i, r, c] = Ie[r]
+    for i in range(rb.njoints - 1, 0, -1):
+        par = rb.parent[i]
+        if par > 0:
+            for r in range(6):
+                for c in range(6):
+                    oIc[par, r, c] += oIc[i, r, c]
+                    oBc[par, r, c] += oBc[i, r, c]
+
+
+@compiled
 def dynamics_derivatives(
     rb: RigidBodyModel,
     ws: RigidBodyWorkspace,
@@ -386,64 +415,46 @@ def dynamics_derivatives(
     dtau_dv_out: np.ndarray,
 ) -> None:
     """``∂RNEA/∂q`` and ``∂RNEA/∂v`` at ``(q, v, a)`` into ``(nv, nv)`` arrays (``∂/∂a`` is :func:`forward_dynamics`'
-    ``ws.M``).  Runs the kinematics and a RNEA pass itself; leaves ``ws.L`` untouched."""
+    ``ws.M``).  Runs the kinematics and a RNEA pass itself; overwrites ``ws.oIc``, leaves ``ws.M, ws.L``.
+
+    With ``ψ̇ = ov_λ(j) × s``, ``ψ̈ = oa_λ(j) × s + ov_λ(j) × ψ̇``, ``φ = ψ̇ + ov_j × s`` for dof ``k`` of joint
+    ``j`` (``s = oS_k``), the composite inertia ``Ic_l`` and composite ``Bc_l`` (:func:`_composite_coriolis`):
+    a dof ``c`` of a joint ``l`` of the subtree of ``j`` gets ``∂τ_c/∂q_k = S_cᵀ (Ic_l ψ̈ + Bc_l ψ̇)`` and
+    ``∂τ_c/∂v_k = S_cᵀ (Bc_l s + Ic_l φ)``; a dof ``c`` of a strict ancestor of ``j`` gets the same with ``l = j``
+    plus ``S_cᵀ (s ×* F_j)`` in ``∂τ_c/∂q_k``.
+    """
     forward_kinematics(rb, ws, q, v)
     _rnea_pass(rb, ws, a, ws.tau)
-    oS, ov, ow, oa, oI, oh, oIa, of = ws.oS, ws.ov, ws.ow, ws.oa, ws.oI, ws.oh, ws.oIa, ws.of
-    dv, da, df = ws.dv, ws.da, ws.df
+    _composite_coriolis(rb, ws)
+    oS, ov, oa, of, oIc, oBc = ws.oS, ws.ov, ws.oa, ws.of, ws.oIc, ws.oBc
     parent, idx_v, nvj = rb.parent, rb.idx_v, rb.nvj
+    for r in range(rb.nv):
+        for c in range(rb.nv):
+            dtau_dq_out[r, c] = 0.0
+            dtau_dv_out[r, c] = 0.0
     for k in range(rb.nv):
         j = rb.dof_joint[k]
         s = _get6(oS, k)
-        end = rb.subtree_end[j]
-        for mode in range(2):  # 0: configuration tangent δq_k, 1: velocity tangent δv_k
-            out = dtau_dq_out if mode == 0 else dtau_dv_out
-            for i in range(j, end):
-                par = parent[i]
-                iv = idx_v[i]
-                ovi, owi = _get6(ov, i), _get6(ow, i)
-                dvi = ZERO6 if i == j else _get6(dv, par)
-                dai = ZERO6 if i == j else _get6(da, par)
-                if mode == 0:
-                    acc = ZERO6
-                    for d in range(nvj[i]):
-                        acc = _plus(acc, _times(_get6(oS, iv + d), a[iv + d]))
-                    dw = _mcross(s, owi)
-                    dvi = _plus(dvi, dw)
-                    dai = _plus(_plus(dai, _mcross(s, acc)), _plus(_mcross(dvi, owi), _mcross(ovi, dw)))
-                    # d(oI m) = s ×* (oI m) + oI (dm - s × m)
-                    dh = _plus(_fcross(s, _get6(oh, i)), _imul(oI, i, _minus(dvi, _mcross(s, ovi))))
-                    dfi = _plus(_fcross(s, _get6(oIa, i)), _imul(oI, i, _minus(dai, _mcross(s, _get6(oa, i)))))
-                else:
-                    if i == j:
-                        dvi = s
-                        dai = _mcross(ovi, s)
-                    dai = _plus(dai, _mcross(dvi, owi))
-                    dh = _imul(oI, i, dvi)
-                    dfi = _imul(oI, i, dai)
-                dfi = _plus(dfi, _plus(_fcross(dvi, _get6(oh, i)), _fcross(ovi, dh)))
-                _set6(dv, i, dvi)
-                _set6(da, i, dai)
-                _set6(df, i, dfi)
-            for r in range(rb.nv):
-                out[r, k] = 0.0
-            for i in range(end - 1, j, -1):
-                _set6(df, parent[i], _plus(_get6(df, parent[i]), _get6(df, i)))
-            for i in range(j, end):
-                iv = idx_v[i]
-                dfi = _get6(df, i)
-                for d in range(nvj[i]):
-                    col = _get6(oS, iv + d)
-                    x = _dot(col, dfi)
-                    if mode == 0:
-                        x += _dot(_mcross(s, col), _get6(of, i))
-                    out[iv + d, k] = x
-            dfj = _get6(df, j)
-            i = parent[j]
-            while i > 0:
-                for d in range(nvj[i]):
-                    out[idx_v[i] + d, k] = _dot(_get6(oS, idx_v[i] + d), dfj)
-                i = parent[i]
+        ovp = _get6(ov, parent[j])
+        psi_d = _mcross(ovp, s)
+        psi_dd = _plus(_mcross(_get6(oa, parent[j]), s), _mcross(ovp, psi_d))
+        phi = _plus(psi_d, _mcross(_get6(ov, j), s))
+        for l in range(j, rb.subtree_end[j]):
+            gq = _plus(_imul(oIc, l, psi_dd), _imul(oBc, l, psi_d))
+            gv = _plus(_imul(oBc, l, s), _imul(oIc, l, phi))
+            for d in range(nvj[l]):
+                col = _get6(oS, idx_v[l] + d)
+                dtau_dq_out[idx_v[l] + d, k] = _dot(col, gq)
+                dtau_dv_out[idx_v[l] + d, k] = _dot(col, gv)
+        gq = _plus(_plus(_imul(oIc, j, psi_dd), _imul(oBc, j, psi_d)), _fcross(s, _get6(of, j)))
+        gv = _plus(_imul(oBc, j, s), _imul(oIc, j, phi))
+        i = parent[j]
+        while i > 0:
+            for d in range(nvj[i]):
+                col = _get6(oS, idx_v[i] + d)
+                dtau_dq_out[idx_v[i] + d, k] = _dot(col, gq)
+                dtau_dv_out[idx_v[i] + d, k] = _dot(col, gv)
+            i = parent[i]
 
 
 @compiled

@@ -70,14 +70,14 @@ class RigidBodyWorkspace(NamedTuple):
     """Preallocated arrays the kernels write into; every spatial quantity is in the world frame.
 
     ``oR (njoints, 3, 3)``, ``op (njoints, 3)``: joint placements ``oMi``.  ``oS (nv, 6)``: motion subspace
-    columns, one row per velocity index.  ``ov oa (njoints, 6)``: spatial velocities and accelerations
-    (at the world origin).  ``ow (njoints, 6)``: joint motion ``oS_i v_i``.  ``oI (njoints, 6, 6)``: body
-    spatial inertias.  ``oh (njoints, 6)``: momenta ``oI ov``; ``oIa (njoints, 6)``: ``oI oa``.
-    ``of (njoints, 6)``: after a RNEA pass, the force each joint transmits (its subtree's net force).
-    ``oIc (njoints, 6, 6)``: composite inertias.  ``M (nv, nv)``: mass matrix, armature included (as
-    ``pinocchio.crba``); ``L (nv, nv)``: its lower Cholesky factor.  ``tau zero (nv,)``: scratch and a
-    zero vector.  ``dv da df (njoints, 6)``: tangents for the derivative kernels.  ``tmp (6, 6)``, ``Rf (3, 3)``,
-    ``pf (3,)``: scratch (``Rf, pf``: the last frame placement a frame kernel computed).
+    columns, one row per velocity index.  ``ov oa (njoints, 6)``: spatial velocities and accelerations (at the
+    world origin).  ``ow (njoints, 6)``: joint motion ``oS_i v_i``.  ``oI (njoints, 6, 6)``: body spatial
+    inertias.  ``oh (njoints, 6)``: momenta ``oI ov``; ``oIa (njoints, 6)``: ``oI oa``.  ``of (njoints, 6)``:
+    after a RNEA pass, the force each joint transmits (its subtree's net force).  ``oIc oBc (njoints, 6, 6)``:
+    composite inertias and composite Coriolis maps (derivatives).  ``M (nv, nv)``: mass matrix, armature
+    included (as ``pinocchio.crba``); ``L (nv, nv)``: its lower Cholesky factor.  ``tau zero (nv,)``: scratch
+    and a zero vector.  ``tmp (6, 6)``, ``Rf (3, 3)``, ``pf (3,)``: scratch (``Rf, pf``: the last frame
+    placement a frame kernel computed).
     """
 
     oR: np.ndarray
@@ -91,13 +91,11 @@ class RigidBodyWorkspace(NamedTuple):
     oIa: np.ndarray
     of: np.ndarray
     oIc: np.ndarray
+    oBc: np.ndarray
     M: np.ndarray
     L: np.ndarray
     tau: np.ndarray
     zero: np.ndarray
-    dv: np.ndarray
-    da: np.ndarray
-    df: np.ndarray
     tmp: np.ndarray
     Rf: np.ndarray
     pf: np.ndarray
@@ -183,13 +181,11 @@ def make_workspace(rb: RigidBodyModel) -> RigidBodyWorkspace:
         oIa=np.zeros((n, 6)),
         of=np.zeros((n, 6)),
         oIc=np.zeros((n, 6, 6)),
+        oBc=np.zeros((n, 6, 6)),
         M=np.zeros((nv, nv)),
         L=np.zeros((nv, nv)),
         tau=np.zeros(nv),
         zero=np.zeros(nv),
-        dv=np.zeros((n, 6)),
-        da=np.zeros((n, 6)),
-        df=np.zeros((n, 6)),
         tmp=np.zeros((6, 6)),
         Rf=np.zeros((3, 3)),
         pf=np.zeros(3),
