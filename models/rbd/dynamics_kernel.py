@@ -13,7 +13,7 @@ quantities are expressed in the world frame at the world origin.  For joint ``i`
     oa_i  = oa_λ(i) + oS_i a_i + ov_i × oS_i v_i,          oa_0 = -gravity
     f_i   = oI_i oa_i + ov_i ×* (oI_i ov_i),               F_i = f_i + Σ_children F_c
     τ_i   = oS_iᵀ F_i + armature_i a_i                     (RNEA)
-    M     = CRBA (composite inertias) + diag(armature),  L Lᵀ = M
+    M     = CRBA (composite inertias) + diag(armature),  Lᵀ L = M (L lower triangular, tree-sparse)
     a     = M⁻¹ (τ - RNEA(q, v, 0))                        (forward dynamics)
 
 where ``m × n = [m_ω × n_v + m_v × n_ω; m_ω × n_ω]`` and ``m ×* f = [m_ω × f_v; m_ω × f_ω + m_v × f_v]``.
@@ -126,6 +126,21 @@ def _imul(inertia, i, m):
         out3 += inertia[i, 3, c] * x
         out4 += inertia[i, 4, c] * x
         out5 += inertia[i, 5, c] * x
+    return out0, out1, out2, out3, out4, out5
+
+
+@compiled
+def _imul_t(A, i, m):
+    """``A[i]ᵀ @ m`` for an ``(n, 6, 6)`` array and a 6-tuple."""
+    out0 = out1 = out2 = out3 = out4 = out5 = 0.0
+    for r in range(6):
+        x = m[r]
+        out0 += A[i, r, 0] * x
+        out1 += A[i, r, 1] * x
+        out2 += A[i, r, 2] * x
+        out3 += A[i, r, 3] * x
+        out4 += A[i, r, 4] * x
+        out5 += A[i, r, 5] * x
     return out0, out1, out2, out3, out4, out5
 
 
@@ -300,39 +315,47 @@ def _crba(rb, ws):
 
 
 @compiled
-def _cholesky(rb, ws):
-    """``ws.L``: lower Cholesky factor of ``ws.M``."""
+def _factor(rb, ws):
+    """``ws.L``: the lower-triangular ``L`` with ``ws.M = Lᵀ L`` and the branch-induced sparsity of ``M``
+    (Featherstone's LTL factorization: no fill-in, ``O(nv · depth²)``)."""
     n = rb.nv
-    L = ws.L
-    for j in range(n):
-        acc = ws.M[j, j]
-        for k in range(j):
-            acc -= L[j, k] * L[j, k]
-        d = math.sqrt(acc)
-        L[j, j] = d
-        for i in range(j + 1, n):
-            x = ws.M[i, j]
-            for k in range(j):
-                x -= L[i, k] * L[j, k]
-            L[i, j] = x / d
-        for i in range(j):
-            L[i, j] = 0.0
+    L, lam = ws.L, rb.dof_parent
+    for r in range(n):
+        for c in range(n):
+            L[r, c] = ws.M[r, c] if c <= r else 0.0
+    for k in range(n - 1, -1, -1):
+        d = math.sqrt(L[k, k])
+        L[k, k] = d
+        i = lam[k]
+        while i >= 0:
+            L[k, i] /= d
+            i = lam[i]
+        i = lam[k]
+        while i >= 0:
+            x = L[k, i]
+            j = i
+            while j >= 0:
+                L[i, j] -= x * L[k, j]
+                j = lam[j]
+            i = lam[i]
 
 
 @compiled
-def _cholesky_solve(L, x):
-    """``x ← (L Lᵀ)⁻¹ x`` in place."""
-    n = x.shape[0]
-    for i in range(n):
-        acc = x[i]
-        for k in range(i):
-            acc -= L[i, k] * x[k]
-        x[i] = acc / L[i, i]
-    for i in range(n - 1, -1, -1):
-        acc = x[i]
-        for k in range(i + 1, n):
-            acc -= L[k, i] * x[k]
-        x[i] = acc / L[i, i]
+def _factor_solve(rb, L, x):
+    """``x ← (Lᵀ L)⁻¹ x`` in place, with the factor of :func:`_factor`."""
+    lam = rb.dof_parent
+    for k in range(rb.nv - 1, -1, -1):
+        x[k] /= L[k, k]
+        i = lam[k]
+        while i >= 0:
+            x[i] -= L[k, i] * x[k]
+            i = lam[i]
+    for k in range(rb.nv):
+        i = lam[k]
+        while i >= 0:
+            x[k] -= L[k, i] * x[i]
+            i = lam[i]
+        x[k] /= L[k, k]
 
 
 @compiled
@@ -344,31 +367,38 @@ def forward_dynamics(
     forward_kinematics(rb, ws, q, v)
     _rnea_pass(rb, ws, ws.zero, ws.tau)
     _crba(rb, ws)
-    _cholesky(rb, ws)
+    _factor(rb, ws)
     for k in range(rb.nv):
         a_out[k] = tau[k] - ws.tau[k]
-    _cholesky_solve(ws.L, a_out)
+    _factor_solve(rb, ws.L, a_out)
 
 
 @compiled
 def mass_inverse(rb: RigidBodyModel, ws: RigidBodyWorkspace, Minv_out: np.ndarray) -> None:
     """``Minv_out (nv, nv) = M⁻¹`` (armature included) from the factor ``ws.L`` of the last
-    :func:`forward_dynamics` (symmetric: the lower triangle is solved and mirrored)."""
+    :func:`forward_dynamics`, one sparse solve per column (``O(nv² · depth)``), then mirrored to be symmetric."""
     n = rb.nv
-    L = ws.L
-    for j in range(n):
-        for i in range(j):
-            Minv_out[i, j] = 0.0
-        for i in range(j, n):
-            acc = 1.0 if i == j else 0.0
-            for k in range(j, i):
-                acc -= L[i, k] * Minv_out[k, j]
-            Minv_out[i, j] = acc / L[i, i]
-        for i in range(n - 1, j - 1, -1):
-            acc = Minv_out[i, j]
-            for k in range(i + 1, n):
-                acc -= L[k, i] * Minv_out[k, j]
-            Minv_out[i, j] = acc / L[i, i]
+    L, lam = ws.L, rb.dof_parent
+    for j in range(n):  # row j = column j, contiguous
+        x = Minv_out[j]
+        for k in range(n):
+            x[k] = 0.0
+        x[j] = 1.0
+        k = j
+        while k >= 0:  # Lᵀ y = e_j: only the ancestors of j are reached
+            x[k] /= L[k, k]
+            i = lam[k]
+            while i >= 0:
+                x[i] -= L[k, i] * x[k]
+                i = lam[i]
+            k = lam[k]
+        for k in range(n):
+            acc = x[k]
+            i = lam[k]
+            while i >= 0:
+                acc -= L[k, i] * x[i]
+                i = lam[i]
+            x[k] = acc / L[k, k]
     for j in range(n):
         for i in range(j):
             Minv_out[i, j] = Minv_out[j, i]
@@ -420,14 +450,19 @@ def dynamics_derivatives(
     With ``ψ̇ = ov_λ(j) × s``, ``ψ̈ = oa_λ(j) × s + ov_λ(j) × ψ̇``, ``φ = ψ̇ + ov_j × s`` for dof ``k`` of joint
     ``j`` (``s = oS_k``), the composite inertia ``Ic_l`` and composite ``Bc_l`` (:func:`_composite_coriolis`):
     a dof ``c`` of a joint ``l`` of the subtree of ``j`` gets ``∂τ_c/∂q_k = S_cᵀ (Ic_l ψ̈ + Bc_l ψ̇)`` and
-    ``∂τ_c/∂v_k = S_cᵀ (Bc_l s + Ic_l φ)``; a dof ``c`` of a strict ancestor of ``j`` gets the same with ``l = j``
+    ``∂τ_c/∂v_k = S_cᵀ (Bc_l s + Ic_l φ)``, dot products with ``ws.IcS[c] = Ic_l S_c``, ``ws.BcS[c] = Bc_lᵀ S_c``
+    (the subtree's dofs are contiguous); a dof ``c`` of a strict ancestor of ``j`` gets the same with ``l = j``
     plus ``S_cᵀ (s ×* F_j)`` in ``∂τ_c/∂q_k``.
     """
     forward_kinematics(rb, ws, q, v)
     _rnea_pass(rb, ws, a, ws.tau)
     _composite_coriolis(rb, ws)
-    oS, ov, oa, of, oIc, oBc = ws.oS, ws.ov, ws.oa, ws.of, ws.oIc, ws.oBc
+    oS, ov, oa, of, oIc, oBc, Y, Z = ws.oS, ws.ov, ws.oa, ws.of, ws.oIc, ws.oBc, ws.IcS, ws.BcS
     parent, idx_v, nvj = rb.parent, rb.idx_v, rb.nvj
+    for c in range(rb.nv):
+        col = _get6(oS, c)
+        _set6(Y, c, _imul(oIc, rb.dof_joint[c], col))
+        _set6(Z, c, _imul_t(oBc, rb.dof_joint[c], col))
     for r in range(rb.nv):
         for c in range(rb.nv):
             dtau_dq_out[r, c] = 0.0
@@ -439,16 +474,15 @@ def dynamics_derivatives(
         psi_d = _mcross(ovp, s)
         psi_dd = _plus(_mcross(_get6(oa, parent[j]), s), _mcross(ovp, psi_d))
         phi = _plus(psi_d, _mcross(_get6(ov, j), s))
-        for l in range(j, rb.subtree_end[j]):
-            gq = _plus(_imul(oIc, l, psi_dd), _imul(oBc, l, psi_d))
-            gv = _plus(_imul(oBc, l, s), _imul(oIc, l, phi))
-            for d in range(nvj[l]):
-                col = _get6(oS, idx_v[l] + d)
-                dtau_dq_out[idx_v[l] + d, k] = _dot(col, gq)
-                dtau_dv_out[idx_v[l] + d, k] = _dot(col, gv)
+        for c in range(idx_v[j], idx_v[rb.subtree_end[j] - 1] + nvj[rb.subtree_end[j] - 1]):
+            y, z = _get6(Y, c), _get6(Z, c)
+            dtau_dq_out[c, k] = _dot(y, psi_dd) + _dot(z, psi_d)
+            dtau_dv_out[c, k] = _dot(z, s) + _dot(y, phi)
+        i = parent[j]
+        if i == 0:
+            continue
         gq = _plus(_plus(_imul(oIc, j, psi_dd), _imul(oBc, j, psi_d)), _fcross(s, _get6(of, j)))
         gv = _plus(_imul(oBc, j, s), _imul(oIc, j, phi))
-        i = parent[j]
         while i > 0:
             for d in range(nvj[i]):
                 col = _get6(oS, idx_v[i] + d)
