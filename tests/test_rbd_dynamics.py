@@ -239,3 +239,45 @@ def test_kernels_run_inside_a_compiled_function():
     close(p, data.oMf[fid].translation)
     close(vel, pin.getFrameVelocity(model, data, fid, pin.LOCAL_WORLD_ALIGNED).vector)
     close(g, pin.computeGeneralizedGravity(model, data, q))
+
+
+@numba.njit
+def _allocates(n):
+    total = 0.0
+    for _ in range(n):
+        total += np.ones(3).sum()
+    return total
+
+
+@numba.njit
+def _repeat(rb, ws, q, v, tau, fid, out, n):
+    for _ in range(n):
+        _node(rb, ws, q, v, tau, fid, out)
+
+
+def test_kernels_do_not_allocate():
+    """numba's allocation counters grow no more for four calls than for one (argument boxing aside)."""
+    from numba.core.runtime import _nrt_python, rtsys
+
+    model, _, rb, ws = lowered("talos")
+    q, v, _, tau = state(model, 5)
+    n = model.nv
+    out = (np.zeros(n), *(np.zeros((n, n)) for _ in range(3)), *(np.zeros((6, n)) for _ in range(3)))
+    out += (np.zeros((3, 3)), np.zeros(3), np.zeros(6), np.zeros(n))
+    fid = model.getFrameId("left_sole_link")
+    _repeat(rb, ws, q, v, tau, fid, out, 1)
+    _allocates(1)
+    _nrt_python.memsys_enable_stats()
+    try:
+        counts = []
+        for calls in (1, 4):
+            before = rtsys.get_allocation_stats().alloc
+            _repeat(rb, ws, q, v, tau, fid, out, calls)
+            counts.append(rtsys.get_allocation_stats().alloc - before)
+        before = rtsys.get_allocation_stats().alloc
+        _allocates(4)
+        control = rtsys.get_allocation_stats().alloc - before
+    finally:
+        _nrt_python.memsys_disable_stats()
+    assert control >= 4  # the counters do count
+    assert counts[0] == counts[1]
