@@ -24,7 +24,11 @@ from crocopy.models.rbd.lowering import lower_model, make_workspace
 ROBOTS = ("iris", "double_pendulum", "kinova", "talos_arm", "panda", "anymal", "solo12", "talos")
 REFERENCES = (pin.WORLD, pin.LOCAL, pin.LOCAL_WORLD_ALIGNED)
 SEEDS = st.integers(0, 2**32 - 1)
-EXAMPLES = settings(max_examples=4, deadline=None)
+
+
+def per_robot(test):
+    """``test(robot, seed)`` on every robot, for a few Hypothesis seeds."""
+    return pytest.mark.parametrize("robot", ROBOTS)(settings(max_examples=3, deadline=None)(given(seed=SEEDS)(test)))
 
 
 @functools.cache
@@ -77,9 +81,7 @@ def test_lower_model_refuses_unsupported_joints():
         lower_model(model)
 
 
-@pytest.mark.parametrize("robot", ROBOTS)
-@EXAMPLES
-@given(seed=SEEDS)
+@per_robot
 def test_forward_kinematics(robot, seed):
     model, data, rb, ws = lowered(robot)
     q, v, _, _ = state(model, seed)
@@ -93,9 +95,7 @@ def test_forward_kinematics(robot, seed):
         close(ws.ov[i], data.oMi[i].act(data.v[i]).vector)
 
 
-@pytest.mark.parametrize("robot", ROBOTS)
-@EXAMPLES
-@given(seed=SEEDS)
+@per_robot
 def test_forward_dynamics_and_mass_inverse(robot, seed):
     model, data, rb, ws = lowered(robot)
     q, v, _, tau = state(model, seed)
@@ -125,9 +125,7 @@ def test_forward_dynamics_with_armature_is_cholesky_of_crba_plus_armature():
     assert np.abs(acc - np.linalg.solve(no_armature, tau - data.nle)).max() > 1e-3  # the armature matters
 
 
-@pytest.mark.parametrize("robot", ROBOTS)
-@EXAMPLES
-@given(seed=SEEDS)
+@per_robot
 def test_rnea_derivatives(robot, seed):
     model, data, rb, ws = lowered(robot)
     q, v, a, _ = state(model, seed)
@@ -139,9 +137,7 @@ def test_rnea_derivatives(robot, seed):
     close(ws.tau, pin.rnea(model, data, q, v, a))
 
 
-@pytest.mark.parametrize("robot", ROBOTS)
-@EXAMPLES
-@given(seed=SEEDS)
+@per_robot
 def test_free_dynamics_derivatives_from_rnea_derivatives(robot, seed):
     """``∂a/∂(q, v) = -M⁻¹ ∂RNEA/∂(q, v)`` at ``a = FD(q, v, τ)``: Pinocchio's ABA derivatives."""
     model, data, rb, ws = lowered(robot)
@@ -157,9 +153,7 @@ def test_free_dynamics_derivatives_from_rnea_derivatives(robot, seed):
     close(Minv, symmetric(data.Minv), 1e-8)
 
 
-@pytest.mark.parametrize("robot", ROBOTS)
-@EXAMPLES
-@given(seed=SEEDS)
+@per_robot
 def test_gravity_torque(robot, seed):
     model, data, rb, ws = lowered(robot)
     q = state(model, seed)[0]
@@ -168,9 +162,7 @@ def test_gravity_torque(robot, seed):
     close(g, pin.computeGeneralizedGravity(model, data, q))
 
 
-@pytest.mark.parametrize("robot", ROBOTS)
-@settings(max_examples=2, deadline=None)
-@given(seed=SEEDS)
+@per_robot
 def test_frames(robot, seed):
     """Placement, Jacobian, velocity and velocity derivatives of every frame, in the three references."""
     model, data, rb, ws = lowered(robot)
