@@ -115,63 +115,6 @@ def _fcross(m, f):
 
 
 @compiled
-def _imul(inertia, i, m):
-    """``inertia[i] @ m`` for an ``(n, 6, 6)`` array and a 6-tuple."""
-    out0 = out1 = out2 = out3 = out4 = out5 = 0.0
-    for c in range(6):
-        x = m[c]
-        out0 += inertia[i, 0, c] * x
-        out1 += inertia[i, 1, c] * x
-        out2 += inertia[i, 2, c] * x
-        out3 += inertia[i, 3, c] * x
-        out4 += inertia[i, 4, c] * x
-        out5 += inertia[i, 5, c] * x
-    return out0, out1, out2, out3, out4, out5
-
-
-@compiled
-def _imul_t(A, i, m):
-    """``A[i]ᵀ @ m`` for an ``(n, 6, 6)`` array and a 6-tuple."""
-    out0 = out1 = out2 = out3 = out4 = out5 = 0.0
-    for r in range(6):
-        x = m[r]
-        out0 += A[i, r, 0] * x
-        out1 += A[i, r, 1] * x
-        out2 += A[i, r, 2] * x
-        out3 += A[i, r, 3] * x
-        out4 += A[i, r, 4] * x
-        out5 += A[i, r, 5] * x
-    return out0, out1, out2, out3, out4, out5
-
-
-@compiled
-def _joint_transform(kind, ax, ay, az, q, iq):
-    """``M_J(q)`` of a joint of code ``kind``, axis ``(ax, ay, az)``, configuration at ``q[iq:]``:
-    the tuple ``(R00, R01, R02, R10, R11, R12, R20, R21, R22, px, py, pz)``."""
-    if kind == FREEFLYER:
-        x, y, z, w = q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6]
-        return (
-            1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w),
-            2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w),
-            2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y),
-            q[iq], q[iq + 1], q[iq + 2],
-        )
-    if kind == PRISMATIC:
-        return 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, ax * q[iq], ay * q[iq], az * q[iq]
-    if kind == REVOLUTE:
-        c, s = math.cos(q[iq]), math.sin(q[iq])
-    else:  # REVOLUTE_UB: q = [cos θ, sin θ]
-        c, s = q[iq], q[iq + 1]
-    t = 1.0 - c
-    return (
-        c + t * ax * ax, t * ax * ay - s * az, t * ax * az + s * ay,
-        t * ax * ay + s * az, c + t * ay * ay, t * ay * az - s * ax,
-        t * ax * az - s * ay, t * ay * az + s * ax, c + t * az * az,
-        0.0, 0.0, 0.0,
-    )
-
-
-@compiled
 def forward_kinematics(rb: RigidBodyModel, ws: RigidBodyWorkspace, q: np.ndarray, v: np.ndarray) -> None:
     """``ws.oR, ws.op`` (``oMi``), ``ws.oS`` (world motion subspace), ``ws.ov``, ``ws.ow`` and ``ws.oI``."""
     oR, op, oS, ov, ow, oI = ws.oR, ws.op, ws.oS, ws.ov, ws.ow, ws.oI
@@ -188,7 +131,30 @@ def forward_kinematics(rb: RigidBodyModel, ws: RigidBodyWorkspace, q: np.ndarray
         par = rb.parent[i]
         kind = rb.jtype[i]
         ax, ay, az = axis[i, 0], axis[i, 1], axis[i, 2]
-        J = _joint_transform(kind, ax, ay, az, q, rb.idx_q[i])
+        # the joint's own transform M_J(q) (rotation J[0:9] row-major, translation J[9:12])
+        iq = rb.idx_q[i]
+        if kind == FREEFLYER:
+            x, y, z, w = q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6]
+            J = (
+                1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w),
+                2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w),
+                2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y),
+                q[iq], q[iq + 1], q[iq + 2],
+            )
+        elif kind == PRISMATIC:
+            J = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, ax * q[iq], ay * q[iq], az * q[iq])
+        else:
+            if kind == REVOLUTE:
+                c, sn = math.cos(q[iq]), math.sin(q[iq])
+            else:  # REVOLUTE_UB: q = [cos θ, sin θ]
+                c, sn = q[iq], q[iq + 1]
+            t = 1.0 - c
+            J = (
+                c + t * ax * ax, t * ax * ay - sn * az, t * ax * az + sn * ay,
+                t * ax * ay + sn * az, c + t * ay * ay, t * ay * az - sn * ax,
+                t * ax * az - sn * ay, t * ay * az + sn * ax, c + t * az * az,
+                0.0, 0.0, 0.0,
+            )
         for r in range(3):
             acc = op[par, r]
             for c in range(3):
@@ -268,11 +234,14 @@ def _rnea_pass(rb, ws, a, tau):
         ovi = _get6(ov, i)
         acc = _plus(acc, _mcross(ovi, _get6(ow, i)))
         _set6(oa, i, acc)
-        h = _imul(oI, i, ovi)
-        Ia = _imul(oI, i, acc)
-        _set6(oh, i, h)
-        _set6(oIa, i, Ia)
-        _set6(of, i, _plus(Ia, _fcross(ovi, h)))
+        for r in range(6):  # loops, not a helper call: a call makes numba count references to every array
+            h_r = ia_r = 0.0
+            for c in range(6):
+                h_r += oI[i, r, c] * ov[i, c]
+                ia_r += oI[i, r, c] * oa[i, c]
+            oh[i, r] = h_r
+            oIa[i, r] = ia_r
+        _set6(of, i, _plus(_get6(oIa, i), _fcross(ovi, _get6(oh, i))))
     for i in range(rb.njoints - 1, 0, -1):
         iv = rb.idx_v[i]
         fi = _get6(of, i)
@@ -294,10 +263,16 @@ def _crba(rb, ws):
         for r in range(6):
             for c in range(6):
                 oIc[i, r, c] = oI[i, r, c]
+    tmp = ws.tmp
     for i in range(rb.njoints - 1, 0, -1):
         iv = rb.idx_v[i]
         for d in range(rb.nvj[i]):
-            F = _imul(oIc, i, _get6(oS, iv + d))
+            for r in range(6):  # F = oIc_i S (loops here, not a call: see _rnea_pass)
+                x = 0.0
+                for c in range(6):
+                    x += oIc[i, r, c] * oS[iv + d, c]
+                tmp[0, r] = x
+            F = _get6(tmp, 0)
             j = i
             while j > 0:
                 jv = rb.idx_v[j]
@@ -319,13 +294,14 @@ def _factor(rb, ws):
     """``ws.L``: the lower-triangular ``L`` with ``ws.M = Lᵀ L`` and the branch-induced sparsity of ``M``
     (Featherstone's LTL factorization: no fill-in, ``O(nv · depth²)``)."""
     n = rb.nv
-    L, lam = ws.L, rb.dof_parent
+    L, M, dinv, lam = ws.L, ws.M, ws.dinv, rb.dof_parent
     for r in range(n):
         for c in range(n):
-            L[r, c] = ws.M[r, c] if c <= r else 0.0
+            L[r, c] = M[r, c] if c <= r else 0.0
     for k in range(n - 1, -1, -1):
         d = math.sqrt(L[k, k])
         L[k, k] = d
+        dinv[k] = 1.0 / d
         i = lam[k]
         while i >= 0:
             L[k, i] /= d
@@ -341,11 +317,11 @@ def _factor(rb, ws):
 
 
 @compiled
-def _factor_solve(rb, L, x):
-    """``x ← (Lᵀ L)⁻¹ x`` in place, with the factor of :func:`_factor`."""
+def _factor_solve(rb, L, dinv, x):
+    """``x ← (Lᵀ L)⁻¹ x`` in place, with the factor of :func:`_factor` and ``dinv = 1 / diag(L)``."""
     lam = rb.dof_parent
     for k in range(rb.nv - 1, -1, -1):
-        x[k] /= L[k, k]
+        x[k] *= dinv[k]
         i = lam[k]
         while i >= 0:
             x[i] -= L[k, i] * x[k]
@@ -355,7 +331,7 @@ def _factor_solve(rb, L, x):
         while i >= 0:
             x[k] -= L[k, i] * x[i]
             i = lam[i]
-        x[k] /= L[k, k]
+        x[k] *= dinv[k]
 
 
 @compiled
@@ -370,7 +346,7 @@ def forward_dynamics(
     _factor(rb, ws)
     for k in range(rb.nv):
         a_out[k] = tau[k] - ws.tau[k]
-    _factor_solve(rb, ws.L, a_out)
+    _factor_solve(rb, ws.L, ws.dinv, a_out)
 
 
 @compiled
@@ -378,27 +354,26 @@ def mass_inverse(rb: RigidBodyModel, ws: RigidBodyWorkspace, Minv_out: np.ndarra
     """``Minv_out (nv, nv) = M⁻¹`` (armature included) from the factor ``ws.L`` of the last
     :func:`forward_dynamics`, one sparse solve per column (``O(nv² · depth)``), then mirrored to be symmetric."""
     n = rb.nv
-    L, lam = ws.L, rb.dof_parent
+    L, lam, dinv, x = ws.L, rb.dof_parent, ws.dinv, Minv_out
     for j in range(n):  # row j = column j, contiguous
-        x = Minv_out[j]
         for k in range(n):
-            x[k] = 0.0
-        x[j] = 1.0
+            x[j, k] = 0.0
+        x[j, j] = 1.0
         k = j
         while k >= 0:  # Lᵀ y = e_j: only the ancestors of j are reached
-            x[k] /= L[k, k]
+            x[j, k] *= dinv[k]
             i = lam[k]
             while i >= 0:
-                x[i] -= L[k, i] * x[k]
+                x[j, i] -= L[k, i] * x[j, k]
                 i = lam[i]
             k = lam[k]
         for k in range(n):
-            acc = x[k]
+            acc = x[j, k]
             i = lam[k]
             while i >= 0:
-                acc -= L[k, i] * x[i]
+                acc -= L[k, i] * x[j, i]
                 i = lam[i]
-            x[k] = acc / L[k, k]
+            x[j, k] = acc * dinv[k]
     for j in range(n):
         for i in range(j):
             Minv_out[i, j] = Minv_out[j, i]
@@ -414,17 +389,23 @@ def gravity_torque(rb: RigidBodyModel, ws: RigidBodyWorkspace, q: np.ndarray, ou
 @compiled
 def _composite_coriolis(rb, ws):
     """``ws.oIc``, ``ws.oBc``: composite inertias and composite ``B_i = ov_i ×* oI_i - oI_i (ov_i ×) + (· ×* h_i)``."""
-    oI, oIc, oBc, ov, oh = ws.oI, ws.oIc, ws.oBc, ws.ov, ws.oh
+    oI, oIc, oBc, ov, oh, Mx = ws.oI, ws.oIc, ws.oBc, ws.ov, ws.oh, ws.tmp
     for i in range(1, rb.njoints):
         ovi, h = _get6(ov, i), _get6(oh, i)
+        for c in range(6):  # Mx: the matrix of ovi ×
+            e = (1.0 if c == 0 else 0.0, 1.0 if c == 1 else 0.0, 1.0 if c == 2 else 0.0,
+                 1.0 if c == 3 else 0.0, 1.0 if c == 4 else 0.0, 1.0 if c == 5 else 0.0)
+            _set6(Mx, c, _mcross(ovi, e))  # row c of Mx holds its column c
         for c in range(6):
             e = (1.0 if c == 0 else 0.0, 1.0 if c == 1 else 0.0, 1.0 if c == 2 else 0.0,
                  1.0 if c == 3 else 0.0, 1.0 if c == 4 else 0.0, 1.0 if c == 5 else 0.0)
-            Ie = (oI[i, 0, c], oI[i, 1, c], oI[i, 2, c], oI[i, 3, c], oI[i, 4, c], oI[i, 5, c])
-            col = _plus(_minus(_fcross(ovi, Ie), _imul(oI, i, _mcross(ovi, e))), _fcross(e, h))
-            for r in range(6):
-                oBc[i, r, c] = col[r]
-                oIc[i, r, c] = Ie[r]
+            hx = _fcross(e, h)
+            for r in range(6):  # (ovi ×*) = -(Mx)ᵀ
+                x = hx[r]
+                for k in range(6):
+                    x -= Mx[r, k] * oI[i, k, c] + oI[i, r, k] * Mx[c, k]
+                oBc[i, r, c] = x
+                oIc[i, r, c] = oI[i, r, c]
     for i in range(rb.njoints - 1, 0, -1):
         par = rb.parent[i]
         if par > 0:
@@ -459,10 +440,16 @@ def dynamics_derivatives(
     _composite_coriolis(rb, ws)
     oS, ov, oa, of, oIc, oBc, Y, Z = ws.oS, ws.ov, ws.oa, ws.of, ws.oIc, ws.oBc, ws.IcS, ws.BcS
     parent, idx_v, nvj = rb.parent, rb.idx_v, rb.nvj
+    tmp = ws.tmp
     for c in range(rb.nv):
-        col = _get6(oS, c)
-        _set6(Y, c, _imul(oIc, rb.dof_joint[c], col))
-        _set6(Z, c, _imul_t(oBc, rb.dof_joint[c], col))
+        l = rb.dof_joint[c]
+        for r in range(6):
+            y = z = 0.0
+            for k in range(6):
+                y += oIc[l, r, k] * oS[c, k]
+                z += oBc[l, k, r] * oS[c, k]
+            Y[c, r] = y
+            Z[c, r] = z
     for r in range(rb.nv):
         for c in range(rb.nv):
             dtau_dq_out[r, c] = 0.0
@@ -481,8 +468,19 @@ def dynamics_derivatives(
         i = parent[j]
         if i == 0:
             continue
-        gq = _plus(_plus(_imul(oIc, j, psi_dd), _imul(oBc, j, psi_d)), _fcross(s, _get6(of, j)))
-        gv = _plus(_imul(oBc, j, s), _imul(oIc, j, phi))
+        _set6(tmp, 0, s)
+        _set6(tmp, 1, psi_d)
+        _set6(tmp, 2, psi_dd)
+        _set6(tmp, 3, phi)
+        for r in range(6):  # gq = Ic_j ψ̈ + Bc_j ψ̇,  gv = Bc_j s + Ic_j φ
+            x = y = 0.0
+            for c in range(6):
+                x += oIc[j, r, c] * tmp[2, c] + oBc[j, r, c] * tmp[1, c]
+                y += oBc[j, r, c] * tmp[0, c] + oIc[j, r, c] * tmp[3, c]
+            tmp[4, r] = x
+            tmp[5, r] = y
+        gq = _plus(_get6(tmp, 4), _fcross(s, _get6(of, j)))
+        gv = _get6(tmp, 5)
         while i > 0:
             for d in range(nvj[i]):
                 col = _get6(oS, idx_v[i] + d)

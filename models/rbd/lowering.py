@@ -78,9 +78,9 @@ class RigidBodyWorkspace(NamedTuple):
     after a RNEA pass, the force each joint transmits (its subtree's net force).  ``oIc oBc (njoints, 6, 6)``:
     composite inertias and composite Coriolis maps; ``IcS BcS (nv, 6)``: ``Ic S`` and ``Bcᵀ S`` per dof (the
     last two for the derivatives).  ``M (nv, nv)``: mass matrix, armature included (as ``pinocchio.crba``);
-    ``L (nv, nv)``: lower triangular, ``M = Lᵀ L``.  ``tau zero (nv,)``: scratch and a zero vector.
-    ``tmp (6, 6)``, ``Rf (3, 3)``, ``pf (3,)``: scratch (``Rf, pf``: the last frame placement a frame kernel
-    computed).
+    ``L (nv, nv)``: lower triangular, ``M = Lᵀ L``; ``dinv (nv,)``: ``1 / diag(L)``.  ``tau zero (nv,)``:
+    scratch and a zero vector.  ``tmp (6, 6)``, ``Rf (3, 3)``, ``pf (3,)``: scratch (``Rf, pf``: the last frame
+    placement a frame kernel computed).
     """
 
     oR: np.ndarray
@@ -99,6 +99,7 @@ class RigidBodyWorkspace(NamedTuple):
     BcS: np.ndarray
     M: np.ndarray
     L: np.ndarray
+    dinv: np.ndarray
     tau: np.ndarray
     zero: np.ndarray
     tmp: np.ndarray
@@ -198,6 +199,7 @@ def make_workspace(rb: RigidBodyModel) -> RigidBodyWorkspace:
         BcS=np.zeros((nv, 6)),
         M=np.zeros((nv, nv)),
         L=np.zeros((nv, nv)),
+        dinv=np.zeros(nv),
         tau=np.zeros(nv),
         zero=np.zeros(nv),
         tmp=np.zeros((6, 6)),
