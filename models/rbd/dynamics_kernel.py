@@ -126,13 +126,14 @@ def forward_kinematics(rb: RigidBodyModel, ws: RigidBodyWorkspace, q: np.ndarray
     for r in range(6):
         ov[0, r] = 0.0
         ow[0, r] = 0.0
+    parent, jtype, idx_q, idx_v, nvj, mass = rb.parent, rb.jtype, rb.idx_q, rb.idx_v, rb.nvj, rb.mass
     A = ws.tmp
     for i in range(1, rb.njoints):
-        par = rb.parent[i]
-        kind = rb.jtype[i]
+        par = parent[i]
+        kind = jtype[i]
         ax, ay, az = axis[i, 0], axis[i, 1], axis[i, 2]
         # the joint's own transform M_J(q) (rotation J[0:9] row-major, translation J[9:12])
-        iq = rb.idx_q[i]
+        iq = idx_q[i]
         if kind == FREEFLYER:
             x, y, z, w = q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6]
             J = (
@@ -165,11 +166,11 @@ def forward_kinematics(rb: RigidBodyModel, ws: RigidBodyWorkspace, q: np.ndarray
             for c in range(3):
                 oR[i, r, c] = A[r, 0] * J[c] + A[r, 1] * J[3 + c] + A[r, 2] * J[6 + c]
         px, py, pz = op[i, 0], op[i, 1], op[i, 2]
-        iv = rb.idx_v[i]
+        iv = idx_v[i]
         wx = oR[i, 0, 0] * ax + oR[i, 0, 1] * ay + oR[i, 0, 2] * az
         wy = oR[i, 1, 0] * ax + oR[i, 1, 1] * ay + oR[i, 1, 2] * az
         wz = oR[i, 2, 0] * ax + oR[i, 2, 1] * ay + oR[i, 2, 2] * az
-        for d in range(rb.nvj[i]):
+        for d in range(nvj[i]):
             lin_x = lin_y = lin_z = ang_x = ang_y = ang_z = 0.0
             if kind == FREEFLYER:
                 if d < 3:
@@ -187,12 +188,12 @@ def forward_kinematics(rb: RigidBodyModel, ws: RigidBodyWorkspace, q: np.ndarray
             oS[k, 3], oS[k, 4], oS[k, 5] = ang_x, ang_y, ang_z
         for r in range(6):
             acc = 0.0
-            for d in range(rb.nvj[i]):
+            for d in range(nvj[i]):
                 acc += oS[iv + d, r] * v[iv + d]
             ow[i, r] = acc
             ov[i, r] = ov[par, r] + acc
         # body inertia at the world origin: [[m, -m[c]x], [m[c]x, R Ic Rᵀ - m [c]x [c]x]], c the world com
-        m = rb.mass[i]
+        m = mass[i]
         cx = px + oR[i, 0, 0] * com[i, 0] + oR[i, 0, 1] * com[i, 1] + oR[i, 0, 2] * com[i, 2]
         cy = py + oR[i, 1, 0] * com[i, 0] + oR[i, 1, 1] * com[i, 1] + oR[i, 1, 2] * com[i, 2]
         cz = pz + oR[i, 2, 0] * com[i, 0] + oR[i, 2, 1] * com[i, 1] + oR[i, 2, 2] * com[i, 2]
@@ -224,12 +225,13 @@ def forward_kinematics(rb: RigidBodyModel, ws: RigidBodyWorkspace, q: np.ndarray
 def _rnea_pass(rb, ws, a, tau):
     """RNEA on the kinematics in ``ws``: ``ws.oa, ws.oh, ws.oIa``, ``ws.of`` (subtree forces), ``tau (nv,)``."""
     oS, ov, ow, oa, oI, oh, oIa, of = ws.oS, ws.ov, ws.ow, ws.oa, ws.oI, ws.oh, ws.oIa, ws.of
+    parent, idx_v, nvj, armature = rb.parent, rb.idx_v, rb.nvj, rb.armature
     g = rb.gravity
     _set6(oa, 0, (-g[0], -g[1], -g[2], -g[3], -g[4], -g[5]))
     for i in range(1, rb.njoints):
-        iv = rb.idx_v[i]
-        acc = _get6(oa, rb.parent[i])
-        for d in range(rb.nvj[i]):
+        iv = idx_v[i]
+        acc = _get6(oa, parent[i])
+        for d in range(nvj[i]):
             acc = _plus(acc, _times(_get6(oS, iv + d), a[iv + d]))
         ovi = _get6(ov, i)
         acc = _plus(acc, _mcross(ovi, _get6(ow, i)))
@@ -243,11 +245,11 @@ def _rnea_pass(rb, ws, a, tau):
             oIa[i, r] = ia_r
         _set6(of, i, _plus(_get6(oIa, i), _fcross(ovi, _get6(oh, i))))
     for i in range(rb.njoints - 1, 0, -1):
-        iv = rb.idx_v[i]
+        iv = idx_v[i]
         fi = _get6(of, i)
-        for d in range(rb.nvj[i]):
-            tau[iv + d] = _dot(_get6(oS, iv + d), fi) + rb.armature[iv + d] * a[iv + d]
-        par = rb.parent[i]
+        for d in range(nvj[i]):
+            tau[iv + d] = _dot(_get6(oS, iv + d), fi) + armature[iv + d] * a[iv + d]
+        par = parent[i]
         if par > 0:
             _set6(of, par, _plus(_get6(of, par), fi))
 
@@ -263,10 +265,11 @@ def _crba(rb, ws):
         for r in range(6):
             for c in range(6):
                 oIc[i, r, c] = oI[i, r, c]
+    parent, idx_v, nvj, armature = rb.parent, rb.idx_v, rb.nvj, rb.armature
     tmp = ws.tmp
     for i in range(rb.njoints - 1, 0, -1):
-        iv = rb.idx_v[i]
-        for d in range(rb.nvj[i]):
+        iv = idx_v[i]
+        for d in range(nvj[i]):
             for r in range(6):  # F = oIc_i S (loops here, not a call: see _rnea_pass)
                 x = 0.0
                 for c in range(6):
@@ -275,14 +278,14 @@ def _crba(rb, ws):
             F = _get6(tmp, 0)
             j = i
             while j > 0:
-                jv = rb.idx_v[j]
-                for e in range(rb.nvj[j]):
+                jv = idx_v[j]
+                for e in range(nvj[j]):
                     x = _dot(_get6(oS, jv + e), F)
                     M[jv + e, iv + d] = x
                     M[iv + d, jv + e] = x
-                j = rb.parent[j]
-            M[iv + d, iv + d] += rb.armature[iv + d]
-        par = rb.parent[i]
+                j = parent[j]
+            M[iv + d, iv + d] += armature[iv + d]
+        par = parent[i]
         if par > 0:
             for r in range(6):
                 for c in range(6):
@@ -406,8 +409,9 @@ def _composite_coriolis(rb, ws):
                     x -= Mx[r, k] * oI[i, k, c] + oI[i, r, k] * Mx[c, k]
                 oBc[i, r, c] = x
                 oIc[i, r, c] = oI[i, r, c]
+    parent = rb.parent
     for i in range(rb.njoints - 1, 0, -1):
-        par = rb.parent[i]
+        par = parent[i]
         if par > 0:
             for r in range(6):
                 for c in range(6):
@@ -440,9 +444,10 @@ def dynamics_derivatives(
     _composite_coriolis(rb, ws)
     oS, ov, oa, of, oIc, oBc, Y, Z = ws.oS, ws.ov, ws.oa, ws.of, ws.oIc, ws.oBc, ws.IcS, ws.BcS
     parent, idx_v, nvj = rb.parent, rb.idx_v, rb.nvj
+    dof_joint, subtree_end = rb.dof_joint, rb.subtree_end
     tmp = ws.tmp
     for c in range(rb.nv):
-        l = rb.dof_joint[c]
+        l = dof_joint[c]
         for r in range(6):
             y = z = 0.0
             for k in range(6):
@@ -455,13 +460,13 @@ def dynamics_derivatives(
             dtau_dq_out[r, c] = 0.0
             dtau_dv_out[r, c] = 0.0
     for k in range(rb.nv):
-        j = rb.dof_joint[k]
+        j = dof_joint[k]
         s = _get6(oS, k)
         ovp = _get6(ov, parent[j])
         psi_d = _mcross(ovp, s)
         psi_dd = _plus(_mcross(_get6(oa, parent[j]), s), _mcross(ovp, psi_d))
         phi = _plus(psi_d, _mcross(_get6(ov, j), s))
-        for c in range(idx_v[j], idx_v[rb.subtree_end[j] - 1] + nvj[rb.subtree_end[j] - 1]):
+        for c in range(idx_v[j], idx_v[subtree_end[j] - 1] + nvj[subtree_end[j] - 1]):
             y, z = _get6(Y, c), _get6(Z, c)
             dtau_dq_out[c, k] = _dot(y, psi_dd) + _dot(z, psi_d)
             dtau_dv_out[c, k] = _dot(z, s) + _dot(y, phi)
@@ -494,12 +499,13 @@ def _frame_pose(rb, ws, fid):
     """``ws.Rf, ws.pf``: ``oMf`` of frame ``fid``; returns its parent joint."""
     i = rb.frame_joint[fid]
     oR, Rf, fR = ws.oR, ws.Rf, rb.fR
+    fp, op, pf = rb.fp, ws.op, ws.pf
     for r in range(3):
-        acc = ws.op[i, r]
+        acc = op[i, r]
         for c in range(3):
-            acc += oR[i, r, c] * rb.fp[fid, c]
+            acc += oR[i, r, c] * fp[fid, c]
             Rf[r, c] = oR[i, r, 0] * fR[fid, 0, c] + oR[i, r, 1] * fR[fid, 1, c] + oR[i, r, 2] * fR[fid, 2, c]
-        ws.pf[r] = acc
+        pf[r] = acc
     return i
 
 
@@ -538,16 +544,17 @@ def frame_jacobian(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int, referen
     """``J_out (6, nv)``: the Jacobian of frame ``fid`` in ``reference`` (zero outside its support)."""
     i = _frame_pose(rb, ws, fid)
     Rf, pf, oS = ws.Rf, ws.pf, ws.oS
+    idx_v, nvj, parent = rb.idx_v, rb.nvj, rb.parent
     for r in range(6):
         for c in range(rb.nv):
             J_out[r, c] = 0.0
     while i > 0:
-        iv = rb.idx_v[i]
-        for d in range(rb.nvj[i]):
+        iv = idx_v[i]
+        for d in range(nvj[i]):
             col = _to_reference(Rf, pf, _get6(oS, iv + d), reference)
             for r in range(6):
                 J_out[r, iv + d] = col[r]
-        i = rb.parent[i]
+        i = parent[i]
 
 
 @compiled
@@ -573,16 +580,17 @@ def frame_velocity_derivatives(
     frame_jacobian(rb, ws, fid, reference, dv_dv_out)
     i = rb.frame_joint[fid]
     Rf, pf, oS, ov = ws.Rf, ws.pf, ws.oS, ws.ov
+    parent, idx_v, nvj = rb.parent, rb.idx_v, rb.nvj
     for r in range(6):
         for c in range(rb.nv):
             dv_dq_out[r, c] = 0.0
     ovi = _get6(ov, i)
     j = i
     while j > 0:
-        par = rb.parent[j]
-        jv = rb.idx_v[j]
+        par = parent[j]
+        jv = idx_v[j]
         ovp = _get6(ov, par)
-        for d in range(rb.nvj[j]):
+        for d in range(nvj[j]):
             s = _get6(oS, jv + d)
             if reference == LOCAL:
                 col = _to_reference(Rf, pf, _mcross(ovp, s), LOCAL)
