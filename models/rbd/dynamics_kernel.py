@@ -536,8 +536,10 @@ def _to_reference(R, p, m, reference):
 def frame_placement(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int, R_out: np.ndarray, p_out: np.ndarray) -> None:
     """``oMf`` of frame ``fid`` (``R_out (3, 3)``, ``p_out (3,)``) after :func:`forward_kinematics`."""
     _frame_pose(rb, ws, fid)
-    R_out[:, :] = ws.Rf
-    p_out[:] = ws.pf
+    for r in range(3):
+        p_out[r] = ws.pf[r]
+        for c in range(3):
+            R_out[r, c] = ws.Rf[r, c]
 
 
 @compiled
