@@ -13,7 +13,7 @@ quantities are expressed in the world frame at the world origin.  For joint ``i`
     oa_i  = oa_λ(i) + oS_i a_i + ov_i × oS_i v_i,          oa_0 = -gravity
     f_i   = oI_i oa_i + ov_i ×* (oI_i ov_i),               F_i = f_i + Σ_children F_c
     τ_i   = oS_iᵀ F_i + armature_i a_i                     (RNEA)
-    M     = CRBA (composite inertias) + diag(armature),  L Lᵀ = M
+    M     = CRBA (composite inertias) + diag(armature),  Lᵀ L = M (L lower triangular, tree-sparse)
     a     = M⁻¹ (τ - RNEA(q, v, 0))                        (forward dynamics)
 
 where ``m × n = [m_ω × n_v + m_v × n_ω; m_ω × n_ω]`` and ``m ×* f = [m_ω × f_v; m_ω × f_ω + m_v × f_v]``.
@@ -21,8 +21,14 @@ where ``m × n = [m_ω × n_v + m_v × n_ω; m_ω × n_ω]`` and ``m ×* f = [m_
 Derivatives.  A configuration is perturbed in the joint's local frame, ``M_J(q ⊕ δ) = M_J(q) exp(S δ)``, so a
 tangent ``δ_k`` of dof ``k`` of joint ``j`` (world column ``s = oS_k``) moves every placement of the subtree of
 ``j`` as ``d oX_i = s × oX_i``: ``d oS_i = s × oS_i``, ``d (oI_i m) = s ×* (oI_i m) - oI_i (s × m)``.
-:func:`dynamics_derivatives` propagates these tangents through the recursions above (forward mode, one dof
-at a time over its subtree; cost ``O(nv · subtree)``); the ancestors of ``j`` see ``d τ_l = oS_lᵀ dF_j``.
+:func:`dynamics_derivatives` propagates these tangents through the recursions above in closed form: the
+subtree's velocities and accelerations move rigidly plus the terms ``ψ̇ = ov_λ(j) × s``, ``ψ̈ = oa_λ(j) × s +
+ov_λ(j) × ψ̇`` (configuration) and ``φ = ψ̇ + ov_j × s`` (velocity), so each column only needs the composite
+inertias ``Ic`` and composite ``Bc = Σ (ov ×* oI - oI ov× + (·) ×* oI ov)`` over subtrees: ``O(nv)`` 6x6
+products, then ``O(nv · depth)`` 6-vector dot products; the ancestors of ``j`` see ``d τ_l = oS_lᵀ dF_j``.
+
+Inner 6x6 loops are written out: calling a compiled helper that is not inlined makes numba count references to
+every array of ``rb`` and ``ws`` (about 0.5 µs); the 6-vector helpers work on tuples and are inlined.
 As in Pinocchio (4.0 and 4.1, measured), RNEA and CRBA include the armature, so ``∂τ/∂a = M``.
 
 Frames.  ``reference`` is ``int(pin.WORLD) = 0``, ``int(pin.LOCAL) = 1`` or ``int(pin.LOCAL_WORLD_ALIGNED) = 2``.
@@ -46,296 +52,299 @@ LOCAL = 1
 LOCAL_WORLD_ALIGNED = 2
 
 
-@compiled
-def _motion_cross_add(m, n, scale, out):
-    """``out += scale · (m × n)`` (``out`` may alias ``m`` or ``n``)."""
-    x = m[4] * n[2] - m[5] * n[1] + m[1] * n[5] - m[2] * n[4]
-    y = m[5] * n[0] - m[3] * n[2] + m[2] * n[3] - m[0] * n[5]
-    z = m[3] * n[1] - m[4] * n[0] + m[0] * n[4] - m[1] * n[3]
-    wx = m[4] * n[5] - m[5] * n[4]
-    wy = m[5] * n[3] - m[3] * n[5]
-    wz = m[3] * n[4] - m[4] * n[3]
-    out[0] += scale * x
-    out[1] += scale * y
-    out[2] += scale * z
-    out[3] += scale * wx
-    out[4] += scale * wy
-    out[5] += scale * wz
+ZERO6 = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
 @compiled
-def _force_cross_add(m, f, scale, out):
-    """``out += scale · (m ×* f)`` (``out`` may alias ``m`` or ``f``)."""
-    x = m[4] * f[2] - m[5] * f[1]
-    y = m[5] * f[0] - m[3] * f[2]
-    z = m[3] * f[1] - m[4] * f[0]
-    nx = m[4] * f[5] - m[5] * f[4] + m[1] * f[2] - m[2] * f[1]
-    ny = m[5] * f[3] - m[3] * f[5] + m[2] * f[0] - m[0] * f[2]
-    nz = m[3] * f[4] - m[4] * f[3] + m[0] * f[1] - m[1] * f[0]
-    out[0] += scale * x
-    out[1] += scale * y
-    out[2] += scale * z
-    out[3] += scale * nx
-    out[4] += scale * ny
-    out[5] += scale * nz
+def _get6(A, i):
+    """Row ``i`` of an ``(n, 6)`` array as a tuple."""
+    return A[i, 0], A[i, 1], A[i, 2], A[i, 3], A[i, 4], A[i, 5]
 
 
 @compiled
-def _inertia_add(inertia, m, scale, out):
-    """``out += scale · inertia @ m`` for a 6x6 ``inertia`` (``out`` must not alias ``m``)."""
-    for r in range(6):
-        acc = 0.0
-        for c in range(6):
-            acc += inertia[r, c] * m[c]
-        out[r] += scale * acc
+def _set6(A, i, m):
+    """``A[i] = m``."""
+    A[i, 0], A[i, 1], A[i, 2], A[i, 3], A[i, 4], A[i, 5] = m
 
 
 @compiled
-def _dot6(a, b):
-    """``aᵀ b`` of two 6-vectors."""
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3] + a[4] * b[4] + a[5] * b[5]
+def _plus(m, n):
+    """``m + n`` of two 6-tuples."""
+    return m[0] + n[0], m[1] + n[1], m[2] + n[2], m[3] + n[3], m[4] + n[4], m[5] + n[5]
 
 
 @compiled
-def _joint_transform(rb, i, q, R, p):
-    """``M_J(q)`` of joint ``i`` into ``R (3, 3)``, ``p (3,)``."""
-    kind = rb.jtype[i]
-    iq = rb.idx_q[i]
-    for r in range(3):
-        p[r] = 0.0
-        for c in range(3):
-            R[r, c] = 1.0 if r == c else 0.0
-    if kind == FREEFLYER:
-        p[0], p[1], p[2] = q[iq], q[iq + 1], q[iq + 2]
-        x, y, z, w = q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6]
-        R[0, 0] = 1.0 - 2.0 * (y * y + z * z)
-        R[0, 1] = 2.0 * (x * y - z * w)
-        R[0, 2] = 2.0 * (x * z + y * w)
-        R[1, 0] = 2.0 * (x * y + z * w)
-        R[1, 1] = 1.0 - 2.0 * (x * x + z * z)
-        R[1, 2] = 2.0 * (y * z - x * w)
-        R[2, 0] = 2.0 * (x * z - y * w)
-        R[2, 1] = 2.0 * (y * z + x * w)
-        R[2, 2] = 1.0 - 2.0 * (x * x + y * y)
-    elif kind == PRISMATIC:
-        for r in range(3):
-            p[r] = rb.axis[i, r] * q[iq]
-    else:
-        if kind == REVOLUTE:
-            c, s = math.cos(q[iq]), math.sin(q[iq])
-        else:  # REVOLUTE_UB: q = [cos θ, sin θ]
-            c, s = q[iq], q[iq + 1]
-        ax, ay, az = rb.axis[i, 0], rb.axis[i, 1], rb.axis[i, 2]
-        t = 1.0 - c
-        R[0, 0] = c + t * ax * ax
-        R[0, 1] = t * ax * ay - s * az
-        R[0, 2] = t * ax * az + s * ay
-        R[1, 0] = t * ax * ay + s * az
-        R[1, 1] = c + t * ay * ay
-        R[1, 2] = t * ay * az - s * ax
-        R[2, 0] = t * ax * az - s * ay
-        R[2, 1] = t * ay * az + s * ax
-        R[2, 2] = c + t * az * az
+def _minus(m, n):
+    """``m - n`` of two 6-tuples."""
+    return m[0] - n[0], m[1] - n[1], m[2] - n[2], m[3] - n[3], m[4] - n[4], m[5] - n[5]
 
 
 @compiled
-def _world_inertia(rb, ws, i):
-    """``ws.oI[i]``: the body inertia of joint ``i`` in the world frame at the origin (6x6)."""
-    R = ws.oR[i]
-    out = ws.oI[i]
-    m = rb.mass[i]
-    cx = ws.op[i, 0] + R[0, 0] * rb.com[i, 0] + R[0, 1] * rb.com[i, 1] + R[0, 2] * rb.com[i, 2]
-    cy = ws.op[i, 1] + R[1, 0] * rb.com[i, 0] + R[1, 1] * rb.com[i, 1] + R[1, 2] * rb.com[i, 2]
-    cz = ws.op[i, 2] + R[2, 0] * rb.com[i, 0] + R[2, 1] * rb.com[i, 1] + R[2, 2] * rb.com[i, 2]
-    for r in range(3):
-        for c in range(3):
-            acc = 0.0
-            for k in range(3):
-                for n in range(3):
-                    acc += R[r, k] * rb.inertia[i, k, n] * R[c, n]
-            out[3 + r, 3 + c] = acc
-            out[r, c] = m if r == c else 0.0
-    # m [c]x in the lower-left block, its transpose (-m [c]x) upper-right, -m [c]x [c]x added to the inertia
-    out[3, 0], out[3, 1], out[3, 2] = 0.0, -m * cz, m * cy
-    out[4, 0], out[4, 1], out[4, 2] = m * cz, 0.0, -m * cx
-    out[5, 0], out[5, 1], out[5, 2] = -m * cy, m * cx, 0.0
-    for r in range(3):
-        for c in range(3):
-            out[c, 3 + r] = out[3 + r, c]
-    out[3, 3] += m * (cy * cy + cz * cz)
-    out[4, 4] += m * (cx * cx + cz * cz)
-    out[5, 5] += m * (cx * cx + cy * cy)
-    out[3, 4] -= m * cx * cy
-    out[4, 3] -= m * cx * cy
-    out[3, 5] -= m * cx * cz
-    out[5, 3] -= m * cx * cz
-    out[4, 5] -= m * cy * cz
-    out[5, 4] -= m * cy * cz
+def _times(m, x):
+    """``x m`` of a 6-tuple and a scalar."""
+    return m[0] * x, m[1] * x, m[2] * x, m[3] * x, m[4] * x, m[5] * x
+
+
+@compiled
+def _unit(c):
+    """The ``c``-th unit 6-tuple."""
+    return (1.0 if c == 0 else 0.0, 1.0 if c == 1 else 0.0, 1.0 if c == 2 else 0.0,
+            1.0 if c == 3 else 0.0, 1.0 if c == 4 else 0.0, 1.0 if c == 5 else 0.0)
+
+
+@compiled
+def _dot(m, n):
+    """``mᵀ n`` of two 6-tuples."""
+    return m[0] * n[0] + m[1] * n[1] + m[2] * n[2] + m[3] * n[3] + m[4] * n[4] + m[5] * n[5]
+
+
+@compiled
+def _mcross(m, n):
+    """``m × n`` of two motions (6-tuples)."""
+    return (
+        m[4] * n[2] - m[5] * n[1] + m[1] * n[5] - m[2] * n[4],
+        m[5] * n[0] - m[3] * n[2] + m[2] * n[3] - m[0] * n[5],
+        m[3] * n[1] - m[4] * n[0] + m[0] * n[4] - m[1] * n[3],
+        m[4] * n[5] - m[5] * n[4],
+        m[5] * n[3] - m[3] * n[5],
+        m[3] * n[4] - m[4] * n[3],
+    )
+
+
+@compiled
+def _fcross(m, f):
+    """``m ×* f`` of a motion and a force (6-tuples)."""
+    return (
+        m[4] * f[2] - m[5] * f[1],
+        m[5] * f[0] - m[3] * f[2],
+        m[3] * f[1] - m[4] * f[0],
+        m[4] * f[5] - m[5] * f[4] + m[1] * f[2] - m[2] * f[1],
+        m[5] * f[3] - m[3] * f[5] + m[2] * f[0] - m[0] * f[2],
+        m[3] * f[4] - m[4] * f[3] + m[0] * f[1] - m[1] * f[0],
+    )
 
 
 @compiled
 def forward_kinematics(rb: RigidBodyModel, ws: RigidBodyWorkspace, q: np.ndarray, v: np.ndarray) -> None:
     """``ws.oR, ws.op`` (``oMi``), ``ws.oS`` (world motion subspace), ``ws.ov``, ``ws.ow`` and ``ws.oI``."""
+    oR, op, oS, ov, ow, oI = ws.oR, ws.op, ws.oS, ws.ov, ws.ow, ws.oI
+    jR, jp, axis, com, Ic = rb.jR, rb.jp, rb.axis, rb.com, rb.inertia
     for r in range(3):
-        ws.op[0, r] = 0.0
+        op[0, r] = 0.0
         for c in range(3):
-            ws.oR[0, r, c] = 1.0 if r == c else 0.0
+            oR[0, r, c] = 1.0 if r == c else 0.0
     for r in range(6):
-        ws.ov[0, r] = 0.0
-        ws.ow[0, r] = 0.0
-    RJ = ws.tmp[0:3, 0:3]
-    A = ws.tmp[3:6, 0:3]
-    pJ = ws.tmp[0, 3:6]
+        ov[0, r] = 0.0
+        ow[0, r] = 0.0
+    parent, jtype, idx_q, idx_v, nvj, mass = rb.parent, rb.jtype, rb.idx_q, rb.idx_v, rb.nvj, rb.mass
+    A = ws.tmp
     for i in range(1, rb.njoints):
-        par = rb.parent[i]
-        _joint_transform(rb, i, q, RJ, pJ)
-        Rp = ws.oR[par]
+        par = parent[i]
+        kind = jtype[i]
+        ax, ay, az = axis[i, 0], axis[i, 1], axis[i, 2]
+        # the joint's own transform M_J(q) (rotation J[0:9] row-major, translation J[9:12])
+        iq = idx_q[i]
+        if kind == FREEFLYER:
+            x, y, z, w = q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6]
+            J = (
+                1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w),
+                2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w),
+                2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y),
+                q[iq], q[iq + 1], q[iq + 2],
+            )
+        elif kind == PRISMATIC:
+            J = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, ax * q[iq], ay * q[iq], az * q[iq])
+        else:
+            if kind == REVOLUTE:
+                c, sn = math.cos(q[iq]), math.sin(q[iq])
+            else:  # REVOLUTE_UB: q = [cos θ, sin θ]
+                c, sn = q[iq], q[iq + 1]
+            t = 1.0 - c
+            J = (
+                c + t * ax * ax, t * ax * ay - sn * az, t * ax * az + sn * ay,
+                t * ax * ay + sn * az, c + t * ay * ay, t * ay * az - sn * ax,
+                t * ax * az - sn * ay, t * ay * az + sn * ax, c + t * az * az,
+                0.0, 0.0, 0.0,
+            )
         for r in range(3):
-            acc = ws.op[par, r]
+            acc = op[par, r]
             for c in range(3):
-                acc += Rp[r, c] * rb.jp[i, c]
-                x = 0.0
-                for k in range(3):
-                    x += Rp[r, k] * rb.jR[i, k, c]
-                A[r, c] = x
-            ws.op[i, r] = acc
+                acc += oR[par, r, c] * jp[i, c]
+                A[r, c] = oR[par, r, 0] * jR[i, 0, c] + oR[par, r, 1] * jR[i, 1, c] + oR[par, r, 2] * jR[i, 2, c]
+            op[i, r] = acc + A[r, 0] * J[9] + A[r, 1] * J[10] + A[r, 2] * J[11]
         for r in range(3):
             for c in range(3):
-                ws.oR[i, r, c] = A[r, 0] * RJ[0, c] + A[r, 1] * RJ[1, c] + A[r, 2] * RJ[2, c]
-            ws.op[i, r] += A[r, 0] * pJ[0] + A[r, 1] * pJ[1] + A[r, 2] * pJ[2]
-        R = ws.oR[i]
-        px, py, pz = ws.op[i, 0], ws.op[i, 1], ws.op[i, 2]
-        iv = rb.idx_v[i]
-        for d in range(rb.nvj[i]):
-            col = ws.oS[iv + d]
+                oR[i, r, c] = A[r, 0] * J[c] + A[r, 1] * J[3 + c] + A[r, 2] * J[6 + c]
+        px, py, pz = op[i, 0], op[i, 1], op[i, 2]
+        iv = idx_v[i]
+        wx = oR[i, 0, 0] * ax + oR[i, 0, 1] * ay + oR[i, 0, 2] * az
+        wy = oR[i, 1, 0] * ax + oR[i, 1, 1] * ay + oR[i, 1, 2] * az
+        wz = oR[i, 2, 0] * ax + oR[i, 2, 1] * ay + oR[i, 2, 2] * az
+        for d in range(nvj[i]):
             lin_x = lin_y = lin_z = ang_x = ang_y = ang_z = 0.0
-            if rb.jtype[i] == FREEFLYER:
+            if kind == FREEFLYER:
                 if d < 3:
-                    lin_x, lin_y, lin_z = R[0, d], R[1, d], R[2, d]
+                    lin_x, lin_y, lin_z = oR[i, 0, d], oR[i, 1, d], oR[i, 2, d]
                 else:
-                    ang_x, ang_y, ang_z = R[0, d - 3], R[1, d - 3], R[2, d - 3]
+                    ang_x, ang_y, ang_z = oR[i, 0, d - 3], oR[i, 1, d - 3], oR[i, 2, d - 3]
+            elif kind == PRISMATIC:
+                lin_x, lin_y, lin_z = wx, wy, wz
             else:
-                ax, ay, az = rb.axis[i, 0], rb.axis[i, 1], rb.axis[i, 2]
-                wx = R[0, 0] * ax + R[0, 1] * ay + R[0, 2] * az
-                wy = R[1, 0] * ax + R[1, 1] * ay + R[1, 2] * az
-                wz = R[2, 0] * ax + R[2, 1] * ay + R[2, 2] * az
-                if rb.jtype[i] == PRISMATIC:
-                    lin_x, lin_y, lin_z = wx, wy, wz
-                else:
-                    ang_x, ang_y, ang_z = wx, wy, wz
-            col[0] = lin_x + py * ang_z - pz * ang_y
-            col[1] = lin_y + pz * ang_x - px * ang_z
-            col[2] = lin_z + px * ang_y - py * ang_x
-            col[3], col[4], col[5] = ang_x, ang_y, ang_z
+                ang_x, ang_y, ang_z = wx, wy, wz
+            k = iv + d
+            oS[k, 0] = lin_x + py * ang_z - pz * ang_y
+            oS[k, 1] = lin_y + pz * ang_x - px * ang_z
+            oS[k, 2] = lin_z + px * ang_y - py * ang_x
+            oS[k, 3], oS[k, 4], oS[k, 5] = ang_x, ang_y, ang_z
         for r in range(6):
             acc = 0.0
-            for d in range(rb.nvj[i]):
-                acc += ws.oS[iv + d, r] * v[iv + d]
-            ws.ow[i, r] = acc
-            ws.ov[i, r] = ws.ov[par, r] + acc
-        _world_inertia(rb, ws, i)
+            for d in range(nvj[i]):
+                acc += oS[iv + d, r] * v[iv + d]
+            ow[i, r] = acc
+            ov[i, r] = ov[par, r] + acc
+        # body inertia at the world origin: [[m, -m[c]x], [m[c]x, R Ic Rᵀ - m [c]x [c]x]], c the world com
+        m = mass[i]
+        cx = px + oR[i, 0, 0] * com[i, 0] + oR[i, 0, 1] * com[i, 1] + oR[i, 0, 2] * com[i, 2]
+        cy = py + oR[i, 1, 0] * com[i, 0] + oR[i, 1, 1] * com[i, 1] + oR[i, 1, 2] * com[i, 2]
+        cz = pz + oR[i, 2, 0] * com[i, 0] + oR[i, 2, 1] * com[i, 1] + oR[i, 2, 2] * com[i, 2]
+        for r in range(3):
+            for c in range(3):
+                A[3 + r, c] = oR[i, r, 0] * Ic[i, 0, c] + oR[i, r, 1] * Ic[i, 1, c] + oR[i, r, 2] * Ic[i, 2, c]
+        for r in range(3):
+            for c in range(3):
+                oI[i, 3 + r, 3 + c] = A[3 + r, 0] * oR[i, c, 0] + A[3 + r, 1] * oR[i, c, 1] + A[3 + r, 2] * oR[i, c, 2]
+                oI[i, r, c] = m if r == c else 0.0
+        oI[i, 3, 0], oI[i, 3, 1], oI[i, 3, 2] = 0.0, -m * cz, m * cy
+        oI[i, 4, 0], oI[i, 4, 1], oI[i, 4, 2] = m * cz, 0.0, -m * cx
+        oI[i, 5, 0], oI[i, 5, 1], oI[i, 5, 2] = -m * cy, m * cx, 0.0
+        for r in range(3):
+            for c in range(3):
+                oI[i, c, 3 + r] = oI[i, 3 + r, c]
+        oI[i, 3, 3] += m * (cy * cy + cz * cz)
+        oI[i, 4, 4] += m * (cx * cx + cz * cz)
+        oI[i, 5, 5] += m * (cx * cx + cy * cy)
+        oI[i, 3, 4] -= m * cx * cy
+        oI[i, 4, 3] -= m * cx * cy
+        oI[i, 3, 5] -= m * cx * cz
+        oI[i, 5, 3] -= m * cx * cz
+        oI[i, 4, 5] -= m * cy * cz
+        oI[i, 5, 4] -= m * cy * cz
 
 
 @compiled
 def _rnea_pass(rb, ws, a, tau):
     """RNEA on the kinematics in ``ws``: ``ws.oa, ws.oh, ws.oIa``, ``ws.of`` (subtree forces), ``tau (nv,)``."""
-    for r in range(6):
-        ws.oa[0, r] = -rb.gravity[r]
+    oS, ov, ow, oa, oI, oh, oIa, of = ws.oS, ws.ov, ws.ow, ws.oa, ws.oI, ws.oh, ws.oIa, ws.of
+    parent, idx_v, nvj, armature = rb.parent, rb.idx_v, rb.nvj, rb.armature
+    g = rb.gravity
+    _set6(oa, 0, (-g[0], -g[1], -g[2], -g[3], -g[4], -g[5]))
     for i in range(1, rb.njoints):
-        par = rb.parent[i]
-        iv = rb.idx_v[i]
-        oa = ws.oa[i]
-        for r in range(6):
-            acc = ws.oa[par, r]
-            for d in range(rb.nvj[i]):
-                acc += ws.oS[iv + d, r] * a[iv + d]
-            oa[r] = acc
-        _motion_cross_add(ws.ov[i], ws.ow[i], 1.0, oa)
-        for r in range(6):
-            ws.oh[i, r] = 0.0
-            ws.oIa[i, r] = 0.0
-        _inertia_add(ws.oI[i], ws.ov[i], 1.0, ws.oh[i])
-        _inertia_add(ws.oI[i], oa, 1.0, ws.oIa[i])
-        for r in range(6):
-            ws.of[i, r] = ws.oIa[i, r]
-        _force_cross_add(ws.ov[i], ws.oh[i], 1.0, ws.of[i])
+        iv = idx_v[i]
+        acc = _get6(oa, parent[i])
+        for d in range(nvj[i]):
+            acc = _plus(acc, _times(_get6(oS, iv + d), a[iv + d]))
+        ovi = _get6(ov, i)
+        acc = _plus(acc, _mcross(ovi, _get6(ow, i)))
+        _set6(oa, i, acc)
+        for r in range(6):  # h = oI ov, oIa = oI oa
+            h_r = ia_r = 0.0
+            for c in range(6):
+                h_r += oI[i, r, c] * ov[i, c]
+                ia_r += oI[i, r, c] * oa[i, c]
+            oh[i, r] = h_r
+            oIa[i, r] = ia_r
+        _set6(of, i, _plus(_get6(oIa, i), _fcross(ovi, _get6(oh, i))))
     for i in range(rb.njoints - 1, 0, -1):
-        iv = rb.idx_v[i]
-        for d in range(rb.nvj[i]):
-            tau[iv + d] = _dot6(ws.oS[iv + d], ws.of[i]) + rb.armature[iv + d] * a[iv + d]
-        par = rb.parent[i]
+        iv = idx_v[i]
+        fi = _get6(of, i)
+        for d in range(nvj[i]):
+            tau[iv + d] = _dot(_get6(oS, iv + d), fi) + armature[iv + d] * a[iv + d]
+        par = parent[i]
         if par > 0:
-            for r in range(6):
-                ws.of[par, r] += ws.of[i, r]
+            _set6(of, par, _plus(_get6(of, par), fi))
 
 
 @compiled
 def _crba(rb, ws):
     """``ws.M``: the joint-space inertia matrix (armature included), from the composite inertias ``ws.oIc``."""
+    M, oS, oI, oIc = ws.M, ws.oS, ws.oI, ws.oIc
     for r in range(rb.nv):
         for c in range(rb.nv):
-            ws.M[r, c] = 0.0
+            M[r, c] = 0.0
     for i in range(rb.njoints):
         for r in range(6):
             for c in range(6):
-                ws.oIc[i, r, c] = ws.oI[i, r, c]
-    F = ws.tmp[0]
+                oIc[i, r, c] = oI[i, r, c]
+    parent, idx_v, nvj, armature = rb.parent, rb.idx_v, rb.nvj, rb.armature
+    tmp = ws.tmp
     for i in range(rb.njoints - 1, 0, -1):
-        iv = rb.idx_v[i]
-        for d in range(rb.nvj[i]):
-            for r in range(6):
-                F[r] = 0.0
-            _inertia_add(ws.oIc[i], ws.oS[iv + d], 1.0, F)
+        iv = idx_v[i]
+        for d in range(nvj[i]):
+            for r in range(6):  # F = oIc_i S
+                x = 0.0
+                for c in range(6):
+                    x += oIc[i, r, c] * oS[iv + d, c]
+                tmp[0, r] = x
+            F = _get6(tmp, 0)
             j = i
             while j > 0:
-                jv = rb.idx_v[j]
-                for e in range(rb.nvj[j]):
-                    x = _dot6(ws.oS[jv + e], F)
-                    ws.M[jv + e, iv + d] = x
-                    ws.M[iv + d, jv + e] = x
-                j = rb.parent[j]
-            ws.M[iv + d, iv + d] += rb.armature[iv + d]
-        par = rb.parent[i]
+                jv = idx_v[j]
+                for e in range(nvj[j]):
+                    x = _dot(_get6(oS, jv + e), F)
+                    M[jv + e, iv + d] = x
+                    M[iv + d, jv + e] = x
+                j = parent[j]
+            M[iv + d, iv + d] += armature[iv + d]
+        par = parent[i]
         if par > 0:
             for r in range(6):
                 for c in range(6):
-                    ws.oIc[par, r, c] += ws.oIc[i, r, c]
+                    oIc[par, r, c] += oIc[i, r, c]
 
 
 @compiled
-def _cholesky(rb, ws):
-    """``ws.L``: lower Cholesky factor of ``ws.M``."""
+def _factor(rb, ws):
+    """``ws.L``: the lower-triangular ``L`` with ``ws.M = Lᵀ L`` and the branch-induced sparsity of ``M``
+    (Featherstone's LTL factorization: no fill-in, ``O(nv · depth²)``)."""
     n = rb.nv
-    L = ws.L
-    for j in range(n):
-        acc = ws.M[j, j]
-        for k in range(j):
-            acc -= L[j, k] * L[j, k]
-        d = math.sqrt(acc)
-        L[j, j] = d
-        for i in range(j + 1, n):
-            x = ws.M[i, j]
-            for k in range(j):
-                x -= L[i, k] * L[j, k]
-            L[i, j] = x / d
-        for i in range(j):
-            L[i, j] = 0.0
+    L, M, dinv, lam = ws.L, ws.M, ws.dinv, rb.dof_parent
+    for r in range(n):
+        for c in range(n):
+            L[r, c] = M[r, c] if c <= r else 0.0
+    for k in range(n - 1, -1, -1):
+        d = math.sqrt(L[k, k])
+        L[k, k] = d
+        dinv[k] = 1.0 / d
+        i = lam[k]
+        while i >= 0:
+            L[k, i] /= d
+            i = lam[i]
+        i = lam[k]
+        while i >= 0:
+            x = L[k, i]
+            j = i
+            while j >= 0:
+                L[i, j] -= x * L[k, j]
+                j = lam[j]
+            i = lam[i]
 
 
 @compiled
-def _cholesky_solve(L, x):
-    """``x ← (L Lᵀ)⁻¹ x`` in place."""
-    n = x.shape[0]
-    for i in range(n):
-        acc = x[i]
-        for k in range(i):
-            acc -= L[i, k] * x[k]
-        x[i] = acc / L[i, i]
-    for i in range(n - 1, -1, -1):
-        acc = x[i]
-        for k in range(i + 1, n):
-            acc -= L[k, i] * x[k]
-        x[i] = acc / L[i, i]
+def _factor_solve(rb, L, dinv, x):
+    """``x ← (Lᵀ L)⁻¹ x`` in place, with the factor of :func:`_factor` and ``dinv = 1 / diag(L)``."""
+    lam = rb.dof_parent
+    for k in range(rb.nv - 1, -1, -1):
+        x[k] *= dinv[k]
+        i = lam[k]
+        while i >= 0:
+            x[i] -= L[k, i] * x[k]
+            i = lam[i]
+    for k in range(rb.nv):
+        i = lam[k]
+        while i >= 0:
+            x[k] -= L[k, i] * x[i]
+            i = lam[i]
+        x[k] *= dinv[k]
 
 
 @compiled
@@ -347,31 +356,37 @@ def forward_dynamics(
     forward_kinematics(rb, ws, q, v)
     _rnea_pass(rb, ws, ws.zero, ws.tau)
     _crba(rb, ws)
-    _cholesky(rb, ws)
+    _factor(rb, ws)
     for k in range(rb.nv):
         a_out[k] = tau[k] - ws.tau[k]
-    _cholesky_solve(ws.L, a_out)
+    _factor_solve(rb, ws.L, ws.dinv, a_out)
 
 
 @compiled
 def mass_inverse(rb: RigidBodyModel, ws: RigidBodyWorkspace, Minv_out: np.ndarray) -> None:
     """``Minv_out (nv, nv) = M⁻¹`` (armature included) from the factor ``ws.L`` of the last
-    :func:`forward_dynamics` (symmetric: the lower triangle is solved and mirrored)."""
+    :func:`forward_dynamics`, one sparse solve per column (``O(nv² · depth)``), then mirrored to be symmetric."""
     n = rb.nv
-    L = ws.L
-    for j in range(n):
-        for i in range(j):
-            Minv_out[i, j] = 0.0
-        for i in range(j, n):
-            acc = 1.0 if i == j else 0.0
-            for k in range(j, i):
-                acc -= L[i, k] * Minv_out[k, j]
-            Minv_out[i, j] = acc / L[i, i]
-        for i in range(n - 1, j - 1, -1):
-            acc = Minv_out[i, j]
-            for k in range(i + 1, n):
-                acc -= L[k, i] * Minv_out[k, j]
-            Minv_out[i, j] = acc / L[i, i]
+    L, lam, dinv, x = ws.L, rb.dof_parent, ws.dinv, Minv_out
+    for j in range(n):  # row j = column j, contiguous
+        for k in range(n):
+            x[j, k] = 0.0
+        x[j, j] = 1.0
+        k = j
+        while k >= 0:  # Lᵀ y = e_j: only the ancestors of j are reached
+            x[j, k] *= dinv[k]
+            i = lam[k]
+            while i >= 0:
+                x[j, i] -= L[k, i] * x[j, k]
+                i = lam[i]
+            k = lam[k]
+        for k in range(n):
+            acc = x[j, k]
+            i = lam[k]
+            while i >= 0:
+                acc -= L[k, i] * x[j, i]
+                i = lam[i]
+            x[j, k] = acc * dinv[k]
     for j in range(n):
         for i in range(j):
             Minv_out[i, j] = Minv_out[j, i]
@@ -385,33 +400,29 @@ def gravity_torque(rb: RigidBodyModel, ws: RigidBodyWorkspace, q: np.ndarray, ou
 
 
 @compiled
-def _subtree_torques(rb, ws, j, k, with_q, out):
-    """Column ``k`` of a RNEA derivative from the tangents ``ws.df`` of the subtree of ``j`` (summed here)."""
-    end = rb.subtree_end[j]
-    for r in range(rb.nv):
-        out[r, k] = 0.0
-    for i in range(end - 1, j, -1):
-        par = rb.parent[i]
-        for r in range(6):
-            ws.df[par, r] += ws.df[i, r]
-    s = ws.oS[k]
-    dS = ws.tmp[3]
-    for i in range(j, end):
-        iv = rb.idx_v[i]
-        for d in range(rb.nvj[i]):
-            x = _dot6(ws.oS[iv + d], ws.df[i])
-            if with_q:
-                for r in range(6):
-                    dS[r] = 0.0
-                _motion_cross_add(s, ws.oS[iv + d], 1.0, dS)
-                x += _dot6(dS, ws.of[i])
-            out[iv + d, k] = x
-    a = rb.parent[j]
-    while a > 0:
-        av = rb.idx_v[a]
-        for d in range(rb.nvj[a]):
-            out[av + d, k] = _dot6(ws.oS[av + d], ws.df[j])
-        a = rb.parent[a]
+def _composite_coriolis(rb, ws):
+    """``ws.oIc``, ``ws.oBc``: composite inertias and composite ``B_i = ov_i ×* oI_i - oI_i (ov_i ×) + (· ×* h_i)``."""
+    oI, oIc, oBc, ov, oh, Mx = ws.oI, ws.oIc, ws.oBc, ws.ov, ws.oh, ws.tmp
+    for i in range(1, rb.njoints):
+        ovi, h = _get6(ov, i), _get6(oh, i)
+        for c in range(6):  # Mx: the matrix of ovi ×, row c holding its column c
+            _set6(Mx, c, _mcross(ovi, _unit(c)))
+        for c in range(6):
+            hx = _fcross(_unit(c), h)
+            for r in range(6):  # (ovi ×*) = -(Mx)ᵀ
+                x = hx[r]
+                for k in range(6):
+                    x -= Mx[r, k] * oI[i, k, c] + oI[i, r, k] * Mx[c, k]
+                oBc[i, r, c] = x
+                oIc[i, r, c] = oI[i, r, c]
+    parent = rb.parent
+    for i in range(rb.njoints - 1, 0, -1):
+        par = parent[i]
+        if par > 0:
+            for r in range(6):
+                for c in range(6):
+                    oIc[par, r, c] += oIc[i, r, c]
+                    oBc[par, r, c] += oBc[i, r, c]
 
 
 @compiled
@@ -425,107 +436,100 @@ def dynamics_derivatives(
     dtau_dv_out: np.ndarray,
 ) -> None:
     """``∂RNEA/∂q`` and ``∂RNEA/∂v`` at ``(q, v, a)`` into ``(nv, nv)`` arrays (``∂/∂a`` is :func:`forward_dynamics`'
-    ``ws.M``).  Runs the kinematics and a RNEA pass itself; leaves ``ws.L`` untouched."""
+    ``ws.M``).  Runs the kinematics and a RNEA pass itself; overwrites ``ws.oIc``, leaves ``ws.M, ws.L``.
+
+    Column ``k`` (dof of joint ``j``, ``s = oS_k``): a dof ``c`` of joint ``l`` in the subtree of ``j`` gets
+    ``S_cᵀ (Ic_l ψ̈ + Bc_l ψ̇)`` and ``S_cᵀ (Bc_l s + Ic_l φ)``, i.e. dot products with ``ws.IcS[c] = Ic_l S_c`` and
+    ``ws.BcS[c] = Bc_lᵀ S_c``; a dof of a strict ancestor the same with ``l = j``, plus ``S_cᵀ (s ×* F_j)`` in q.
+    """
     forward_kinematics(rb, ws, q, v)
     _rnea_pass(rb, ws, a, ws.tau)
-    dw = ws.tmp[0]
-    acc = ws.tmp[1]
-    dh = ws.tmp[2]
+    _composite_coriolis(rb, ws)
+    oS, ov, oa, of, oIc, oBc, Y, Z = ws.oS, ws.ov, ws.oa, ws.of, ws.oIc, ws.oBc, ws.IcS, ws.BcS
+    parent, idx_v, nvj = rb.parent, rb.idx_v, rb.nvj
+    dof_joint, subtree_end = rb.dof_joint, rb.subtree_end
+    tmp = ws.tmp
+    for c in range(rb.nv):
+        l = dof_joint[c]
+        for r in range(6):
+            y = z = 0.0
+            for k in range(6):
+                y += oIc[l, r, k] * oS[c, k]
+                z += oBc[l, k, r] * oS[c, k]
+            Y[c, r] = y
+            Z[c, r] = z
+    for r in range(rb.nv):
+        for c in range(rb.nv):
+            dtau_dq_out[r, c] = 0.0
+            dtau_dv_out[r, c] = 0.0
     for k in range(rb.nv):
-        j = rb.dof_joint[k]
-        s = ws.oS[k]
-        end = rb.subtree_end[j]
-        # configuration tangent
-        for i in range(j, end):
-            par = rb.parent[i]
-            iv = rb.idx_v[i]
-            dvi = ws.dv[i]
-            dai = ws.da[i]
-            for r in range(6):
-                dw[r] = 0.0
-                acc[r] = 0.0
-                for d in range(rb.nvj[i]):
-                    acc[r] += ws.oS[iv + d, r] * a[iv + d]
-                dvi[r] = ws.dv[par, r] if i != j else 0.0
-                dai[r] = ws.da[par, r] if i != j else 0.0
-            _motion_cross_add(s, ws.ow[i], 1.0, dw)
-            for r in range(6):
-                dvi[r] += dw[r]
-            _motion_cross_add(s, acc, 1.0, dai)
-            _motion_cross_add(dvi, ws.ow[i], 1.0, dai)
-            _motion_cross_add(ws.ov[i], dw, 1.0, dai)
-            # dh = s ×* h + oI (dv - s × ov);  df = s ×* oIa + oI (da - s × oa) + dv ×* h + ov ×* dh
-            for r in range(6):
-                acc[r] = dvi[r]
-                dh[r] = 0.0
-            _motion_cross_add(s, ws.ov[i], -1.0, acc)
-            _inertia_add(ws.oI[i], acc, 1.0, dh)
-            _force_cross_add(s, ws.oh[i], 1.0, dh)
-            dfi = ws.df[i]
-            for r in range(6):
-                acc[r] = dai[r]
-                dfi[r] = 0.0
-            _motion_cross_add(s, ws.oa[i], -1.0, acc)
-            _inertia_add(ws.oI[i], acc, 1.0, dfi)
-            _force_cross_add(s, ws.oIa[i], 1.0, dfi)
-            _force_cross_add(dvi, ws.oh[i], 1.0, dfi)
-            _force_cross_add(ws.ov[i], dh, 1.0, dfi)
-        _subtree_torques(rb, ws, j, k, True, dtau_dq_out)
-        # velocity tangent
-        for i in range(j, end):
-            par = rb.parent[i]
-            dvi = ws.dv[i]
-            dai = ws.da[i]
-            for r in range(6):
-                dvi[r] = ws.dv[par, r] if i != j else s[r]
-                dai[r] = ws.da[par, r] if i != j else 0.0
-            _motion_cross_add(dvi, ws.ow[i], 1.0, dai)
-            if i == j:
-                _motion_cross_add(ws.ov[i], s, 1.0, dai)
-            dfi = ws.df[i]
-            for r in range(6):
-                dh[r] = 0.0
-                dfi[r] = 0.0
-            _inertia_add(ws.oI[i], dvi, 1.0, dh)
-            _inertia_add(ws.oI[i], dai, 1.0, dfi)
-            _force_cross_add(dvi, ws.oh[i], 1.0, dfi)
-            _force_cross_add(ws.ov[i], dh, 1.0, dfi)
-        _subtree_torques(rb, ws, j, k, False, dtau_dv_out)
+        j = dof_joint[k]
+        s = _get6(oS, k)
+        ovp = _get6(ov, parent[j])
+        psi_d = _mcross(ovp, s)
+        psi_dd = _plus(_mcross(_get6(oa, parent[j]), s), _mcross(ovp, psi_d))
+        phi = _plus(psi_d, _mcross(_get6(ov, j), s))
+        for c in range(idx_v[j], idx_v[subtree_end[j] - 1] + nvj[subtree_end[j] - 1]):
+            y, z = _get6(Y, c), _get6(Z, c)
+            dtau_dq_out[c, k] = _dot(y, psi_dd) + _dot(z, psi_d)
+            dtau_dv_out[c, k] = _dot(z, s) + _dot(y, phi)
+        i = parent[j]
+        if i == 0:
+            continue
+        _set6(tmp, 0, s)
+        _set6(tmp, 1, psi_d)
+        _set6(tmp, 2, psi_dd)
+        _set6(tmp, 3, phi)
+        for r in range(6):  # gq = Ic_j ψ̈ + Bc_j ψ̇,  gv = Bc_j s + Ic_j φ
+            x = y = 0.0
+            for c in range(6):
+                x += oIc[j, r, c] * tmp[2, c] + oBc[j, r, c] * tmp[1, c]
+                y += oBc[j, r, c] * tmp[0, c] + oIc[j, r, c] * tmp[3, c]
+            tmp[4, r] = x
+            tmp[5, r] = y
+        gq = _plus(_get6(tmp, 4), _fcross(s, _get6(of, j)))
+        gv = _get6(tmp, 5)
+        while i > 0:
+            for d in range(nvj[i]):
+                col = _get6(oS, idx_v[i] + d)
+                dtau_dq_out[idx_v[i] + d, k] = _dot(col, gq)
+                dtau_dv_out[idx_v[i] + d, k] = _dot(col, gv)
+            i = parent[i]
 
 
 @compiled
 def _frame_pose(rb, ws, fid):
     """``ws.Rf, ws.pf``: ``oMf`` of frame ``fid``; returns its parent joint."""
     i = rb.frame_joint[fid]
+    oR, Rf, fR = ws.oR, ws.Rf, rb.fR
+    fp, op, pf = rb.fp, ws.op, ws.pf
     for r in range(3):
-        acc = ws.op[i, r]
+        acc = op[i, r]
         for c in range(3):
-            acc += ws.oR[i, r, c] * rb.fp[fid, c]
-            x = 0.0
-            for k in range(3):
-                x += ws.oR[i, r, k] * rb.fR[fid, k, c]
-            ws.Rf[r, c] = x
-        ws.pf[r] = acc
+            acc += oR[i, r, c] * fp[fid, c]
+            Rf[r, c] = oR[i, r, 0] * fR[fid, 0, c] + oR[i, r, 1] * fR[fid, 1, c] + oR[i, r, 2] * fR[fid, 2, c]
+        pf[r] = acc
     return i
 
 
 @compiled
-def _to_reference(ws, m, reference, out):
-    """``out (6,)``: the world motion ``m`` read in ``reference`` at the frame ``ws.Rf, ws.pf``."""
-    vx, vy, vz, wx, wy, wz = m[0], m[1], m[2], m[3], m[4], m[5]
-    if reference != WORLD:
-        px, py, pz = ws.pf[0], ws.pf[1], ws.pf[2]
-        vx, vy, vz = vx - (py * wz - pz * wy), vy - (pz * wx - px * wz), vz - (px * wy - py * wx)
-    if reference == LOCAL:
-        R = ws.Rf
-        out[0] = R[0, 0] * vx + R[1, 0] * vy + R[2, 0] * vz
-        out[1] = R[0, 1] * vx + R[1, 1] * vy + R[2, 1] * vz
-        out[2] = R[0, 2] * vx + R[1, 2] * vy + R[2, 2] * vz
-        out[3] = R[0, 0] * wx + R[1, 0] * wy + R[2, 0] * wz
-        out[4] = R[0, 1] * wx + R[1, 1] * wy + R[2, 1] * wz
-        out[5] = R[0, 2] * wx + R[1, 2] * wy + R[2, 2] * wz
-    else:
-        out[0], out[1], out[2], out[3], out[4], out[5] = vx, vy, vz, wx, wy, wz
+def _to_reference(R, p, m, reference):
+    """The world motion ``m`` (6-tuple) read in ``reference`` at the frame ``(R (3, 3), p (3,))``."""
+    vx, vy, vz, wx, wy, wz = m
+    if reference == WORLD:
+        return m
+    px, py, pz = p[0], p[1], p[2]
+    vx, vy, vz = vx - (py * wz - pz * wy), vy - (pz * wx - px * wz), vz - (px * wy - py * wx)
+    if reference == LOCAL_WORLD_ALIGNED:
+        return vx, vy, vz, wx, wy, wz
+    return (
+        R[0, 0] * vx + R[1, 0] * vy + R[2, 0] * vz,
+        R[0, 1] * vx + R[1, 1] * vy + R[2, 1] * vz,
+        R[0, 2] * vx + R[1, 2] * vy + R[2, 2] * vz,
+        R[0, 0] * wx + R[1, 0] * wy + R[2, 0] * wz,
+        R[0, 1] * wx + R[1, 1] * wy + R[2, 1] * wz,
+        R[0, 2] * wx + R[1, 2] * wy + R[2, 2] * wz,
+    )
 
 
 @compiled
@@ -542,24 +546,27 @@ def frame_placement(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int, R_out:
 def frame_jacobian(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int, reference: int, J_out: np.ndarray) -> None:
     """``J_out (6, nv)``: the Jacobian of frame ``fid`` in ``reference`` (zero outside its support)."""
     i = _frame_pose(rb, ws, fid)
+    Rf, pf, oS = ws.Rf, ws.pf, ws.oS
+    idx_v, nvj, parent = rb.idx_v, rb.nvj, rb.parent
     for r in range(6):
         for c in range(rb.nv):
             J_out[r, c] = 0.0
-    col = ws.tmp[5]
     while i > 0:
-        iv = rb.idx_v[i]
-        for d in range(rb.nvj[i]):
-            _to_reference(ws, ws.oS[iv + d], reference, col)
+        iv = idx_v[i]
+        for d in range(nvj[i]):
+            col = _to_reference(Rf, pf, _get6(oS, iv + d), reference)
             for r in range(6):
                 J_out[r, iv + d] = col[r]
-        i = rb.parent[i]
+        i = parent[i]
 
 
 @compiled
 def frame_velocity(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int, reference: int, out6: np.ndarray) -> None:
     """``out6 (6,)``: the spatial velocity of frame ``fid`` in ``reference``, linear then angular."""
     i = _frame_pose(rb, ws, fid)
-    _to_reference(ws, ws.ov[i], reference, out6)
+    m = _to_reference(ws.Rf, ws.pf, _get6(ws.ov, i), reference)
+    for r in range(6):
+        out6[r] = m[r]
 
 
 @compiled
@@ -575,31 +582,23 @@ def frame_velocity_derivatives(
     """
     frame_jacobian(rb, ws, fid, reference, dv_dv_out)
     i = rb.frame_joint[fid]
+    Rf, pf, oS, ov = ws.Rf, ws.pf, ws.oS, ws.ov
+    parent, idx_v, nvj = rb.parent, rb.idx_v, rb.nvj
     for r in range(6):
         for c in range(rb.nv):
             dv_dq_out[r, c] = 0.0
-    t = ws.tmp[0]
-    out = ws.tmp[1]
+    ovi = _get6(ov, i)
     j = i
     while j > 0:
-        par = rb.parent[j]
-        jv = rb.idx_v[j]
-        for d in range(rb.nvj[j]):
-            s = ws.oS[jv + d]
-            for r in range(6):
-                t[r] = 0.0
+        par = parent[j]
+        jv = idx_v[j]
+        ovp = _get6(ov, par)
+        for d in range(nvj[j]):
+            s = _get6(oS, jv + d)
             if reference == LOCAL:
-                _motion_cross_add(ws.ov[par], s, 1.0, t)
-                _to_reference(ws, t, LOCAL, out)
+                col = _to_reference(Rf, pf, _mcross(ovp, s), LOCAL)
             else:
-                for r in range(6):
-                    out[r] = ws.ov[i, r] - ws.ov[par, r]
-                _motion_cross_add(s, out, 1.0, t)
-                if reference == WORLD:
-                    for r in range(6):
-                        out[r] = t[r]
-                else:
-                    _to_reference(ws, t, LOCAL_WORLD_ALIGNED, out)
+                col = _to_reference(Rf, pf, _mcross(s, _minus(ovi, ovp)), reference)
             for r in range(6):
-                dv_dq_out[r, jv + d] = out[r]
+                dv_dq_out[r, jv + d] = col[r]
         j = par

@@ -16,6 +16,7 @@ field                    shape                meaning
 ``subtree_end``          ``(njoints,)``       one past the last joint of the subtree of each joint
 ``depth``                ``(njoints,)``       number of moving joints from the root to the joint, itself included
 ``dof_joint``            ``(nv,)``            joint of each velocity index
+``dof_parent``           ``(nv,)``            previous velocity index on the path to the root (``-1``: none)
 ``jR jp``                ``(njoints, 3, 3)``, joint placement in its parent (``model.jointPlacements``)
                          ``(njoints, 3)``
 ``mass com inertia``     ``(njoints,)``,      body inertia in the joint frame: mass, centre of mass, rotational
@@ -54,6 +55,7 @@ class RigidBodyModel(NamedTuple):
     subtree_end: np.ndarray
     depth: np.ndarray
     dof_joint: np.ndarray
+    dof_parent: np.ndarray
     jR: np.ndarray
     jp: np.ndarray
     mass: np.ndarray
@@ -70,14 +72,15 @@ class RigidBodyWorkspace(NamedTuple):
     """Preallocated arrays the kernels write into; every spatial quantity is in the world frame.
 
     ``oR (njoints, 3, 3)``, ``op (njoints, 3)``: joint placements ``oMi``.  ``oS (nv, 6)``: motion subspace
-    columns, one row per velocity index.  ``ov oa (njoints, 6)``: spatial velocities and accelerations
-    (at the world origin).  ``ow (njoints, 6)``: joint motion ``oS_i v_i``.  ``oI (njoints, 6, 6)``: body
-    spatial inertias.  ``oh (njoints, 6)``: momenta ``oI ov``; ``oIa (njoints, 6)``: ``oI oa``.
-    ``of (njoints, 6)``: after a RNEA pass, the force each joint transmits (its subtree's net force).
-    ``oIc (njoints, 6, 6)``: composite inertias.  ``M (nv, nv)``: mass matrix, armature included (as
-    ``pinocchio.crba``); ``L (nv, nv)``: its lower Cholesky factor.  ``tau zero (nv,)``: scratch and a
-    zero vector.  ``dv da df (njoints, 6)``: tangents for the derivative kernels.  ``tmp (6, 6)``, ``Rf (3, 3)``,
-    ``pf (3,)``: scratch (``Rf, pf``: the last frame placement a frame kernel computed).
+    columns, one row per velocity index.  ``ov oa (njoints, 6)``: spatial velocities and accelerations (at the
+    world origin).  ``ow (njoints, 6)``: joint motion ``oS_i v_i``.  ``oI (njoints, 6, 6)``: body spatial
+    inertias.  ``oh (njoints, 6)``: momenta ``oI ov``; ``oIa (njoints, 6)``: ``oI oa``.  ``of (njoints, 6)``:
+    after a RNEA pass, the force each joint transmits (its subtree's net force).  ``oIc oBc (njoints, 6, 6)``:
+    composite inertias and composite Coriolis maps; ``IcS BcS (nv, 6)``: ``Ic S`` and ``Bcᵀ S`` per dof (the
+    last two for the derivatives).  ``M (nv, nv)``: mass matrix, armature included (as ``pinocchio.crba``);
+    ``L (nv, nv)``: lower triangular, ``M = Lᵀ L``; ``dinv (nv,)``: ``1 / diag(L)``.  ``tau zero (nv,)``:
+    scratch and a zero vector.  ``tmp (6, 6)``, ``Rf (3, 3)``, ``pf (3,)``: scratch (``Rf, pf``: the last frame
+    placement a frame kernel computed).
     """
 
     oR: np.ndarray
@@ -91,13 +94,14 @@ class RigidBodyWorkspace(NamedTuple):
     oIa: np.ndarray
     of: np.ndarray
     oIc: np.ndarray
+    oBc: np.ndarray
+    IcS: np.ndarray
+    BcS: np.ndarray
     M: np.ndarray
     L: np.ndarray
+    dinv: np.ndarray
     tau: np.ndarray
     zero: np.ndarray
-    dv: np.ndarray
-    da: np.ndarray
-    df: np.ndarray
     tmp: np.ndarray
     Rf: np.ndarray
     pf: np.ndarray
@@ -129,8 +133,14 @@ def lower_model(model: object) -> RigidBodyModel:
         if inside != list(range(i, subtree_end[i])):
             raise NotLowerable(f"the subtree of joint {model.names[i]!r} is not a contiguous range of joints")
     dof_joint = np.zeros(nv, dtype=np.int64)
+    dof_parent = np.full(nv, -1, dtype=np.int64)
     for i in range(1, njoints):
         dof_joint[idx_v[i] : idx_v[i] + nvj[i]] = i
+        dof_parent[idx_v[i] + 1 : idx_v[i] + nvj[i]] = np.arange(idx_v[i], idx_v[i] + nvj[i] - 1)
+        if parent[i] > 0:
+            dof_parent[idx_v[i]] = idx_v[parent[i]] + nvj[parent[i]] - 1
+        if dof_parent[idx_v[i]] >= idx_v[i]:
+            raise NotLowerable(f"joint {model.names[i]!r} has a velocity index before its parent's")
     placements = list(model.jointPlacements)
     inertias = list(model.inertias)
     frames = list(model.frames)
@@ -148,6 +158,7 @@ def lower_model(model: object) -> RigidBodyModel:
         subtree_end=subtree_end,
         depth=depth,
         dof_joint=dof_joint,
+        dof_parent=dof_parent,
         jR=np.array([m.rotation for m in placements], dtype=float).reshape(njoints, 3, 3),
         jp=np.array([m.translation for m in placements], dtype=float).reshape(njoints, 3),
         mass=np.array([b.mass for b in inertias], dtype=float),
@@ -183,13 +194,14 @@ def make_workspace(rb: RigidBodyModel) -> RigidBodyWorkspace:
         oIa=np.zeros((n, 6)),
         of=np.zeros((n, 6)),
         oIc=np.zeros((n, 6, 6)),
+        oBc=np.zeros((n, 6, 6)),
+        IcS=np.zeros((nv, 6)),
+        BcS=np.zeros((nv, 6)),
         M=np.zeros((nv, nv)),
         L=np.zeros((nv, nv)),
+        dinv=np.zeros(nv),
         tau=np.zeros(nv),
         zero=np.zeros(nv),
-        dv=np.zeros((n, 6)),
-        da=np.zeros((n, 6)),
-        df=np.zeros((n, 6)),
         tmp=np.zeros((6, 6)),
         Rf=np.zeros((3, 3)),
         pf=np.zeros(3),
