@@ -204,3 +204,22 @@ def test_parameters_are_read_again_at_each_refresh():
     iam.calcDiff(slow, x, u)
     assert data.cost == pytest.approx(slow.cost, rel=1e-10)
     np.testing.assert_allclose(data.Lx, slow.Lx, rtol=1e-8, atol=1e-10)
+
+
+def test_the_kernel_rebuilds_the_lowered_model_and_workspace_from_the_table():
+    """Entry by entry, the arrays the kernel views are the node's own (same memory, shapes and values)."""
+    from crocopy.models.rbd import euler_node_kernel as kernel
+
+    iam, state = node("anymal", ("state", "control"))
+    data = iam.createData()
+    evaluator = iam._compiled_node(data, False, {})
+    rb = kernel._model(evaluator.tbl, evaluator.ints)
+    ws = kernel._workspace(evaluator.tbl, evaluator.ints)
+    reference = evaluator._lowered.rb
+    assert rb[:4] == reference[:4]
+    for name in rb._fields[4:]:
+        expected = evaluator.armature if name == "armature" else getattr(reference, name)
+        np.testing.assert_array_equal(getattr(rb, name), expected, err_msg=name)
+    for name in ws._fields:
+        mine, theirs = getattr(ws, name), getattr(evaluator.workspace, name)
+        assert mine.shape == theirs.shape and mine.ctypes.data == theirs.ctypes.data, name

@@ -96,9 +96,9 @@ def _model(tbl, ints):
         ints[NQ], ints[NV], ints[NJOINTS], ints[NFRAMES],
         _index(tbl, ints, 0), _index(tbl, ints, 1), _index(tbl, ints, 2), _index(tbl, ints, 3),
         _mat(tbl, ints, 4), _index(tbl, ints, 5), _index(tbl, ints, 6), _index(tbl, ints, 7),
-        _index(tbl, ints, 8), _cube(tbl, ints, 9), _mat(tbl, ints, 10), _vec(tbl, ints, 11),
-        _mat(tbl, ints, 12), _cube(tbl, ints, 13), _index(tbl, ints, 14), _cube(tbl, ints, 15),
-        _mat(tbl, ints, 16), _vec(tbl, ints, 17), _vec(tbl, ints, 18),
+        _index(tbl, ints, 8), _index(tbl, ints, 9), _cube(tbl, ints, 10), _mat(tbl, ints, 11),
+        _vec(tbl, ints, 12), _mat(tbl, ints, 13), _cube(tbl, ints, 14), _index(tbl, ints, 15),
+        _cube(tbl, ints, 16), _mat(tbl, ints, 17), _vec(tbl, ints, 18), _vec(tbl, ints, 19),
     )
 
 
@@ -109,10 +109,10 @@ def _workspace(tbl, ints):
     return RigidBodyWorkspace(
         _cube(tbl, ints, k), _mat(tbl, ints, k + 1), _mat(tbl, ints, k + 2), _mat(tbl, ints, k + 3),
         _mat(tbl, ints, k + 4), _mat(tbl, ints, k + 5), _cube(tbl, ints, k + 6), _mat(tbl, ints, k + 7),
-        _mat(tbl, ints, k + 8), _mat(tbl, ints, k + 9), _cube(tbl, ints, k + 10), _mat(tbl, ints, k + 11),
-        _mat(tbl, ints, k + 12), _vec(tbl, ints, k + 13), _vec(tbl, ints, k + 14), _mat(tbl, ints, k + 15),
-        _mat(tbl, ints, k + 16), _mat(tbl, ints, k + 17), _mat(tbl, ints, k + 18), _mat(tbl, ints, k + 19),
-        _vec(tbl, ints, k + 20),
+        _mat(tbl, ints, k + 8), _mat(tbl, ints, k + 9), _cube(tbl, ints, k + 10), _cube(tbl, ints, k + 11),
+        _mat(tbl, ints, k + 12), _mat(tbl, ints, k + 13), _mat(tbl, ints, k + 14), _mat(tbl, ints, k + 15),
+        _vec(tbl, ints, k + 16), _vec(tbl, ints, k + 17), _vec(tbl, ints, k + 18), _mat(tbl, ints, k + 19),
+        _mat(tbl, ints, k + 20), _vec(tbl, ints, k + 21),
     )
 
 
