@@ -116,3 +116,20 @@ def test_mixed_problem_compiles_the_nodes_it_can():
     reference, _ = solve("quad-goal", "SolverFDDP", False, maxiter=30)
     assert fast.iter == reference.iter
     assert fast.cost == pytest.approx(reference.cost, rel=1e-9)
+
+
+def test_a_diverging_solve_stops_as_without_compiled_nodes():
+    """Overflowing rollouts (a far too long time step) are rejected and the solve keeps a finite iterate."""
+    outcomes = []
+    for compiled in (True, False):
+        problem, xs, us = registry.build("quad-goal")
+        for m in problem.runningModels:
+            m.dt = 50.0
+        cls = crocopy.SolverFDDP if compiled else type("Uncompiled", (crocopy.SolverFDDP,), {"_nodes_compiled": False})
+        s = cls(problem)
+        solved = s.solve(xs, us, 20)
+        assert all(np.isfinite(x).all() for x in s.xs) and all(np.isfinite(u).all() for u in s.us)
+        assert np.isfinite(s.cost)
+        outcomes.append((solved, s.iter, s.reason))
+    assert outcomes[0] == outcomes[1]
+    assert outcomes[0][0] is False and "non-finite" in outcomes[0][2]
