@@ -23,9 +23,13 @@ derive once from shared models).  Today the Euler-integrated free forward dynami
 a multibody system with residual costs has one (:mod:`crocopy.models.rbd.euler_node`).
 
 Inside ``solve`` those evaluators replace ``model.calc``/``model.calcDiff`` in the derivatives and the
-rollout.  They write only the action data fields above, not the nested datas (differential, costs,
-residuals, Pinocchio data): when ``solve`` returns, one ``problem.calc`` and ``problem.calcDiff`` at the
-final iterate fill every data exactly as a solve without compiled nodes leaves them.  The compiled
+rollout.  They write the action data fields above, and the arrays the nested datas share with them (the
+differential data's ``xout``, ``Fx``, ``Fu``, ``Lx`` ... and the cost stack's residuals, Jacobians and
+activation derivatives), not the rest of the nested datas (Pinocchio data, a residual's own
+intermediates).  When ``solve`` returns, one ``problem.calc`` at the final iterate fills every value as
+a solve without compiled nodes leaves them; the derivatives are, as without compiled nodes, those of
+the iterate the last direction was computed at, except the Pinocchio data's derivative fields and the
+residuals' private intermediates (frame Jacobians), which compiled nodes do not write.  The compiled
 nodes are used only while :func:`crocopy.kernels_enabled`, by the solver classes that declare
 ``_nodes_compiled = True`` in their own body (DDP, FDDP, Box-DDP, Box-FDDP; a subclass may read nested
 datas mid-solve, so it opts in explicitly), and when every callback is one of crocopy's (a user

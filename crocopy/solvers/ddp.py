@@ -211,7 +211,6 @@ class SolverDDP(SolverAbstract):
             compiled, self._nodes = self._nodes is not None, None
         if compiled:
             self.problem.calc(self.xs, self.us)
-            self.problem.calcDiff(self.xs, self.us)
         return solved
 
     def _iterate(self, maxiter: int) -> bool:
