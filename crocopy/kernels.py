@@ -16,6 +16,8 @@ Each kernel lives beside its twin:
                                        ``accumulate`` and their ``*_numpy`` twins
 ``integrators/euler_kernel.py``        ``euler_step``, ``euler_chain``, ``add_integrate_jacobian``
                                        and their ``*_numpy`` twins
+``models/rbd/euler_node_kernel.py``    a whole Euler node of free forward dynamics (twin: the node's
+                                       Python path; see :mod:`crocopy.solvers.compiled_nodes`)
 =====================================  ==========================================================
 
 One setting chooses between them for the whole library (default: on when numba is installed)::
