@@ -223,3 +223,18 @@ def test_the_kernel_rebuilds_the_lowered_model_and_workspace_from_the_table():
     for name in ws._fields:
         mine, theirs = getattr(ws, name), getattr(evaluator.workspace, name)
         assert mine.shape == theirs.shape and mine.ctypes.data == theirs.ctypes.data, name
+
+
+def test_a_changed_pinocchio_model_is_read_again_at_the_next_solve():
+    iam, state = node("iris", ("state", "placement", "control"))
+    data, slow = iam.createData(), iam.createData()
+    x, u = point(state, iam.nu, 4)
+    iam._compiled_node(data, False, {}).calcDiff(x, u, False)
+    state.pinocchio.gravity = pin.Motion(np.array([0.0, 0.0, -3.7]), np.zeros(3))
+    state.pinocchio.inertias[1].mass = 2.5
+    evaluator = iam._compiled_node(data, False, {})
+    evaluator.calcDiff(x, u, False)
+    iam.calc(slow, x, u)
+    iam.calcDiff(slow, x, u)
+    np.testing.assert_allclose(data.xnext, slow.xnext, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(data.Fu, slow.Fu, rtol=1e-10, atol=1e-12)

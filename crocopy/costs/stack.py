@@ -149,6 +149,16 @@ class CostStack:
         self._seen.filled()
         self._terminal = terminal
 
+    def refresh_if_stale(self, terminal: bool) -> bool:
+        """:meth:`refresh` when the node kind changed or a parameter was touched since; True if it did."""
+        seen = self._seen
+        if self._terminal != terminal or (
+            seen.value != ParametersVersion.value and seen.stale(self._parameter_owners)
+        ):
+            self.refresh(terminal)
+            return True
+        return False
+
     def _parameter_owners(self):
         """Every object whose parameters :meth:`refresh` reads: items, activations, activation bounds."""
         for _, item, _ in self.items:

@@ -15,7 +15,8 @@ that has re-read the model's parameters (references, weights, time step) and has
 * optionally, on its class, ``horizon(evaluators) -> rollout``: when every running node has an evaluator of
   that class, ``rollout(xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs, alpha, gaps, gap_at) -> (total,
   costs)`` runs those rollout steps for ``t = 0 .. T-1`` in one call (``gap_at``: the one node whose gap
-  stays open besides ``gaps``, -1 for none); the caller stores ``costs[t]`` in the datas;
+  stays open besides ``gaps``, -1 for none), and ``rollout.calc_diff(xs, us, fs, gaps) -> (total, costs)``
+  their ``calcDiff`` (and the gaps ``fs[1:]`` when ``gaps``); the caller stores ``costs[t]`` in the datas;
 
 or ``None`` (models without the method, or nodes it cannot compile).  ``terminal`` tells whether the node is the
 problem's terminal node; ``memo`` is a dictionary shared by the nodes of one solve (for what they
@@ -81,8 +82,17 @@ class CompiledNodes:
         problem.cost = cost
         return cost
 
-    def calcDiff(self, problem, xs, us, synced: bool) -> float:
-        """Derivatives (and values, unless ``synced``) of every node; returns the total cost."""
+    def calcDiff(self, problem, xs, us, synced: bool, fs: list | None = None) -> float:
+        """Derivatives (and values, unless ``synced``) of every node; returns the total cost.  With ``fs``,
+        also the gaps ``fs[t+1] = xnext_t ⊖ xs[t+1]`` (``fs[0]`` is the caller's)."""
+        if self.horizon is not None:
+            cost, costs = self.horizon.calc_diff(xs, us, fs, fs is not None)
+            for d, c in zip(problem.runningDatas, costs):
+                d.cost = c
+            self.calc_diffs[-1](xs[-1], None, synced)
+            cost += problem.terminalData.cost
+            problem.cost = cost
+            return cost
         cost = 0.0
         for calc_diff, d, x, u in zip(self.calc_diffs, problem.runningDatas, xs, us):
             calc_diff(x, u, synced)
@@ -90,6 +100,9 @@ class CompiledNodes:
         self.calc_diffs[-1](xs[-1], None, synced)
         cost += problem.terminalData.cost
         problem.cost = cost
+        if fs is not None:
+            for t, (m, d) in enumerate(zip(problem.runningModels, problem.runningDatas)):
+                m.state._diff_into(xs[t + 1], d.xnext, fs[t + 1])
         return cost
 
 

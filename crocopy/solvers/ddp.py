@@ -349,8 +349,9 @@ class SolverDDP(SolverAbstract):
     def calcDiff(self) -> float:
         """Evaluate (if needed) and differentiate every node at the current iterate; update the gaps."""
         problem = self.problem
-        if self._nodes is not None:
-            self.cost = self._nodes.calcDiff(problem, self.xs, self.us, self._synced)
+        nodes = self._nodes
+        if nodes is not None:
+            self.cost = nodes.calcDiff(problem, self.xs, self.us, self._synced, None if self.isFeasible else self.fs)
         else:
             if not self._synced:
                 problem.calc(self.xs, self.us)
@@ -362,6 +363,9 @@ class SolverDDP(SolverAbstract):
             for f in self.fs:
                 f[:] = 0.0
             self.ffeas = 0.0
+        elif nodes is not None:
+            self.fs[0][:] = problem.runningModels[0].state.diff(self.xs[0], problem.x0) if problem.T else 0.0
+            self.ffeas = self._norm(self.fs)
         else:
             self.computeDynamicFeasibility()
         self.computeInequalityFeasibility()

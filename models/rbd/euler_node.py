@@ -70,16 +70,41 @@ class Lowered:
         self.rb = rb
         self.addresses, self.shapes = table_entries([getattr(rb, name) for name in rb._fields[4:]])
 
+    def update(self, rb: RigidBodyModel) -> bool:
+        """Copy ``rb``'s values into this model's arrays (their addresses stay); False if a size differs."""
+        names = self.rb._fields[4:]
+        if tuple(self.rb[:4]) != tuple(rb[:4]) or any(getattr(self.rb, n).shape != getattr(rb, n).shape for n in names):
+            return False
+        for name in names:
+            np.copyto(getattr(self.rb, name), getattr(rb, name))
+        return True
+
+
+_LOWERED: dict[int, tuple[pin.Model, Lowered]] = {}
+"""``id(model)`` → the model and its :class:`Lowered`, whose arrays are rewritten at each solve."""
+
 
 def lowered(model: pin.Model, memo: dict) -> Lowered | None:
-    """``lower_model(model)``, once per model and ``memo`` (one solve); None if it does not lower."""
+    """The lowered ``model``, its values read once per ``memo`` (one solve) into arrays that keep their
+    addresses from solve to solve; None if it does not lower."""
     key = id(model)
-    if key not in memo:
-        try:
-            memo[key] = Lowered(lower_model(model))
-        except NotLowerable:
-            memo[key] = None
-    return memo[key]
+    if key in memo:
+        return memo[key]
+    try:
+        rb = lower_model(model)
+    except NotLowerable:
+        memo[key] = None
+        return None
+    cached = _LOWERED.get(key)
+    if cached is not None and cached[0] is model and cached[1].update(rb):
+        low = cached[1]
+    else:
+        if len(_LOWERED) > 16:
+            _LOWERED.clear()
+        low = Lowered(rb)
+        _LOWERED[key] = (model, low)
+    memo[key] = low
+    return low
 
 
 def table_entries(arrays: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -103,7 +128,7 @@ def euler_node(iam, data, terminal: bool, memo: dict) -> EulerNode | None:
     if node is None or node.model is not iam or node.terminal != terminal or node.nv != low.rb.nv:
         node = EulerNode(iam, data, terminal, low.rb)
         _NODES[data] = node
-    return node if node.refresh(low) else None
+    return node if node.refresh(low, memo) else None
 
 
 def _address(array: np.ndarray) -> int:
@@ -140,17 +165,38 @@ class EulerNode:
         self._workspace_entries = table_entries(list(self.workspace))
         self._data_arrays: list = []
         self._data_entries = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
+        self._residuals: list | None = None
+        self._items: list = []
+        self._lowered: Lowered | None = None
 
-    def refresh(self, low: Lowered) -> bool:
-        """Re-read the models' parameters and the data arrays' addresses; False if the node no longer qualifies."""
+    def refresh(self, low: Lowered, memo: dict) -> bool:
+        """Re-read the models' parameters and the data arrays' addresses; False if the node no longer qualifies.
+
+        The cost stack's items are read again only when the stack's parameters were touched (its
+        :meth:`~crocopy.costs.stack.CostStack.refresh_if_stale`); the references, the time step, the
+        armature and ``S`` at every call; the table only when an array it lists changed."""
         data = self._data()
         iam = self.model
         dam, ddata = iam.differential, data.differential
         stack = ddata.costs.stack
-        stack.refresh(self.terminal)
+        changed = stack.refresh_if_stale(self.terminal) or self._residuals is None
+        if changed and not self._read_items(stack, ddata):
+            return False
+        par = [float(iam.dt)]
+        for kind, residual in self._residuals:
+            par += self._parameters(kind, residual)
+        self.par = np.array(par)
+        np.add(low.rb.armature, dam.armature, out=self.armature)
+        self._actuation_matrix(dam, ddata, memo)
+        self._table(low, data, ddata, stack, changed)
+        return True
+
+    def _read_items(self, stack, ddata) -> bool:
+        """The compiled items of the cost stack (kind, rows, frame, reference frame, parameter offset)."""
+        self._residuals = None
         if stack.unfused or ddata.costs.generic:
             return False
-        items, par = [], [float(iam.dt)]
+        items, residuals, offset = [], [], 1
         for (_, item, cdata), rows in zip(stack.items, stack.slices):
             if type(item.cost) is not CostModelResidual:
                 return False
@@ -160,17 +206,16 @@ class EulerNode:
             kind = KINDS.get(type(residual))
             if kind is None:
                 return False
-            items += [kind, rows.start, rows.stop - rows.start, getattr(residual, "id", 0), 0, len(par)]
-            par += self._parameters(kind, residual, items)
-        np.add(low.rb.armature, dam.armature, out=self.armature)
-        self._actuation_matrix(dam, ddata)
-        self.par = np.array(par)
-        self._table(low, data, ddata, stack, items)
+            reference = int(residual.type) if kind == kernel.VELOCITY else 0
+            items += [kind, rows.start, rows.stop - rows.start, getattr(residual, "id", 0), reference, offset]
+            residuals.append((kind, residual))
+            offset += len(self._parameters(kind, residual))
+        self._items, self._residuals = items, residuals
         return True
 
     @staticmethod
-    def _parameters(kind: int, residual, items: list) -> list[float]:
-        """The residual's reference in the layout :mod:`.euler_node_kernel` reads (``items[-2]``: its frame type)."""
+    def _parameters(kind: int, residual) -> list[float]:
+        """The residual's reference in the layout :mod:`.euler_node_kernel` reads."""
         if kind == kernel.STATE:
             return list(residual.xref)
         if kind == kernel.CONTROL:
@@ -182,20 +227,22 @@ class EulerNode:
             return list(residual.reference)
         if kind == kernel.ROTATION:
             return list(np.asarray(residual.reference).T.reshape(-1))
-        items[-2] = int(residual.type)
         return list(residual.reference.vector)
 
-    def _actuation_matrix(self, dam, ddata) -> None:
-        """``S = ∂τ/∂u`` of the (linear, state-independent) actuation."""
+    def _actuation_matrix(self, dam, ddata, memo: dict) -> None:
+        """``S = ∂τ/∂u`` of the (linear, state-independent) actuation, once per actuation and ``memo``."""
         if self.terminal:
             return
-        act = ddata.multibody.actuation
-        x, u = dam.state.zero(), np.zeros(dam.nu)
-        dam.actuation.calc(act, x, u)
-        dam.actuation.calcDiff(act, x, u)
-        self.scratch["S"][:] = act.dtau_du
+        key = ("S", id(dam.actuation))
+        if key not in memo:
+            act = ddata.multibody.actuation
+            x, u = dam.state.zero(), np.zeros(dam.nu)
+            dam.actuation.calc(act, x, u)
+            dam.actuation.calcDiff(act, x, u)
+            memo[key] = act.dtau_du.copy()
+        self.scratch["S"][:] = memo[key]
 
-    def _table(self, low: Lowered, data, ddata, stack, items: list) -> None:
+    def _table(self, low: Lowered, data, ddata, stack, changed: bool) -> None:
         """The addresses and dimensions of every array the kernels read or write, and the integer program.
 
         Entries: the lowered model's arrays (the armature is this node's, model's plus dynamics'), the
@@ -216,6 +263,9 @@ class EulerNode:
         if len(known) != len(arrays) or any(a is not b for a, b in zip(arrays, known)):
             self._data_entries = table_entries(arrays)
             self._data_arrays = arrays
+        elif not changed and low is self._lowered:
+            return
+        items = self._items
         rb = low.rb
         armature = kernel.RB_ARMATURE
         parts = [(low.addresses[:armature], low.shapes[:3 * armature]), self._armature_entry,
@@ -283,7 +333,8 @@ class AddressCache:
 
 class EulerHorizon:
     """The rollout of the DDP family over running Euler nodes (:func:`.euler_node_kernel.horizon_rollout`):
-    ``rollout(xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs, alpha, gaps, gap_at) -> (total, costs)``."""
+    ``rollout(xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs, alpha, gaps, gap_at) -> (total, costs)``;
+    and their derivatives with the gaps, ``calc_diff(xs, us, fs, gaps) -> (total, costs)``."""
 
     def __init__(self, nodes: list[EulerNode]) -> None:
         self.tbls = np.stack([n.tbl for n in nodes])
@@ -294,6 +345,7 @@ class EulerHorizon:
         self.nus = np.array([n.model.nu for n in nodes], dtype=np.int64)
         self.nx, self.ndx = nodes[0].model.state.nx, nodes[0].model.state.ndx
         self.costs = np.zeros(len(nodes))
+        self.no_gaps = np.zeros(len(nodes) + 1, dtype=np.int64)
         self.fixed = [AddressCache() for _ in range(6)]
         self.trajectories: dict[int, AddressCache] = {}
 
@@ -305,6 +357,16 @@ class EulerHorizon:
                 self.trajectories.clear()
             cache = self.trajectories[id(arrays)] = AddressCache()
         return cache(arrays)
+
+    def calc_diff(self, xs, us, fs, gaps: bool) -> tuple[float, list[float]]:
+        """Every running node's values and derivatives (and the gaps ``fs[1:]`` when ``gaps``):
+        :func:`.euler_node_kernel.horizon_calc_diff`; returns ``(total, costs)``."""
+        trajectory = self._trajectory
+        total = kernel.horizon_calc_diff(
+            self.tbls, self.ints, self.ioff, self.par, self.poff, trajectory(xs), trajectory(us), self.nus, self.nx,
+            self.ndx, gaps, self.fixed[3](fs) if gaps else self.no_gaps, self.costs,
+        )
+        return total, self.costs.tolist()
 
     def __call__(self, xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs, alpha: float, gaps: bool,
                  gap_at: int) -> tuple[float, list[float]]:

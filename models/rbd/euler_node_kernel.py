@@ -357,6 +357,26 @@ def horizon_rollout(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, ks
 
 
 @compiled
+def horizon_calc_diff(tbls, ints, ioff, par, poff, xs, us, nus, nx, ndx, gaps, fs, costs):
+    """:func:`node_calc_diff` over the running nodes ``t = 0 .. T-1`` in one call (tables as in
+    :func:`horizon_rollout`); returns the sum of their costs (each into ``costs[t]``).  With ``gaps``, also
+    the gaps ``fs[t+1] = xnext_t ⊖ xs[t+1]``."""
+    total = 0.0
+    for t in range(tbls.shape[0]):
+        tbl, node_ints = tbls[t], ints[ioff[t]: ioff[t + 1]]
+        x = carray(float64_pointer(xs[t]), (nx,))
+        cost = node_calc_diff(tbl, node_ints, par[poff[t]: poff[t + 1]], x, carray(float64_pointer(us[t]), (nus[t],)))
+        costs[t] = cost
+        total += cost
+        if gaps:
+            rb = _model(tbl, node_ints)
+            x_next = carray(float64_pointer(xs[t + 1]), (nx,))
+            state_diff(rb.jtype, rb.idx_q, rb.idx_v, node_ints[NQ], node_ints[NV], x_next,
+                       _vec(tbl, node_ints, E_XNEXT), carray(float64_pointer(fs[t + 1]), (ndx,)))
+    return total
+
+
+@compiled
 def _dynamics_jacobians(tbl, ints, x, rb, ws):
     """``dFx = -(M + diag ε)⁻¹ ∂RNEA/∂(q, v)`` and ``dFu = (M + diag ε)⁻¹ S`` at the last ``calc`` point."""
     nq, nv, nu = ints[NQ], ints[NV], ints[NU]
