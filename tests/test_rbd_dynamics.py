@@ -154,15 +154,6 @@ def test_free_dynamics_derivatives_from_rnea_derivatives(robot, seed):
 
 
 @per_robot
-def test_gravity_torque(robot, seed):
-    model, data, rb, ws = lowered(robot)
-    q = state(model, seed)[0]
-    g = np.zeros(model.nv)
-    K.gravity_torque(rb, ws, q, g)
-    close(g, pin.computeGeneralizedGravity(model, data, q))
-
-
-@per_robot
 def test_frames(robot, seed):
     """Placement, Jacobian, velocity and velocity derivatives of every frame, in the three references."""
     model, data, rb, ws = lowered(robot)
@@ -197,7 +188,7 @@ def test_reference_codes_are_pinocchios():
 @numba.njit
 def _node(rb, ws, q, v, tau, fid, out):
     """A compiled caller, as a compiled node will be: every kernel called from inside numba."""
-    acc, Minv, dq, dv, J, Jq, Jv, R, p, vel, g = out
+    acc, Minv, dq, dv, J, Jq, Jv, R, p, vel = out
     K.forward_dynamics(rb, ws, q, v, tau, acc)
     K.mass_inverse(rb, ws, Minv)
     K.dynamics_derivatives(rb, ws, q, v, acc, dq, dv)
@@ -206,7 +197,6 @@ def _node(rb, ws, q, v, tau, fid, out):
     K.frame_velocity_derivatives(rb, ws, fid, 0, Jq, Jv)
     K.frame_placement(rb, ws, fid, R, p)
     K.frame_velocity(rb, ws, fid, 2, vel)
-    K.gravity_torque(rb, ws, q, g)
 
 
 def test_kernels_run_inside_a_compiled_function():
@@ -214,9 +204,9 @@ def test_kernels_run_inside_a_compiled_function():
     q, v, _, tau = state(model, 3)
     n, fid = model.nv, model.getFrameId("LF_FOOT")
     out = (np.zeros(n), *(np.zeros((n, n)) for _ in range(3)), *(np.zeros((6, n)) for _ in range(3)))
-    out += (np.zeros((3, 3)), np.zeros(3), np.zeros(6), np.zeros(n))
+    out += (np.zeros((3, 3)), np.zeros(3), np.zeros(6))
     _node(rb, ws, q, v, tau, fid, out)
-    acc, Minv, dq, dv, J, Jq, Jv, R, p, vel, g = out
+    acc, Minv, dq, dv, J, Jq, Jv, R, p, vel = out
     pin.computeABADerivatives(model, data, q, v, tau)
     close(acc, pin.aba(model, data, q, v, tau))
     close(-Minv @ dq, data.ddq_dq, 1e-8)
@@ -230,7 +220,6 @@ def test_kernels_run_inside_a_compiled_function():
     close(R, data.oMf[fid].rotation)
     close(p, data.oMf[fid].translation)
     close(vel, pin.getFrameVelocity(model, data, fid, pin.LOCAL_WORLD_ALIGNED).vector)
-    close(g, pin.computeGeneralizedGravity(model, data, q))
 
 
 @numba.njit
@@ -255,7 +244,7 @@ def test_kernels_do_not_allocate():
     q, v, _, tau = state(model, 5)
     n = model.nv
     out = (np.zeros(n), *(np.zeros((n, n)) for _ in range(3)), *(np.zeros((6, n)) for _ in range(3)))
-    out += (np.zeros((3, 3)), np.zeros(3), np.zeros(6), np.zeros(n))
+    out += (np.zeros((3, 3)), np.zeros(3), np.zeros(6))
     fid = model.getFrameId("left_sole_link")
     _repeat(rb, ws, q, v, tau, fid, out, 1)
     _allocates(1)

@@ -1,11 +1,13 @@
 """The compiled Lie-group kernels equal Pinocchio (and crocopy's StateMultibody) on SO(3), SE(3) and robots.
 
-Oracles: Pinocchio's ``exp3/log3/Jexp3/Jlog3/exp6/log6/Jexp6/Jlog6``, ``SE3`` and ``Quaternion``, its
-``integrate/difference/dIntegrate/dDifference/dIntegrateTransport`` on example-robot-data models, and
-:class:`crocopy.StateMultibody`.  Pinocchio's ``Jexp6``/``Jlog6`` (and ``Jlog3``) lose up to 1e-7 for
-rotation angles between about 1e-4 and 1e-2 (measured against the series below), so at those angles the
-kernels are checked against an independent reference instead: power series of the matrix exponential
-and of the SE(3) right Jacobian ``Σ_k (-ad ν)^k/(k+1)!`` summed in extended precision.
+Oracles: Pinocchio's ``log3/Jlog3/log6/Jlog6`` and its ``integrate/difference/dIntegrate/dDifference`` on a
+lone free flyer and on example-robot-data models, and :class:`crocopy.StateMultibody`.  The SE(3)
+exponential, its Jacobian and the adjoint are private to the kernels; they are checked through
+``integrate`` and ``dintegrate`` of a free flyer (``q ⊕ ν = M(q) exp6(ν)``, ``∂/∂v = jexp6(ν)``,
+``∂/∂q = Ad(exp6 ν)⁻¹``).  Pinocchio's ``Jexp6``/``Jlog6`` (and ``Jlog3``) lose up to 1e-7 for rotation
+angles between about 1e-4 and 1e-2 (measured against the series below), so at those angles the kernels are
+checked against an independent reference instead: power series of the matrix exponential and of the
+SE(3) right Jacobian ``Σ_k (-ad ν)^k/(k+1)!`` summed in extended precision.
 """
 
 from __future__ import annotations
@@ -47,6 +49,20 @@ def twist(seed, angle):
     return np.concatenate([np.random.default_rng(seed + 1).normal(size=3), axis_angle(seed, angle)])
 
 
+def free_flyer():
+    """``(model, jtype, idx_q, idx_v)`` of a model made of one free-flyer joint: ``q ⊕ ν = M(q) exp6(ν)``."""
+    model = pin.Model()
+    model.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "base")
+    jtype, idx_q, idx_v, _ = joint_arrays(model)
+    return model, jtype, idx_q, idx_v
+
+
+def inverse_adjoint(R, p):
+    """``Ad(R, p)⁻¹ = [[Rᵀ, -Rᵀ [p]], [0, Rᵀ]]`` (6, 6), in NumPy."""
+    hat = np.array([[0.0, -p[2], p[1]], [p[2], 0.0, -p[0]], [-p[1], p[0], 0.0]])
+    return np.block([[R.T, -R.T @ hat], [np.zeros((3, 3)), R.T]])
+
+
 # --- extended-precision references ----------------------------------------------------------------------
 
 LD = np.longdouble
@@ -86,15 +102,11 @@ def series_jexp6(nu):
 @pytest.mark.parametrize("seed", range(3))
 def test_so3_maps_equal_pinocchio(angle, seed):
     w = axis_angle(seed, angle)
-    R, w_out, J = np.empty((3, 3)), np.empty(3), np.empty((3, 3))
-    lie.exp3(w, R)
-    close(R, pin.exp3(w))
+    w_out, J = np.empty(3), np.empty((3, 3))
     Rp = pin.exp3(w)
     lie.log3(Rp, w_out)
     close(w_out, pin.log3(Rp))
     close(w_out, w, 1e-9)  # angles below π come back (π - 1e-9 loses ~1e-7 relative in R's entries)
-    lie.jexp3(w, J)
-    close(J, pin.Jexp3(w))
     lie.jlog3(Rp, J)
     close(J, pin.Jlog3(Rp))
 
@@ -103,29 +115,39 @@ def test_so3_maps_equal_pinocchio(angle, seed):
 @pytest.mark.parametrize("seed", range(3))
 def test_se3_maps_equal_pinocchio(angle, seed):
     nu = twist(seed, angle)
-    R, p, out6, J = np.empty((3, 3)), np.empty(3), np.empty(6), np.empty((6, 6))
-    lie.exp6(nu, R, p)
+    out6, J = np.empty(6), np.empty((6, 6))
     M = pin.exp6(nu)
-    close(R, M.rotation)
-    close(p, M.translation)
     lie.log6(M.rotation, M.translation, out6)
     close(out6, pin.log6(M).vector)
-    lie.jexp6(nu, J)
-    close(J, pin.Jexp6(nu))
     lie.jlog6(M.rotation, M.translation, J)
     close(J, pin.Jlog6(M))
-    lie.adjoint(M.rotation, M.translation, J)
-    close(J, M.action)
+
+
+@pytest.mark.parametrize("angle", ANGLES)
+@pytest.mark.parametrize("seed", range(3))
+def test_free_flyer_exponential_and_its_jacobians_equal_pinocchio(angle, seed):
+    """``integrate`` (``exp6``) and ``dintegrate`` (``Ad(exp6 ν)⁻¹``, ``jexp6``) of a lone free flyer."""
+    model, jtype, idx_q, idx_v = free_flyer()
+    nu = twist(seed, angle)
+    q = random_q(model, np.random.default_rng(seed))
+    q_out, J = np.empty(7), np.full((6, 6), np.nan)
+    lie.integrate(jtype, idx_q, idx_v, q, nu, q_out)
+    close(q_out, pin.integrate(model, q, nu))
+    close(pin.XYZQUATToSE3(q_out).homogeneous, (pin.XYZQUATToSE3(q) * pin.exp6(nu)).homogeneous)
+    for arg, pin_arg in ((0, pin.ARG0), (1, pin.ARG1)):
+        lie.dintegrate(jtype, idx_q, idx_v, q, nu, arg, J)
+        close(J, pin.dIntegrate(model, q, nu, pin_arg))
+    close(J, pin.Jexp6(nu))
 
 
 def test_zero_twist_and_identity():
-    R, p, J6, J3, out6 = np.empty((3, 3)), np.empty(3), np.empty((6, 6)), np.empty((3, 3)), np.empty(6)
-    lie.exp6(np.zeros(6), R, p)
-    assert np.array_equal(R, np.eye(3)) and np.array_equal(p, np.zeros(3))
-    lie.jexp6(np.zeros(6), J6)
-    assert np.array_equal(J6, np.eye(6)) and np.array_equal(J6, pin.Jexp6(np.zeros(6)))
-    lie.jexp3(np.zeros(3), J3)
-    assert np.array_equal(J3, np.eye(3))
+    model, jtype, idx_q, idx_v = free_flyer()
+    J6, out6 = np.empty((6, 6)), np.empty(6)
+    q = pin.neutral(model)
+    for arg in (0, 1):
+        lie.dintegrate(jtype, idx_q, idx_v, q, np.zeros(6), arg, J6)
+        assert np.array_equal(J6, np.eye(6))
+    assert np.array_equal(J6, pin.Jexp6(np.zeros(6)))
     lie.log6(np.eye(3), np.zeros(3), out6)
     assert np.array_equal(out6, np.zeros(6))
     lie.jlog6(np.eye(3), np.zeros(3), J6)
@@ -139,9 +161,7 @@ def test_log_at_exactly_pi(axis):
     w = np.empty(3)
     lie.log3(R, w)
     assert np.allclose(np.abs(w), np.abs(pin.log3(R)), atol=1e-12) and abs(abs(w[axis]) - math.pi) < 1e-12
-    back = np.empty((3, 3))
-    lie.exp3(w, back)
-    close(back, R, 1e-12)
+    close(pin.exp3(w), R, 1e-12)
     J, out6 = np.empty((3, 3)), np.empty(6)
     lie.jlog3(R, J)
     close(J, pin.Jlog3(R))
@@ -155,46 +175,25 @@ def test_log_at_exactly_pi(axis):
 def test_se3_maps_equal_series_references(seed, angle):
     """At every angle, including those where Pinocchio's Jacobians lose digits."""
     nu = twist(seed, angle)
-    R, p, J, back = np.empty((3, 3)), np.empty(3), np.empty((6, 6)), np.empty(6)
-    lie.exp6(nu, R, p)
+    model, jtype, idx_q, idx_v = free_flyer()
+    q, q_out, J, back = pin.neutral(model), np.empty(7), np.full((6, 6), np.nan), np.empty(6)
     Rs, ps = series_exp6(nu)
-    close(R, Rs, 1e-13)
-    close(p, ps, 1e-13)
+    lie.integrate(jtype, idx_q, idx_v, q, nu, q_out)
+    M = pin.XYZQUATToSE3(q_out)
+    close(M.rotation, Rs, 1e-13)
+    close(M.translation, ps, 1e-13)
+    lie.dintegrate(jtype, idx_q, idx_v, q, nu, 0, J)
+    close(J, inverse_adjoint(Rs, ps), 1e-13)
+    Jr = series_jexp6(nu)
+    lie.dintegrate(jtype, idx_q, idx_v, q, nu, 1, J)
+    close(J, Jr, 1e-13)
     lie.log6(Rs, ps, back)
     close(back, nu, 1e-9 if angle > 3.0 else 1e-12)
-    Jr = series_jexp6(nu)
-    lie.jexp6(nu, J)
-    close(J, Jr, 1e-13)
-    lie.jlog6(R, p, J)
+    lie.jlog6(Rs, ps, J)
     close(J @ Jr, np.eye(6), 1e-12 if angle < 3.0 else 1e-9)
     J3 = np.empty((3, 3))
-    lie.jexp3(nu[3:], J3)
-    close(J3, Jr[3:, 3:], 1e-13)
-    lie.jlog3(R, J3)
+    lie.jlog3(Rs, J3)
     close(J3 @ Jr[3:, 3:], np.eye(3), 1e-12 if angle < 3.0 else 1e-9)
-
-
-@pytest.mark.parametrize("seed", range(5))
-def test_placements_and_quaternions_equal_pinocchio(seed):
-    rng = np.random.default_rng(seed)
-    Ma, Mb = (pin.SE3(pin.exp3(rng.normal(size=3)), rng.normal(size=3)) for _ in range(2))
-    R, p, x = np.empty((3, 3)), np.empty(3), rng.normal(size=3)
-    lie.se3_compose(Ma.rotation, Ma.translation, Mb.rotation, Mb.translation, R, p)
-    close(np.c_[R, p], (Ma * Mb).homogeneous[:3])
-    lie.relative_placement(Ma.rotation, Ma.translation, Mb.rotation, Mb.translation, R, p)
-    close(np.c_[R, p], (Ma.inverse() * Mb).homogeneous[:3])
-    lie.se3_act(Ma.rotation, Ma.translation, x, p)
-    close(p, Ma.act(x))
-    quat = np.empty(4)
-    for rot in (Ma.rotation, pin.exp3(axis_angle(seed, math.pi - 1e-3)), np.diag([1.0, -1.0, -1.0]),
-                np.diag([-1.0, 1.0, -1.0]), np.diag([-1.0, -1.0, 1.0])):
-        lie.rot_to_quat(rot, quat)
-        ref = pin.Quaternion(rot).coeffs()
-        close(quat * np.sign(quat @ ref), ref)
-        lie.quat_to_rot(quat, R)
-        close(R, rot)
-        lie.quat_to_rot(ref, R)
-        close(R, pin.Quaternion(ref).toRotationMatrix())
 
 
 # --- configuration space and the multibody state ----------------------------------------------------------
@@ -232,18 +231,12 @@ def test_configuration_space_equals_pinocchio(robot, seed, near):
     close(q_out, pin.integrate(model, q0, v))
     lie.difference(jtype, idx_q, idx_v, q0, q1, v_out)
     close(v_out, pin.difference(model, q0, q1))
-    J_in = rng.normal(size=(nv, 4))
+    x0, x1, Jx = np.r_[q0, np.zeros(nv)], np.r_[q1, np.zeros(nv)], np.full((2 * nv, 2 * nv), np.nan)
     for arg, pin_arg in ((0, pin.ARG0), (1, pin.ARG1)):
         lie.dintegrate(jtype, idx_q, idx_v, q0, v, arg, J)
         close(J, pin.dIntegrate(model, q0, v, pin_arg))
-        lie.ddifference(jtype, idx_q, idx_v, q0, q1, arg, J)
-        close(J, pin.dDifference(model, q0, q1, pin_arg))
-        out = np.empty_like(J_in)
-        lie.dintegrate_transport(jtype, idx_q, idx_v, q0, v, J_in, arg, out)
-        close(out, pin.dIntegrateTransport(model, q0, v, J_in, pin_arg))
-        in_place = J_in.copy()
-        lie.dintegrate_transport(jtype, idx_q, idx_v, q0, v, in_place, arg, in_place)
-        assert np.array_equal(in_place, out)
+        lie.state_jdiff(jtype, idx_q, idx_v, nq, nv, x0, x1, arg == 0, Jx)  # its q block is dDifference
+        close(Jx[:nv, :nv], pin.dDifference(model, q0, q1, pin_arg))
 
 
 @settings(max_examples=15, deadline=None)
@@ -259,16 +252,12 @@ def test_state_operations_equal_state_multibody(robot, seed):
     close(out_dx, state.diff(x0, x1))
     lie.state_integrate(jtype, idx_q, idx_v, nq, nv, x0, dx, out_x)
     close(out_x, state.integrate(x0, dx))
+    Jq = np.full((nv, nv), np.nan)
     for k, first in enumerate((True, False)):
         lie.state_jdiff(jtype, idx_q, idx_v, nq, nv, x0, x1, first, J)
         close(J, state.Jdiff(x0, x1)[k])
-        lie.state_jintegrate(jtype, idx_q, idx_v, nq, nv, x0, dx, first, J)
-        close(J, state.Jintegrate(x0, dx)[k])
-        J_in = rng.normal(size=(state.ndx, 3))
-        transported = J_in.copy()
-        state.JintegrateTransport(x0, dx, transported, crocopy.Jcomponent.first if first else crocopy.Jcomponent.second)
-        lie.dintegrate_transport(jtype, idx_q, idx_v, x0, dx, J_in, 1 - int(first), J_in)
-        close(J_in, transported)
+        lie.dintegrate(jtype, idx_q, idx_v, x0, dx, k, Jq)  # a whole state x and tangent dx as q and v
+        close(Jq, state.Jintegrate(x0, dx)[k][:nv, :nv])
 
 
 def test_non_unit_joint_configurations_are_handled_as_pinocchio_does():
@@ -308,13 +297,14 @@ def test_unbounded_joint_difference_rounds_like_pinocchio():
 
 
 @compiled
-def _round_trip(jtype, idx_q, idx_v, nq, nv, x, dx, nu, x_out, dx_out, J, R, p, out6):
-    """``x ⊕ dx ⊖ x`` and ``log6(exp6(nu))`` inside one compiled call."""
+def _round_trip(jtype, idx_q, idx_v, nq, nv, x, dx, x_out, dx_out, J, Jq, R, p, out6, J6):
+    """``x ⊕ dx ⊖ x``, its Jacobians and ``log6``/``jlog6`` of ``(R, p)`` inside one compiled call."""
     lie.state_integrate(jtype, idx_q, idx_v, nq, nv, x, dx, x_out)
     lie.state_diff(jtype, idx_q, idx_v, nq, nv, x, x_out, dx_out)
-    lie.state_jintegrate(jtype, idx_q, idx_v, nq, nv, x, dx, False, J)
-    lie.exp6(nu, R, p)
+    lie.state_jdiff(jtype, idx_q, idx_v, nq, nv, x, x_out, False, J)
+    lie.dintegrate(jtype, idx_q, idx_v, x, dx, 1, Jq)
     lie.log6(R, p, out6)
+    lie.jlog6(R, p, J6)
 
 
 @pytest.mark.parametrize("name", ["iris", "kinova"])
@@ -326,9 +316,12 @@ def test_kernels_run_inside_a_compiled_function(name):
     x = np.r_[random_q(model, rng), rng.normal(size=model.nv)]
     dx, nu = rng.normal(size=state.ndx) * 0.5, twist(4, 1.2)
     x_out, dx_out, J = np.empty(state.nx), np.empty(state.ndx), np.empty((state.ndx, state.ndx))
-    R, p, out6 = np.empty((3, 3)), np.empty(3), np.empty(6)
-    _round_trip(jtype, idx_q, idx_v, model.nq, model.nv, x, dx, nu, x_out, dx_out, J, R, p, out6)
+    Jq, M, out6, J6 = np.empty((model.nv, model.nv)), pin.exp6(nu), np.empty(6), np.empty((6, 6))
+    _round_trip(jtype, idx_q, idx_v, model.nq, model.nv, x, dx, x_out, dx_out, J, Jq, M.rotation, M.translation,
+                out6, J6)
     close(x_out, state.integrate(x, dx))
     close(dx_out, dx)
-    close(J, state.Jintegrate(x, dx)[1])
+    close(J, state.Jdiff(x, x_out)[1])
+    close(Jq, state.Jintegrate(x, dx)[1][:model.nv, :model.nv])
     close(out6, nu)
+    close(J6, pin.Jlog6(M))

@@ -3,5 +3,8 @@
 - :mod:`.joint_types`: joint codes of a lowered model.
 - :mod:`.lowering`: ``lower_model(model) -> RigidBodyModel`` (plain arrays) and ``make_workspace``.
 - :mod:`.dynamics_kernel`: forward kinematics, forward dynamics (CRBA + tree-sparse factor), mass inverse,
-  RNEA derivatives, generalized gravity, frame placement / Jacobian / velocity / velocity derivatives.
+  RNEA derivatives, frame placement / Jacobian / velocity / velocity derivatives.
+- :mod:`.lie_kernel`: ``log3``/``jlog3``/``log6``/``jlog6``, configuration-space ``integrate``/``difference``/
+  ``dintegrate`` and the multibody state's ``state_diff``/``state_integrate``/``state_jdiff``.
+- :mod:`.euler_node`, :mod:`.euler_node_kernel`: the compiled Euler node of free forward dynamics.
 """

@@ -393,13 +393,6 @@ def mass_inverse(rb: RigidBodyModel, ws: RigidBodyWorkspace, Minv_out: np.ndarra
 
 
 @compiled
-def gravity_torque(rb: RigidBodyModel, ws: RigidBodyWorkspace, q: np.ndarray, out: np.ndarray) -> None:
-    """``out (nv,) = RNEA(q, 0, 0)``, the generalized gravity."""
-    forward_kinematics(rb, ws, q, ws.zero)
-    _rnea_pass(rb, ws, ws.zero, out)
-
-
-@compiled
 def _composite_coriolis(rb, ws):
     """``ws.oIc``, ``ws.oBc``: composite inertias and composite ``B_i = ov_i ×* oI_i - oI_i (ov_i ×) + (· ×* h_i)``."""
     oI, oIc, oBc, ov, oh, Mx = ws.oI, ws.oIc, ws.oBc, ws.ov, ws.oh, ws.tmp

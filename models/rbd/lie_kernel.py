@@ -1,8 +1,9 @@
 """Lie-group maps of SO(3)/SE(3) and the configuration space of a lowered multibody model (numba kernels).
 
-Every function is compiled with :func:`crocopy.kernels.compiled`, callable from Python and from other
-compiled functions, and writes into its ``out`` argument(s) (float64, C-contiguous); nothing is
-allocated.  Conventions are Pinocchio's.
+Every public function is compiled with :func:`crocopy.kernels.compiled`, callable from Python and from
+other compiled functions, and writes into its ``out`` argument(s) (float64, C-contiguous); nothing is
+allocated.  Conventions are Pinocchio's.  Public kernels: ``log3``, ``jlog3``, ``log6``, ``jlog6``;
+``integrate``, ``difference``, ``dintegrate``; ``state_diff``, ``state_integrate``, ``state_jdiff``.
 
 SO(3) and SE(3)
 ---------------
@@ -12,21 +13,22 @@ skew matrix of ``ω``:
 
 * ``exp3(ω) = I + sin θ/θ [ω] + (1 - cos θ)/θ² [ω]²``; ``log3`` is its inverse with ``θ ∈ [0, π]``
   (the axis is read from the symmetric part of ``R`` near ``π``).
-* ``jexp3(ω) = Jr(ω) = I - (1 - cos θ)/θ² [ω] + (θ - sin θ)/θ³ [ω]²`` (right Jacobian:
+* ``Jr(ω) = I - (1 - cos θ)/θ² [ω] + (θ - sin θ)/θ³ [ω]²`` (the right Jacobian of ``exp3``:
   ``exp3(ω + δ) ≈ exp3(ω) exp3(Jr δ)``) and ``jlog3(R) = Jr(log3 R)⁻¹
   = I + [ω]/2 + (1/θ² - (1 + cos θ)/(2 θ sin θ)) [ω]²``.
 * ``exp6(ν) = (exp3 ω, Jl(ω) v)`` with the left Jacobian ``Jl(ω) = Jr(ω)ᵀ``; ``log6`` is its inverse.
-* ``jexp6(ν) = [[Jr(ω), Q(-v, -ω)], [0, Jr(ω)]]`` (6, 6), with the block ``Q(ρ, φ)`` of SE(3)'s left
-  Jacobian (Barfoot & Furgale 2014; Solà et al., "A micro Lie theory for state estimation in
-  robotics", 2018), and
+* ``jexp6(ν) = [[Jr(ω), Q(-v, -ω)], [0, Jr(ω)]]`` (6, 6), the right Jacobian of ``exp6``, with the block
+  ``Q(ρ, φ)`` of SE(3)'s left Jacobian (Barfoot & Furgale 2014; Solà et al., "A micro Lie theory for
+  state estimation in robotics", 2018), and
   ``jlog6(M) = jexp6(log6 M)⁻¹ = [[A, -A Q A], [0, A]]`` with ``A = Jr(ω)⁻¹``.
-* ``adjoint(M) = [[R, [p] R], [0, R]]`` (Pinocchio's ``SE3.action``); ``relative_placement(Ma, Mb)
-  = Ma⁻¹ Mb``; ``se3_compose(Ma, Mb) = Ma Mb``.
+* ``Ad(M) = [[R, [p] R], [0, R]]`` (Pinocchio's ``SE3.action``).
 * Quaternions are stored ``[x, y, z, w]`` (Pinocchio's configuration order).
 
-The coefficients of ``exp3``, ``Jr`` and ``Q`` are summed from their power series for ``θ < 1`` (to
-round-off), ``θ/sin θ``, ``sin(θ/2)/θ`` and ``Jr⁻¹``'s from a Taylor polynomial below ``θ = 1e-2``.
-Pinocchio's own ``Jexp6``/``Jlog6`` lose up to 1e-7 for ``θ`` between about 1e-4 and 1e-2; these do not.
+``exp3``, ``Jr``, ``exp6``, ``jexp6`` and ``Ad`` are private tuple helpers used by the configuration-space
+kernels below.  The coefficients of ``exp3``, ``Jr`` and ``Q`` are summed from their power series for
+``θ < 1`` (to round-off), ``θ/sin θ``, ``sin(θ/2)/θ`` and ``Jr⁻¹``'s from a Taylor polynomial below
+``θ = 1e-2``.  Pinocchio's own ``Jexp6``/``Jlog6`` lose up to 1e-7 for ``θ`` between about 1e-4 and 1e-2;
+these do not.
 
 Configuration space
 -------------------
@@ -42,19 +44,15 @@ The model is given by ``(jtype, idx_q, idx_v)`` of :func:`~crocopy.models.rbd.jo
   ``atan2(s, c)`` from ``q0`` to ``q1`` (``c = q0·q1``, ``s = q0 × q1``), Jacobians ``±1``.  As
   Pinocchio does, the angle is 0 when the rounded ``c`` exceeds 1 (angles below about 1.5e-8 apart).
 
-``integrate``/``difference`` write ``(nq,)``/``(nv,)``; ``dintegrate``/``ddifference`` write the block
-diagonal ``(nv, nv)`` Jacobian (``arg`` 0: w.r.t. the first argument, 1: the second);
-``dintegrate_transport`` writes ``J_out = dintegrate(q, v, arg) @ J_in`` for ``J_in`` (nv, ncols) (in place
-when ``J_out is J_in``).  The arrays are read and written at ``idx_q``/``idx_v`` only, so ``q`` may be a
-whole state ``x = [q, v]``, ``v`` a state tangent ``dx = [dq, dv]`` and ``J_in``/``J_out`` have more than
-``nv`` rows: ``dintegrate_transport(jtype, idx_q, idx_v, x, dx, J, arg, J)`` is
-``StateMultibody.JintegrateTransport(x, dx, J, first/second)`` (only the first ``nv`` rows change).
+``integrate``/``difference`` write ``(nq,)``/``(nv,)``; ``dintegrate`` writes the block diagonal
+``(nv, nv)`` Jacobian of ``q ⊕ v`` (``arg`` 0: w.r.t. ``q``, 1: w.r.t. ``v``).  The arrays are read and
+written at ``idx_q``/``idx_v`` only, so ``q`` may be a whole state ``x = [q, v]`` and ``v`` a state
+tangent ``dx = [dq, dv]``.
 
 The state functions are those of :class:`~crocopy.models.state_multibody.StateMultibody`
 (``x = [q, v]`` (nq + nv,), ``dx = [dq, dv]`` (2 nv,)):
-``state_diff = [q1 ⊖ q0, v1 - v0]``, ``state_integrate = [q ⊕ dq, v + dv]``,
-``state_jdiff(first) = diag(∂(q1 ⊖ q0)/∂q0, -I)`` or ``diag(∂(q1 ⊖ q0)/∂q1, I)`` and
-``state_jintegrate(first) = diag(∂(q ⊕ dq)/∂q, I)`` or ``diag(∂(q ⊕ dq)/∂dq, I)``, each (2 nv, 2 nv).
+``state_diff = [q1 ⊖ q0, v1 - v0]``, ``state_integrate = [q ⊕ dq, v + dv]`` and
+``state_jdiff(first) = diag(∂(q1 ⊖ q0)/∂q0, -I)`` or ``diag(∂(q1 ⊖ q0)/∂q1, I)`` (2 nv, 2 nv).
 """
 
 from __future__ import annotations
@@ -270,21 +268,9 @@ def _q_t(rx, ry, rz, x, y, z):
 
 
 @compiled
-def exp3(w, R_out):
-    """``R_out (3, 3) = exp3(w (3,))``."""
-    _store(_exp3_t(w[0], w[1], w[2]), R_out, 0, 0)
-
-
-@compiled
 def log3(R, w_out):
     """``w_out (3,) = log3(R (3, 3))``, angle in ``[0, π]``."""
     w_out[0], w_out[1], w_out[2] = _log3_t(_load(R))
-
-
-@compiled
-def jexp3(w, J_out):
-    """``J_out (3, 3) = Jexp3(w)``, the right Jacobian of ``exp3``."""
-    _store(_jr_t(w[0], w[1], w[2], -1.0), J_out, 0, 0)
 
 
 @compiled
@@ -357,14 +343,6 @@ def _inverse_t(R, px, py, pz):
 
 
 @compiled
-def exp6(nu, R_out, p_out):
-    """``(R_out (3, 3), p_out (3,)) = exp6(nu (6,))``, ``nu = [v; ω]``."""
-    R, p = _exp6_t(nu[0], nu[1], nu[2], nu[3], nu[4], nu[5])
-    _store(R, R_out, 0, 0)
-    p_out[0], p_out[1], p_out[2] = p
-
-
-@compiled
 def log6(R, p, out6):
     """``out6 (6,) = log6(R, p) = [v; ω]``."""
     res = _log6_t(_load(R), p[0], p[1], p[2])
@@ -373,45 +351,9 @@ def log6(R, p, out6):
 
 
 @compiled
-def jexp6(nu, J_out):
-    """``J_out (6, 6) = Jexp6(nu)``, the right Jacobian of ``exp6``."""
-    _jexp6_into(nu[0], nu[1], nu[2], nu[3], nu[4], nu[5], J_out, 0, 0)
-
-
-@compiled
 def jlog6(R, p, J_out):
     """``J_out (6, 6) = Jlog6(R, p)``."""
     _jlog6_into(_load(R), p[0], p[1], p[2], J_out, 0, 0)
-
-
-@compiled
-def adjoint(R, p, Ad_out):
-    """``Ad_out (6, 6) = Ad(R, p)`` (Pinocchio's ``SE3(R, p).action``)."""
-    _adjoint_into(_load(R), p[0], p[1], p[2], Ad_out, 0, 0)
-
-
-@compiled
-def se3_compose(Ra, pa, Rb, pb, R_out, p_out):
-    """``(R_out, p_out) = Ma Mb = (Ra Rb, Ra pb + pa)``."""
-    A = _load(Ra)
-    _store(_mm(A, _load(Rb)), R_out, 0, 0)
-    x, y, z = _mv(A, pb[0], pb[1], pb[2])
-    p_out[0], p_out[1], p_out[2] = x + pa[0], y + pa[1], z + pa[2]
-
-
-@compiled
-def relative_placement(Ra, pa, Rb, pb, R_out, p_out):
-    """``(R_out, p_out) = Ma⁻¹ Mb = (Raᵀ Rb, Raᵀ (pb - pa))``."""
-    At = _tr(_load(Ra))
-    _store(_mm(At, _load(Rb)), R_out, 0, 0)
-    p_out[0], p_out[1], p_out[2] = _mv(At, pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2])
-
-
-@compiled
-def se3_act(R, p, x, out):
-    """``out (3,) = R x + p``, the placement acting on a point."""
-    a, b, c = _mv(_load(R), x[0], x[1], x[2])
-    out[0], out[1], out[2] = a + p[0], b + p[1], c + p[2]
 
 
 # --- quaternions [x, y, z, w] -------------------------------------------------------------------------
@@ -425,32 +367,6 @@ def _quat_rot_t(x, y, z, w):
         2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w),
         2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y),
     )
-
-
-@compiled
-def quat_to_rot(quat, R_out):
-    """``R_out (3, 3)`` = rotation of the unit quaternion ``quat = [x, y, z, w]``."""
-    _store(_quat_rot_t(quat[0], quat[1], quat[2], quat[3]), R_out, 0, 0)
-
-
-@compiled
-def rot_to_quat(R, quat_out):
-    """``quat_out = [x, y, z, w]``, a unit quaternion of ``R`` (Shepperd's method; ``w ≥ 0`` when
-    ``trace R > 0``, the sign is otherwise that of the largest of ``x, y, z``)."""
-    t = R[0, 0] + R[1, 1] + R[2, 2]
-    if t > 0.0:
-        s = 2.0 * math.sqrt(t + 1.0)
-        w, x, y, z = 0.25 * s, (R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s
-    elif R[0, 0] >= R[1, 1] and R[0, 0] >= R[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + R[0, 0] - R[1, 1] - R[2, 2])
-        w, x, y, z = (R[2, 1] - R[1, 2]) / s, 0.25 * s, (R[0, 1] + R[1, 0]) / s, (R[0, 2] + R[2, 0]) / s
-    elif R[1, 1] >= R[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + R[1, 1] - R[0, 0] - R[2, 2])
-        w, x, y, z = (R[0, 2] - R[2, 0]) / s, (R[0, 1] + R[1, 0]) / s, 0.25 * s, (R[1, 2] + R[2, 1]) / s
-    else:
-        s = 2.0 * math.sqrt(1.0 + R[2, 2] - R[0, 0] - R[1, 1])
-        w, x, y, z = (R[1, 0] - R[0, 1]) / s, (R[0, 2] + R[2, 0]) / s, (R[1, 2] + R[2, 1]) / s, 0.25 * s
-    quat_out[0], quat_out[1], quat_out[2], quat_out[3] = x, y, z, w
 
 
 # --- configuration space --------------------------------------------------------------------------------
@@ -585,44 +501,6 @@ def dintegrate(jtype, idx_q, idx_v, q, v, arg, J_out):
     _dintegrate_blocks(jtype, idx_q, idx_v, v, arg, J_out)
 
 
-@compiled
-def ddifference(jtype, idx_q, idx_v, q0, q1, arg, J_out):
-    """``J_out (nv, nv) = ∂(q1 ⊖ q0)/∂q0`` (``arg = 0``) or ``∂/∂q1`` (``arg = 1``) (``pinocchio.dDifference``)."""
-    _zero(J_out)
-    _ddifference_blocks(jtype, idx_q, idx_v, q0, q1, arg, J_out)
-
-
-@compiled
-def dintegrate_transport(jtype, idx_q, idx_v, q, v, J_in, arg, J_out):
-    """``J_out (nv, ncols) = dintegrate(q, v, arg) @ J_in (nv, ncols)`` (``pinocchio.dIntegrateTransport``);
-    ``J_out`` may be ``J_in``."""
-    ncols = J_in.shape[1]
-    for j in range(1, jtype.shape[0]):
-        kind, iv = jtype[j], idx_v[j]
-        if kind != FREEFLYER:
-            for c in range(ncols):
-                J_out[iv, c] = J_in[iv, c]
-            continue
-        vx, vy, vz, x, y, z = v[iv], v[iv + 1], v[iv + 2], v[iv + 3], v[iv + 4], v[iv + 5]
-        if arg == 1:  # [[Jr, Q(-v, -ω)], [0, Jr]]
-            A = _jr_t(x, y, z, -1.0)
-            B = _q_t(-vx, -vy, -vz, -x, -y, -z)
-        else:  # Ad(exp6(v))⁻¹ = [[Rᵀ, -Rᵀ[p]], [0, Rᵀ]]
-            R, p = _exp6_t(vx, vy, vz, x, y, z)
-            A = _tr(R)
-            S = _mm(A, _skew(p[0], p[1], p[2]))
-            B = (-S[0], -S[1], -S[2], -S[3], -S[4], -S[5], -S[6], -S[7], -S[8])
-        for c in range(ncols):
-            a0, a1, a2 = J_in[iv, c], J_in[iv + 1, c], J_in[iv + 2, c]
-            b0, b1, b2 = J_in[iv + 3, c], J_in[iv + 4, c], J_in[iv + 5, c]
-            top = _mv(A, a0, a1, a2)
-            top2 = _mv(B, b0, b1, b2)
-            bottom = _mv(A, b0, b1, b2)
-            for k in range(3):
-                J_out[iv + k, c] = top[k] + top2[k]
-                J_out[iv + 3 + k, c] = bottom[k]
-
-
 # --- multibody state x = [q, v] ---------------------------------------------------------------------------
 
 
@@ -650,12 +528,3 @@ def state_jdiff(jtype, idx_q, idx_v, nq, nv, x0, x1, first, J_out):
     d = -1.0 if first else 1.0
     for k in range(nv):
         J_out[nv + k, nv + k] = d
-
-
-@compiled
-def state_jintegrate(jtype, idx_q, idx_v, nq, nv, x, dx, first, J_out):
-    """``J_out (2 nv, 2 nv)``: ``StateMultibody.Jintegrate(x, dx)[0]`` (``first``) or ``[1]``."""
-    _zero(J_out)
-    _dintegrate_blocks(jtype, idx_q, idx_v, dx, 0 if first else 1, J_out)
-    for k in range(nv):
-        J_out[nv + k, nv + k] = 1.0
