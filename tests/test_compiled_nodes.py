@@ -138,3 +138,27 @@ def test_a_diverging_solve_stops_as_without_compiled_nodes():
         outcomes.append((solved, s.iter, s.reason))
     assert outcomes[0] == outcomes[1]
     assert outcomes[0][0] is False and "non-finite" in outcomes[0][2]
+
+
+def test_the_compiled_rollout_reuses_its_arrays_and_never_writes_a_held_one():
+    problem, xs, us = registry.build("quad-goal")
+    solver = crocopy.SolverFDDP(problem)
+    solver.solve(xs, us, 3)
+    assert compiled_nodes.attach(solver).horizon is not None
+    solver.computeDirection()
+    solver._trial_rollout(0.5, gaps=True)
+    ids = [id(a) for a in solver.xs_try + solver.us_try]
+    solver._trial_rollout(0.25, gaps=True)
+    assert [id(a) for a in solver.xs_try + solver.us_try] == ids
+    held, held_u = solver.xs_try[4], solver.us_try[4]
+    values = held.copy(), held_u.copy()
+    solver._trial_rollout(1.0)
+    assert solver.xs_try[4] is not held and solver.us_try[4] is not held_u
+    np.testing.assert_array_equal(held, values[0])
+    np.testing.assert_array_equal(held_u, values[1])
+    assert not np.array_equal(solver.xs_try[4], values[0])
+    reference = [x.copy() for x in solver.xs_try]
+    solver._nodes = None
+    solver._trial_rollout(1.0)
+    for a, b in zip(solver.xs_try, reference):
+        np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-10)

@@ -116,8 +116,13 @@ def _solve_vector_euler():
     crocopy.SolverFDDP(_euler_problem()).solve(None, None, 3)
 
 
+class _NodesInPython(crocopy.SolverFDDP):
+    """A subclass, so that no compiled node (:mod:`crocopy.solvers.compiled_nodes`) replaces the Python node
+    path these consumers are on."""
+
+
 def _solve_arm():
-    crocopy.SolverFDDP(_arm_problem()).solve(None, None, 3)
+    _NodesInPython(_arm_problem()).solve(None, None, 3)
 
 
 # (module, kernel, numpy twin or None when the twin is a chain of methods, workload)
