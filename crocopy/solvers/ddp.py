@@ -523,6 +523,10 @@ class SolverDDP(SolverAbstract):
         pattern), else replaced by a new array, so that a state or control a user
         kept from ``xs``/``us`` (swapped with ``xs_try``/``us_try`` when a trial is accepted) never
         changes under them.
+
+        Inside ``solve``, a compiled node (:mod:`.compiled_nodes`) does its whole step (``dx``, the
+        control, the node, the next state) in one call, and when every running node is compiled the
+        whole loop is one call (:meth:`_horizon_rollout`).
         """
         problem = self.problem
         xs, xs_try, us_try, fs, dx_try = self.xs, self.xs_try, self.us_try, self.fs, self._dx_try
@@ -547,33 +551,10 @@ class SolverDDP(SolverAbstract):
             models, t, x = (), problem.T, xs_try[-1]
         for m, d in zip(models, problem.runningDatas):
             state = m.state
-            step = None if steps is None else steps[t]
-            if step is not None:
-                dx = dx_try[t]
-                if dx is None or dx.shape[0] != state.ndx:
-                    dx = dx_try[t] = np.empty(state.ndx)
-                u = us_try[t]
-                if getrefcount(u) != _SOLE or u.base is not None or u.shape[0] != m.nu:
-                    u = us_try[t] = np.empty(m.nu)
-                lb = None if lbs is None else lbs[t]
-                if lb is None:
-                    lb, ub = unbounded[m.nu]
-                else:
-                    ub = ubs[t]
-                x_next = xs_try[t + 1]
-                if getrefcount(x_next) != _SOLE or x_next.base is not None or x_next.shape[0] != state.nx:
-                    x_next = xs_try[t + 1] = np.empty(state.nx)
-                d.cost = c = step(xs[t], x, us[t], k[t], K[t], steplength, lb, ub, u, dx, x_next, fs[t + 1],
-                                  gaps or t + 1 == gap_at)
-                cost += c
-                x = x_next
-                t += 1
-                continue
             if m.nu:
                 dx = dx_try[t]
                 if dx is None or dx.shape[0] != state.ndx:
                     dx = dx_try[t] = np.empty(state.ndx)
-                state._diff_into(xs[t], x, dx)
                 u = us_try[t]
                 if getrefcount(u) != _SOLE or u.base is not None or u.shape[0] != m.nu:
                     u = us_try[t] = np.empty(m.nu)
@@ -582,6 +563,18 @@ class SolverDDP(SolverAbstract):
                     lb, ub = unbounded[m.nu]
                 else:
                     ub = ubs[t]
+                step = None if steps is None else steps[t]
+                if step is not None:
+                    x_next = xs_try[t + 1]
+                    if getrefcount(x_next) != _SOLE or x_next.base is not None or x_next.shape[0] != state.nx:
+                        x_next = xs_try[t + 1] = np.empty(state.nx)
+                    d.cost = c = step(xs[t], x, us[t], k[t], K[t], steplength, lb, ub, u, dx, x_next, fs[t + 1],
+                                      gaps or t + 1 == gap_at)
+                    cost += c
+                    x = x_next
+                    t += 1
+                    continue
+                state._diff_into(xs[t], x, dx)
                 feedback(us[t], k[t], K[t], dx, steplength, lb, ub, u)
             else:
                 u = us_try[t]

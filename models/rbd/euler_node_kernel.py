@@ -128,8 +128,8 @@ def _matmul(A, B, out, rows, cols, inner, scale):
 
 
 @compiled
-def _relative_frame(rb, ws, fid, par, o, R3, p3):
-    """``pref⁻¹ oMf`` into ``(R3, p3)``; ``par[o:o+9]`` is ``pref⁻¹``'s rotation (row-major), then its translation."""
+def _rotation_error(rb, ws, fid, par, o, R3):
+    """``Rrefᵀ oRf`` into ``R3``; ``par[o:o+9]`` is ``Rrefᵀ`` (row-major); leaves ``oMf`` in ``ws.Rf, ws.pf``."""
     frame_placement(rb, ws, fid, ws.Rf, ws.pf)
     for i in range(3):
         for j in range(3):
@@ -137,22 +137,17 @@ def _relative_frame(rb, ws, fid, par, o, R3, p3):
             for k in range(3):
                 acc += par[o + 3 * i + k] * ws.Rf[k, j]
             R3[i, j] = acc
+
+
+@compiled
+def _relative_frame(rb, ws, fid, par, o, R3, p3):
+    """``pref⁻¹ oMf`` into ``(R3, p3)``; ``par[o:o+9]`` is ``pref⁻¹``'s rotation (row-major), then its translation."""
+    _rotation_error(rb, ws, fid, par, o, R3)
+    for i in range(3):
         acc = par[o + 9 + i]
         for k in range(3):
             acc += par[o + 3 * i + k] * ws.pf[k]
         p3[i] = acc
-
-
-@compiled
-def _rotation_error(rb, ws, fid, par, o, R3):
-    """``Rrefᵀ oRf`` into ``R3``; ``par[o:o+9]`` is ``Rrefᵀ`` (row-major)."""
-    frame_placement(rb, ws, fid, ws.Rf, ws.pf)
-    for i in range(3):
-        for j in range(3):
-            acc = 0.0
-            for k in range(3):
-                acc += par[o + 3 * i + k] * ws.Rf[k, j]
-            R3[i, j] = acc
 
 
 @compiled
