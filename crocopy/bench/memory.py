@@ -2,7 +2,7 @@
 
 ``python -m crocopy.bench.memory NAME LIBRARY SOLVER MAXITER`` imports the library (``crocopy``
 or ``crocoddyl``), Pinocchio and the problem registry, warms up with two iterations of ``SOLVER``
-on another small problem (:func:`warmup_problem`: crocopy's numba kernels are loaded, or compiled
+on another small problem (:func:`warm_up`: crocopy's numba kernels are loaded, or compiled
 after a source change, before anything is measured: one-time costs that Crocoddyl, compiled ahead
 of time, does not have; another problem, since a problem's own memory freed by the warm-up would
 be reused by its measured build),
@@ -53,9 +53,23 @@ def peak_memory_kib() -> int:
 
 
 def warmup_problem(name: str) -> str:
-    """The small problem solved before measuring ``name``: the double pendulum, or the quadrotor
-    goal task when ``name`` is the pendulum."""
-    return "quad-goal" if name == "pend" else "pend"
+    """The small problem solved before measuring ``name``: the quadrotor goal task (its nodes are
+    compiled nodes, :mod:`crocopy.solvers.compiled_nodes`), or the arm when ``name`` is a quadrotor task."""
+    return "arm" if name.startswith("quad") else "quad-goal"
+
+
+def warm_up(lib, name: str, solver_name: str) -> None:
+    """Two iterations of the solver on :func:`warmup_problem`; for crocopy, once with compiled nodes and
+    once through a solver subclass (the Python node path), so that every kernel either path uses is loaded."""
+    from .side_by_side import build_problem, make_solver
+
+    problem, xs, us = build_problem(warmup_problem(name), lib)
+    solver = make_solver(lib, problem, solver_name)
+    solver.solve(xs, us, 2, False)
+    if lib.__name__ == "crocopy":
+        solver = make_solver(lib, problem, solver_name)
+        python_nodes = type("PythonNodes" + type(solver).__name__, (type(solver),), {})
+        python_nodes(problem).solve(xs, us, 2, False)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -68,9 +82,7 @@ def main(argv: list[str] | None = None) -> int:
     limit_threads()
     lib = importlib.import_module(library)
     registry.get(name)
-    warm_problem, warm_xs, warm_us = build_problem(warmup_problem(name), lib)
-    make_solver(lib, warm_problem, solver_name).solve(warm_xs, warm_us, 2, False)
-    del warm_problem, warm_xs, warm_us
+    warm_up(lib, name, solver_name)
     gc.collect()
     reset = reset_peak_memory()
     baseline = peak_memory_kib()

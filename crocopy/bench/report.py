@@ -189,7 +189,8 @@ def format_report(results: Sequence[ProblemResult], meta: dict) -> str:
         " (column *solves*); the first solve of each library runs in a fresh process that measures memory.",
         "- Memory: peak resident memory (`VmHWM`, reset after the imports) of building and solving the problem"
         " in that fresh process, above the level after the imports and a 2-iteration warm-up solve of another"
-        " small problem (which loads crocopy's compiled numba kernels; not counted in the solve time).",
+        " small problem (which loads crocopy's compiled numba kernels, with and without compiled nodes; not counted"
+        " in the solve time).",
         "",
         "## Solves",
         "",
