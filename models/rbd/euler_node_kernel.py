@@ -302,7 +302,7 @@ def node_calc(tbl, ints, par, x, u):
 
 @compiled
 def node_rollout_step(tbl, ints, par, x_ref, x, u_ref, k, K, alpha, lb, ub, u, dx, x_next, f, gap):
-    """One node of the DDP family's rollout (``SolverDDP._trial_rollout``): ``dx = x ⊖ x_ref``,
+    """One node of the DDP family's rollout (the node step of ``_trial_rollout``): ``dx = x ⊖ x_ref``,
     ``u = clamp(u_ref - α k - K dx, lb, ub)``, the node at ``(x, u)``, and ``x_next = xnext``, or
     ``xnext ⊕ ((α - 1) f)`` if ``gap``; returns the node's cost."""
     rb = _model(tbl, ints)
@@ -325,7 +325,7 @@ def node_rollout_step(tbl, ints, par, x_ref, x, u_ref, k, K, alpha, lb, ub, u, d
 @compiled
 def horizon_rollout(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs, nus, nx, ndx,
                     alpha, gaps, gap_at, costs):
-    """:func:`node_rollout_step` over the running nodes ``t = 0 .. T-1`` in one call; returns the sum of their costs
+    """:func:`node_rollout_step` over the running nodes, t from 0 to T-1, in one call; returns the sum of their costs
     (each into ``costs[t]``).
 
     Node ``t``'s table is ``tbls[t]``, its integers ``ints[ioff[t]:ioff[t+1]]``, its parameters
@@ -353,7 +353,7 @@ def horizon_rollout(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, ks
 
 @compiled
 def horizon_calc_diff(tbls, ints, ioff, par, poff, xs, us, nus, nx, ndx, gaps, fs, costs):
-    """:func:`node_calc_diff` over the running nodes ``t = 0 .. T-1`` in one call (tables as in
+    """:func:`node_calc_diff` over the running nodes, t from 0 to T-1, in one call (tables as in
     :func:`horizon_rollout`); returns the sum of their costs (each into ``costs[t]``).  With ``gaps``, also
     the gaps ``fs[t+1] = xnext_t ⊖ xs[t+1]``."""
     total = 0.0

@@ -4,30 +4,30 @@ Both are ``typing.NamedTuple`` of ints and numpy arrays, so each is ONE argument
 Joints are numbered as in Pinocchio (``0`` is the universe, ``parent[i] < i``); the subtree of joint ``i``
 is the contiguous range ``i .. subtree_end[i] - 1`` (checked when lowering).
 
-=======================  ===================  =================================================================
-field                    shape                meaning
-=======================  ===================  =================================================================
-``nq nv njoints nframes``  int                sizes
-``jtype idx_q idx_v``    ``(njoints,)``       joint code (:mod:`.joint_types`, ``-1`` for the universe), first
-                                              configuration / velocity index
-``nvj``                  ``(njoints,)``       velocity size of each joint
-``axis``                 ``(njoints, 3)``     unit axis of a revolute / prismatic joint
-``parent``               ``(njoints,)``       parent joint (``parent[0] = 0``)
-``subtree_end``          ``(njoints,)``       one past the last joint of the subtree of each joint
-``depth``                ``(njoints,)``       number of moving joints from the root to the joint, itself included
-``dof_joint``            ``(nv,)``            joint of each velocity index
-``dof_parent``           ``(nv,)``            previous velocity index on the path to the root (``-1``: none)
-``jR jp``                ``(njoints, 3, 3)``, joint placement in its parent (``model.jointPlacements``)
-                         ``(njoints, 3)``
-``mass com inertia``     ``(njoints,)``,      body inertia in the joint frame: mass, centre of mass, rotational
-                         ``(njoints, 3)``,    inertia about the centre of mass (``model.inertias``)
-                         ``(njoints, 3, 3)``
-``frame_joint``          ``(nframes,)``       parent joint of each frame (``model.frames[f].parentJoint``)
-``fR fp``                ``(nframes, 3, 3)``, frame placement in its parent joint
-                         ``(nframes, 3)``
-``armature``             ``(nv,)``            rotor inertia added to the diagonal of the mass matrix
-``gravity``              ``(6,)``             ``model.gravity`` (linear, then angular)
-=======================  ===================  =================================================================
+=========================  ====================  ===================================================================
+field                      shape                 meaning
+=========================  ====================  ===================================================================
+``nq nv njoints nframes``  int                   sizes
+``jtype idx_q idx_v``      ``(njoints,)``        joint code (:mod:`.joint_types`, ``-1`` for the universe), first
+                                                 configuration / velocity index
+``nvj``                    ``(njoints,)``        velocity size of each joint
+``axis``                   ``(njoints, 3)``      unit axis of a revolute / prismatic joint
+``parent``                 ``(njoints,)``        parent joint (``parent[0] = 0``)
+``subtree_end``            ``(njoints,)``        one past the last joint of the subtree of each joint
+``depth``                  ``(njoints,)``        number of moving joints from the root to the joint, itself included
+``dof_joint``              ``(nv,)``             joint of each velocity index
+``dof_parent``             ``(nv,)``             previous velocity index on the path to the root (``-1``: none)
+``jR jp``                  ``(njoints, 3, 3)``,  joint placement in its parent (``model.jointPlacements``)
+                           ``(njoints, 3)``
+``mass com inertia``       ``(njoints,)``,       body inertia in the joint frame: mass, centre of mass, rotational
+                           ``(njoints, 3)``,     inertia about the centre of mass (``model.inertias``)
+                           ``(njoints, 3, 3)``
+``frame_joint``            ``(nframes,)``        parent joint of each frame (``model.frames[f].parentJoint``)
+``fR fp``                  ``(nframes, 3, 3)``,  frame placement in its parent joint
+                           ``(nframes, 3)``
+``armature``               ``(nv,)``             rotor inertia added to the diagonal of the mass matrix
+``gravity``                ``(6,)``              ``model.gravity`` (linear, then angular)
+=========================  ====================  ===================================================================
 """
 
 from __future__ import annotations
