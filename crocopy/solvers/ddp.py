@@ -526,7 +526,7 @@ class SolverDDP(SolverAbstract):
 
         Inside ``solve``, a compiled node (:mod:`.compiled_nodes`) does its whole step (``dx``, the
         control, the node, the next state) in one call, and when every running node is compiled the
-        whole loop is one call (:meth:`_horizon_rollout`).
+        whole loop is one call (:func:`.compiled_nodes.horizon_rollout`).
         """
         problem = self.problem
         xs, xs_try, us_try, fs, dx_try = self.xs, self.xs_try, self.us_try, self.fs, self._dx_try
@@ -547,7 +547,7 @@ class SolverDDP(SolverAbstract):
         cost = 0.0
         t = 0
         if self._nodes is not None and self._nodes.horizon is not None:
-            cost = self._horizon_rollout(steplength, gaps, lbs, ubs, gap_at)
+            cost = compiled_nodes.horizon_rollout(self, steplength, gaps, lbs, ubs, gap_at, _SOLE)
             models, t, x = (), problem.T, xs_try[-1]
         for m, d in zip(models, problem.runningDatas):
             state = m.state
@@ -600,36 +600,6 @@ class SolverDDP(SolverAbstract):
         if not np.isfinite(cost) or not np.isfinite(x).all():
             raise ForwardPassError("the rollout produced a non-finite state or cost")
         self.cost_try = cost
-
-    def _horizon_rollout(self, steplength: float, gaps: bool, lbs: list | None, ubs: list | None, gap_at: int) -> float:
-        """The running nodes of :meth:`_trial_rollout` in one compiled call (``self._nodes.horizon``); the
-        entries of ``xs_try[1:]``, ``us_try`` and ``_dx_try`` are made fit first, as in the node loop."""
-        problem = self.problem
-        xs_try, us_try, dx_try, unbounded = self.xs_try, self.us_try, self._dx_try, self._unbounded
-        lb_list, ub_list = [], []
-        for t, m in enumerate(problem.runningModels):
-            state, nu = m.state, m.nu
-            dx = dx_try[t]
-            if dx is None or dx.shape[0] != state.ndx:
-                dx_try[t] = np.empty(state.ndx)
-            u = us_try[t]
-            if getrefcount(u) != _SOLE or u.base is not None or u.shape[0] != nu:
-                us_try[t] = np.empty(nu)
-            x = xs_try[t + 1]
-            if getrefcount(x) != _SOLE or x.base is not None or x.shape[0] != state.nx:
-                xs_try[t + 1] = np.empty(state.nx)
-            lb = None if lbs is None else lbs[t]
-            if lb is None:
-                lb, ub = unbounded[nu]
-            else:
-                ub = ubs[t]
-            lb_list.append(lb)
-            ub_list.append(ub)
-        cost, costs = self._nodes.horizon(self.xs, self.us, xs_try, us_try, dx_try, self.k, self.K, self.fs, lb_list,
-                                          ub_list, steplength, gaps, gap_at)
-        for d, c in zip(problem.runningDatas, costs):
-            d.cost = c
-        return cost
 
     def stoppingCriteria(self) -> float:
         """``stop = |d₀ + ½ d₁|``: the expected reduction of a full step."""
