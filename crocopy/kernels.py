@@ -137,6 +137,20 @@ def _address(array):
 address = compiled(_address)
 """``address(array)``: the address of ``array``'s first element (for :func:`float64_pointer`/:func:`int64_pointer`),
 a quarter of the cost of ``array.ctypes.data`` from Python."""
+
+
+def _matrix_at(address, n, m):
+    """The C-contiguous ``(n, m)`` float64 array at ``address`` (kept alive by the caller)."""
+    return carray(float64_pointer(address), (n, m))
+
+
+def _vector_at(address, n):
+    """The float64 vector of length ``n`` at ``address`` (kept alive by the caller)."""
+    return carray(float64_pointer(address), (n,))
+
+
+matrix_at = compiled(_matrix_at)
+vector_at = compiled(_vector_at)
 carray = numba.carray if available else None
 
 

@@ -205,9 +205,14 @@ class SolverAbstract:
         """Update the gaps ``fs`` from the nodes' ``xnext`` (after ``problem.calc``) and return their norm."""
         problem = self.problem
         xs = self.xs
-        self.fs[0][:] = problem.runningModels[0].state.diff(xs[0], problem.x0) if problem.T else 0.0
         for t, (m, d) in enumerate(zip(problem.runningModels, problem.runningDatas)):
             self.fs[t + 1][:] = m.state.diff(xs[t + 1], d.xnext)
+        return self._close_gaps()
+
+    def _close_gaps(self) -> float:
+        """``fs[0] = x0 ⊖ xs[0]`` and ``ffeas``, the norm of all the gaps (``fs[1:]`` filled by the caller)."""
+        problem = self.problem
+        self.fs[0][:] = problem.runningModels[0].state.diff(self.xs[0], problem.x0) if problem.T else 0.0
         self.ffeas = self._norm(self.fs)
         return self.ffeas
 

@@ -20,14 +20,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kernels import compiled
+from ..kernels import compiled, matrix_at
 from .horizon import QUU_INV
 from .riccati_kernel import (
     SMALL,
     action_value_function,
     cholesky_lower,
     finish_value_function,
-    matrix_at,
     node_arrays,
     node_riccati,
     q_arrays,

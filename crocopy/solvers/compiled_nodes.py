@@ -86,26 +86,21 @@ class CompiledNodes:
         return cost
 
     def calcDiff(self, problem, xs, us, synced: bool, fs: list | None = None) -> float:
-        """Derivatives (and values, unless ``synced``) of every node; returns the total cost.  With ``fs``,
-        also the gaps ``fs[t+1] = xnext_t ⊖ xs[t+1]`` (``fs[0]`` is the caller's)."""
+        """Derivatives (and values, unless ``synced``) of every node; returns the total cost.  With ``fs``
+        (only with a :attr:`horizon`, which computes them in the same call), also the gaps
+        ``fs[t+1] = xnext_t ⊖ xs[t+1]`` (``fs[0]`` is the caller's)."""
         if self.horizon is not None:
             cost, costs = self.horizon.calc_diff(xs, us, fs, fs is not None)
             for d, c in zip(problem.runningDatas, costs):
                 d.cost = c
-            self.calc_diffs[-1](xs[-1], None, synced)
-            cost += problem.terminalData.cost
-            problem.cost = cost
-            return cost
-        cost = 0.0
-        for calc_diff, d, x, u in zip(self.calc_diffs, problem.runningDatas, xs, us):
-            calc_diff(x, u, synced)
-            cost += d.cost
+        else:
+            cost = 0.0
+            for calc_diff, d, x, u in zip(self.calc_diffs, problem.runningDatas, xs, us):
+                calc_diff(x, u, synced)
+                cost += d.cost
         self.calc_diffs[-1](xs[-1], None, synced)
         cost += problem.terminalData.cost
         problem.cost = cost
-        if fs is not None:
-            for t, (m, d) in enumerate(zip(problem.runningModels, problem.runningDatas)):
-                m.state._diff_into(xs[t + 1], d.xnext, fs[t + 1])
         return cost
 
 

@@ -350,8 +350,9 @@ class SolverDDP(SolverAbstract):
         """Evaluate (if needed) and differentiate every node at the current iterate; update the gaps."""
         problem = self.problem
         nodes = self._nodes
+        gaps_compiled = nodes is not None and nodes.horizon is not None and not self.isFeasible
         if nodes is not None:
-            self.cost = nodes.calcDiff(problem, self.xs, self.us, self._synced, None if self.isFeasible else self.fs)
+            self.cost = nodes.calcDiff(problem, self.xs, self.us, self._synced, self.fs if gaps_compiled else None)
         else:
             if not self._synced:
                 problem.calc(self.xs, self.us)
@@ -363,9 +364,8 @@ class SolverDDP(SolverAbstract):
             for f in self.fs:
                 f[:] = 0.0
             self.ffeas = 0.0
-        elif nodes is not None:
-            self.fs[0][:] = problem.runningModels[0].state.diff(self.xs[0], problem.x0) if problem.T else 0.0
-            self.ffeas = self._norm(self.fs)
+        elif gaps_compiled:
+            self._close_gaps()
         else:
             self.computeDynamicFeasibility()
         self.computeInequalityFeasibility()

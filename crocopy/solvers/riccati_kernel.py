@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kernels import carray, compiled, float64_pointer
+from ..kernels import compiled, matrix_at, vector_at
 from .horizon import FS, KM, KV, QU, QUU, QX, QXU, QXX, VX, VXX, VXX_F
 
 
@@ -176,20 +176,6 @@ def _feedback_control(u, k, K, dx, alpha, lb, ub, out):
 
 
 feedback_control = compiled(_feedback_control)
-
-
-def _matrix_at(address, n, m):
-    """The C-contiguous ``(n, m)`` float64 array at ``address`` (kept alive by the caller)."""
-    return carray(float64_pointer(address), (n, m))
-
-
-def _vector_at(address, n):
-    """The float64 vector of length ``n`` at ``address`` (kept alive by the caller)."""
-    return carray(float64_pointer(address), (n,))
-
-
-matrix_at = compiled(_matrix_at)
-vector_at = compiled(_vector_at)
 
 
 def _mul(A, B, C, transpose):

@@ -275,8 +275,7 @@ class EulerNode:
         shapes = np.concatenate([p[1] for p in parts])
         n = addresses.shape[0]
         header = np.zeros(kernel.SHAPES, dtype=np.int64)
-        header[[kernel.NQ, kernel.NV, kernel.NU, kernel.NR, kernel.U_START]] = (
-            rb.nq, rb.nv, self.model.nu, stack.r.shape[0], stack.u_start)
+        header[[kernel.NQ, kernel.NV, kernel.NU, kernel.U_START]] = rb.nq, rb.nv, self.model.nu, stack.u_start
         header[[kernel.N_ITEMS, kernel.EUCLIDEAN, kernel.NJOINTS, kernel.NFRAMES, kernel.N_STACK]] = (
             len(items) // kernel.ITEM_FIELDS, self.model._euclidean, rb.njoints, rb.nframes, len(stack.starts))
         header[kernel.ITEMS] = kernel.SHAPES + 3 * n

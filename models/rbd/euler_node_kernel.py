@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from crocopy.costs.stack_kernel import activation_values, derivatives_and_sums
 from crocopy.integrators.euler_kernel import add_integrate_jacobian, euler_chain
-from crocopy.kernels import carray, compiled, float64_pointer, int64_pointer
+from crocopy.kernels import carray, compiled, float64_pointer, int64_pointer, matrix_at, vector_at
 from crocopy.solvers.riccati_kernel import feedback_control
 
 from .dynamics_kernel import (
@@ -44,11 +44,10 @@ STATE, CONTROL, PLACEMENT, TRANSLATION, ROTATION, VELOCITY = range(6)
 WORLD, LOCAL, LOCAL_WORLD_ALIGNED = 0, 1, 2
 """Pinocchio's reference frames (``int(pinocchio.ReferenceFrame)``)."""
 
-NQ, NV, NU, NR, U_START, N_ITEMS, EUCLIDEAN, NJOINTS, NFRAMES, N_STACK, ITEMS, STARTS, TERMINAL = range(13)
-SHAPES = 13
+NQ, NV, NU, U_START, N_ITEMS, EUCLIDEAN, NJOINTS, NFRAMES, N_STACK, ITEMS, STARTS, TERMINAL = range(12)
+SHAPES = 12
 ITEM_FIELDS = 6
 
-RB_INT_FIELDS = ("jtype", "idx_q", "idx_v", "nvj", "parent", "subtree_end", "depth", "dof_joint", "frame_joint")
 NODE_ARRAYS = (
     "xnext", "dx", "Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu",
     "a", "dFx", "dFu", "Minv", "dLx", "dLu", "dLxx", "dLxu", "dLuu",
@@ -70,12 +69,12 @@ NODE = N_RB + N_WS
 
 @compiled
 def _vec(tbl, ints, k):
-    return carray(float64_pointer(tbl[k]), (ints[SHAPES + 3 * k],))
+    return vector_at(tbl[k], ints[SHAPES + 3 * k])
 
 
 @compiled
 def _mat(tbl, ints, k):
-    return carray(float64_pointer(tbl[k]), (ints[SHAPES + 3 * k], ints[SHAPES + 3 * k + 1]))
+    return matrix_at(tbl[k], ints[SHAPES + 3 * k], ints[SHAPES + 3 * k + 1])
 
 
 @compiled
@@ -117,14 +116,14 @@ def _workspace(tbl, ints):
 
 
 @compiled
-def _matmul(A, B, out, rows, cols, inner, scale):
-    """``out[:rows, :cols] = scale A[:rows, :inner] B[:inner, :cols]``."""
+def _matmul(A, B, out, rows, cols, inner):
+    """``out[:rows, :cols] = A[:rows, :inner] B[:inner, :cols]``."""
     for i in range(rows):
         for j in range(cols):
             acc = 0.0
             for k in range(inner):
                 acc += A[i, k] * B[k, j]
-            out[i, j] = scale * acc
+            out[i, j] = acc
 
 
 @compiled
@@ -211,7 +210,7 @@ def _jacobians(tbl, ints, par, rb, ws, x):
             frame_jacobian(rb, ws, fid, LOCAL, J6)
             _relative_frame(rb, ws, fid, par, o, R3, p3)
             jlog6(R3, p3, m6)
-            _matmul(m6, J6, rows, 6, nv, 6, 1.0)
+            _matmul(m6, J6, rows, 6, nv, 6)
         else:
             frame_jacobian(rb, ws, fid, LOCAL, J6)
             _rotation_error(rb, ws, fid, par, o, R3)
@@ -338,13 +337,10 @@ def horizon_rollout(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, ks
     for t in range(tbls.shape[0]):
         nu = nus[t]
         cost = node_rollout_step(
-            tbls[t], ints[ioff[t]: ioff[t + 1]], par[poff[t]: poff[t + 1]],
-            carray(float64_pointer(xs[t]), (nx,)), carray(float64_pointer(xs_try[t]), (nx,)),
-            carray(float64_pointer(us[t]), (nu,)), carray(float64_pointer(ks[t]), (nu,)),
-            carray(float64_pointer(Ks[t]), (nu, ndx)), alpha, carray(float64_pointer(lbs[t]), (nu,)),
-            carray(float64_pointer(ubs[t]), (nu,)), carray(float64_pointer(us_try[t]), (nu,)),
-            carray(float64_pointer(dxs[t]), (ndx,)), carray(float64_pointer(xs_try[t + 1]), (nx,)),
-            carray(float64_pointer(fs[t + 1]), (ndx,)), gaps or t + 1 == gap_at,
+            tbls[t], ints[ioff[t]: ioff[t + 1]], par[poff[t]: poff[t + 1]], vector_at(xs[t], nx),
+            vector_at(xs_try[t], nx), vector_at(us[t], nu), vector_at(ks[t], nu), matrix_at(Ks[t], nu, ndx), alpha,
+            vector_at(lbs[t], nu), vector_at(ubs[t], nu), vector_at(us_try[t], nu), vector_at(dxs[t], ndx),
+            vector_at(xs_try[t + 1], nx), vector_at(fs[t + 1], ndx), gaps or t + 1 == gap_at,
         )
         costs[t] = cost
         total += cost
@@ -359,15 +355,15 @@ def horizon_calc_diff(tbls, ints, ioff, par, poff, xs, us, nus, nx, ndx, gaps, f
     total = 0.0
     for t in range(tbls.shape[0]):
         tbl, node_ints = tbls[t], ints[ioff[t]: ioff[t + 1]]
-        x = carray(float64_pointer(xs[t]), (nx,))
-        cost = node_calc_diff(tbl, node_ints, par[poff[t]: poff[t + 1]], x, carray(float64_pointer(us[t]), (nus[t],)))
+        x = vector_at(xs[t], nx)
+        cost = node_calc_diff(tbl, node_ints, par[poff[t]: poff[t + 1]], x, vector_at(us[t], nus[t]))
         costs[t] = cost
         total += cost
         if gaps:
             rb = _model(tbl, node_ints)
-            x_next = carray(float64_pointer(xs[t + 1]), (nx,))
+            x_next = vector_at(xs[t + 1], nx)
             state_diff(rb.jtype, rb.idx_q, rb.idx_v, node_ints[NQ], node_ints[NV], x_next,
-                       _vec(tbl, node_ints, E_XNEXT), carray(float64_pointer(fs[t + 1]), (ndx,)))
+                       _vec(tbl, node_ints, E_XNEXT), vector_at(fs[t + 1], ndx))
     return total
 
 
