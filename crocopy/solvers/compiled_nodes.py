@@ -40,9 +40,6 @@ callback may read nested datas).
 from __future__ import annotations
 
 from collections.abc import Callable
-from sys import getrefcount
-
-import numpy as np
 
 from .. import kernels
 
@@ -138,39 +135,6 @@ def select(solver) -> CompiledNodes | None:
         make_horizon = getattr(kind, "horizon", None)
         horizon = None if make_horizon is None else make_horizon(running)
     return CompiledNodes(calcs, calc_diffs, steps[:-1], horizon)
-
-
-def horizon_rollout(solver, steplength: float, gaps: bool, lbs: list | None, ubs: list | None, gap_at: int,
-                    sole: int) -> float:
-    """The running nodes of ``SolverDDP._trial_rollout`` in one compiled call (``solver._nodes.horizon``); returns
-    their total cost.  The entries of ``xs_try[1:]``, ``us_try`` and ``_dx_try`` are made fit first, as in the
-    node loop: an array is reused when the solver's list is its only holder (``getrefcount`` equal to ``sole``)."""
-    problem = solver.problem
-    xs_try, us_try, dx_try, unbounded = solver.xs_try, solver.us_try, solver._dx_try, solver._unbounded
-    lb_list, ub_list = [], []
-    for t, m in enumerate(problem.runningModels):
-        state, nu = m.state, m.nu
-        dx = dx_try[t]
-        if dx is None or dx.shape[0] != state.ndx:
-            dx_try[t] = np.empty(state.ndx)
-        u = us_try[t]
-        if getrefcount(u) != sole or u.base is not None or u.shape[0] != nu:
-            us_try[t] = np.empty(nu)
-        x = xs_try[t + 1]
-        if getrefcount(x) != sole or x.base is not None or x.shape[0] != state.nx:
-            xs_try[t + 1] = np.empty(state.nx)
-        lb = None if lbs is None else lbs[t]
-        if lb is None:
-            lb, ub = unbounded[nu]
-        else:
-            ub = ubs[t]
-        lb_list.append(lb)
-        ub_list.append(ub)
-    cost, costs = solver._nodes.horizon(solver.xs, solver.us, xs_try, us_try, dx_try, solver.k, solver.K, solver.fs,
-                                        lb_list, ub_list, steplength, gaps, gap_at)
-    for d, c in zip(problem.runningDatas, costs):
-        d.cost = c
-    return cost
 
 
 def attach(solver) -> CompiledNodes | None:

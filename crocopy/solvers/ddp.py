@@ -33,15 +33,13 @@ buffers when ``problem.updateModel``/``circularAppend`` changed a node's ``nx``,
 
 from __future__ import annotations
 
-from sys import getrefcount
-
 import numpy as np
 from scipy.linalg.lapack import dpotrf, dpotrs
 
 from .. import kernels
 from ..kernels import log_fallback, overridden
 from ..shooting import ShootingProblem
-from . import compiled_nodes, horizon, riccati_kernel
+from . import compiled_nodes, horizon, riccati_kernel, rollout
 from .base import BackwardPassError, ForwardPassError, SolverAbstract
 from .horizon import Horizon, NodeDerivatives
 from .nonfinite import (
@@ -52,17 +50,6 @@ from .nonfinite import (
     locate_in_rollout,
     trajectory_finite,
 )
-
-
-def _sole_holder_count() -> int:
-    """``getrefcount`` of an array that one list holds, read into a local name, as ``_trial_rollout`` reads it
-    (3 on CPython 3.11-3.13: the list, the name, the argument; less where the interpreter borrows references)."""
-    held = [np.empty(1)]
-    a = held[0]
-    return getrefcount(a)
-
-
-_SOLE = _sole_holder_count()
 
 
 class SolverDDP(SolverAbstract):
@@ -509,97 +496,9 @@ class SolverDDP(SolverAbstract):
 
     def _trial_rollout(self, steplength: float, gaps: bool = False, bounds: tuple[list, list] | None = None,
                        last_gap: bool = False) -> None:
-        """The DDP family's rollout into ``xs_try``/``us_try``/``cost_try``; raises ForwardPassError on NaN.
-
-        ``û_t = clamp(u_t - α k_t - K_t (x̂_t ⊖ x_t), lb_t, ub_t)`` (one compiled call,
-        :func:`~crocopy.solvers.riccati_kernel.feedback_control`) with ``bounds = (lbs, ubs)`` (no
-        ``bounds``, or ``None`` entries: no clamp) and ``x̂_{t+1} = f(x̂_t, û_t)``.  ``gaps`` keeps every
-        gap open by ``(1 - α)``: ``x̂₀ = x0 ⊕ ((α-1) f₀)``, ``x̂_{t+1} = f(x̂_t, û_t) ⊕ ((α-1) f_{t+1})``
-        (FDDP); ``last_gap`` keeps only the last one (Crocoddyl 3.2's Box-DDP from an infeasible
-        iterate).  Stores ``x̂_t ⊖ x_t`` in ``_dx_try`` (the solver's arrays, rewritten by every rollout).
-
-        No per-node allocation: an entry of ``xs_try``/``us_try`` is written in place when the list is
-        the only holder of that array (its ``getrefcount`` is ``_SOLE``, measured at import on the same
-        pattern), else replaced by a new array, so that a state or control a user
-        kept from ``xs``/``us`` (swapped with ``xs_try``/``us_try`` when a trial is accepted) never
-        changes under them.
-
-        Inside ``solve``, a compiled node (:mod:`.compiled_nodes`) does its whole step (``dx``, the
-        control, the node, the next state) in one call, and when every running node is compiled the
-        whole loop is one call (:func:`.compiled_nodes.horizon_rollout`).
-        """
-        problem = self.problem
-        xs, xs_try, us_try, fs, dx_try = self.xs, self.xs_try, self.us_try, self.fs, self._dx_try
-        models = problem.runningModels
-        x0 = problem.x0
-        x = xs_try[0]
-        if getrefcount(x) != _SOLE or x.base is not None or x.shape != x0.shape:
-            x = xs_try[0] = np.empty_like(x0)
-        if gaps:
-            (models[0] if models else problem.terminalModel).state._integrate_into(x0, (steplength - 1.0) * fs[0], x)
-        else:
-            x[:] = x0
-        lbs, ubs = (None, None) if bounds is None else bounds
-        us, k, K, unbounded = self.us, self.k, self.K, self._unbounded
-        feedback = riccati_kernel.feedback_control if kernels.active else riccati_kernel.feedback_control_numpy
-        gap_at = problem.T if last_gap else -1
-        calcs, steps = (None, None) if self._nodes is None else (self._nodes.calcs, self._nodes.steps)
-        cost = 0.0
-        t = 0
-        if self._nodes is not None and self._nodes.horizon is not None:
-            cost = compiled_nodes.horizon_rollout(self, steplength, gaps, lbs, ubs, gap_at, _SOLE)
-            models, t, x = (), problem.T, xs_try[-1]
-        for m, d in zip(models, problem.runningDatas):
-            state = m.state
-            if m.nu:
-                dx = dx_try[t]
-                if dx is None or dx.shape[0] != state.ndx:
-                    dx = dx_try[t] = np.empty(state.ndx)
-                u = us_try[t]
-                if getrefcount(u) != _SOLE or u.base is not None or u.shape[0] != m.nu:
-                    u = us_try[t] = np.empty(m.nu)
-                lb = None if lbs is None else lbs[t]
-                if lb is None:
-                    lb, ub = unbounded[m.nu]
-                else:
-                    ub = ubs[t]
-                step = None if steps is None else steps[t]
-                if step is not None:
-                    x_next = xs_try[t + 1]
-                    if getrefcount(x_next) != _SOLE or x_next.base is not None or x_next.shape[0] != state.nx:
-                        x_next = xs_try[t + 1] = np.empty(state.nx)
-                    d.cost = c = step(xs[t], x, us[t], k[t], K[t], steplength, lb, ub, u, dx, x_next, fs[t + 1],
-                                      gaps or t + 1 == gap_at)
-                    cost += c
-                    x = x_next
-                    t += 1
-                    continue
-                state._diff_into(xs[t], x, dx)
-                feedback(us[t], k[t], K[t], dx, steplength, lb, ub, u)
-            else:
-                u = us_try[t]
-            if calcs is None:
-                m.calc(d, x, u)
-            else:
-                calcs[t](x, u)
-            cost += d.cost
-            t += 1
-            xnext = d.xnext
-            x = xs_try[t]
-            if getrefcount(x) != _SOLE or x.base is not None or x.shape != xnext.shape:
-                x = xs_try[t] = np.empty_like(xnext)
-            if gaps or t == gap_at:
-                state._integrate_into(xnext, (steplength - 1.0) * fs[t], x)
-            else:
-                x[:] = xnext
-        if calcs is None:
-            problem.terminalModel.calc(problem.terminalData, x)
-        else:
-            calcs[-1](x, None)
-        cost += problem.terminalData.cost
-        if not np.isfinite(cost) or not np.isfinite(x).all():
-            raise ForwardPassError("the rollout produced a non-finite state or cost")
-        self.cost_try = cost
+        """The DDP family's rollout into ``xs_try``/``us_try``/``cost_try``
+        (:func:`~crocopy.solvers.rollout.trial_rollout`); raises ForwardPassError on NaN."""
+        rollout.trial_rollout(self, steplength, gaps, bounds, last_gap)
 
     def stoppingCriteria(self) -> float:
         """``stop = |d₀ + ½ d₁|``: the expected reduction of a full step."""
