@@ -384,11 +384,7 @@ def _dynamics_jacobians(tbl, ints, x, rb, ws):
                 sv += Minv[i, k] * dv[k, j]
             dFx[i, j] = -sq
             dFx[i, nv + j] = -sv
-        for j in range(nu):
-            acc = 0.0
-            for k in range(nv):
-                acc += Minv[i, k] * Sm[k, j]
-            dFu[i, j] = acc
+    _matmul(Minv, Sm, dFu, nv, nu, nv)
 
 
 @compiled
