@@ -4,6 +4,7 @@ from .actuations import (
     ActuationModelFloatingBase,
     ActuationModelFloatingBaseThrusters,
     ActuationModelFull,
+    ActuationModelLinear,
     Thruster,
     ThrusterType,
 )
@@ -119,6 +120,7 @@ __all__ = [
     "ActuationModelFloatingBase",
     "ActuationModelFloatingBaseThrusters",
     "ActuationModelFull",
+    "ActuationModelLinear",
     "DataCollectorActMultibody",
     "DataCollectorActMultibodyInContact",
     "DataCollectorActuation",

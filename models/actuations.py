@@ -6,9 +6,11 @@
 - :class:`ActuationModelFloatingBaseThrusters`: the root joint is driven by ``n`` thrusters fixed
   on the base; ``tau = W u`` for ``nu = n + nv - 6`` where the first ``n`` columns of ``W`` are
   the thrusters' wrenches in the base frame and the rest select the other joints.
+- :class:`ActuationModelLinear` (crocopy's own): ``tau = S u`` for any constant ``S (nv, nu)``, for
+  example the selection of the actuated joints of an under-actuated robot (acrobot, pendubot).
 
 Control bounds ``u_lb``/``u_ub`` default to the URDF effort limits of the actuated joints (thrust
-limits for thrusters).  ``dtau_du`` and ``Mtau`` are constant and set in ``createData``.
+limits for thrusters; unbounded for :class:`ActuationModelLinear`).  ``dtau_du`` and ``Mtau`` are constant and set in ``createData``.
 """
 
 from __future__ import annotations
@@ -107,6 +109,62 @@ class ActuationModelFloatingBase(ActuationModelAbstract):
         np.fill_diagonal(data.Mtau[:, nfb:], 1.0)
         data.tau_set[:nfb] = False
         return data
+
+
+class ActuationModelLinear(ActuationModelAbstract):
+    """crocopy's ``ActuationModelLinear(state, S)``: ``tau = S u`` with a constant ``S``, shape ``(nv, nu)``.
+
+    Crocoddyl has no such class (its examples write the under-actuated pendulum's actuation in Python);
+    crocopy's compiled nodes take this one.  ``Mtau = S⁺`` (pseudo-inverse), ``commands`` gives
+    ``u = S⁺ tau``; ``tau_set`` flags the rows of ``S`` that are not zero.  ``S`` is read-only (build a
+    new model to change it); ``u_lb``/``u_ub`` default to unbounded.
+
+    Raises ``ValueError`` if ``S`` is not a finite ``(nv, nu)`` matrix with ``nu >= 1``.
+    """
+
+    def __init__(self, state: StateMultibody, S: np.ndarray) -> None:
+        nv = _check_state(state).nv
+        S = np.array(S, dtype=float, copy=True)
+        if S.ndim == 1 and S.shape[0] == nv:
+            S = S.reshape(nv, 1)
+        if S.ndim != 2 or S.shape[0] != nv or S.shape[1] < 1:
+            raise ValueError(f"S must have shape (nv, nu) = ({nv}, nu) with nu >= 1, got {S.shape}")
+        if not np.isfinite(S).all():
+            raise ValueError("S must be finite")
+        S.flags.writeable = False
+        self._S = S
+        self._Mtau = np.linalg.pinv(S)
+        self._Mtau.flags.writeable = False
+        super().__init__(state, S.shape[1])
+
+    @property
+    def S(self) -> np.ndarray:
+        """The constant torque map ``tau = S u``, shape ``(nv, nu)`` (read-only)."""
+        return self._S
+
+    def calc(self, data: ActuationDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
+        if u is not None:
+            np.dot(self._S, u, out=data.tau)
+
+    def calcDiff(self, data: ActuationDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
+        """``dtau_du = S`` and ``dtau_dx = 0`` are constant (set in :meth:`createData`)."""
+
+    def commands(self, data: ActuationDataAbstract, x: np.ndarray, tau: np.ndarray) -> None:
+        np.dot(self._Mtau, tau, out=data.u)
+
+    def torqueTransform(self, data: ActuationDataAbstract, x: np.ndarray, u: np.ndarray) -> None:
+        """``Mtau = S⁺`` is constant (set in :meth:`createData`)."""
+
+    def createData(self) -> ActuationDataAbstract:
+        data = ActuationDataAbstract(self)
+        data.dtau_du[:] = self._S
+        data.Mtau[:] = self._Mtau
+        data.tau_set[:] = np.abs(self._S).sum(axis=1) > 0.0
+        return data
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._S.flags.writeable = self._Mtau.flags.writeable = False
 
 
 class ThrusterType(enum.IntEnum):

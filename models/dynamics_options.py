@@ -16,7 +16,12 @@ import numpy as np
 
 from crocopy.validation import as_vector
 
-from .actuations import ActuationModelFloatingBase, ActuationModelFloatingBaseThrusters, ActuationModelFull
+from .actuations import (
+    ActuationModelFloatingBase,
+    ActuationModelFloatingBaseThrusters,
+    ActuationModelFull,
+    ActuationModelLinear,
+)
 
 
 class ArmatureMixin:
@@ -58,15 +63,17 @@ class ActuationStructure:
     ``dtau_dx_nonzero`` is False for the bundled actuations, whose ``τ`` does not depend on ``x``;
     ``u_columns`` is the slice of joints driven one-to-one by ``u`` when ``∂τ/∂u`` is a selection
     (full and floating-base actuations), so that ``A ∂τ/∂u = A[:, u_columns]``; ``None`` otherwise.
-    ``constant``: the actuation is exactly one of those two, whose ``calcDiff`` has nothing to do.
+    ``constant``: the actuation is exactly one of those two or ``ActuationModelLinear``, whose ``calcDiff``
+    has nothing to do.
     """
 
     def __init__(self, actuation, nv: int) -> None:
         self.dtau_dx_nonzero = not isinstance(
-            actuation, ActuationModelFull | ActuationModelFloatingBase | ActuationModelFloatingBaseThrusters
+            actuation,
+            ActuationModelFull | ActuationModelFloatingBase | ActuationModelFloatingBaseThrusters | ActuationModelLinear,
         )
         self.u_columns = None
-        self.constant = type(actuation) in (ActuationModelFull, ActuationModelFloatingBase)
+        self.constant = type(actuation) in (ActuationModelFull, ActuationModelFloatingBase, ActuationModelLinear)
         if type(actuation) is ActuationModelFull:
             self.u_columns = slice(0, nv)
         elif type(actuation) is ActuationModelFloatingBase:

@@ -11,6 +11,11 @@ Costs (``0.5 ||r||^2`` activations times the weight, running costs multiplied by
 * running ``state``: weighted state error to upright, weights ``(1, 1, 0.1, 0.1)``, weight 1e-2;
 * running ``control``: ``||u||^2``, weight 1e-3;
 * terminal ``state``: same residual, weight 1e3.
+
+The actuation ``tau = (0, u)`` (elbow) is crocopy's ``ActuationModelLinear``, which its compiled nodes
+take; Crocoddyl has no built-in equivalent, so its problem gets a Python subclass of
+``ActuationModelAbstract``, as in Crocoddyl's own double-pendulum example (``python_actuation=True``
+gives crocopy that class too).
 """
 
 from __future__ import annotations
@@ -26,7 +31,8 @@ from .common import load_model
 
 @functools.cache
 def _actuation_class(lib: ModuleType) -> type:
-    """One-joint actuation ``tau = S u`` derived from ``lib.ActuationModelAbstract`` (one class per lib)."""
+    """One-joint actuation ``tau = S u`` written in Python on ``lib.ActuationModelAbstract`` (one class per lib),
+    as Crocoddyl's own double-pendulum example does: Crocoddyl has no built-in actuation for it."""
 
     class ActuationModelSingleJoint(lib.ActuationModelAbstract):
         """Actuation of joint ``joint`` only: ``tau = e_joint u`` (nu = 1)."""
@@ -64,6 +70,16 @@ def _single_joint_actuation(lib_name: str, state: object, joint: int) -> object:
     return _actuation_class(importlib.import_module(lib_name))(state, joint)
 
 
+def single_joint_actuation(lib: ModuleType, state: object, joint: int, python: bool = False) -> object:
+    """Actuation of joint ``joint`` only (``nu = 1``): ``lib.ActuationModelLinear`` where ``lib`` has it
+    (crocopy), else, or when ``python``, the Python class of :func:`_actuation_class` (Crocoddyl)."""
+    if python or not hasattr(lib, "ActuationModelLinear"):
+        return _actuation_class(lib)(state, joint)
+    selection = np.zeros((state.nv, 1))
+    selection[joint, 0] = 1.0
+    return lib.ActuationModelLinear(state, selection)
+
+
 def build_pendulum(
     lib: ModuleType,
     actuated_joint: int = 1,
@@ -71,6 +87,7 @@ def build_pendulum(
     horizon: float = 1.0,
     nodes: int = 100,
     weights: tuple[float, float, float] = (1e-2, 1e-3, 1e3),
+    python_actuation: bool = False,
 ) -> tuple[object, list, list]:
     """Double-pendulum swing-up with one actuated joint and ±``torque_limit`` N m.
 
@@ -86,6 +103,9 @@ def build_pendulum(
         Duration (s) and number of running nodes (dt = horizon / nodes).
     weights : tuple of float
         Running state, running control and terminal state weights.
+    python_actuation : bool
+        Use the Python actuation class (as Crocoddyl's example does) even where ``lib`` has
+        ``ActuationModelLinear``; crocopy then keeps these nodes on its Python path.
 
     Returns
     -------
@@ -98,7 +118,7 @@ def build_pendulum(
         raise ValueError(f"need nodes >= 1 and horizon > 0, got nodes={nodes}, horizon={horizon}")
     model = load_model("double_pendulum")
     state = lib.StateMultibody(model)
-    actuation = _actuation_class(lib)(state, actuated_joint)
+    actuation = single_joint_actuation(lib, state, actuated_joint, python_actuation)
     x0 = np.array([np.pi, 0.0, 0.0, 0.0])
     x_up = np.zeros(4)
     w_state, w_control, w_terminal = weights

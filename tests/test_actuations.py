@@ -103,6 +103,41 @@ def test_thruster_wrenches():
         crocopy.ActuationModelFloatingBaseThrusters(state, [0.1])
 
 
+def test_linear_actuation():
+    """tau = S u with a constant S: values, the constant Jacobians, S⁺ as commands and Mtau, tau_set."""
+    state = crocopy.StateMultibody(load("kinova"))
+    S = np.zeros((state.nv, 2))
+    S[1, 0], S[3, 1], S[4, 1] = 1.0, 2.0, -0.5
+    act = crocopy.ActuationModelLinear(state, S)
+    data = act.createData()
+    x, u = state.rand(), np.array([0.7, -1.3])
+    act.calc(data, x, u)
+    act.calcDiff(data, x, u)
+    assert act.nu == 2 and np.allclose(data.tau, S @ u)
+    assert np.array_equal(data.dtau_du, S) and not data.dtau_dx.any()
+    act.commands(data, x, data.tau.copy())
+    act.torqueTransform(data, x, u)
+    assert np.allclose(data.u, u) and np.allclose(data.Mtau @ S, np.eye(2))
+    assert data.tau_set.tolist() == [i in (1, 3, 4) for i in range(state.nv)]
+    assert np.all(act.u_lb == -np.inf) and np.all(act.u_ub == np.inf)
+    S[1, 0] = 5.0
+    assert act.S[1, 0] == 1.0
+    with pytest.raises(ValueError, match="read-only"):
+        act.S[1, 0] = 5.0
+    pendulum = crocopy.StateMultibody(load("double_pendulum"))
+    assert crocopy.ActuationModelLinear(pendulum, [0.0, 1.0]).S.shape == (2, 1)
+
+
+@pytest.mark.parametrize(
+    ("S", "match"),
+    [(np.ones((3, 1)), r"\(nv, nu\) = \(2, nu\).*got \(3, 1\)"), (np.ones((2, 0)), r"got \(2, 0\)"),
+     (np.ones((2, 1, 1)), r"got \(2, 1, 1\)"), (np.array([[np.nan], [1.0]]), "finite")],
+)
+def test_linear_actuation_rejects_bad_S(S, match):
+    with pytest.raises(ValueError, match=match):
+        crocopy.ActuationModelLinear(crocopy.StateMultibody(load("double_pendulum")), S)
+
+
 def test_smooth_sat_values_and_derivative():
     lb, ub = np.array([-1.0, 0.5]), np.array([2.0, 3.0])
     sq = crocopy.SquashingModelSmoothSat(lb, ub, 2)

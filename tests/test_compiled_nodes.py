@@ -85,8 +85,10 @@ def test_compiled_nodes_are_selected_only_where_they_apply():
     assert compiled_nodes.select(s) is not None
     with crocopy.use_kernels(False):
         assert compiled_nodes.select(s) is None
-    pend, _, _ = registry.build("pend")
+    pend, _, _ = registry.build("pend", python_actuation=True)
     assert compiled_nodes.select(crocopy.SolverFDDP(pend)) is None
+    pend, _, _ = registry.build("pend")
+    assert compiled_nodes.select(crocopy.SolverFDDP(pend)) is not None
 
 
 def test_a_user_callback_reads_nested_datas_of_the_current_iterate():

@@ -277,6 +277,7 @@ CASES: dict[str, Callable] = {
         lambda: crocopy.ActuationModelFloatingBase(crocopy.StateMultibody(load("talos_legs")))
     ),
     "ActuationModelFloatingBaseThrusters": _actuation_case(_thrusters),
+    "ActuationModelLinear": _actuation_case(lambda: crocopy.ActuationModelLinear(_pendulum(), [[0.0], [1.0]])),
     "ActuationSquashingModel": _actuation_case(lambda: _squashed(_pendulum())),
     "SquashingModelSmoothSat": lambda: (
         (dam := _free(actuation=_squashed(_pendulum()))), dam.actuation.squashing,

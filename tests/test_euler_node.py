@@ -36,6 +36,8 @@ def actuation(robot: str, state):
         return crocopy.ActuationModelFloatingBaseThrusters(state, thrusters)
     if robot == "anymal":
         return crocopy.ActuationModelFloatingBase(state)
+    if robot == "double_pendulum":
+        return crocopy.ActuationModelLinear(state, [[0.3], [1.0]])
     return crocopy.ActuationModelFull(state)
 
 

@@ -31,6 +31,8 @@ def _actuation(state, kind):
             )
         ]
         return crocopy.ActuationModelFloatingBaseThrusters(state, thrusters)
+    if kind == "linear":
+        return crocopy.ActuationModelLinear(state, np.random.default_rng(7).standard_normal((state.nv, 3)))
     floating = state.pinocchio.joints[1].shortname() == "JointModelFreeFlyer"
     act = crocopy.ActuationModelFloatingBase(state) if floating else crocopy.ActuationModelFull(state)
     if kind == "squashed":
@@ -116,7 +118,7 @@ def random_point(model, seed=0):
 
 
 CASES = [(r, k, a) for r in ROBOTS for k in ("plain", "squashed") for a in (False, True)] + [
-    ("iris", "thrusters", False)
+    ("iris", "thrusters", False), ("kinova", "linear", False), ("anymal", "linear", True)
 ]
 
 

@@ -7,8 +7,8 @@ exact classes (a subclass may override a step, so it keeps the Python path):
 * ``IntegratedActionModelEuler`` with the identity control parametrization, over a
   ``DifferentialActionModelFreeFwdDynamics`` without constraints;
 * its ``StateMultibody``'s Pinocchio model lowers (:func:`.lowering.lower_model`);
-* its actuation is ``ActuationModelFull``, ``ActuationModelFloatingBase`` or
-  ``ActuationModelFloatingBaseThrusters`` (``τ = S u`` with a constant ``S``);
+* its actuation is ``ActuationModelFull``, ``ActuationModelFloatingBase``,
+  ``ActuationModelFloatingBaseThrusters`` or ``ActuationModelLinear`` (``τ = S u`` with a constant ``S``);
 * every cost is a ``CostModelResidual`` in the cost stack with an activation of the quadratic-barrier
   family (:mod:`crocopy.costs.stack`), and every active one's residual is a ``ResidualModelState``,
   ``ResidualModelControl``, ``ResidualModelFramePlacement``, ``ResidualModelFrameTranslation``,
@@ -36,7 +36,12 @@ from crocopy.kernels import address
 from crocopy.residuals.control import ResidualModelControl
 from crocopy.residuals.state import ResidualModelState
 
-from ..actuations import ActuationModelFloatingBase, ActuationModelFloatingBaseThrusters, ActuationModelFull
+from ..actuations import (
+    ActuationModelFloatingBase,
+    ActuationModelFloatingBaseThrusters,
+    ActuationModelFull,
+    ActuationModelLinear,
+)
 from ..residuals_frame import (
     ResidualModelFramePlacement,
     ResidualModelFrameRotation,
@@ -48,7 +53,7 @@ from . import euler_node_kernel as kernel
 from .joint_types import NotLowerable
 from .lowering import RigidBodyModel, lower_model, make_workspace
 
-ACTUATIONS = (ActuationModelFull, ActuationModelFloatingBase, ActuationModelFloatingBaseThrusters)
+ACTUATIONS = (ActuationModelFull, ActuationModelFloatingBase, ActuationModelFloatingBaseThrusters, ActuationModelLinear)
 KINDS = {
     ResidualModelState: kernel.STATE,
     ResidualModelControl: kernel.CONTROL,
