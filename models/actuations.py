@@ -10,7 +10,8 @@
   example the selection of the actuated joints of an under-actuated robot (acrobot, pendubot).
 
 Control bounds ``u_lb``/``u_ub`` default to the URDF effort limits of the actuated joints (thrust
-limits for thrusters; unbounded for :class:`ActuationModelLinear`).  ``dtau_du`` and ``Mtau`` are constant and set in ``createData``.
+limits for thrusters; unbounded for :class:`ActuationModelLinear`).  ``dtau_du`` and ``Mtau`` are
+constant and set in ``createData``.
 """
 
 from __future__ import annotations

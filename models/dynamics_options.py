@@ -70,7 +70,7 @@ class ActuationStructure:
     def __init__(self, actuation, nv: int) -> None:
         self.dtau_dx_nonzero = not isinstance(
             actuation,
-            ActuationModelFull | ActuationModelFloatingBase | ActuationModelFloatingBaseThrusters | ActuationModelLinear,
+            (ActuationModelFull, ActuationModelFloatingBase, ActuationModelFloatingBaseThrusters, ActuationModelLinear),
         )
         self.u_columns = None
         self.constant = type(actuation) in (ActuationModelFull, ActuationModelFloatingBase, ActuationModelLinear)

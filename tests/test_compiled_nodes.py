@@ -164,3 +164,54 @@ def test_the_compiled_rollout_reuses_its_arrays_and_never_writes_a_held_one():
     solver._trial_rollout(1.0)
     for a, b in zip(solver.xs_try, reference):
         np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-10)
+
+
+def test_expected_improvement_over_the_compiled_horizon_equals_the_node_loop():
+    problem, xs, us = registry.build("quad-goal")
+    solver = crocopy.SolverFDDP(problem)
+    solver.setCandidate(xs, us, False)
+    assert compiled_nodes.attach(solver).horizon is not None
+    solver.computeDirection()
+    assert not solver.isFeasible and solver._Vxx_f is solver._Vxx_f_views
+    for alpha in (0.25, 0.1, 0.01):
+        solver.tryStep(alpha)
+        fast = solver.expectedImprovement().copy()
+        nodes, solver._nodes = solver._nodes, None
+        slow = solver.expectedImprovement().copy()
+        solver._nodes = nodes
+        assert abs(fast[1] - solver._dq) > 1e-6  # the gap term is not zero here
+        np.testing.assert_allclose(fast, slow, rtol=1e-12, atol=1e-14)
+
+
+def test_box_solvers_report_the_gaps_of_a_feasible_iterate_from_the_compiled_derivatives():
+    reports = []
+    for compiled in (True, False):
+        problem, xs, us = registry.build("quad-goal")
+        solver = crocopy.SolverBoxFDDP(problem)
+        solver.compat_crocoddyl = True
+        xs = problem.rollout(us)
+        xs[7] = xs[7].copy()
+        xs[7][[0, 1, 2, 7, 12]] += 0.01  # a feasible iterate (declared so) with one gap
+        solver.setCandidate(xs, us, True)
+        if compiled:
+            assert compiled_nodes.attach(solver).horizon is not None
+        solver.calcDiff()
+        assert all(not f.any() for f in solver.fs)
+        reports.append(solver.ffeas)
+    assert reports[0] == pytest.approx(reports[1], rel=1e-12) and reports[0] > 0.009
+
+
+def test_rollout_bounds_follow_the_bound_arrays():
+    problem, xs, us = registry.build("pend")
+    nodes = compiled_nodes.select(crocopy.SolverBoxFDDP(problem))
+    unbounded = {1: (np.full(1, -np.inf), np.full(1, np.inf))}
+    lbs = [np.array([-float(t)]) for t in range(problem.T)]
+    ubs = [np.array([float(t)]) for t in range(problem.T)]
+    lbs[3] = ubs[3] = None
+    lb_list, ub_list = nodes.bounds(lbs, ubs, unbounded)
+    assert lb_list[2] is lbs[2] and ub_list[5] is ubs[5] and lb_list[3] is unbounded[1][0]
+    assert nodes.bounds(lbs, ubs, unbounded)[0] is lb_list
+    lbs[4] = np.array([-9.0])
+    assert nodes.bounds(lbs, ubs, unbounded)[0][4] is lbs[4]
+    lb_list, ub_list = nodes.bounds(None, None, unbounded)
+    assert all(lb is unbounded[1][0] for lb in lb_list) and all(ub is unbounded[1][1] for ub in ub_list)

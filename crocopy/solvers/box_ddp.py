@@ -137,13 +137,8 @@ class BoxSolverMixin:
         self._kernel_fact = 0
         super()._start(init_xs, init_us, is_feasible, init_reg)
 
-    def calcDiff(self) -> float:
-        cost = super().calcDiff()
-        if self._compat and self.isFeasible:  # Crocoddyl reports the gaps, its backward pass ignores them
-            self.computeDynamicFeasibility()
-            for f in self.fs:
-                f[:] = 0.0
-        return cost
+    def _reports_feasible_gaps(self) -> bool:
+        return self._compat  # Crocoddyl reports the gaps, its backward pass ignores them
 
     @property
     def compat_crocoddyl(self) -> bool:

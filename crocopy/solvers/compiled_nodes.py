@@ -40,6 +40,7 @@ callback may read nested datas).
 from __future__ import annotations
 
 from collections.abc import Callable
+from operator import is_
 
 from .. import kernels
 
@@ -65,11 +66,35 @@ class CompiledNodes:
     where the nodes offer one, the models' own methods elsewhere (the terminal node last)."""
 
     def __init__(self, calcs: list[Callable], calc_diffs: list[Callable], steps: list[Callable | None],
-                 horizon: Callable | None = None) -> None:
+                 horizon: Callable | None = None, problem=None) -> None:
         self.calcs = calcs
         self.calc_diffs = calc_diffs
         self.steps = steps
         self.horizon = horizon
+        models = [] if problem is None else problem.runningModels
+        self.nu = [m.nu for m in models]
+        self.nx = [m.state.nx for m in models]
+        self.ndx = [m.state.ndx for m in models]
+        self._bounds: tuple = ((), (), [], [])
+        self.dx_addresses = kernels.AddressCache()
+
+    def bounds(self, lbs: list | None, ubs: list | None, unbounded: dict) -> tuple[list, list]:
+        """Per running node, the control bounds of the rollout: ``lbs[t]``/``ubs[t]``, or ``unbounded[nu]`` where
+        ``lbs`` is None or its entry is None; the lists are kept while ``lbs``/``ubs`` hold the same arrays."""
+        held_lbs, held_ubs, lb_list, ub_list = self._bounds
+        lbs_now = () if lbs is None else lbs
+        ubs_now = () if ubs is None else ubs
+        if (len(lbs_now) == len(held_lbs) and len(ubs_now) == len(held_ubs) and len(lb_list) == len(self.nu)
+                and all(map(is_, lbs_now, held_lbs)) and all(map(is_, ubs_now, held_ubs))):
+            return lb_list, ub_list
+        lb_list, ub_list = [], []
+        for t, nu in enumerate(self.nu):
+            lb = None if lbs is None else lbs[t]
+            lb, ub = unbounded[nu] if lb is None else (lb, ubs[t])
+            lb_list.append(lb)
+            ub_list.append(ub)
+        self._bounds = (tuple(lbs_now), tuple(ubs_now), lb_list, ub_list)
+        return lb_list, ub_list
 
     def calc(self, problem, xs, us) -> float:
         """Every node's value at ``(xs, us)``; returns the total cost."""
@@ -134,7 +159,7 @@ def select(solver) -> CompiledNodes | None:
     if running and all(type(e) is kind and step is not None for e, step in zip(running, steps)):
         make_horizon = getattr(kind, "horizon", None)
         horizon = None if make_horizon is None else make_horizon(running)
-    return CompiledNodes(calcs, calc_diffs, steps[:-1], horizon)
+    return CompiledNodes(calcs, calc_diffs, steps[:-1], horizon, problem)
 
 
 def attach(solver) -> CompiledNodes | None:

@@ -337,7 +337,9 @@ class SolverDDP(SolverAbstract):
         """Evaluate (if needed) and differentiate every node at the current iterate; update the gaps."""
         problem = self.problem
         nodes = self._nodes
-        gaps_compiled = nodes is not None and nodes.horizon is not None and not self.isFeasible
+        feasible = self.isFeasible
+        reported = feasible and self._reports_feasible_gaps()
+        gaps_compiled = nodes is not None and nodes.horizon is not None and (not feasible or reported)
         if nodes is not None:
             self.cost = nodes.calcDiff(problem, self.xs, self.us, self._synced, self.fs if gaps_compiled else None)
         else:
@@ -347,17 +349,22 @@ class SolverDDP(SolverAbstract):
         self._synced = True
         if not np.isfinite(self.cost):
             raise locate_cost(problem)
-        if self.isFeasible:
+        if gaps_compiled:
+            self._close_gaps()
+        elif not feasible or reported:
+            self.computeDynamicFeasibility()
+        if feasible:
             for f in self.fs:
                 f[:] = 0.0
-            self.ffeas = 0.0
-        elif gaps_compiled:
-            self._close_gaps()
-        else:
-            self.computeDynamicFeasibility()
+            if not reported:
+                self.ffeas = 0.0
         self.computeInequalityFeasibility()
         self.computeEqualityFeasibility()
         return self.cost
+
+    def _reports_feasible_gaps(self) -> bool:
+        """Whether ``ffeas`` reports the gaps of a feasible iterate (whose ``fs`` the backward pass sees as zero)."""
+        return False
 
     def _kernel_applies(self, owner: type, kernel: str) -> bool:
         """True when no subclass replaces a node step as ``owner`` defines it (else log it once)."""

@@ -80,7 +80,14 @@ class SolverFDDP(SolverDDP):
             problem = self.problem
             models = [*problem.runningModels, problem.terminalModel]
             Vxx_fs = self._Vxx_f or [Vxx @ f for Vxx, f in zip(self.Vxx, self.fs)]
-            for t, (m, Vxx_f) in enumerate(zip(models, Vxx_fs)):
+            start = 0
+            if kernels.active and self._Vxx_f is self._Vxx_f_views and self._nodes is not None \
+                    and self._nodes.horizon is not None:  # the rollout over the horizon wrote every running dx
+                start = problem.T
+                h = self._horizon
+                dv = riccati_kernel.gap_step_term(h.addr, h.dims, self._nodes.dx_addresses(self._dx_try[:start]))
+            for t in range(start, len(models)):
+                m, Vxx_f = models[t], Vxx_fs[t]
                 dx = self._dx_try[t]
                 if dx is None:
                     dx = m.state.diff(self.xs[t], self.xs_try[t])

@@ -13,7 +13,7 @@ larger ones :func:`riccati_step` (products by BLAS, ``L⁻¹`` by LAPACK).  A no
 the gains.  The pass returns -1, or the first node (from the end) whose ``Quu`` is not positive definite
 or not finite (the caller tells them apart: it raises the regularisation, or stops on NaN/inf,
 :mod:`.nonfinite`).  :func:`expected_terms` gives FDDP's ``Σ Quᵀk - Σ Vxᵀf`` and
-``-Σ kᵀQuu k + Σ fᵀVxx f`` and stores ``Vxx f``.
+``-Σ kᵀQuu k + Σ fᵀVxx f`` and stores ``Vxx f``; :func:`gap_step_term` the trial step's ``Σ (Vxx f)ᵀ dx``.
 
 ``feedback_control(u, k, K, dx, α, lb, ub, out)`` writes the rollout's control
 ``clamp(u - α k - K dx, lb, ub)`` (infinite bounds for the unconstrained solvers).
@@ -412,7 +412,22 @@ def _expected_terms(saddr, dims, gaps):
     return dg, dq
 
 
+def _gap_step_term(saddr, dims, dx_addr):
+    """``Σ_t (Vxx f)_tᵀ dx_t`` (FDDP's expected improvement) over the nodes ``t < len(dx_addr)`` whose ``dx`` address
+    is not 0; ``Vxx f`` is read from its column (written by :func:`_expected_terms`)."""
+    dv = 0.0
+    for t in range(dx_addr.shape[0]):
+        if dx_addr[t] == 0:
+            continue
+        n = dims[t, 0]
+        Vxx_f, dx = vector_at(saddr[t][VXX_F], n), vector_at(dx_addr[t], n)
+        for i in range(n):
+            dv += Vxx_f[i] * dx[i]
+    return dv
+
+
 scratch = compiled(_scratch)
 node_riccati = compiled(_node_riccati)
 riccati_pass = compiled(_riccati_pass)
 expected_terms = compiled(_expected_terms)
+gap_step_term = compiled(_gap_step_term)

@@ -8,6 +8,8 @@
 
 from __future__ import annotations
 
+from itertools import islice, repeat
+from operator import attrgetter, is_, is_not
 from sys import getrefcount
 
 import numpy as np
@@ -27,6 +29,33 @@ def sole_holder_count() -> int:
 
 SOLE = sole_holder_count()
 """The reference count of an array only a trajectory list holds, read as the rollout reads it."""
+
+
+def sole_holder_count_mapped() -> int:
+    """``getrefcount`` of an array that one list holds, read through ``map`` over ``islice`` of the list, as
+    :func:`_fit` reads it."""
+    held = [None, np.empty(1)]
+    return list(map(getrefcount, islice(held, 1, None)))[0]
+
+
+SOLE_MAPPED = sole_holder_count_mapped()
+"""The reference count of an array only a trajectory list holds, read as :func:`_fit` reads it."""
+
+_base = attrgetter("base")
+
+
+def _fit(arrays: list, start: int, stop: int, sizes: list[int], check_holders: bool) -> bool:
+    """Whether the entries ``start:stop`` of ``arrays`` can all be written in place (C-level checks, no Python
+    loop): none is None, each has its size in ``sizes`` and owns its memory, and (``check_holders``) only the
+    list holds it (:data:`SOLE_MAPPED`)."""
+    if any(map(is_, islice(arrays, start, stop), repeat(None))):
+        return False
+    if list(map(len, islice(arrays, start, stop))) != sizes:
+        return False
+    if any(map(is_not, map(_base, islice(arrays, start, stop)), repeat(None))):
+        return False
+    return not check_holders or not any(map(int.__ne__, map(getrefcount, islice(arrays, start, stop)),
+                                             repeat(SOLE_MAPPED)))
 
 
 def trial_rollout(solver, steplength: float, gaps: bool = False, bounds: tuple[list, list] | None = None,
@@ -127,10 +156,25 @@ def trial_rollout(solver, steplength: float, gaps: bool = False, bounds: tuple[l
 def horizon_rollout(solver, steplength: float, gaps: bool, lbs: list | None, ubs: list | None, gap_at: int) -> float:
     """The running nodes of :func:`trial_rollout` in one compiled call (``solver._nodes.horizon``); returns their
     total cost.  The entries of ``xs_try[1:]``, ``us_try`` and ``_dx_try`` are made fit first, as in the node
-    loop: an array is reused when the solver's list is its only holder (``getrefcount`` equal to :data:`SOLE`)."""
+    loop: an array is reused when the solver's list is its only holder (``getrefcount`` equal to :data:`SOLE`);
+    when every entry already fits (:func:`_fit`, the usual case) no Python loop runs over the nodes."""
     problem = solver.problem
     xs_try, us_try, dx_try, unbounded = solver.xs_try, solver.us_try, solver._dx_try, solver._unbounded
-    lb_list, ub_list = [], []
+    nodes = solver._nodes
+    T = problem.T
+    if not (_fit(us_try, 0, T, nodes.nu, True) and _fit(xs_try, 1, T + 1, nodes.nx, True)
+            and _fit(dx_try, 0, T, nodes.ndx, False)):
+        _make_fit(problem, xs_try, us_try, dx_try)
+    lb_list, ub_list = nodes.bounds(lbs, ubs, unbounded)
+    cost, costs = nodes.horizon(solver.xs, solver.us, xs_try, us_try, dx_try, solver.k, solver.K, solver.fs,
+                          lb_list, ub_list, steplength, gaps, gap_at)
+    for d, c in zip(problem.runningDatas, costs):
+        d.cost = c
+    return cost
+
+
+def _make_fit(problem, xs_try: list, us_try: list, dx_try: list) -> None:
+    """The node loop of :func:`horizon_rollout`'s checks: replace each entry that cannot be written in place."""
     for t, m in enumerate(problem.runningModels):
         state, nu = m.state, m.nu
         dx = dx_try[t]
@@ -142,15 +186,3 @@ def horizon_rollout(solver, steplength: float, gaps: bool, lbs: list | None, ubs
         x = xs_try[t + 1]
         if getrefcount(x) != SOLE or x.base is not None or x.shape[0] != state.nx:
             xs_try[t + 1] = np.empty(state.nx)
-        lb = None if lbs is None else lbs[t]
-        if lb is None:
-            lb, ub = unbounded[nu]
-        else:
-            ub = ubs[t]
-        lb_list.append(lb)
-        ub_list.append(ub)
-    cost, costs = solver._nodes.horizon(solver.xs, solver.us, xs_try, us_try, dx_try, solver.k, solver.K, solver.fs,
-                                        lb_list, ub_list, steplength, gaps, gap_at)
-    for d, c in zip(problem.runningDatas, costs):
-        d.cost = c
-    return cost

@@ -32,7 +32,7 @@ import numpy as np
 import pinocchio as pin
 
 from crocopy.costs.base import CostModelResidual
-from crocopy.kernels import address
+from crocopy.kernels import AddressCache, checked_address
 from crocopy.residuals.control import ResidualModelControl
 from crocopy.residuals.state import ResidualModelState
 
@@ -117,7 +117,7 @@ def table_entries(arrays: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     shapes = np.zeros(3 * len(arrays), dtype=np.int64)
     for k, a in enumerate(arrays):
         shapes[3 * k: 3 * k + a.ndim] = a.shape
-    return np.array([_address(a) for a in arrays], dtype=np.int64), shapes
+    return np.array([checked_address(a) for a in arrays], dtype=np.int64), shapes
 
 
 def euler_node(iam, data, terminal: bool, memo: dict) -> EulerNode | None:
@@ -134,12 +134,6 @@ def euler_node(iam, data, terminal: bool, memo: dict) -> EulerNode | None:
         node = EulerNode(iam, data, terminal, low.rb)
         _NODES[data] = node
     return node if node.refresh(low, memo) else None
-
-
-def _address(array: np.ndarray) -> int:
-    if not array.flags.c_contiguous or array.dtype not in (np.float64, np.int64):
-        raise TypeError(f"compiled node: an array of dtype {array.dtype} that is not C-contiguous")
-    return address(array)
 
 
 class EulerNode:
@@ -310,29 +304,6 @@ class EulerNode:
     def horizon(nodes: list[EulerNode]) -> EulerHorizon:
         """The rollout of running nodes ``nodes`` (all of this class) in one compiled call."""
         return EulerHorizon(nodes)
-
-
-class AddressCache:
-    """Addresses of the arrays of a list, read again only for entries that are not the arrays seen last time
-    (weak references: the cache never keeps an array alive, nor changes its reference count); ``None``
-    entries get address 0 (never read by the kernel)."""
-
-    def __init__(self) -> None:
-        self.refs: list = []
-        self.values = np.zeros(0, dtype=np.int64)
-
-    def __call__(self, arrays: list[np.ndarray]) -> np.ndarray:
-        refs = self.refs
-        if len(refs) != len(arrays):
-            self.refs = refs = [None] * len(arrays)
-            self.values = np.zeros(len(arrays), dtype=np.int64)
-        values = self.values
-        for t, a in enumerate(arrays):
-            ref = refs[t]
-            if ref is None or ref() is not a:
-                values[t] = 0 if a is None else _address(a)
-                refs[t] = None if a is None else weakref.ref(a)
-        return values
 
 
 class EulerHorizon:
