@@ -3,8 +3,8 @@ term of the RNEA derivatives, and the contact forward dynamics with its derivati
 
 Conventions are :mod:`.dynamics_kernel`'s (world-frame spatial quantities at the world origin, ``[linear;
 angular]``, reference codes ``LOCAL = 1``, ``LOCAL_WORLD_ALIGNED = 2``); the contacts are those of
-:mod:`crocopy.models.contacts` (``WORLD`` means ``LOCAL_WORLD_ALIGNED`` there, the caller maps it).  A contact
-acts on frame ``fid`` (placement ``oMf = (R, p)``) with ``nc = 3`` (a point: translation) or ``nc = 6`` rows
+:mod:`crocopy.models.contacts`, where ``WORLD`` means ``LOCAL_WORLD_ALIGNED``: so here does any code but LOCAL.
+A contact acts on frame ``fid`` (placement ``oMf = (R, p)``) with ``nc = 3`` (a point: translation) or ``nc = 6`` rows
 and Baumgarte gains ``(kp, kd)``.  With ``X = oXf`` the frame's action, ``J = X⁻¹ oS`` its LOCAL Jacobian and,
 at joint acceleration ``a``, ``v_f = X⁻¹ ov_i``, ``a_f = X⁻¹ (oa_i + g)`` (``g`` the model gravity: ``ws.oa``
 includes ``-g``) its LOCAL velocity ``(v_l, ω)`` and spatial acceleration::
@@ -60,6 +60,7 @@ from crocopy.kernels import compiled
 from .dynamics_kernel import (
     LOCAL,
     LOCAL_WORLD_ALIGNED,
+    _dot,
     _factor_solve,
     _fcross,
     _frame_pose,
@@ -67,6 +68,7 @@ from .dynamics_kernel import (
     _mcross,
     _minus,
     _plus,
+    _times,
     _to_reference,
     frame_jacobian,
 )
@@ -163,7 +165,7 @@ def _frame_motion(rb, ws, cw, fid, nc, kp, kd, ref_R, ref_p):
             0.0, 0.0, 0.0,
         )
         return i, vf, c
-    c = _plus(af, (kd * vf[0], kd * vf[1], kd * vf[2], kd * vf[3], kd * vf[4], kd * vf[5]))
+    c = _plus(af, _times(vf, kd))
     if kp != 0.0:
         R3, p3 = cw.R3, cw.p3
         for r in range(3):
@@ -172,7 +174,7 @@ def _frame_motion(rb, ws, cw, fid, nc, kp, kd, ref_R, ref_p):
                 R3[r, k] = ref_R[0, r] * R[0, k] + ref_R[1, r] * R[1, k] + ref_R[2, r] * R[2, k]
         log6(R3, p3, cw.m6)
         m = cw.m6
-        c = _plus(c, (kp * m[0], kp * m[1], kp * m[2], kp * m[3], kp * m[4], kp * m[5]))
+        c = _plus(c, _times((m[0], m[1], m[2], m[3], m[4], m[5]), kp))
     return i, vf, c
 
 
@@ -199,14 +201,14 @@ def contact_calc(
     joint acceleration in ``ws`` (:func:`~.dynamics_kernel.forward_dynamics`).
     """
     _, _, c = _frame_motion(rb, ws, cw, fid, nc, kp, kd, ref_R, ref_p)
-    R, J = ws.Rf, cw.J6
-    if reference == LOCAL_WORLD_ALIGNED:
+    R, J, lwa = ws.Rf, cw.J6, reference != LOCAL
+    if lwa:
         c = _rotate(R, c)
     for r in range(nc):
         a0_out[row + r] = c[r]
     for k in range(rb.nv):
         col = (J[0, k], J[1, k], J[2, k], J[3, k], J[4, k], J[5, k])
-        if reference == LOCAL_WORLD_ALIGNED:
+        if lwa:
             col = _rotate(R, col)
         for r in range(nc):
             Jc_out[row + r, k] = col[r]
@@ -234,7 +236,7 @@ def contact_calc_diff(
     """
     i, vf, c = _frame_motion(rb, ws, cw, fid, nc, kp, kd, ref_R, ref_p)
     R, p, J, oS, ov = ws.Rf, ws.pf, cw.J6, ws.oS, ws.ov
-    nv, lwa = rb.nv, reference == LOCAL_WORLD_ALIGNED
+    nv, lwa = rb.nv, reference != LOCAL
     if nc == 6 and kp != 0.0:
         jlog6(cw.R3, cw.p3, cw.J66)
     L = cw.J66
@@ -268,18 +270,12 @@ def contact_calc_diff(
                 dv = (av[0] + x[0] + y[0] + kd * Jk[0], av[1] + x[1] + y[1] + kd * Jk[1],
                       av[2] + x[2] + y[2] + kd * Jk[2], 0.0, 0.0, 0.0)
             else:
-                dq = _plus(aq, (kd * vq[0], kd * vq[1], kd * vq[2], kd * vq[3], kd * vq[4], kd * vq[5]))
-                dv = _plus(av, (kd * Jk[0], kd * Jk[1], kd * Jk[2], kd * Jk[3], kd * Jk[4], kd * Jk[5]))
+                dq = _plus(aq, _times(vq, kd))
+                dv = _plus(av, _times(Jk, kd))
                 if kp != 0.0:
-                    lj = (
-                        L[0, 0] * Jk[0] + L[0, 1] * Jk[1] + L[0, 2] * Jk[2] + L[0, 3] * Jk[3] + L[0, 4] * Jk[4] + L[0, 5] * Jk[5],
-                        L[1, 0] * Jk[0] + L[1, 1] * Jk[1] + L[1, 2] * Jk[2] + L[1, 3] * Jk[3] + L[1, 4] * Jk[4] + L[1, 5] * Jk[5],
-                        L[2, 0] * Jk[0] + L[2, 1] * Jk[1] + L[2, 2] * Jk[2] + L[2, 3] * Jk[3] + L[2, 4] * Jk[4] + L[2, 5] * Jk[5],
-                        L[3, 0] * Jk[0] + L[3, 1] * Jk[1] + L[3, 2] * Jk[2] + L[3, 3] * Jk[3] + L[3, 4] * Jk[4] + L[3, 5] * Jk[5],
-                        L[4, 0] * Jk[0] + L[4, 1] * Jk[1] + L[4, 2] * Jk[2] + L[4, 3] * Jk[3] + L[4, 4] * Jk[4] + L[4, 5] * Jk[5],
-                        L[5, 0] * Jk[0] + L[5, 1] * Jk[1] + L[5, 2] * Jk[2] + L[5, 3] * Jk[3] + L[5, 4] * Jk[4] + L[5, 5] * Jk[5],
-                    )
-                    dq = _plus(dq, (kp * lj[0], kp * lj[1], kp * lj[2], kp * lj[3], kp * lj[4], kp * lj[5]))
+                    lj = (_dot(_get6(L, 0), Jk), _dot(_get6(L, 1), Jk), _dot(_get6(L, 2), Jk),
+                          _dot(_get6(L, 3), Jk), _dot(_get6(L, 4), Jk), _dot(_get6(L, 5), Jk))
+                    dq = _plus(dq, _times(lj, kp))
             if lwa:
                 x = _cross(Jk[3], Jk[4], Jk[5], c[0], c[1], c[2])
                 y = _cross(Jk[3], Jk[4], Jk[5], c[3], c[4], c[5])
