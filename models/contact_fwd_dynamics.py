@@ -153,6 +153,17 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
     def createData(self) -> "DifferentialActionDataContactFwdDynamics":
         return DifferentialActionDataContactFwdDynamics(self)
 
+    def _compiled_euler_node(self, iam, data, terminal: bool, memo: dict) -> object | None:
+        """The compiled evaluator of the Euler node ``(iam, data)`` over this model (:func:`.rbd.euler_node.euler_node`
+        with its active contacts, :mod:`.rbd.contact_lowering`), or None for a subclass or a node it cannot compile."""
+        if type(self) is not DifferentialActionModelContactFwdDynamics:
+            return None
+        from .rbd.contact_lowering import active_contacts
+        from .rbd.euler_node import euler_node
+
+        contacts = active_contacts(self)
+        return None if contacts is None else euler_node(iam, data, terminal, memo, contacts)
+
     def _kinematics(self, data: "DifferentialActionDataContactFwdDynamics", q: np.ndarray, v: np.ndarray) -> None:
         model, pd = self.pinocchio, data.pinocchio
         pin.computeAllTerms(model, pd, q, v)

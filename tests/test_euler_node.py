@@ -171,12 +171,11 @@ def test_nodes_that_do_not_qualify():
     rk = crocopy.IntegratedActionModelRK(iam.differential, crocopy.RKType.four, 0.01)
     assert not hasattr(rk, "_compiled_node") or rk._compiled_node(rk.createData(), False, {}) is None
     costs = iam.differential.costs
-    costs.addCost("com", crocopy.CostModelResidual(state, crocopy.ResidualModelCoMPosition(state, np.zeros(3),
-                                                                                          iam.nu)), 1.0)
+    costs.addCost("grav", crocopy.CostModelResidual(state, crocopy.ResidualModelControlGrav(state, iam.nu)), 1.0)
     dam = crocopy.DifferentialActionModelFreeFwdDynamics(state, iam.differential.actuation, costs)
     other = crocopy.IntegratedActionModelEuler(dam, 0.01)
     assert other._compiled_node(other.createData(), False, {}) is None
-    costs.changeCostStatus("com", False)
+    costs.changeCostStatus("grav", False)
     assert other._compiled_node(other.createData(), False, {}) is not None
     assert iam._compiled_node(data, False, {}) is not None
 

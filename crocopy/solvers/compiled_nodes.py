@@ -20,8 +20,8 @@ that has re-read the model's parameters (references, weights, time step) and has
 
 or ``None`` (models without the method, or nodes it cannot compile).  ``terminal`` tells whether the node is the
 problem's terminal node; ``memo`` is a dictionary shared by the nodes of one solve (for what they
-derive once from shared models).  Today the Euler-integrated free forward dynamics of
-a multibody system with residual costs has one (:mod:`crocopy.models.rbd.euler_node`).
+derive once from shared models).  Today the Euler-integrated free and contact forward dynamics of
+a multibody system with residual costs have one (:mod:`crocopy.models.rbd.euler_node`).
 
 Inside ``solve`` those evaluators replace ``model.calc``/``model.calcDiff`` in the derivatives and the
 rollout.  They write the action data fields above, and the arrays the nested datas share with them (the

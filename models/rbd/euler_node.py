@@ -1,24 +1,28 @@
-"""Compiled Euler nodes of free forward dynamics: one numba call per node evaluation inside a solve.
+"""Compiled Euler nodes of free or contact forward dynamics: one numba call per node evaluation inside a solve.
 
 :class:`EulerNode` is the evaluator (:mod:`crocopy.solvers.compiled_nodes`) of a node whose whole
 ``calc``/``calcDiff`` the kernels of :mod:`.euler_node_kernel` can do.  A node qualifies when, on the
 exact classes (a subclass may override a step, so it keeps the Python path):
 
 * ``IntegratedActionModelEuler`` with the identity control parametrization, over a
-  ``DifferentialActionModelFreeFwdDynamics`` without constraints;
+  ``DifferentialActionModelFreeFwdDynamics`` or a ``DifferentialActionModelContactFwdDynamics`` without
+  constraints, whose active contacts are ``ContactModel3D``/``ContactModel6D`` on distinct joints (or with a
+  positive ``JMinvJt_damping``; see :mod:`.contact_lowering`);
 * its ``StateMultibody``'s Pinocchio model lowers (:func:`.lowering.lower_model`);
 * its actuation is ``ActuationModelFull``, ``ActuationModelFloatingBase``,
   ``ActuationModelFloatingBaseThrusters`` or ``ActuationModelLinear`` (``τ = S u`` with a constant ``S``);
 * every cost is a ``CostModelResidual`` in the cost stack with an activation of the quadratic-barrier
   family (:mod:`crocopy.costs.stack`), and every active one's residual is a ``ResidualModelState``,
   ``ResidualModelControl``, ``ResidualModelFramePlacement``, ``ResidualModelFrameTranslation``,
-  ``ResidualModelFrameRotation`` or ``ResidualModelFrameVelocity``.
+  ``ResidualModelFrameRotation``, ``ResidualModelFrameVelocity``, ``ResidualModelCoMPosition``, or (on an
+  active contact) ``ResidualModelContactFrictionCone``/``ResidualModelContactWrenchCone``.
 
 :meth:`EulerNode.refresh` (at the start of every solve) re-reads everything the kernels take from the
 models: the lowered Pinocchio model, the armature (the Pinocchio model's, which Pinocchio's own
-``crba``/``aba`` add, plus the dynamics model's ``armature``), ``S``, the time step, the cost stack's weights and
-activation bounds, the residuals' references; and the addresses of the data arrays the kernels write
-(``xnext``, ``Fx``, ... of the node's data, the stack's arrays).  Evaluators are cached per node data
+``crba``/``aba`` add, plus the dynamics model's ``armature``), ``S``, the time step, the damping, the
+contacts' gains and references, the cost stack's weights and activation bounds, the residuals' references;
+and the addresses of the data arrays the kernels write (``xnext``, ``Fx``, ... of the node's data, the
+stack's arrays).  Evaluators are cached per node data
 (weakly: a copied or unpickled data gets its own).
 """
 
@@ -42,6 +46,8 @@ from ..actuations import (
     ActuationModelFull,
     ActuationModelLinear,
 )
+from ..residuals_contact import ResidualModelContactFrictionCone, ResidualModelContactWrenchCone
+from ..residuals_dynamics import ResidualModelCoMPosition
 from ..residuals_frame import (
     ResidualModelFramePlacement,
     ResidualModelFrameRotation,
@@ -50,6 +56,8 @@ from ..residuals_frame import (
 )
 from ..state_multibody import StateMultibody
 from . import euler_node_kernel as kernel
+from .contact_kernel import make_contact_workspace
+from .contact_lowering import ContactSet
 from .joint_types import NotLowerable
 from .lowering import RigidBodyModel, lower_model, make_workspace
 
@@ -61,6 +69,9 @@ KINDS = {
     ResidualModelFrameTranslation: kernel.TRANSLATION,
     ResidualModelFrameRotation: kernel.ROTATION,
     ResidualModelFrameVelocity: kernel.VELOCITY,
+    ResidualModelContactFrictionCone: kernel.CONE,
+    ResidualModelContactWrenchCone: kernel.CONE,
+    ResidualModelCoMPosition: kernel.COM,
 }
 
 _NODES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -120,9 +131,10 @@ def table_entries(arrays: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     return np.array([checked_address(a) for a in arrays], dtype=np.int64), shapes
 
 
-def euler_node(iam, data, terminal: bool, memo: dict) -> EulerNode | None:
-    """The refreshed evaluator of node ``(iam, data)``, or None if the node does not qualify (the caller,
-    ``DifferentialActionModelFreeFwdDynamics``, has checked its own class and the integrator's)."""
+def euler_node(iam, data, terminal: bool, memo: dict, contacts: list = ()) -> EulerNode | None:
+    """The refreshed evaluator of node ``(iam, data)`` with the active rigid ``contacts`` (3D/6D contact models), or
+    None if the node does not qualify (the caller, the free or contact dynamics model, has checked its own class,
+    the integrator's and the contacts')."""
     dam = iam.differential
     if dam.constraints is not None or type(dam.state) is not StateMultibody or type(dam.actuation) not in ACTUATIONS:
         return None
@@ -130,21 +142,23 @@ def euler_node(iam, data, terminal: bool, memo: dict) -> EulerNode | None:
     if low is None:
         return None
     node = _NODES.get(data)
-    if node is None or node.model is not iam or node.terminal != terminal or node.nv != low.rb.nv:
-        node = EulerNode(iam, data, terminal, low.rb)
+    if node is None or node.model is not iam or node.terminal != terminal or node.nv != low.rb.nv \
+            or not node.contacts.same(contacts):
+        node = EulerNode(iam, data, terminal, low.rb, contacts)
         _NODES[data] = node
     return node if node.refresh(low, memo) else None
 
 
 class EulerNode:
-    """The compiled ``calc``/``calcDiff`` of one Euler node of free forward dynamics (see the module docstring).
+    """The compiled ``calc``/``calcDiff`` of one Euler node of free or contact forward dynamics (see the module
+    docstring).
 
     ``calc(x, u)`` writes ``data.xnext`` and ``data.cost``; ``calcDiff(x, u, synced)`` also ``Fx``, ``Fu``,
     ``Lx``, ``Lu``, ``Lxx``, ``Lxu``, ``Luu`` (and the cost stack's residuals, Jacobians and activation
     derivatives, which the stack shares with the residual and activation datas).
     """
 
-    def __init__(self, iam, data, terminal: bool, rb: RigidBodyModel) -> None:
+    def __init__(self, iam, data, terminal: bool, rb: RigidBodyModel, contacts: list = ()) -> None:
         self.model = iam
         self.terminal = terminal
         self._data = weakref.ref(data)
@@ -153,11 +167,19 @@ class EulerNode:
         self.nv = nv
         self.armature = np.zeros(nv)
         self.workspace = make_workspace(rb)
+        self.contacts = ContactSet(contacts)
+        nc = self.contacts.nc
+        cw = make_contact_workspace(rb, nc)
         self.scratch = {
             "S": np.zeros((nv, nu)), "tau": np.zeros(nv), "dtau_dq": np.zeros((nv, nv)), "dtau_dv": np.zeros((nv, nv)),
             "J6": np.zeros((6, nv)), "K6": np.zeros((6, nv)), "m6": np.zeros((6, 6)), "R3": np.zeros((3, 3)),
             "p3": np.zeros(3), "v6": np.zeros(6), "Jq": np.zeros((nv, nv)), "Jv": np.zeros((nv, nv)),
             "rows": np.zeros((nv, ndx + nu)), "gap": np.zeros(ndx),
+            "Jcs": np.zeros((nc, nv)), "a0": np.zeros(nc), "lam": np.zeros(nc), "da0_dx": np.zeros((nc, ndx)),
+            "df_dx": np.zeros((nc, ndx)), "df_du": np.zeros((nc, nu)), "gains": self.contacts.gains,
+            "ref_R": self.contacts.ref_R, "ref_p": self.contacts.ref_p, "com": np.zeros(3), "Jcom": np.zeros((3, nv)),
+            "cJ6": cw.J6, "cY": cw.Y, "cG": cw.G, "cz": cw.z, "cw": cw.w, "cm6": cw.m6, "cJ66": cw.J66, "cR3": cw.R3,
+            "cp3": cw.p3, "Minv": np.zeros((nv, nv)),
         }
         self.no_control = np.zeros(0)
         self._armature_entry = table_entries([self.armature])
@@ -181,7 +203,8 @@ class EulerNode:
         changed = stack.refresh_if_stale(self.terminal) or self._residuals is None
         if changed and not self._read_items(stack, ddata):
             return False
-        par = [float(iam.dt)]
+        self.contacts.refresh()
+        par = [float(iam.dt), float(getattr(dam, "_damping", 0.0))]
         for kind, residual in self._residuals:
             par += self._parameters(kind, residual)
         self.par = np.array(par)
@@ -195,7 +218,7 @@ class EulerNode:
         self._residuals = None
         if stack.unfused or ddata.costs.generic:
             return False
-        items, residuals, offset = [], [], 1
+        items, residuals, offset = [], [], 2
         for (_, item, cdata), rows in zip(stack.items, stack.slices):
             if type(item.cost) is not CostModelResidual:
                 return False
@@ -205,8 +228,13 @@ class EulerNode:
             kind = KINDS.get(type(residual))
             if kind is None:
                 return False
-            reference = int(residual.type) if kind == kernel.VELOCITY else 0
-            items += [kind, rows.start, rows.stop - rows.start, getattr(residual, "id", 0), reference, offset]
+            frame, reference = getattr(residual, "id", 0), int(residual.type) if kind == kernel.VELOCITY else 0
+            if kind == kernel.CONE:
+                row, nc = self.contacts.rows.get(frame, (0, 0))
+                if nc < residual.ncf:
+                    return False
+                frame, reference = row, residual.ncf
+            items += [kind, rows.start, rows.stop - rows.start, frame, reference, offset]
             residuals.append((kind, residual))
             offset += len(self._parameters(kind, residual))
         self._items, self._residuals = items, residuals
@@ -226,6 +254,10 @@ class EulerNode:
             return list(residual.reference)
         if kind == kernel.ROTATION:
             return list(np.asarray(residual.reference).T.reshape(-1))
+        if kind == kernel.CONE:
+            return list(np.asarray(residual.reference.A, dtype=float).reshape(-1))
+        if kind == kernel.COM:
+            return list(residual.reference)
         return list(residual.reference.vector)
 
     def _actuation_matrix(self, dam, ddata, memo: dict) -> None:
@@ -250,13 +282,15 @@ class EulerNode:
         fields = {
             "xnext": data.xnext, "dx": data.dx, "Fx": data.Fx, "Fu": data.Fu, "Lx": data.Lx, "Lu": data.Lu,
             "Lxx": data.Lxx, "Lxu": data.Lxu, "Luu": data.Luu,
-            "a": ddata.xout, "dFx": ddata.Fx, "dFu": ddata.Fu, "Minv": ddata.Minv, "dLx": ddata.Lx, "dLu": ddata.Lu,
+            "a": ddata.xout, "dFx": ddata.Fx, "dFu": ddata.Fu, "dLx": ddata.Lx, "dLu": ddata.Lu,
             "dLxx": ddata.Lxx, "dLxu": ddata.Lxu, "dLuu": ddata.Luu,
             "r": stack.r, "lb": stack.lb, "ub": stack.ub, "act_weights": stack.act_weights,
             "item_costs": stack.item_costs, "item_weights": stack.item_weights, "weights": stack.weights,
             "Ar": stack.Ar, "Arr": stack.Arr, "Jx": stack.Jx, "Ju": stack.Ju, "Jc": stack.Jc, "HJx": stack.HJx,
             "Juc": stack.Juc, "HJu": stack.HJu, **self.scratch,
         }
+        if hasattr(ddata, "Minv"):
+            fields["Minv"] = ddata.Minv
         arrays = [fields[name] for name in kernel.NODE_ARRAYS]
         known = self._data_arrays
         if len(known) != len(arrays) or any(a is not b for a, b in zip(arrays, known)):
@@ -280,8 +314,12 @@ class EulerNode:
         header[kernel.ITEMS] = kernel.SHAPES + 3 * n
         header[kernel.STARTS] = header[kernel.ITEMS] + len(items)
         header[kernel.TERMINAL] = self.terminal
+        header[kernel.N_CONTACTS] = len(self.contacts.models)
+        header[kernel.CONTACTS] = header[kernel.STARTS] + len(stack.starts)
+        header[kernel.NC] = self.contacts.nc
         self.ints = np.concatenate([header, shapes, np.array(items, dtype=np.int64),
-                                    np.asarray(stack.starts, dtype=np.int64)])
+                                    np.asarray(stack.starts, dtype=np.int64),
+                                    np.array(self.contacts.ints, dtype=np.int64)])
         self.tbl = addresses
         self._lowered = low
 

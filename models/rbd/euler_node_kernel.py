@@ -1,10 +1,15 @@
-"""The compiled calc and calcDiff of an Euler node of free forward dynamics (see :mod:`.euler_node`).
+"""The compiled calc and calcDiff of an Euler node of free or contact forward dynamics (see :mod:`.euler_node`).
 
 One call evaluates a whole node: ``τ = S u`` (constant actuation matrix ``S (nv, nu)``), the forward
 dynamics ``a = (M + diag(ε))⁻¹ (τ - b)``, the residuals of the cost stack, the activations and weighted
 sums, the symplectic Euler step ``dx = ((v + a dt) dt, a dt)``, ``xnext = x ⊕ dx`` and, in ``calcDiff``,
 
     ∂a/∂x = -(M + diag(ε))⁻¹ (∂RNEA/∂q, ∂RNEA/∂v),   ∂a/∂u = (M + diag(ε))⁻¹ S,
+
+With rigid contacts (``ints[N_CONTACTS] > 0``, the stacked rows of the contacts listed from ``ints[CONTACTS]``,
+``CONTACT_FIELDS`` integers each: frame, rows, reference frame, first row), the dynamics and their derivatives
+(``a``, the forces ``λ``, ``∂a/∂(x, u)``, ``∂λ/∂(x, u)``) are those of :mod:`.contact_kernel` with the damping
+``par[1]``; the force residuals read ``λ`` and ``∂λ``.
 
 the residual Jacobians and the Euler chain rule of :mod:`crocopy.integrators.euler_kernel` (plus the
 configuration's ``∂(q ⊕ dq)/∂(q, dq)`` on a Lie group).  The terminal node (``terminal`` set) has only
@@ -25,6 +30,15 @@ from crocopy.integrators.euler_kernel import add_integrate_jacobian, euler_chain
 from crocopy.kernels import carray, compiled, float64_pointer, int64_pointer, matrix_at, vector_at
 from crocopy.solvers.riccati_kernel import feedback_control
 
+from .com_kernel import center_of_mass
+from .contact_kernel import (
+    ContactWorkspace,
+    contact_calc,
+    contact_calc_diff,
+    contact_dynamics_derivatives,
+    contact_force_derivatives,
+    contact_forward_dynamics,
+)
 from .dynamics_kernel import (
     dynamics_derivatives,
     forward_dynamics,
@@ -38,15 +52,18 @@ from .dynamics_kernel import (
 from .lie_kernel import dintegrate, jlog3, jlog6, log3, log6, state_diff, state_integrate, state_jdiff
 from .lowering import RigidBodyModel, RigidBodyWorkspace
 
-STATE, CONTROL, PLACEMENT, TRANSLATION, ROTATION, VELOCITY = range(6)
-"""Residual kinds."""
+STATE, CONTROL, PLACEMENT, TRANSLATION, ROTATION, VELOCITY, CONE, COM = range(8)
+"""Residual kinds.  ``CONE``: ``r = A λ_c`` (friction and wrench cones; the item's frame field is the contact's first
+row, its reference field the force components ``ncf``, ``A`` row-major in ``par``); ``COM``: ``r = com - cref``."""
 
 WORLD, LOCAL, LOCAL_WORLD_ALIGNED = 0, 1, 2
 """Pinocchio's reference frames (``int(pinocchio.ReferenceFrame)``)."""
 
-NQ, NV, NU, U_START, N_ITEMS, EUCLIDEAN, NJOINTS, NFRAMES, N_STACK, ITEMS, STARTS, TERMINAL = range(12)
-SHAPES = 12
+(NQ, NV, NU, U_START, N_ITEMS, EUCLIDEAN, NJOINTS, NFRAMES, N_STACK, ITEMS, STARTS, TERMINAL, N_CONTACTS, CONTACTS,
+ NC) = range(15)
+SHAPES = 15
 ITEM_FIELDS = 6
+CONTACT_FIELDS = 4
 
 NODE_ARRAYS = (
     "xnext", "dx", "Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu",
@@ -54,6 +71,8 @@ NODE_ARRAYS = (
     "r", "lb", "ub", "act_weights", "item_costs", "item_weights", "weights", "Ar", "Arr",
     "Jx", "Ju", "Jc", "HJx", "Juc", "HJu",
     "S", "tau", "dtau_dq", "dtau_dv", "J6", "K6", "m6", "R3", "p3", "v6", "Jq", "Jv", "rows", "gap",
+    "Jcs", "a0", "lam", "da0_dx", "df_dx", "df_du", "gains", "ref_R", "ref_p", "com", "Jcom",
+    "cJ6", "cY", "cG", "cz", "cw", "cm6", "cJ66", "cR3", "cp3",
 )
 N_RB, N_WS = len(RigidBodyModel._fields) - 4, len(RigidBodyWorkspace._fields)
 RB_ARMATURE = RigidBodyModel._fields.index("armature") - 4
@@ -64,7 +83,8 @@ NODE = N_RB + N_WS
  E_R, E_LB, E_UB, E_ACT_W, E_ITEM_COSTS, E_ITEM_WEIGHTS, E_WEIGHTS, E_AR, E_ARR,
  E_JX, E_JU, E_JC, E_HJX, E_JUC, E_HJU,
  E_S, E_TAU, E_DTAU_DQ, E_DTAU_DV, E_J6, E_K6, E_M6, E_R3, E_P3, E_V6, E_JQ, E_JV,
- E_ROWS, E_GAP) = range(NODE, NODE + len(NODE_ARRAYS))
+ E_ROWS, E_GAP, E_JCS, E_A0, E_LAM, E_DA0_DX, E_DF_DX, E_DF_DU, E_GAINS, E_REF_R, E_REF_P, E_COM, E_JCOM,
+ E_CJ6) = range(NODE, NODE + len(NODE_ARRAYS) - 8)
 
 
 @compiled
@@ -113,6 +133,24 @@ def _workspace(tbl, ints):
         _vec(tbl, ints, k + 16), _vec(tbl, ints, k + 17), _vec(tbl, ints, k + 18), _mat(tbl, ints, k + 19),
         _mat(tbl, ints, k + 20), _vec(tbl, ints, k + 21),
     )
+
+
+@compiled
+def _contact_workspace(tbl, ints):
+    """The contact workspace, from entries ``E_CJ6 ..`` (its fields' order)."""
+    k = E_CJ6
+    return ContactWorkspace(
+        _mat(tbl, ints, k), _mat(tbl, ints, k + 1), _mat(tbl, ints, k + 2), _vec(tbl, ints, k + 3),
+        _vec(tbl, ints, k + 4), _vec(tbl, ints, k + 5), _mat(tbl, ints, k + 6), _mat(tbl, ints, k + 7),
+        _vec(tbl, ints, k + 8),
+    )
+
+
+@compiled
+def _contact(ints, n):
+    """``(frame, rows, reference frame, first row)`` of contact ``n``."""
+    b = ints[CONTACTS] + CONTACT_FIELDS * n
+    return ints[b], ints[b + 1], ints[b + 2], ints[b + 3]
 
 
 @compiled
@@ -173,15 +211,50 @@ def _residuals(tbl, ints, par, rb, ws, x, u):
         elif kind == ROTATION:
             _rotation_error(rb, ws, fid, par, o, R3)
             log3(R3, rows)
-        else:
+        elif kind == VELOCITY:
             frame_velocity(rb, ws, fid, ref, v6)
             for i in range(6):
                 rows[i] = v6[i] - par[o + i]
+        elif kind == CONE:
+            lam = _vec(tbl, ints, E_LAM)
+            for i in range(nr):
+                acc = 0.0
+                for j in range(ref):
+                    acc += par[o + ref * i + j] * lam[fid + j]
+                rows[i] = acc
+        else:
+            com = _vec(tbl, ints, E_COM)
+            center_of_mass(rb, ws, com, _mat(tbl, ints, E_JCOM))
+            for i in range(3):
+                rows[i] = com[i] - par[o + i]
+
+
+@compiled
+def _force_jacobians(tbl, ints, par, nr, row, ncf, o, Jx_rows, start):
+    """``A ∂λ/∂x`` into ``Jx_rows`` and, at a running node, ``A ∂λ/∂u`` into the stacked ``Ju`` rows of stack row
+    ``start`` (``A (nr, ncf)`` row-major at ``par[o]``, ``λ`` from stacked row ``row``)."""
+    df_dx, nv = _mat(tbl, ints, E_DF_DX), ints[NV]
+    for i in range(nr):
+        for c in range(2 * nv):
+            acc = 0.0
+            for j in range(ncf):
+                acc += par[o + ncf * i + j] * df_dx[row + j, c]
+            Jx_rows[i, c] = acc
+    if ints[TERMINAL]:
+        return
+    df_du, Ju, nu, u0 = _mat(tbl, ints, E_DF_DU), _mat(tbl, ints, E_JU), ints[NU], start - ints[U_START]
+    for i in range(nr):
+        for c in range(nu):
+            acc = 0.0
+            for j in range(ncf):
+                acc += par[o + ncf * i + j] * df_du[row + j, c]
+            Ju[u0 + i, c] = acc
 
 
 @compiled
 def _jacobians(tbl, ints, par, rb, ws, x):
-    """Every compiled item's rows of the stacked ``Jx`` (a control residual's are zero and stay so)."""
+    """Every compiled item's rows of the stacked ``Jx`` (a control residual's are zero and stay so) and the force
+    residuals' rows of ``Ju`` (after :func:`_dynamics_jacobians` at a running node)."""
     nq, nv = ints[NQ], ints[NV]
     Jx, J6, K6, m6 = _mat(tbl, ints, E_JX), _mat(tbl, ints, E_J6), _mat(tbl, ints, E_K6), _mat(tbl, ints, E_M6)
     R3, p3, v6 = _mat(tbl, ints, E_R3), _vec(tbl, ints, E_P3), _vec(tbl, ints, E_V6)
@@ -198,6 +271,9 @@ def _jacobians(tbl, ints, par, rb, ws, x):
         if kind == VELOCITY:
             _velocity_jacobian(rb, ws, fid, ref, J6, K6, m6, v6, rows, nv)
             continue
+        if kind == CONE:
+            _force_jacobians(tbl, ints, par, nr, fid, ref, o, rows, start)
+            continue
         for i in range(nr):
             for j in range(nv, ndx):
                 rows[i, j] = 0.0
@@ -211,6 +287,12 @@ def _jacobians(tbl, ints, par, rb, ws, x):
             _relative_frame(rb, ws, fid, par, o, R3, p3)
             jlog6(R3, p3, m6)
             _matmul(m6, J6, rows, 6, nv, 6)
+        elif kind == COM:
+            Jcom = _mat(tbl, ints, E_JCOM)
+            center_of_mass(rb, ws, _vec(tbl, ints, E_COM), Jcom)
+            for i in range(3):
+                for j in range(nv):
+                    rows[i, j] = Jcom[i, j]
         else:
             frame_jacobian(rb, ws, fid, LOCAL, J6)
             _rotation_error(rb, ws, fid, par, o, R3)
@@ -257,6 +339,9 @@ def _values(tbl, ints, par, x, u, rb, ws):
     q, v = x[:nq], x[nq:]
     if ints[TERMINAL]:
         forward_kinematics(rb, ws, q, v)
+        lam = _vec(tbl, ints, E_LAM)
+        for i in range(ints[NC]):
+            lam[i] = 0.0
     else:
         Sm, tau, a = _mat(tbl, ints, E_S), _vec(tbl, ints, E_TAU), _vec(tbl, ints, E_A)
         for i in range(nv):
@@ -265,12 +350,26 @@ def _values(tbl, ints, par, x, u, rb, ws):
                 acc += Sm[i, j] * u[j]
             tau[i] = acc
         forward_dynamics(rb, ws, q, v, tau, a)
+        if ints[N_CONTACTS]:
+            _contact_dynamics(tbl, ints, par, rb, ws, tau, a)
     _residuals(tbl, ints, par, rb, ws, x, u)
     starts = ints[ints[STARTS]: ints[STARTS] + ints[N_STACK]]
     return activation_values(
         _vec(tbl, ints, E_R), _vec(tbl, ints, E_LB), _vec(tbl, ints, E_UB), _vec(tbl, ints, E_ACT_W), starts,
         _vec(tbl, ints, E_ITEM_COSTS), _vec(tbl, ints, E_ITEM_WEIGHTS),
     )
+
+
+@compiled
+def _contact_dynamics(tbl, ints, par, rb, ws, tau, a):
+    """The contacts' stacked ``Jc`` and drift, then ``a`` and ``λ`` of the contact dynamics (after the free
+    :func:`~.dynamics_kernel.forward_dynamics` at the same state)."""
+    cw, Jcs, a0 = _contact_workspace(tbl, ints), _mat(tbl, ints, E_JCS), _vec(tbl, ints, E_A0)
+    gains, ref_R, ref_p = _mat(tbl, ints, E_GAINS), _cube(tbl, ints, E_REF_R), _mat(tbl, ints, E_REF_P)
+    for n in range(ints[N_CONTACTS]):
+        fid, nc, ref, row = _contact(ints, n)
+        contact_calc(rb, ws, cw, fid, nc, ref, gains[n, 0], gains[n, 1], ref_R[n], ref_p[n], row, Jcs, a0)
+    contact_forward_dynamics(rb, ws, cw, tau, Jcs, a0, ints[NC], par[1], a, _vec(tbl, ints, E_LAM))
 
 
 @compiled
@@ -374,6 +473,17 @@ def _dynamics_jacobians(tbl, ints, x, rb, ws):
     Minv, dq, dv = _mat(tbl, ints, E_MINV), _mat(tbl, ints, E_DTAU_DQ), _mat(tbl, ints, E_DTAU_DV)
     dFx, dFu, Sm, a = _mat(tbl, ints, E_DFX), _mat(tbl, ints, E_DFU), _mat(tbl, ints, E_S), _vec(tbl, ints, E_A)
     dynamics_derivatives(rb, ws, x[:nq], x[nq:], a, dq, dv)
+    if ints[N_CONTACTS]:
+        cw, Jcs, lam, da0_dx = (_contact_workspace(tbl, ints), _mat(tbl, ints, E_JCS), _vec(tbl, ints, E_LAM),
+                                _mat(tbl, ints, E_DA0_DX))
+        gains, ref_R, ref_p = _mat(tbl, ints, E_GAINS), _cube(tbl, ints, E_REF_R), _mat(tbl, ints, E_REF_P)
+        for n in range(ints[N_CONTACTS]):
+            fid, nc, ref, row = _contact(ints, n)
+            contact_force_derivatives(rb, ws, fid, nc, ref, lam, row, dq)
+            contact_calc_diff(rb, ws, cw, fid, nc, ref, gains[n, 0], gains[n, 1], ref_R[n], ref_p[n], row, da0_dx)
+        contact_dynamics_derivatives(rb, ws, cw, Jcs, ints[NC], dq, dv, da0_dx, Sm, dFx, dFu,
+                                     _mat(tbl, ints, E_DF_DX), _mat(tbl, ints, E_DF_DU))
+        return
     mass_inverse(rb, ws, Minv)
     for i in range(nv):
         for j in range(nv):
@@ -414,6 +524,13 @@ def node_calc_diff(tbl, ints, par, x, u):
     cost = _values(tbl, ints, par, x, u, rb, ws)
     _step(tbl, ints, par, x, rb)
     terminal = ints[TERMINAL] != 0
+    if not terminal:
+        _dynamics_jacobians(tbl, ints, x, rb, ws)
+    elif ints[NC]:
+        df_dx = _mat(tbl, ints, E_DF_DX)
+        for i in range(ints[NC]):
+            for j in range(df_dx.shape[1]):
+                df_dx[i, j] = 0.0
     _jacobians(tbl, ints, par, rb, ws, x)
     Lx, Lu, Lxx = _vec(tbl, ints, E_LX), _vec(tbl, ints, E_LU), _mat(tbl, ints, E_LXX)
     Lxu, Luu = _mat(tbl, ints, E_LXU), _mat(tbl, ints, E_LUU)
@@ -434,7 +551,6 @@ def node_calc_diff(tbl, ints, par, x, u):
                                   _mat(tbl, ints, E_DLXU), _mat(tbl, ints, E_DLUU))
     derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, True, Jc, HJx, Juc, HJu,
                          dLx, dLu, dLxx, dLxu, dLuu)
-    _dynamics_jacobians(tbl, ints, x, rb, ws)
     euclidean = ints[EUCLIDEAN] != 0
     euler_chain(
         _mat(tbl, ints, E_DFX), _mat(tbl, ints, E_DFU), dLx, dLu, dLxx, dLxu, dLuu, par[0], euclidean,

@@ -1,0 +1,80 @@
+"""The rigid contacts of a contact-dynamics node, lowered for :mod:`.euler_node_kernel`.
+
+A ``DifferentialActionModelContactFwdDynamics`` node compiles when its active contacts are all
+``ContactModel3D``/``ContactModel6D`` (exact classes) on distinct joints or with a positive damping (a
+redundant set takes the least-squares path of the Python model), and it has no constraints.  Its contacts
+become, in the order of the contact model (by name):
+
+* ``ints``: per contact ``(frame, rows, reference frame, first row)`` (:data:`.euler_node_kernel.CONTACT_FIELDS`;
+  ``WORLD`` is read as ``LOCAL_WORLD_ALIGNED``, as the contacts do);
+* arrays ``gains (n, 2)`` (Baumgarte ``kp, kd``), ``ref_R (n, 3, 3)`` and ``ref_p (n, 3)`` (the reference
+  placement; a 3D contact's rotation is unused), rewritten in place at each solve.
+
+The force residuals (``ResidualModelContactFrictionCone``, ``ResidualModelContactWrenchCone``) find their
+contact's first row here.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from ..contacts import ContactModel3D, ContactModel6D
+
+CONTACTS = (ContactModel3D, ContactModel6D)
+
+
+def active_contacts(dam) -> list | None:
+    """The active contact models of ``dam`` (a ``DifferentialActionModelContactFwdDynamics``), or None if the node
+    cannot compile (see the module docstring)."""
+    contacts = dam.contacts
+    models = [m for _, m in contacts._active]
+    if any(type(m) not in CONTACTS for m in models):
+        return None
+    if models and contacts._shared_joints and dam._damping == 0.0:
+        return None
+    return models
+
+
+class ContactSet:
+    """The lowered contacts of one node: :attr:`ints`, the arrays :attr:`gains`, :attr:`ref_R`, :attr:`ref_p`, and
+    :attr:`rows`, each contact frame's ``(first row, rows)``."""
+
+    def __init__(self, models: list) -> None:
+        n = len(models)
+        self.nc = sum(m.nc for m in models)
+        self.gains = np.zeros((n, 2))
+        self.ref_R = np.zeros((n, 3, 3))
+        self.ref_p = np.zeros((n, 3))
+        self.ints = _ints(models)
+        self.rows: dict[int, tuple[int, int]] = {}
+        for k in range(n):
+            self.rows.setdefault(self.ints[4 * k], (self.ints[4 * k + 3], self.ints[4 * k + 1]))
+        self.models = list(models)
+        self.refresh()
+
+    def refresh(self) -> None:
+        """Read the gains and references again (into the same arrays)."""
+        for k, m in enumerate(self.models):
+            self.gains[k] = m.gains
+            if m.nc == 3:
+                self.ref_R[k] = np.eye(3)
+                self.ref_p[k] = m.reference
+            else:
+                self.ref_R[k] = m.reference.rotation
+                self.ref_p[k] = m.reference.translation
+
+    def same(self, models: list) -> bool:
+        """Whether ``models`` are this set's contacts (same objects, frames, sizes and reference frames)."""
+        return len(models) == len(self.models) and all(a is b for a, b in zip(models, self.models)) and \
+            self.ints == _ints(models)
+
+
+def _ints(models: list) -> list[int]:
+    """``(frame, rows, reference frame, first row)`` of each contact, flat."""
+    ints, row = [], 0
+    for m in models:
+        reference = int(pin.LOCAL) if m.type == pin.LOCAL else int(pin.LOCAL_WORLD_ALIGNED)
+        ints += [int(m.id), int(m.nc), reference, row]
+        row += m.nc
+    return ints
