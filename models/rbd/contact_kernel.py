@@ -358,11 +358,11 @@ def contact_forward_dynamics(
     nv, Y, G = rb.nv, cw.Y, cw.G
     for k in range(nv):
         a_out[k] = tau[k] - ws.tau[k]
-    factor_solve(rb, ws.L, ws.dinv, a_out)
+    factor_solve(rb.dof_parent, ws.L, ws.dinv, a_out)
     for r in range(nc):
         for k in range(nv):
             Y[r, k] = Jc[r, k]
-        factor_solve(rb, ws.L, ws.dinv, Y[r])
+        factor_solve(rb.dof_parent, ws.L, ws.dinv, Y[r])
     for r in range(nc):
         for c in range(r + 1):
             acc = damping if r == c else 0.0
@@ -379,21 +379,6 @@ def contact_forward_dynamics(
     for r in range(nc):
         for k in range(nv):
             a_out[k] += Y[r, k] * lam_out[r]
-
-
-@compiled
-def _kkt_column(rb, ws, cw, Jc, nc, z, da0_dx, c):
-    """``cw.w[:nc] = G⁻¹ (Jc z + da0_dx[:, c])`` (``c < 0``: without ``da0_dx``), then ``z -= Yᵀ w``."""
-    w, Y = cw.w, cw.Y
-    for r in range(nc):
-        acc = da0_dx[r, c] if c >= 0 else 0.0
-        for k in range(rb.nv):
-            acc += Jc[r, k] * z[k]
-        w[r] = acc
-    _schur_solve(cw.G, nc, w)
-    for r in range(nc):
-        for k in range(rb.nv):
-            z[k] -= Y[r, k] * w[r]
 
 
 @compiled
@@ -420,7 +405,7 @@ def contact_dynamics_derivatives(
     :func:`contact_calc_diff` at ``a``.  Uses the factors left by :func:`contact_forward_dynamics` (``ws.L``,
     ``cw.Y``, ``cw.G``); ``O((2 nv + nu) (nv · depth + nc nv))``.
     """
-    nv, z, w = rb.nv, cw.z, cw.w
+    nv, z, w, Y, lam, L, dinv = rb.nv, cw.z, cw.w, cw.Y, rb.dof_parent, ws.L, ws.dinv
     for c in range(2 * nv + S.shape[1]):
         for k in range(nv):
             if c < nv:
@@ -429,8 +414,16 @@ def contact_dynamics_derivatives(
                 z[k] = -did_dv[k, c - nv]
             else:
                 z[k] = S[k, c - 2 * nv]
-        factor_solve(rb, ws.L, ws.dinv, z)
-        _kkt_column(rb, ws, cw, Jc, nc, z, da0_dx, c if c < 2 * nv else -1)
+        factor_solve(lam, L, dinv, z)
+        for r in range(nc):  # w = G⁻¹ (Jc z + ∂c/∂x_c), z -= Yᵀ w
+            acc = da0_dx[r, c] if c < 2 * nv else 0.0
+            for k in range(nv):
+                acc += Jc[r, k] * z[k]
+            w[r] = acc
+        _schur_solve(cw.G, nc, w)
+        for r in range(nc):
+            for k in range(nv):
+                z[k] -= Y[r, k] * w[r]
         if c < 2 * nv:
             for k in range(nv):
                 Fx_out[k, c] = z[k]

@@ -260,16 +260,17 @@ def _factor(rb, ws):
 
 
 @compiled
-def factor_solve(rb: RigidBodyModel, L: np.ndarray, dinv: np.ndarray, x: np.ndarray) -> None:
-    """``x (nv,) ← (Lᵀ L)⁻¹ x`` in place, with the factor of :func:`_factor` and ``dinv = 1 / diag(L)``."""
-    lam = rb.dof_parent
-    for k in range(rb.nv - 1, -1, -1):
+def factor_solve(lam: np.ndarray, L: np.ndarray, dinv: np.ndarray, x: np.ndarray) -> None:
+    """``x (nv,) ← (Lᵀ L)⁻¹ x`` in place, with the factor of :func:`_factor`, ``dinv = 1 / diag(L)`` and
+    ``lam = rb.dof_parent`` (arrays only: a call passing ``rb`` would count references to all its arrays)."""
+    n = len(x)
+    for k in range(n - 1, -1, -1):
         x[k] *= dinv[k]
         i = lam[k]
         while i >= 0:
             x[i] -= L[k, i] * x[k]
             i = lam[i]
-    for k in range(rb.nv):
+    for k in range(n):
         i = lam[k]
         while i >= 0:
             x[k] -= L[k, i] * x[i]
@@ -289,7 +290,7 @@ def forward_dynamics(
     _factor(rb, ws)
     for k in range(rb.nv):
         a_out[k] = tau[k] - ws.tau[k]
-    factor_solve(rb, ws.L, ws.dinv, a_out)
+    factor_solve(rb.dof_parent, ws.L, ws.dinv, a_out)
 
 
 @compiled
