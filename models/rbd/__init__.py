@@ -2,6 +2,7 @@
 
 - :mod:`.joint_types`: joint codes of a lowered model.
 - :mod:`.lowering`: ``lower_model(model) -> RigidBodyModel`` (plain arrays) and ``make_workspace``.
+- :mod:`.spatial`: 6-vector helpers (spatial motions and forces as tuples) shared by the kernels.
 - :mod:`.dynamics_kernel`: forward kinematics, forward dynamics (CRBA + tree-sparse factor), mass inverse,
   RNEA derivatives, frame placement / Jacobian / velocity / velocity derivatives.
 - :mod:`.contact_kernel`: contact Jacobian and drift (3D/6D, Baumgarte) with derivatives, the contact forces'

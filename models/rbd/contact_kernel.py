@@ -57,23 +57,10 @@ import numpy as np
 
 from crocopy.kernels import compiled
 
-from .dynamics_kernel import (
-    LOCAL,
-    LOCAL_WORLD_ALIGNED,
-    _dot,
-    _factor_solve,
-    _fcross,
-    _frame_pose,
-    _get6,
-    _mcross,
-    _minus,
-    _plus,
-    _times,
-    _to_reference,
-    frame_jacobian,
-)
+from .dynamics_kernel import LOCAL, LOCAL_WORLD_ALIGNED, factor_solve, frame_jacobian, frame_pose, to_reference
 from .lie_kernel import jlog6, log6
 from .lowering import RigidBodyModel, RigidBodyWorkspace
+from .spatial import dot, fcross, get6, mcross, minus, plus, times
 
 __all__ = [
     "LOCAL",
@@ -140,7 +127,7 @@ def _rotate(R, m):
 def _no_gravity(rb, ws, i):
     """``oa_i + g``: the spatial acceleration of joint ``i`` without the gravity RNEA puts at the root."""
     g = rb.gravity
-    return _plus(_get6(ws.oa, i), (g[0], g[1], g[2], g[3], g[4], g[5]))
+    return plus(get6(ws.oa, i), (g[0], g[1], g[2], g[3], g[4], g[5]))
 
 
 @compiled
@@ -151,8 +138,8 @@ def _frame_motion(rb, ws, cw, fid, nc, kp, kd, ref_R, ref_p):
     frame_jacobian(rb, ws, fid, LOCAL, cw.J6)
     i = rb.frame_joint[fid]
     R, p = ws.Rf, ws.pf
-    vf = _to_reference(R, p, _get6(ws.ov, i), LOCAL)
-    af = _to_reference(R, p, _no_gravity(rb, ws, i), LOCAL)
+    vf = to_reference(R, p, get6(ws.ov, i), LOCAL)
+    af = to_reference(R, p, _no_gravity(rb, ws, i), LOCAL)
     if nc == 3:
         wv = _cross(vf[3], vf[4], vf[5], vf[0], vf[1], vf[2])
         d = (p[0] - ref_p[0], p[1] - ref_p[1], p[2] - ref_p[2])
@@ -165,7 +152,7 @@ def _frame_motion(rb, ws, cw, fid, nc, kp, kd, ref_R, ref_p):
             0.0, 0.0, 0.0,
         )
         return i, vf, c
-    c = _plus(af, _times(vf, kd))
+    c = plus(af, times(vf, kd))
     if kp != 0.0:
         R3, p3 = cw.R3, cw.p3
         for r in range(3):
@@ -174,7 +161,7 @@ def _frame_motion(rb, ws, cw, fid, nc, kp, kd, ref_R, ref_p):
                 R3[r, k] = ref_R[0, r] * R[0, k] + ref_R[1, r] * R[1, k] + ref_R[2, r] * R[2, k]
         log6(R3, p3, cw.m6)
         m = cw.m6
-        c = _plus(c, _times((m[0], m[1], m[2], m[3], m[4], m[5]), kp))
+        c = plus(c, times((m[0], m[1], m[2], m[3], m[4], m[5]), kp))
     return i, vf, c
 
 
@@ -243,18 +230,18 @@ def contact_calc_diff(
     for r in range(nc):
         for k in range(2 * nv):
             da0_dx_out[row + r, k] = 0.0
-    ovi = _get6(ov, i)
+    ovi = get6(ov, i)
     j = i
     while j > 0:
         par = rb.parent[j]
-        ovp, oap, ovj = _get6(ov, par), _no_gravity(rb, ws, par), _get6(ov, j)
+        ovp, oap, ovj = get6(ov, par), _no_gravity(rb, ws, par), get6(ov, j)
         for k in range(rb.idx_v[j], rb.idx_v[j] + rb.nvj[j]):
-            s = _get6(oS, k)
+            s = get6(oS, k)
             Jk = (J[0, k], J[1, k], J[2, k], J[3, k], J[4, k], J[5, k])
-            psi = _mcross(ovp, s)
-            vq = _to_reference(R, p, psi, LOCAL)
-            aq = _to_reference(R, p, _plus(_mcross(oap, s), _mcross(psi, _minus(ovi, ovp))), LOCAL)
-            av = _to_reference(R, p, _plus(_mcross(s, _minus(ovi, ovp)), _mcross(ovj, s)), LOCAL)
+            psi = mcross(ovp, s)
+            vq = to_reference(R, p, psi, LOCAL)
+            aq = to_reference(R, p, plus(mcross(oap, s), mcross(psi, minus(ovi, ovp))), LOCAL)
+            av = to_reference(R, p, plus(mcross(s, minus(ovi, ovp)), mcross(ovj, s)), LOCAL)
             if nc == 3:
                 x = _cross(vf[3], vf[4], vf[5], vq[0], vq[1], vq[2])
                 y = _cross(vq[3], vq[4], vq[5], vf[0], vf[1], vf[2])
@@ -270,12 +257,12 @@ def contact_calc_diff(
                 dv = (av[0] + x[0] + y[0] + kd * Jk[0], av[1] + x[1] + y[1] + kd * Jk[1],
                       av[2] + x[2] + y[2] + kd * Jk[2], 0.0, 0.0, 0.0)
             else:
-                dq = _plus(aq, _times(vq, kd))
-                dv = _plus(av, _times(Jk, kd))
+                dq = plus(aq, times(vq, kd))
+                dv = plus(av, times(Jk, kd))
                 if kp != 0.0:
-                    lj = (_dot(_get6(L, 0), Jk), _dot(_get6(L, 1), Jk), _dot(_get6(L, 2), Jk),
-                          _dot(_get6(L, 3), Jk), _dot(_get6(L, 4), Jk), _dot(_get6(L, 5), Jk))
-                    dq = _plus(dq, _times(lj, kp))
+                    lj = (dot(get6(L, 0), Jk), dot(get6(L, 1), Jk), dot(get6(L, 2), Jk),
+                          dot(get6(L, 3), Jk), dot(get6(L, 4), Jk), dot(get6(L, 5), Jk))
+                    dq = plus(dq, times(lj, kp))
             if lwa:
                 x = _cross(Jk[3], Jk[4], Jk[5], c[0], c[1], c[2])
                 y = _cross(Jk[3], Jk[4], Jk[5], c[3], c[4], c[5])
@@ -303,7 +290,7 @@ def contact_force_derivatives(
     to :func:`~.dynamics_kernel.dynamics_derivatives`' ``∂RNEA/∂q`` it gives ``∂(RNEA - Σ Jcᵀ λ)/∂q`` (what
     ``computeRNEADerivatives`` with the contact forces as ``fext`` and ``updateRneaDiff`` give).  Needs the
     kinematics in ``ws``; ``O(depth²)``."""
-    i = _frame_pose(rb, ws, fid)
+    i = frame_pose(rb, ws, fid)
     R, p, oS = ws.Rf, ws.pf, ws.oS
     fl = (lam[row], lam[row + 1], lam[row + 2])
     fa = (lam[row + 3], lam[row + 4], lam[row + 5]) if nc == 6 else (0.0, 0.0, 0.0)
@@ -316,8 +303,8 @@ def contact_force_derivatives(
     j = i
     while j > 0:
         for k in range(idx_v[j], idx_v[j] + nvj[j]):
-            s = _get6(oS, k)
-            sf = _fcross(s, F)
+            s = get6(oS, k)
+            sf = fcross(s, F)
             if reference == LOCAL:
                 dF = sf
             else:
@@ -326,9 +313,9 @@ def contact_force_derivatives(
                 dF = (0.0, 0.0, 0.0, d[0], d[1], d[2])
             l = i
             while l > 0:
-                g = _minus(dF, sf) if l >= j else dF
+                g = minus(dF, sf) if l >= j else dF
                 for r in range(idx_v[l], idx_v[l] + nvj[l]):
-                    s_r = _get6(oS, r)
+                    s_r = get6(oS, r)
                     dtau_dq_inout[r, k] -= (
                         s_r[0] * g[0] + s_r[1] * g[1] + s_r[2] * g[2] + s_r[3] * g[3] + s_r[4] * g[4] + s_r[5] * g[5]
                     )
@@ -371,11 +358,11 @@ def contact_forward_dynamics(
     nv, Y, G = rb.nv, cw.Y, cw.G
     for k in range(nv):
         a_out[k] = tau[k] - ws.tau[k]
-    _factor_solve(rb, ws.L, ws.dinv, a_out)
+    factor_solve(rb.dof_parent, ws.L, ws.dinv, a_out)
     for r in range(nc):
         for k in range(nv):
             Y[r, k] = Jc[r, k]
-        _factor_solve(rb, ws.L, ws.dinv, Y[r])
+        factor_solve(rb.dof_parent, ws.L, ws.dinv, Y[r])
     for r in range(nc):
         for c in range(r + 1):
             acc = damping if r == c else 0.0
@@ -392,21 +379,6 @@ def contact_forward_dynamics(
     for r in range(nc):
         for k in range(nv):
             a_out[k] += Y[r, k] * lam_out[r]
-
-
-@compiled
-def _kkt_column(rb, ws, cw, Jc, nc, z, da0_dx, c):
-    """``cw.w[:nc] = G⁻¹ (Jc z + da0_dx[:, c])`` (``c < 0``: without ``da0_dx``), then ``z -= Yᵀ w``."""
-    w, Y = cw.w, cw.Y
-    for r in range(nc):
-        acc = da0_dx[r, c] if c >= 0 else 0.0
-        for k in range(rb.nv):
-            acc += Jc[r, k] * z[k]
-        w[r] = acc
-    _schur_solve(cw.G, nc, w)
-    for r in range(nc):
-        for k in range(rb.nv):
-            z[k] -= Y[r, k] * w[r]
 
 
 @compiled
@@ -433,7 +405,7 @@ def contact_dynamics_derivatives(
     :func:`contact_calc_diff` at ``a``.  Uses the factors left by :func:`contact_forward_dynamics` (``ws.L``,
     ``cw.Y``, ``cw.G``); ``O((2 nv + nu) (nv · depth + nc nv))``.
     """
-    nv, z, w = rb.nv, cw.z, cw.w
+    nv, z, w, Y, lam, L, dinv = rb.nv, cw.z, cw.w, cw.Y, rb.dof_parent, ws.L, ws.dinv
     for c in range(2 * nv + S.shape[1]):
         for k in range(nv):
             if c < nv:
@@ -442,8 +414,16 @@ def contact_dynamics_derivatives(
                 z[k] = -did_dv[k, c - nv]
             else:
                 z[k] = S[k, c - 2 * nv]
-        _factor_solve(rb, ws.L, ws.dinv, z)
-        _kkt_column(rb, ws, cw, Jc, nc, z, da0_dx, c if c < 2 * nv else -1)
+        factor_solve(lam, L, dinv, z)
+        for r in range(nc):  # w = G⁻¹ (Jc z + ∂c/∂x_c), z -= Yᵀ w
+            acc = da0_dx[r, c] if c < 2 * nv else 0.0
+            for k in range(nv):
+                acc += Jc[r, k] * z[k]
+            w[r] = acc
+        _schur_solve(cw.G, nc, w)
+        for r in range(nc):
+            for k in range(nv):
+                z[k] -= Y[r, k] * w[r]
         if c < 2 * nv:
             for k in range(nv):
                 Fx_out[k, c] = z[k]

@@ -28,7 +28,8 @@ inertias ``Ic`` and composite ``Bc = Σ (ov ×* oI - oI ov× + (·) ×* oI ov)``
 products, then ``O(nv · depth)`` 6-vector dot products; the ancestors of ``j`` see ``d τ_l = oS_lᵀ dF_j``.
 
 Inner 6x6 loops are written out: calling a compiled helper that is not inlined makes numba count references to
-every array of ``rb`` and ``ws`` (about 0.5 µs); the 6-vector helpers work on tuples and are inlined.
+every array of ``rb`` and ``ws`` (about 0.5 µs); the 6-vector helpers (:mod:`.spatial`) work on tuples and are
+inlined.
 As in Pinocchio (4.0 and 4.1, measured), RNEA and CRBA include the armature, so ``∂τ/∂a = M``.
 
 Frames.  ``reference`` is ``int(pin.WORLD) = 0``, ``int(pin.LOCAL) = 1`` or ``int(pin.LOCAL_WORLD_ALIGNED) = 2``.
@@ -46,82 +47,11 @@ from crocopy.kernels import compiled
 
 from .joint_types import FREEFLYER, PRISMATIC, REVOLUTE
 from .lowering import RigidBodyModel, RigidBodyWorkspace
+from .spatial import dot, fcross, get6, mcross, minus, plus, set6, times, unit
 
 WORLD = 0
 LOCAL = 1
 LOCAL_WORLD_ALIGNED = 2
-
-
-ZERO6 = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-
-
-@compiled
-def _get6(A, i):
-    """Row ``i`` of an ``(n, 6)`` array as a tuple."""
-    return A[i, 0], A[i, 1], A[i, 2], A[i, 3], A[i, 4], A[i, 5]
-
-
-@compiled
-def _set6(A, i, m):
-    """``A[i] = m``."""
-    A[i, 0], A[i, 1], A[i, 2], A[i, 3], A[i, 4], A[i, 5] = m
-
-
-@compiled
-def _plus(m, n):
-    """``m + n`` of two 6-tuples."""
-    return m[0] + n[0], m[1] + n[1], m[2] + n[2], m[3] + n[3], m[4] + n[4], m[5] + n[5]
-
-
-@compiled
-def _minus(m, n):
-    """``m - n`` of two 6-tuples."""
-    return m[0] - n[0], m[1] - n[1], m[2] - n[2], m[3] - n[3], m[4] - n[4], m[5] - n[5]
-
-
-@compiled
-def _times(m, x):
-    """``x m`` of a 6-tuple and a scalar."""
-    return m[0] * x, m[1] * x, m[2] * x, m[3] * x, m[4] * x, m[5] * x
-
-
-@compiled
-def _unit(c):
-    """The ``c``-th unit 6-tuple."""
-    return (1.0 if c == 0 else 0.0, 1.0 if c == 1 else 0.0, 1.0 if c == 2 else 0.0,
-            1.0 if c == 3 else 0.0, 1.0 if c == 4 else 0.0, 1.0 if c == 5 else 0.0)
-
-
-@compiled
-def _dot(m, n):
-    """``mᵀ n`` of two 6-tuples."""
-    return m[0] * n[0] + m[1] * n[1] + m[2] * n[2] + m[3] * n[3] + m[4] * n[4] + m[5] * n[5]
-
-
-@compiled
-def _mcross(m, n):
-    """``m × n`` of two motions (6-tuples)."""
-    return (
-        m[4] * n[2] - m[5] * n[1] + m[1] * n[5] - m[2] * n[4],
-        m[5] * n[0] - m[3] * n[2] + m[2] * n[3] - m[0] * n[5],
-        m[3] * n[1] - m[4] * n[0] + m[0] * n[4] - m[1] * n[3],
-        m[4] * n[5] - m[5] * n[4],
-        m[5] * n[3] - m[3] * n[5],
-        m[3] * n[4] - m[4] * n[3],
-    )
-
-
-@compiled
-def _fcross(m, f):
-    """``m ×* f`` of a motion and a force (6-tuples)."""
-    return (
-        m[4] * f[2] - m[5] * f[1],
-        m[5] * f[0] - m[3] * f[2],
-        m[3] * f[1] - m[4] * f[0],
-        m[4] * f[5] - m[5] * f[4] + m[1] * f[2] - m[2] * f[1],
-        m[5] * f[3] - m[3] * f[5] + m[2] * f[0] - m[0] * f[2],
-        m[3] * f[4] - m[4] * f[3] + m[0] * f[1] - m[1] * f[0],
-    )
 
 
 @compiled
@@ -237,15 +167,15 @@ def _rnea_pass(rb, ws, a, tau):
     oS, ov, ow, oa, oI, oh, oIa, of = ws.oS, ws.ov, ws.ow, ws.oa, ws.oI, ws.oh, ws.oIa, ws.of
     parent, idx_v, nvj, armature = rb.parent, rb.idx_v, rb.nvj, rb.armature
     g = rb.gravity
-    _set6(oa, 0, (-g[0], -g[1], -g[2], -g[3], -g[4], -g[5]))
+    set6(oa, 0, (-g[0], -g[1], -g[2], -g[3], -g[4], -g[5]))
     for i in range(1, rb.njoints):
         iv = idx_v[i]
-        acc = _get6(oa, parent[i])
+        acc = get6(oa, parent[i])
         for d in range(nvj[i]):
-            acc = _plus(acc, _times(_get6(oS, iv + d), a[iv + d]))
-        ovi = _get6(ov, i)
-        acc = _plus(acc, _mcross(ovi, _get6(ow, i)))
-        _set6(oa, i, acc)
+            acc = plus(acc, times(get6(oS, iv + d), a[iv + d]))
+        ovi = get6(ov, i)
+        acc = plus(acc, mcross(ovi, get6(ow, i)))
+        set6(oa, i, acc)
         for r in range(6):  # h = oI ov, oIa = oI oa
             h_r = ia_r = 0.0
             for c in range(6):
@@ -253,15 +183,15 @@ def _rnea_pass(rb, ws, a, tau):
                 ia_r += oI[i, r, c] * oa[i, c]
             oh[i, r] = h_r
             oIa[i, r] = ia_r
-        _set6(of, i, _plus(_get6(oIa, i), _fcross(ovi, _get6(oh, i))))
+        set6(of, i, plus(get6(oIa, i), fcross(ovi, get6(oh, i))))
     for i in range(rb.njoints - 1, 0, -1):
         iv = idx_v[i]
-        fi = _get6(of, i)
+        fi = get6(of, i)
         for d in range(nvj[i]):
-            tau[iv + d] = _dot(_get6(oS, iv + d), fi) + armature[iv + d] * a[iv + d]
+            tau[iv + d] = dot(get6(oS, iv + d), fi) + armature[iv + d] * a[iv + d]
         par = parent[i]
         if par > 0:
-            _set6(of, par, _plus(_get6(of, par), fi))
+            set6(of, par, plus(get6(of, par), fi))
 
 
 @compiled
@@ -285,12 +215,12 @@ def _crba(rb, ws):
                 for c in range(6):
                     x += oIc[i, r, c] * oS[iv + d, c]
                 tmp[0, r] = x
-            F = _get6(tmp, 0)
+            F = get6(tmp, 0)
             j = i
             while j > 0:
                 jv = idx_v[j]
                 for e in range(nvj[j]):
-                    x = _dot(_get6(oS, jv + e), F)
+                    x = dot(get6(oS, jv + e), F)
                     M[jv + e, iv + d] = x
                     M[iv + d, jv + e] = x
                 j = parent[j]
@@ -330,16 +260,17 @@ def _factor(rb, ws):
 
 
 @compiled
-def _factor_solve(rb, L, dinv, x):
-    """``x ← (Lᵀ L)⁻¹ x`` in place, with the factor of :func:`_factor` and ``dinv = 1 / diag(L)``."""
-    lam = rb.dof_parent
-    for k in range(rb.nv - 1, -1, -1):
+def factor_solve(lam: np.ndarray, L: np.ndarray, dinv: np.ndarray, x: np.ndarray) -> None:
+    """``x (nv,) ← (Lᵀ L)⁻¹ x`` in place, with the factor of :func:`_factor`, ``dinv = 1 / diag(L)`` and
+    ``lam = rb.dof_parent`` (arrays only: a call passing ``rb`` would count references to all its arrays)."""
+    n = len(x)
+    for k in range(n - 1, -1, -1):
         x[k] *= dinv[k]
         i = lam[k]
         while i >= 0:
             x[i] -= L[k, i] * x[k]
             i = lam[i]
-    for k in range(rb.nv):
+    for k in range(n):
         i = lam[k]
         while i >= 0:
             x[k] -= L[k, i] * x[i]
@@ -359,7 +290,7 @@ def forward_dynamics(
     _factor(rb, ws)
     for k in range(rb.nv):
         a_out[k] = tau[k] - ws.tau[k]
-    _factor_solve(rb, ws.L, ws.dinv, a_out)
+    factor_solve(rb.dof_parent, ws.L, ws.dinv, a_out)
 
 
 @compiled
@@ -397,11 +328,11 @@ def _composite_coriolis(rb, ws):
     """``ws.oIc``, ``ws.oBc``: composite inertias and composite ``B_i = ov_i ×* oI_i - oI_i (ov_i ×) + (· ×* h_i)``."""
     oI, oIc, oBc, ov, oh, Mx = ws.oI, ws.oIc, ws.oBc, ws.ov, ws.oh, ws.tmp
     for i in range(1, rb.njoints):
-        ovi, h = _get6(ov, i), _get6(oh, i)
+        ovi, h = get6(ov, i), get6(oh, i)
         for c in range(6):  # Mx: the matrix of ovi ×, row c holding its column c
-            _set6(Mx, c, _mcross(ovi, _unit(c)))
+            set6(Mx, c, mcross(ovi, unit(c)))
         for c in range(6):
-            hx = _fcross(_unit(c), h)
+            hx = fcross(unit(c), h)
             for r in range(6):  # (ovi ×*) = -(Mx)ᵀ
                 x = hx[r]
                 for k in range(6):
@@ -457,22 +388,22 @@ def dynamics_derivatives(
             dtau_dv_out[r, c] = 0.0
     for k in range(rb.nv):
         j = dof_joint[k]
-        s = _get6(oS, k)
-        ovp = _get6(ov, parent[j])
-        psi_d = _mcross(ovp, s)
-        psi_dd = _plus(_mcross(_get6(oa, parent[j]), s), _mcross(ovp, psi_d))
-        phi = _plus(psi_d, _mcross(_get6(ov, j), s))
+        s = get6(oS, k)
+        ovp = get6(ov, parent[j])
+        psi_d = mcross(ovp, s)
+        psi_dd = plus(mcross(get6(oa, parent[j]), s), mcross(ovp, psi_d))
+        phi = plus(psi_d, mcross(get6(ov, j), s))
         for c in range(idx_v[j], idx_v[subtree_end[j] - 1] + nvj[subtree_end[j] - 1]):
-            y, z = _get6(Y, c), _get6(Z, c)
-            dtau_dq_out[c, k] = _dot(y, psi_dd) + _dot(z, psi_d)
-            dtau_dv_out[c, k] = _dot(z, s) + _dot(y, phi)
+            y, z = get6(Y, c), get6(Z, c)
+            dtau_dq_out[c, k] = dot(y, psi_dd) + dot(z, psi_d)
+            dtau_dv_out[c, k] = dot(z, s) + dot(y, phi)
         i = parent[j]
         if i == 0:
             continue
-        _set6(tmp, 0, s)
-        _set6(tmp, 1, psi_d)
-        _set6(tmp, 2, psi_dd)
-        _set6(tmp, 3, phi)
+        set6(tmp, 0, s)
+        set6(tmp, 1, psi_d)
+        set6(tmp, 2, psi_dd)
+        set6(tmp, 3, phi)
         for r in range(6):  # gq = Ic_j ψ̈ + Bc_j ψ̇,  gv = Bc_j s + Ic_j φ
             x = y = 0.0
             for c in range(6):
@@ -480,18 +411,18 @@ def dynamics_derivatives(
                 y += oBc[j, r, c] * tmp[0, c] + oIc[j, r, c] * tmp[3, c]
             tmp[4, r] = x
             tmp[5, r] = y
-        gq = _plus(_get6(tmp, 4), _fcross(s, _get6(of, j)))
-        gv = _get6(tmp, 5)
+        gq = plus(get6(tmp, 4), fcross(s, get6(of, j)))
+        gv = get6(tmp, 5)
         while i > 0:
             for d in range(nvj[i]):
-                col = _get6(oS, idx_v[i] + d)
-                dtau_dq_out[idx_v[i] + d, k] = _dot(col, gq)
-                dtau_dv_out[idx_v[i] + d, k] = _dot(col, gv)
+                col = get6(oS, idx_v[i] + d)
+                dtau_dq_out[idx_v[i] + d, k] = dot(col, gq)
+                dtau_dv_out[idx_v[i] + d, k] = dot(col, gv)
             i = parent[i]
 
 
 @compiled
-def _frame_pose(rb, ws, fid):
+def frame_pose(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int) -> int:
     """``ws.Rf, ws.pf``: ``oMf`` of frame ``fid``; returns its parent joint."""
     i = rb.frame_joint[fid]
     oR, Rf, fR = ws.oR, ws.Rf, rb.fR
@@ -506,7 +437,7 @@ def _frame_pose(rb, ws, fid):
 
 
 @compiled
-def _to_reference(R, p, m, reference):
+def to_reference(R: np.ndarray, p: np.ndarray, m: tuple, reference: int) -> tuple:
     """The world motion ``m`` (6-tuple) read in ``reference`` at the frame ``(R (3, 3), p (3,))``."""
     vx, vy, vz, wx, wy, wz = m
     if reference == WORLD:
@@ -528,7 +459,7 @@ def _to_reference(R, p, m, reference):
 @compiled
 def frame_placement(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int, R_out: np.ndarray, p_out: np.ndarray) -> None:
     """``oMf`` of frame ``fid`` (``R_out (3, 3)``, ``p_out (3,)``) after :func:`forward_kinematics`."""
-    _frame_pose(rb, ws, fid)
+    frame_pose(rb, ws, fid)
     for r in range(3):
         p_out[r] = ws.pf[r]
         for c in range(3):
@@ -538,7 +469,7 @@ def frame_placement(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int, R_out:
 @compiled
 def frame_jacobian(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int, reference: int, J_out: np.ndarray) -> None:
     """``J_out (6, nv)``: the Jacobian of frame ``fid`` in ``reference`` (zero outside its support)."""
-    i = _frame_pose(rb, ws, fid)
+    i = frame_pose(rb, ws, fid)
     Rf, pf, oS = ws.Rf, ws.pf, ws.oS
     idx_v, nvj, parent = rb.idx_v, rb.nvj, rb.parent
     for r in range(6):
@@ -547,7 +478,7 @@ def frame_jacobian(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int, referen
     while i > 0:
         iv = idx_v[i]
         for d in range(nvj[i]):
-            col = _to_reference(Rf, pf, _get6(oS, iv + d), reference)
+            col = to_reference(Rf, pf, get6(oS, iv + d), reference)
             for r in range(6):
                 J_out[r, iv + d] = col[r]
         i = parent[i]
@@ -556,8 +487,8 @@ def frame_jacobian(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int, referen
 @compiled
 def frame_velocity(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int, reference: int, out6: np.ndarray) -> None:
     """``out6 (6,)``: the spatial velocity of frame ``fid`` in ``reference``, linear then angular."""
-    i = _frame_pose(rb, ws, fid)
-    m = _to_reference(ws.Rf, ws.pf, _get6(ws.ov, i), reference)
+    i = frame_pose(rb, ws, fid)
+    m = to_reference(ws.Rf, ws.pf, get6(ws.ov, i), reference)
     for r in range(6):
         out6[r] = m[r]
 
@@ -580,18 +511,18 @@ def frame_velocity_derivatives(
     for r in range(6):
         for c in range(rb.nv):
             dv_dq_out[r, c] = 0.0
-    ovi = _get6(ov, i)
+    ovi = get6(ov, i)
     j = i
     while j > 0:
         par = parent[j]
         jv = idx_v[j]
-        ovp = _get6(ov, par)
+        ovp = get6(ov, par)
         for d in range(nvj[j]):
-            s = _get6(oS, jv + d)
+            s = get6(oS, jv + d)
             if reference == LOCAL:
-                col = _to_reference(Rf, pf, _mcross(ovp, s), LOCAL)
+                col = to_reference(Rf, pf, mcross(ovp, s), LOCAL)
             else:
-                col = _to_reference(Rf, pf, _mcross(s, _minus(ovi, ovp)), reference)
+                col = to_reference(Rf, pf, mcross(s, minus(ovi, ovp)), reference)
             for r in range(6):
                 dv_dq_out[r, jv + d] = col[r]
         j = par
