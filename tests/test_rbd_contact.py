@@ -283,7 +283,7 @@ def test_contact_dynamics_derivatives_by_finite_differences(case):
     close(np.vstack([Fu, df_du]), fd_u, 1e-6)
 
 
-@numba.njit(cache=True)
+@numba.njit
 def _node(rb, ws, cw, q, v, tau, S, fids, R_ref, p_ref, out):
     """A compiled caller, as the contact node will be: 3D LOCAL_WORLD_ALIGNED contacts with gains (2, 1)."""
     a, lam, Jc, a0, dq, dv, da0, Fx, Fu, df_dx, df_du = out
@@ -298,7 +298,7 @@ def _node(rb, ws, cw, q, v, tau, S, fids, R_ref, p_ref, out):
     C.contact_dynamics_derivatives(rb, ws, cw, Jc, 3 * len(fids), dq, dv, da0, S, Fx, Fu, df_dx, df_du)
 
 
-@numba.njit(cache=True)
+@numba.njit
 def _repeat(rb, ws, cw, q, v, tau, S, fids, R_ref, p_ref, out, n):
     for _ in range(n):
         _node(rb, ws, cw, q, v, tau, S, fids, R_ref, p_ref, out)
