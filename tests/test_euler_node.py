@@ -208,7 +208,8 @@ def test_parameters_are_read_again_at_each_refresh():
 
 
 def test_the_kernel_rebuilds_the_lowered_model_and_workspace_from_the_table():
-    """Entry by entry, the arrays the kernel views are the node's own (same memory, shapes and values)."""
+    """Entry by entry, the arrays the kernel views are the node's own and its model's shared workspace (same
+    memory, shapes and values)."""
     from crocopy.models.rbd import euler_node_kernel as kernel
 
     iam, state = node("anymal", ("state", "control"))
@@ -222,7 +223,7 @@ def test_the_kernel_rebuilds_the_lowered_model_and_workspace_from_the_table():
         expected = evaluator.armature if name == "armature" else getattr(reference, name)
         np.testing.assert_array_equal(getattr(rb, name), expected, err_msg=name)
     for name in ws._fields:
-        mine, theirs = getattr(ws, name), getattr(evaluator.workspace, name)
+        mine, theirs = getattr(ws, name), getattr(evaluator._lowered.workspace, name)
         assert mine.shape == theirs.shape and mine.ctypes.data == theirs.ctypes.data, name
 
 
@@ -239,3 +240,24 @@ def test_a_changed_pinocchio_model_is_read_again_at_the_next_solve():
     iam.calcDiff(slow, x, u)
     np.testing.assert_allclose(data.xnext, slow.xnext, rtol=1e-12, atol=1e-14)
     np.testing.assert_allclose(data.Fu, slow.Fu, rtol=1e-10, atol=1e-12)
+
+
+def test_nodes_of_one_model_share_their_scratch_and_keep_their_own_arrays():
+    from crocopy.models.rbd import euler_node_kernel as kernel
+
+    iam, state = node("kinova", ("state", "translation", "control"))
+    first, second = iam.createData(), iam.createData()
+    memo: dict = {}
+    a, b = iam._compiled_node(first, False, memo), iam._compiled_node(second, False, memo)
+    shared = kernel.NODE + len(kernel.NODE_ARRAYS)
+    assert np.array_equal(a.tbl[shared:], b.tbl[shared:])
+    assert not np.intersect1d(a.tbl[kernel.NODE:shared], b.tbl[kernel.NODE:shared]).size
+    x, u = point(state, iam.nu, 6)
+    y, w = point(state, iam.nu, 7)
+    a.calcDiff(x, u, False)
+    b.calcDiff(y, w, False)
+    slow = iam.createData()
+    iam.calc(slow, x, u)
+    iam.calcDiff(slow, x, u)
+    for name in FIELDS:
+        np.testing.assert_allclose(getattr(first, name), getattr(slow, name), rtol=1e-10, atol=1e-12, err_msg=name)

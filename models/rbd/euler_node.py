@@ -85,6 +85,31 @@ class Lowered:
     def __init__(self, rb: RigidBodyModel) -> None:
         self.rb = rb
         self.addresses, self.shapes = table_entries([getattr(rb, name) for name in rb._fields[4:]])
+        self.workspace = make_workspace(rb)
+        self.workspace_entries = table_entries(list(self.workspace))
+        self._scratch: dict[tuple[int, int], tuple[dict, tuple]] = {}
+
+    def scratch(self, nu: int, nc: int) -> tuple[dict, tuple[np.ndarray, np.ndarray]]:
+        """The arrays of :data:`.euler_node_kernel.SCRATCH_ARRAYS` (and a ``Minv`` for a data without one) shared by
+        the nodes of this model with ``nu`` controls and ``nc`` contact rows, with their table entries."""
+        key = (nu, nc)
+        if key not in self._scratch:
+            nv = self.rb.nv
+            ndx = 2 * nv
+            cw = make_contact_workspace(self.rb, nc)
+            arrays = {
+                "tau": np.zeros(nv), "dtau_dq": np.zeros((nv, nv)), "dtau_dv": np.zeros((nv, nv)),
+                "J6": np.zeros((6, nv)), "K6": np.zeros((6, nv)), "m6": np.zeros((6, 6)), "R3": np.zeros((3, 3)),
+                "p3": np.zeros(3), "v6": np.zeros(6), "Jq": np.zeros((nv, nv)), "Jv": np.zeros((nv, nv)),
+                "rows": np.zeros((nv, ndx + nu)), "gap": np.zeros(ndx),
+                "Jcs": np.zeros((nc, nv)), "a0": np.zeros(nc), "lam": np.zeros(nc), "da0_dx": np.zeros((nc, ndx)),
+                "df_dx": np.zeros((nc, ndx)), "df_du": np.zeros((nc, nu)), "com": np.zeros(3),
+                "Jcom": np.zeros((3, nv)),
+                "cJ6": cw.J6, "cY": cw.Y, "cG": cw.G, "cz": cw.z, "cw": cw.w, "cm6": cw.m6, "cJ66": cw.J66,
+                "cR3": cw.R3, "cp3": cw.p3, "Minv": np.zeros((nv, nv)),
+            }
+            self._scratch[key] = arrays, table_entries([arrays[name] for name in kernel.SCRATCH_ARRAYS])
+        return self._scratch[key]
 
     def update(self, rb: RigidBodyModel) -> bool:
         """Copy ``rb``'s values into this model's arrays (their addresses stay); False if a size differs."""
@@ -144,7 +169,7 @@ def euler_node(iam, data, terminal: bool, memo: dict, contacts: list = ()) -> Eu
     node = _NODES.get(data)
     if node is None or node.model is not iam or node.terminal != terminal or node.nv != low.rb.nv \
             or not node.contacts.same(contacts):
-        node = EulerNode(iam, data, terminal, low.rb, contacts)
+        node = EulerNode(iam, data, terminal, low.rb.nv, contacts)
         _NODES[data] = node
     return node if node.refresh(low, memo) else None
 
@@ -158,32 +183,17 @@ class EulerNode:
     derivatives, which the stack shares with the residual and activation datas).
     """
 
-    def __init__(self, iam, data, terminal: bool, rb: RigidBodyModel, contacts: list = ()) -> None:
+    def __init__(self, iam, data, terminal: bool, nv: int, contacts: list = ()) -> None:
         self.model = iam
         self.terminal = terminal
         self._data = weakref.ref(data)
-        nv, nu = rb.nv, iam.nu
-        ndx = 2 * nv
         self.nv = nv
         self.armature = np.zeros(nv)
-        self.workspace = make_workspace(rb)
         self.contacts = ContactSet(contacts)
-        nc = self.contacts.nc
-        cw = make_contact_workspace(rb, nc)
-        self.scratch = {
-            "S": np.zeros((nv, nu)), "tau": np.zeros(nv), "dtau_dq": np.zeros((nv, nv)), "dtau_dv": np.zeros((nv, nv)),
-            "J6": np.zeros((6, nv)), "K6": np.zeros((6, nv)), "m6": np.zeros((6, 6)), "R3": np.zeros((3, 3)),
-            "p3": np.zeros(3), "v6": np.zeros(6), "Jq": np.zeros((nv, nv)), "Jv": np.zeros((nv, nv)),
-            "rows": np.zeros((nv, ndx + nu)), "gap": np.zeros(ndx),
-            "Jcs": np.zeros((nc, nv)), "a0": np.zeros(nc), "lam": np.zeros(nc), "da0_dx": np.zeros((nc, ndx)),
-            "df_dx": np.zeros((nc, ndx)), "df_du": np.zeros((nc, nu)), "gains": self.contacts.gains,
-            "ref_R": self.contacts.ref_R, "ref_p": self.contacts.ref_p, "com": np.zeros(3), "Jcom": np.zeros((3, nv)),
-            "cJ6": cw.J6, "cY": cw.Y, "cG": cw.G, "cz": cw.z, "cw": cw.w, "cm6": cw.m6, "cJ66": cw.J66, "cR3": cw.R3,
-            "cp3": cw.p3, "Minv": np.zeros((nv, nv)),
-        }
+        self.parameters = {"S": np.zeros((nv, iam.nu)), "gains": self.contacts.gains, "ref_R": self.contacts.ref_R,
+                           "ref_p": self.contacts.ref_p}
         self.no_control = np.zeros(0)
         self._armature_entry = table_entries([self.armature])
-        self._workspace_entries = table_entries(list(self.workspace))
         self._data_arrays: list = []
         self._data_entries = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
         self._residuals: list | None = None
@@ -271,14 +281,15 @@ class EulerNode:
             dam.actuation.calc(act, x, u)
             dam.actuation.calcDiff(act, x, u)
             memo[key] = act.dtau_du.copy()
-        self.scratch["S"][:] = memo[key]
+        self.parameters["S"][:] = memo[key]
 
     def _table(self, low: Lowered, data, ddata, stack, changed: bool) -> None:
         """The addresses and dimensions of every array the kernels read or write, and the integer program.
 
-        Entries: the lowered model's arrays (the armature is this node's, model's plus dynamics'), the
-        workspace, then :data:`.euler_node_kernel.NODE_ARRAYS`; the data arrays' addresses are read again
-        only for arrays that are not those of the last refresh."""
+        Entries: the lowered model's arrays (the armature is this node's, model's plus dynamics'), its shared
+        workspace, then :data:`.euler_node_kernel.NODE_ARRAYS` (the node's own) and ``SCRATCH_ARRAYS`` (shared
+        by the model's nodes of the same sizes, :meth:`Lowered.scratch`); the data arrays' addresses are read
+        again only for arrays that are not those of the last refresh."""
         fields = {
             "xnext": data.xnext, "dx": data.dx, "Fx": data.Fx, "Fu": data.Fu, "Lx": data.Lx, "Lu": data.Lu,
             "Lxx": data.Lxx, "Lxu": data.Lxu, "Luu": data.Luu,
@@ -287,10 +298,10 @@ class EulerNode:
             "r": stack.r, "lb": stack.lb, "ub": stack.ub, "act_weights": stack.act_weights,
             "item_costs": stack.item_costs, "item_weights": stack.item_weights, "weights": stack.weights,
             "Ar": stack.Ar, "Arr": stack.Arr, "Jx": stack.Jx, "Ju": stack.Ju, "Jc": stack.Jc, "HJx": stack.HJx,
-            "Juc": stack.Juc, "HJu": stack.HJu, **self.scratch,
+            "Juc": stack.Juc, "HJu": stack.HJu, **self.parameters,
         }
-        if hasattr(ddata, "Minv"):
-            fields["Minv"] = ddata.Minv
+        scratch, scratch_entries = low.scratch(self.model.nu, self.contacts.nc)
+        fields["Minv"] = ddata.Minv if hasattr(ddata, "Minv") else scratch["Minv"]
         arrays = [fields[name] for name in kernel.NODE_ARRAYS]
         known = self._data_arrays
         if len(known) != len(arrays) or any(a is not b for a, b in zip(arrays, known)):
@@ -302,8 +313,8 @@ class EulerNode:
         rb = low.rb
         armature = kernel.RB_ARMATURE
         parts = [(low.addresses[:armature], low.shapes[:3 * armature]), self._armature_entry,
-                 (low.addresses[armature + 1:], low.shapes[3 * armature + 3:]), self._workspace_entries,
-                 self._data_entries]
+                 (low.addresses[armature + 1:], low.shapes[3 * armature + 3:]), low.workspace_entries,
+                 self._data_entries, scratch_entries]
         addresses = np.concatenate([p[0] for p in parts])
         shapes = np.concatenate([p[1] for p in parts])
         n = addresses.shape[0]

@@ -17,10 +17,11 @@ the costs of ``x``; its ``Fx`` is the identity.
 
 The arrays arrive by address: ``tbl[k]`` is the address of entry ``k`` (a C-contiguous array), its
 dimensions are ``ints[SHAPES + 3k : SHAPES + 3k + 3]``.  The entries are the fields of the lowered
-model and of its workspace (:mod:`.lowering`), then ``NODE_ARRAYS``.  ``ints`` also holds the sizes
-(``NQ`` .. ``NFRAMES``), the compiled residual items (``ITEM_FIELDS`` integers each, from
+model and of its workspace (:mod:`.lowering`), then ``NODE_ARRAYS`` and ``SCRATCH_ARRAYS``.  ``ints`` also
+holds the sizes (``NQ`` .. ``NFRAMES``), the compiled residual items (``ITEM_FIELDS`` integers each, from
 ``ints[ITEMS]``: kind, first stack row, rows, frame, reference frame, offset of its parameters in
-``par``) and the cost stack's item starts (from ``ints[STARTS]``); ``par[0]`` is the time step.
+``par``) and the cost stack's item starts (from ``ints[STARTS]``); ``par[0]`` is the time step, ``par[1]``
+the contact dynamics' damping.
 """
 
 from __future__ import annotations
@@ -69,11 +70,16 @@ NODE_ARRAYS = (
     "xnext", "dx", "Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu",
     "a", "dFx", "dFu", "Minv", "dLx", "dLu", "dLxx", "dLxu", "dLuu",
     "r", "lb", "ub", "act_weights", "item_costs", "item_weights", "weights", "Ar", "Arr",
-    "Jx", "Ju", "Jc", "HJx", "Juc", "HJu",
-    "S", "tau", "dtau_dq", "dtau_dv", "J6", "K6", "m6", "R3", "p3", "v6", "Jq", "Jv", "rows", "gap",
-    "Jcs", "a0", "lam", "da0_dx", "df_dx", "df_du", "gains", "ref_R", "ref_p", "com", "Jcom",
+    "Jx", "Ju", "Jc", "HJx", "Juc", "HJu", "S", "gains", "ref_R", "ref_p",
+)
+"""The node's own arrays (its data's, its cost stack's, its actuation matrix and contacts)."""
+SCRATCH_ARRAYS = (
+    "tau", "dtau_dq", "dtau_dv", "J6", "K6", "m6", "R3", "p3", "v6", "Jq", "Jv", "rows", "gap",
+    "Jcs", "a0", "lam", "da0_dx", "df_dx", "df_du", "com", "Jcom",
     "cJ6", "cY", "cG", "cz", "cw", "cm6", "cJ66", "cR3", "cp3",
 )
+"""Scratch of one node evaluation, shared by the nodes of one model with the same ``nu`` and contact rows (a
+kernel call leaves nothing there that a later call reads)."""
 N_RB, N_WS = len(RigidBodyModel._fields) - 4, len(RigidBodyWorkspace._fields)
 RB_ARMATURE = RigidBodyModel._fields.index("armature") - 4
 """Entry of the armature (each node's own: the Pinocchio model's plus the dynamics model's)."""
@@ -81,10 +87,10 @@ NODE = N_RB + N_WS
 (E_XNEXT, E_DX, E_FX, E_FU, E_LX, E_LU, E_LXX, E_LXU, E_LUU,
  E_A, E_DFX, E_DFU, E_MINV, E_DLX, E_DLU, E_DLXX, E_DLXU, E_DLUU,
  E_R, E_LB, E_UB, E_ACT_W, E_ITEM_COSTS, E_ITEM_WEIGHTS, E_WEIGHTS, E_AR, E_ARR,
- E_JX, E_JU, E_JC, E_HJX, E_JUC, E_HJU,
- E_S, E_TAU, E_DTAU_DQ, E_DTAU_DV, E_J6, E_K6, E_M6, E_R3, E_P3, E_V6, E_JQ, E_JV,
- E_ROWS, E_GAP, E_JCS, E_A0, E_LAM, E_DA0_DX, E_DF_DX, E_DF_DU, E_GAINS, E_REF_R, E_REF_P, E_COM, E_JCOM,
- E_CJ6) = range(NODE, NODE + len(NODE_ARRAYS) - 8)
+ E_JX, E_JU, E_JC, E_HJX, E_JUC, E_HJU, E_S, E_GAINS, E_REF_R, E_REF_P,
+ E_TAU, E_DTAU_DQ, E_DTAU_DV, E_J6, E_K6, E_M6, E_R3, E_P3, E_V6, E_JQ, E_JV, E_ROWS, E_GAP,
+ E_JCS, E_A0, E_LAM, E_DA0_DX, E_DF_DX, E_DF_DU, E_COM, E_JCOM,
+ E_CJ6) = range(NODE, NODE + len(NODE_ARRAYS) + len(SCRATCH_ARRAYS) - 8)
 
 
 @compiled
