@@ -118,6 +118,7 @@ def test_mixed_problem_compiles_the_nodes_it_can():
     mixed = crocopy.ShootingProblem(problem.x0, models, problem.terminalModel)
     nodes = compiled_nodes.select(crocopy.SolverFDDP(mixed))
     assert nodes.steps[3] is None and nodes.steps[2] is not None
+    assert nodes.horizon is not None and nodes.segments == {0: 3, 4: problem.T} and nodes.python_nodes == [3]
     fast = crocopy.SolverFDDP(mixed)
     fast.solve(xs, us, 30)
     reference, _ = solve("quad-goal", "SolverFDDP", False, maxiter=30)
@@ -215,3 +216,40 @@ def test_rollout_bounds_follow_the_bound_arrays():
     assert nodes.bounds(lbs, ubs, unbounded)[0][4] is lbs[4]
     lb_list, ub_list = nodes.bounds(None, None, unbounded)
     assert all(lb is unbounded[1][0] for lb in lb_list) and all(ub is unbounded[1][1] for ub in ub_list)
+
+
+def _mixed_quadrotor():
+    """quad-goal with its nodes 3 and 17 on the Python path (a subclass of the integrator)."""
+    problem, xs, us = registry.build("quad-goal")
+    models = list(problem.runningModels)
+
+    class Euler(crocopy.IntegratedActionModelEuler):
+        pass
+
+    for t in (3, 17):
+        models[t] = Euler(models[t].differential, models[t].dt)
+    return crocopy.ShootingProblem(problem.x0, models, problem.terminalModel), xs, us
+
+
+def test_trial_steps_over_compiled_ranges_equal_the_node_loop():
+    """Rollouts, gaps and expected improvements of a problem whose compiled nodes form three ranges."""
+    problem, xs, us = _mixed_quadrotor()
+    solver = crocopy.SolverFDDP(problem)
+    solver.setCandidate(xs, us, False)
+    assert compiled_nodes.attach(solver).segments == {0: 3, 4: 17, 18: problem.T}
+    solver.computeDirection()
+    fs = [f.copy() for f in solver.fs]
+    nodes, solver._nodes = solver._nodes, None
+    solver._synced = False  # the Python nodes need their own calc (compiled nodes skip their intermediates)
+    solver.computeDirection()
+    for a, b in zip(fs, solver.fs):
+        np.testing.assert_allclose(a, b, rtol=1e-8, atol=1e-9)
+    for alpha in (0.25, 0.1):
+        solver._nodes = nodes
+        fast = solver.tryStep(alpha), solver.expectedImprovement().copy(), [x.copy() for x in solver.xs_try]
+        solver._nodes = None
+        slow = solver.tryStep(alpha), solver.expectedImprovement().copy(), solver.xs_try
+        assert fast[0] == pytest.approx(slow[0], rel=1e-8)
+        np.testing.assert_allclose(fast[1], slow[1], rtol=1e-8, atol=1e-12)
+        for a, b in zip(fast[2], slow[2]):
+            np.testing.assert_allclose(a, b, rtol=1e-8, atol=1e-9)

@@ -12,11 +12,15 @@ that has re-read the model's parameters (references, weights, time step) and has
   node of the rollout (``dx = x ⊖ x_ref``, the clamped feedback control ``u``, ``calc``, and
   ``x_next = xnext``, or ``xnext ⊕ ((alpha - 1) f)`` when ``gap``) in one call; the caller stores the
   returned cost in ``data.cost``;
-* optionally, on its class, ``horizon(evaluators) -> rollout``: when every running node has an evaluator of
-  that class, ``rollout(xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs, alpha, gaps, gap_at) -> (total,
-  costs)`` runs those rollout steps for ``t = 0 .. T-1`` in one call (``gap_at``: the one node whose gap
-  stays open besides ``gaps``, -1 for none), and ``rollout.calc_diff(xs, us, fs, gaps) -> (total, costs)``
-  their ``calcDiff`` (and the gaps ``fs[1:]`` when ``gaps``); the caller stores ``costs[t]`` in the datas;
+* optionally, on its class, ``horizon(evaluators, nus) -> horizon`` (``evaluators`` of the running nodes, ``None``
+  where a node has none of that class; ``nus`` their control sizes): when every running node with a rollout step
+  has an evaluator of that class and all share one state size, ``horizon.addresses(xs, us, xs_try, us_try, dxs,
+  ks, Ks, fs, lbs, ubs)`` reads a rollout's arrays once, ``horizon.rollout(addresses, alpha, gaps, gap_at, t0,
+  t1) -> total`` runs the rollout steps of the nodes ``t0 <= t < t1`` in one call (``gap_at``: the one node
+  whose gap stays open besides ``gaps``, -1 for none), and ``horizon.calc_diff(xs, us, fs, gaps, t0, t1) ->
+  total`` their ``calcDiff`` (and their gaps ``fs[t+1]`` when ``gaps``); each node's cost is in
+  ``horizon.costs[t]``, which the caller stores in the datas.  The calls cover each maximal range of such
+  nodes (:attr:`CompiledNodes.segments`); the other nodes keep their Python step in between;
 
 or ``None`` (models without the method, or nodes it cannot compile).  ``terminal`` tells whether the node is the
 problem's terminal node; ``memo`` is a dictionary shared by the nodes of one solve (for what they
@@ -40,6 +44,7 @@ callback may read nested datas).
 from __future__ import annotations
 
 from collections.abc import Callable
+from itertools import islice
 from operator import is_
 
 from .. import kernels
@@ -77,6 +82,22 @@ class CompiledNodes:
         self.ndx = [m.state.ndx for m in models]
         self._bounds: tuple = ((), (), [], [])
         self.dx_addresses = kernels.AddressCache()
+        in_horizon = [horizon is not None and step is not None for step in steps]
+        self.segments: dict[int, int] = {}
+        """First node → one past the last node of each maximal range of nodes the horizon runs."""
+        t = 0
+        while t < len(in_horizon):
+            if in_horizon[t]:
+                end = t
+                while end < len(in_horizon) and in_horizon[end]:
+                    end += 1
+                self.segments[t] = end
+                t = end
+            else:
+                t += 1
+        self.in_horizon = in_horizon
+        self.python_nodes = [t for t, inside in enumerate(in_horizon) if not inside]
+        """The running nodes outside the horizon's ranges."""
 
     def bounds(self, lbs: list | None, ubs: list | None, unbounded: dict) -> tuple[list, list]:
         """Per running node, the control bounds of the rollout: ``lbs[t]``/``ubs[t]``, or ``unbounded[nu]`` where
@@ -109,12 +130,21 @@ class CompiledNodes:
 
     def calcDiff(self, problem, xs, us, synced: bool, fs: list | None = None) -> float:
         """Derivatives (and values, unless ``synced``) of every node; returns the total cost.  With ``fs``
-        (only with a :attr:`horizon`, which computes them in the same call), also the gaps
+        (only with a :attr:`horizon`, which computes its nodes' in the same call), also the gaps
         ``fs[t+1] = xnext_t ⊖ xs[t+1]`` (``fs[0]`` is the caller's)."""
         if self.horizon is not None:
-            cost, costs = self.horizon.calc_diff(xs, us, fs, fs is not None)
-            for d, c in zip(problem.runningDatas, costs):
-                d.cost = c
+            cost = 0.0
+            datas, horizon = problem.runningDatas, self.horizon
+            for t0, t1 in self.segments.items():
+                cost += horizon.calc_diff(xs, us, fs, fs is not None, t0, t1)
+                for d, c in zip(islice(datas, t0, t1), horizon.costs[t0:t1].tolist()):
+                    d.cost = c
+            for t in self.python_nodes:
+                self.calc_diffs[t](xs[t], us[t], synced)
+                d = datas[t]
+                cost += d.cost
+                if fs is not None:
+                    fs[t + 1][:] = problem.runningModels[t].state.diff(xs[t + 1], d.xnext)
         else:
             cost = 0.0
             for calc_diff, d, x, u in zip(self.calc_diffs, problem.runningDatas, xs, us):
@@ -154,11 +184,14 @@ def select(solver) -> CompiledNodes | None:
     if not found:
         return None
     running = evaluators[:-1]
-    kind = type(running[0]) if running else None
+    stepping = [e for e, step in zip(running, steps) if step is not None]
+    kind = type(stepping[0]) if stepping else None
     horizon = None
-    if running and all(type(e) is kind and step is not None for e, step in zip(running, steps)):
+    if stepping and all(type(e) is kind for e in stepping) and len({m.state.nx for m in problem.runningModels}) == 1:
         make_horizon = getattr(kind, "horizon", None)
-        horizon = None if make_horizon is None else make_horizon(running)
+        if make_horizon is not None:
+            horizon = make_horizon([e if step is not None else None for e, step in zip(running, steps)],
+                                   [m.nu for m in problem.runningModels])
     return CompiledNodes(calcs, calc_diffs, steps[:-1], horizon, problem)
 
 

@@ -80,13 +80,15 @@ class SolverFDDP(SolverDDP):
             problem = self.problem
             models = [*problem.runningModels, problem.terminalModel]
             Vxx_fs = self._Vxx_f or [Vxx @ f for Vxx, f in zip(self.Vxx, self.fs)]
-            start = 0
-            if kernels.active and self._Vxx_f is self._Vxx_f_views and self._nodes is not None \
-                    and self._nodes.horizon is not None:  # the rollout over the horizon wrote every running dx
-                start = problem.T
-                h = self._horizon
-                dv = riccati_kernel.gap_step_term(h.addr, h.dims, self._nodes.dx_addresses(self._dx_try[:start]))
-            for t in range(start, len(models)):
+            rest = range(len(models))
+            nodes = self._nodes
+            if kernels.active and self._Vxx_f is self._Vxx_f_views and nodes is not None \
+                    and nodes.horizon is not None:  # the compiled ranges of the rollout wrote their nodes' dx
+                h, dxs = self._horizon, self._dx_try
+                inside = [dx if inside else None for dx, inside in zip(dxs, nodes.in_horizon)]
+                dv = riccati_kernel.gap_step_term(h.addr, h.dims, nodes.dx_addresses(inside))
+                rest = [*nodes.python_nodes, problem.T]
+            for t in rest:
                 m, Vxx_f = models[t], Vxx_fs[t]
                 dx = self._dx_try[t]
                 if dx is None:

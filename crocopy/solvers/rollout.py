@@ -2,7 +2,7 @@
 
 ``û_t = clamp(u_t - α k_t - K_t (x̂_t ⊖ x_t), lb_t, ub_t)`` and ``x̂_{t+1} = f(x̂_t, û_t)``, the gaps kept open by
 ``(1 - α)`` where the solver asks (FDDP).  :func:`trial_rollout` is ``SolverDDP._trial_rollout``;
-:func:`horizon_rollout` runs its running nodes in one compiled call when every one is a compiled node
+:func:`horizon_addresses` prepares the compiled calls that run each range of compiled nodes
 (:mod:`.compiled_nodes`).
 """
 
@@ -76,8 +76,8 @@ def trial_rollout(solver, steplength: float, gaps: bool = False, bounds: tuple[l
     changes under them.
 
     Inside ``solve``, a compiled node (:mod:`.compiled_nodes`) does its whole step (``dx``, the
-    control, the node, the next state) in one call, and when every running node is compiled the
-    whole loop is one call (:func:`horizon_rollout`).
+    control, the node, the next state) in one call, and each range of compiled nodes with a horizon is one
+    call (:attr:`~.compiled_nodes.CompiledNodes.segments`, :func:`horizon_addresses`).
     """
     problem = solver.problem
     xs, xs_try, us_try, fs, dx_try = solver.xs, solver.xs_try, solver.us_try, solver.fs, solver._dx_try
@@ -94,13 +94,24 @@ def trial_rollout(solver, steplength: float, gaps: bool = False, bounds: tuple[l
     us, k, K, unbounded = solver.us, solver.k, solver.K, solver._unbounded
     feedback = riccati_kernel.feedback_control if kernels.active else riccati_kernel.feedback_control_numpy
     gap_at = problem.T if last_gap else -1
-    calcs, steps = (None, None) if solver._nodes is None else (solver._nodes.calcs, solver._nodes.steps)
+    nodes = solver._nodes
+    calcs, steps = (None, None) if nodes is None else (nodes.calcs, nodes.steps)
+    segments = {} if nodes is None or nodes.horizon is None else nodes.segments
+    addresses = None if not segments else horizon_addresses(solver, lbs, ubs)
+    datas = problem.runningDatas
     cost = 0.0
     t = 0
-    if solver._nodes is not None and solver._nodes.horizon is not None:
-        cost = horizon_rollout(solver, steplength, gaps, lbs, ubs, gap_at)
-        models, t, x = (), problem.T, xs_try[-1]
-    for m, d in zip(models, problem.runningDatas):
+    T = problem.T
+    while t < T:
+        if t in segments:
+            end = segments[t]
+            cost += nodes.horizon.rollout(addresses, steplength, gaps, gap_at, t, end)
+            for d, c in zip(islice(datas, t, end), nodes.horizon.costs[t:end].tolist()):
+                d.cost = c
+            t = end
+            x = xs_try[t]
+            continue
+        m, d = models[t], datas[t]
         state = m.state
         if m.nu:
             dx = dx_try[t]
@@ -153,29 +164,34 @@ def trial_rollout(solver, steplength: float, gaps: bool = False, bounds: tuple[l
     solver.cost_try = cost
 
 
-def horizon_rollout(solver, steplength: float, gaps: bool, lbs: list | None, ubs: list | None, gap_at: int) -> float:
-    """The running nodes of :func:`trial_rollout` in one compiled call (``solver._nodes.horizon``); returns their
-    total cost.  The entries of ``xs_try[1:]``, ``us_try`` and ``_dx_try`` are made fit first, as in the node
-    loop: an array is reused when the solver's list is its only holder (``getrefcount`` equal to :data:`SOLE`);
-    when every entry already fits (:func:`_fit`, the usual case) no Python loop runs over the nodes."""
+def horizon_addresses(solver, lbs: list | None, ubs: list | None) -> tuple:
+    """The addresses of the rollout's arrays for ``solver._nodes.horizon``, after the entries the horizon writes
+    (``us_try``, ``_dx_try`` and ``xs_try`` of its nodes, and each range's first state) are made fit, as in the
+    node loop: an array is reused when the solver's list is its only holder (``getrefcount`` equal to
+    :data:`SOLE`); when they all fit (:func:`_fit`, the usual case) no Python loop runs over the nodes.  The node
+    loop then replaces none of them, so the addresses stay valid for the whole rollout."""
     problem = solver.problem
-    xs_try, us_try, dx_try, unbounded = solver.xs_try, solver.us_try, solver._dx_try, solver._unbounded
+    xs_try, us_try, dx_try = solver.xs_try, solver.us_try, solver._dx_try
     nodes = solver._nodes
-    T = problem.T
-    if not (_fit(us_try, 0, T, nodes.nu, True) and _fit(xs_try, 1, T + 1, nodes.nx, True)
-            and _fit(dx_try, 0, T, nodes.ndx, False)):
-        _make_fit(problem, xs_try, us_try, dx_try)
-    lb_list, ub_list = nodes.bounds(lbs, ubs, unbounded)
-    cost, costs = nodes.horizon(solver.xs, solver.us, xs_try, us_try, dx_try, solver.k, solver.K, solver.fs,
-                          lb_list, ub_list, steplength, gaps, gap_at)
-    for d, c in zip(problem.runningDatas, costs):
-        d.cost = c
-    return cost
+    for t0, t1 in nodes.segments.items():
+        first = max(t0, 1)  # xs_try[0] was made fit by the caller, which holds it
+        if not (_fit(us_try, t0, t1, nodes.nu[t0:t1], True) and _fit(dx_try, t0, t1, nodes.ndx[t0:t1], False)
+                and _fit(xs_try, first, t1 + 1, nodes.nx[first - 1:t1], True)):
+            _make_fit(problem, xs_try, us_try, dx_try, t0, t1)
+    lb_list, ub_list = nodes.bounds(lbs, ubs, solver._unbounded)
+    return nodes.horizon.addresses(solver.xs, solver.us, xs_try, us_try, dx_try, solver.k, solver.K, solver.fs,
+                                   lb_list, ub_list)
 
 
-def _make_fit(problem, xs_try: list, us_try: list, dx_try: list) -> None:
-    """The node loop of :func:`horizon_rollout`'s checks: replace each entry that cannot be written in place."""
-    for t, m in enumerate(problem.runningModels):
+def _make_fit(problem, xs_try: list, us_try: list, dx_try: list, t0: int, t1: int) -> None:
+    """The node loop of :func:`horizon_addresses`' checks for the nodes ``t0 <= t < t1``: replace each entry that
+    cannot be written in place (and the range's first state, ``t0 > 0``)."""
+    if t0 > 0:
+        x = xs_try[t0]
+        if getrefcount(x) != SOLE or x.base is not None or x.shape[0] != problem.runningModels[t0].state.nx:
+            xs_try[t0] = np.empty(problem.runningModels[t0].state.nx)
+    for t in range(t0, t1):
+        m = problem.runningModels[t]
         state, nu = m.state, m.nu
         dx = dx_try[t]
         if dx is None or dx.shape[0] != state.ndx:

@@ -350,24 +350,31 @@ class EulerNode:
         )
 
     @staticmethod
-    def horizon(nodes: list[EulerNode]) -> EulerHorizon:
-        """The rollout of running nodes ``nodes`` (all of this class) in one compiled call."""
-        return EulerHorizon(nodes)
+    def horizon(nodes: list[EulerNode | None], nus: list[int]) -> EulerHorizon:
+        """The rollout of the running nodes (``None`` where a node is not of this class; ``nus`` their controls) in
+        one compiled call per range of nodes of this class."""
+        return EulerHorizon(nodes, nus)
 
 
 class EulerHorizon:
-    """The rollout of the DDP family over running Euler nodes (:func:`.euler_node_kernel.horizon_rollout`):
-    ``rollout(xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs, alpha, gaps, gap_at) -> (total, costs)``;
-    and their derivatives with the gaps, ``calc_diff(xs, us, fs, gaps) -> (total, costs)``."""
+    """The rollout of the DDP family over the running Euler nodes (:func:`.euler_node_kernel.horizon_rollout`) and
+    their derivatives with the gaps (:func:`.euler_node_kernel.horizon_calc_diff`), a range ``t0 <= t < t1`` of
+    compiled nodes per call; the other nodes' entries are never read.
 
-    def __init__(self, nodes: list[EulerNode]) -> None:
-        self.tbls = np.stack([n.tbl for n in nodes])
-        self.ioff = np.cumsum([0] + [n.ints.shape[0] for n in nodes], dtype=np.int64)
-        self.poff = np.cumsum([0] + [n.par.shape[0] for n in nodes], dtype=np.int64)
-        self.ints = np.concatenate([n.ints for n in nodes])
-        self.par = np.concatenate([n.par for n in nodes])
-        self.nus = np.array([n.model.nu for n in nodes], dtype=np.int64)
-        self.nx, self.ndx = nodes[0].model.state.nx, nodes[0].model.state.ndx
+    ``addresses(xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs)`` reads the trajectories' addresses once per
+    rollout; ``rollout(addresses, alpha, gaps, gap_at, t0, t1)`` and ``calc_diff(xs, us, fs, gaps, t0, t1)`` return
+    the total cost of the range, each node's in :attr:`costs`."""
+
+    def __init__(self, nodes: list[EulerNode | None], nus: list[int]) -> None:
+        first = next(n for n in nodes if n is not None)
+        empty = np.zeros_like(first.tbl)
+        self.tbls = np.stack([empty if n is None else n.tbl for n in nodes])
+        self.ioff = np.cumsum([0] + [0 if n is None else n.ints.shape[0] for n in nodes], dtype=np.int64)
+        self.poff = np.cumsum([0] + [0 if n is None else n.par.shape[0] for n in nodes], dtype=np.int64)
+        self.ints = np.concatenate([n.ints for n in nodes if n is not None])
+        self.par = np.concatenate([n.par for n in nodes if n is not None])
+        self.nus = np.array(nus, dtype=np.int64)
+        self.nx, self.ndx = first.model.state.nx, first.model.state.ndx
         self.costs = np.zeros(len(nodes))
         self.no_gaps = np.zeros(len(nodes) + 1, dtype=np.int64)
         self.fixed = [AddressCache() for _ in range(6)]
@@ -382,22 +389,23 @@ class EulerHorizon:
             cache = self.trajectories[id(arrays)] = AddressCache()
         return cache(arrays)
 
-    def calc_diff(self, xs, us, fs, gaps: bool) -> tuple[float, list[float]]:
-        """Every running node's values and derivatives (and the gaps ``fs[1:]`` when ``gaps``):
-        :func:`.euler_node_kernel.horizon_calc_diff`; returns ``(total, costs)``."""
+    def calc_diff(self, xs, us, fs, gaps: bool, t0: int, t1: int) -> float:
+        """Values and derivatives of the nodes ``t0 <= t < t1`` (and their gaps ``fs[t+1]`` when ``gaps``)."""
         trajectory = self._trajectory
-        total = kernel.horizon_calc_diff(
+        return kernel.horizon_calc_diff(
             self.tbls, self.ints, self.ioff, self.par, self.poff, trajectory(xs), trajectory(us), self.nus, self.nx,
-            self.ndx, gaps, self.fixed[3](fs) if gaps else self.no_gaps, self.costs,
+            self.ndx, gaps, self.fixed[3](fs) if gaps else self.no_gaps, t0, t1, self.costs,
         )
-        return total, self.costs.tolist()
 
-    def __call__(self, xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs, alpha: float, gaps: bool,
-                 gap_at: int) -> tuple[float, list[float]]:
+    def addresses(self, xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs) -> tuple:
+        """The addresses of a rollout's arrays (valid while no entry of those lists is replaced)."""
         f, trajectory = self.fixed, self._trajectory
-        total = kernel.horizon_rollout(
-            self.tbls, self.ints, self.ioff, self.par, self.poff, trajectory(xs), trajectory(us), trajectory(xs_try),
-            trajectory(us_try), f[0](dxs), f[1](ks), f[2](Ks), f[3](fs), f[4](lbs), f[5](ubs), self.nus, self.nx,
-            self.ndx, alpha, gaps, gap_at, self.costs,
+        return (trajectory(xs), trajectory(us), trajectory(xs_try), trajectory(us_try), f[0](dxs), f[1](ks),
+                f[2](Ks), f[3](fs), f[4](lbs), f[5](ubs))
+
+    def rollout(self, addresses: tuple, alpha: float, gaps: bool, gap_at: int, t0: int, t1: int) -> float:
+        """The rollout steps of the nodes ``t0 <= t < t1``."""
+        return kernel.horizon_rollout(
+            self.tbls, self.ints, self.ioff, self.par, self.poff, *addresses, self.nus, self.nx, self.ndx, alpha,
+            gaps, gap_at, t0, t1, self.costs,
         )
-        return total, self.costs.tolist()

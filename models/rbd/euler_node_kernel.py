@@ -428,8 +428,8 @@ def node_rollout_step(tbl, ints, par, x_ref, x, u_ref, k, K, alpha, lb, ub, u, d
 
 @compiled
 def horizon_rollout(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs, nus, nx, ndx,
-                    alpha, gaps, gap_at, costs):
-    """:func:`node_rollout_step` over the running nodes, t from 0 to T-1, in one call; returns the sum of their costs
+                    alpha, gaps, gap_at, t0, t1, costs):
+    """:func:`node_rollout_step` over the running nodes ``t0 <= t < t1`` in one call; returns the sum of their costs
     (each into ``costs[t]``).
 
     Node ``t``'s table is ``tbls[t]``, its integers ``ints[ioff[t]:ioff[t+1]]``, its parameters
@@ -439,7 +439,7 @@ def horizon_rollout(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, ks
     ``t + 1 == gap_at``.
     """
     total = 0.0
-    for t in range(tbls.shape[0]):
+    for t in range(t0, t1):
         nu = nus[t]
         cost = node_rollout_step(
             tbls[t], ints[ioff[t]: ioff[t + 1]], par[poff[t]: poff[t + 1]], vector_at(xs[t], nx),
@@ -453,12 +453,12 @@ def horizon_rollout(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, ks
 
 
 @compiled
-def horizon_calc_diff(tbls, ints, ioff, par, poff, xs, us, nus, nx, ndx, gaps, fs, costs):
-    """:func:`node_calc_diff` over the running nodes, t from 0 to T-1, in one call (tables as in
+def horizon_calc_diff(tbls, ints, ioff, par, poff, xs, us, nus, nx, ndx, gaps, fs, t0, t1, costs):
+    """:func:`node_calc_diff` over the running nodes ``t0 <= t < t1`` in one call (tables as in
     :func:`horizon_rollout`); returns the sum of their costs (each into ``costs[t]``).  With ``gaps``, also
     the gaps ``fs[t+1] = xnext_t ⊖ xs[t+1]``."""
     total = 0.0
-    for t in range(tbls.shape[0]):
+    for t in range(t0, t1):
         tbl, node_ints = tbls[t], ints[ioff[t]: ioff[t + 1]]
         x = vector_at(xs[t], nx)
         cost = node_calc_diff(tbl, node_ints, par[poff[t]: poff[t + 1]], x, vector_at(us[t], nus[t]))
