@@ -181,7 +181,7 @@ def contact_calc(
     Jc_out: np.ndarray,
     a0_out: np.ndarray,
 ) -> None:
-    """Rows ``row .. row + nc - 1`` of the stacked ``Jc_out (·, nv)`` and drift ``a0_out (·,)`` of a contact.
+    """Rows ``row`` to ``row + nc - 1`` of the stacked ``Jc_out (·, nv)`` and drift ``a0_out (·,)`` of a contact.
 
     ``nc`` is 3 (point contact, reference position ``ref_p (3,)``; ``ref_R`` unused) or 6 (reference placement
     ``(ref_R (3, 3), ref_p (3,))``); ``reference`` LOCAL or LOCAL_WORLD_ALIGNED.  Needs the kinematics at zero
@@ -216,7 +216,7 @@ def contact_calc_diff(
     row: int,
     da0_dx_out: np.ndarray,
 ) -> None:
-    """Rows ``row .. row + nc - 1`` of ``da0_dx_out (·, 2 nv)``: ``∂c/∂q`` (tangent) then ``∂c/∂v`` of the contact
+    """Rows ``row`` to ``row + nc - 1`` of ``da0_dx_out (·, 2 nv)``: ``∂c/∂q`` (tangent) then ``∂c/∂v`` of the contact
     acceleration ``c = Jc a + a0`` (arguments as :func:`contact_calc`) at the joint acceleration ``a`` of the
     kinematics in ``ws``: ``da0_dx`` after :func:`~.dynamics_kernel.forward_dynamics` (``a = 0``), the
     derivative Crocoddyl's contact dynamics use after :func:`~.dynamics_kernel.dynamics_derivatives` at ``a``.
