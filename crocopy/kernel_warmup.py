@@ -1,7 +1,7 @@
 """Getting the compiled kernels ready: the first-run notice, the warm-up call, and ``crocopy compile``.
 
 A kernel (:mod:`crocopy.kernels`) is compiled on its first call with new argument types, unless
-numba's on-disk cache holds it; compiling all of them takes about 70 s on a 2-core machine, loading
+numba's on-disk cache holds it; compiling all of them takes about 90 s on a 2-core machine, loading
 them from the cache a fraction of a second.  Here:
 
 * :func:`announce_cold_cache` prints :data:`COMPILING_NOTICE` at once when the cache lacks a kernel
