@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
+from node_checks import check_finite_differences, compare_with_python_node
 from robots import load
 
 import crocopy
@@ -85,23 +86,7 @@ def point(state, nu: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
 def compare(iam, state, terminal: bool, seed: int = 0) -> None:
     """The compiled node's outputs equal the Python node's at a random point."""
     x, u = point(state, iam.nu, seed)
-    fast, slow = iam.createData(), iam.createData()
-    evaluator = iam._compiled_node(fast, terminal, {})
-    assert evaluator is not None
-    uu = None if terminal else u
-    evaluator.calcDiff(x, uu, False)
-    iam.calc(slow, x, uu)
-    iam.calcDiff(slow, x, uu)
-    assert fast.cost == pytest.approx(slow.cost, rel=1e-9)
-    fields = ("xnext", "Fx", "Lx", "Lxx") if terminal else ("xnext", "Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu")
-    for name in fields:
-        a, b = getattr(fast, name), getattr(slow, name)
-        np.testing.assert_allclose(a, b, rtol=1e-7, atol=1e-7 * max(1.0, np.abs(b).max()), err_msg=name)
-    other = iam.createData()
-    evaluator.calc(x, uu)
-    iam.calc(other, x, uu)
-    assert fast.cost == pytest.approx(other.cost, rel=1e-10)
-    np.testing.assert_allclose(fast.xnext, other.xnext, rtol=1e-10, atol=1e-12)
+    compare_with_python_node(iam, x, u, terminal, rtol=1e-7, atol=1e-7, cost_rel=1e-9)
 
 
 @pytest.mark.parametrize("case", CASES)
@@ -123,28 +108,8 @@ def test_derivatives_match_finite_differences(case):
     """``Fx, Fu, Lx, Lu`` of the compiled contact node against central differences of its own ``calc``."""
     iam, state = contact_node(case, armature=True, seed=2)
     x, u = point(state, iam.nu, 2)
-    data = iam.createData()
-    evaluator = iam._compiled_node(data, False, {})
-    evaluator.calcDiff(x, u, False)
-    Fx, Fu, Lx, Lu = (getattr(data, n).copy() for n in ("Fx", "Fu", "Lx", "Lu"))
-    h = 1e-5  # the costs reach 1e4 here: a smaller step drowns the differences in round-off
-
-    def at(dx, du):
-        evaluator.calc(state.integrate(x, dx), u + du)
-        return data.xnext.copy(), data.cost
-
-    ndx, nu = state.ndx, iam.nu
-    xnext0, cost = at(np.zeros(ndx), np.zeros(nu))
-    roundoff = 1e-10 * abs(cost)
-    for j in range(ndx + nu):
-        e = np.zeros(ndx + nu)
-        e[j] = h
-        (xp, cp), (xm, cm) = at(e[:ndx], e[ndx:]), at(-e[:ndx], -e[ndx:])
-        column = (state.diff(xnext0, xp) - state.diff(xnext0, xm)) / (2 * h)
-        jac = Fx[:, j] if j < ndx else Fu[:, j - ndx]
-        grad = Lx[j] if j < ndx else Lu[j - ndx]
-        np.testing.assert_allclose(column, jac, rtol=1e-4, atol=1e-5 * max(1.0, np.abs(jac).max()))
-        assert (cp - cm) / (2 * h) == pytest.approx(grad, rel=1e-4, abs=1e-5 + roundoff)
+    # the costs reach 1e4 here: a step of 1e-5 keeps the differences above round-off
+    check_finite_differences(iam, state, x, u, h=1e-5, atol=1e-5, roundoff=1e-10)
 
 
 def test_contact_nodes_that_do_not_qualify():

@@ -12,6 +12,7 @@ import pickle
 import numpy as np
 import pinocchio as pin
 import pytest
+from node_checks import FIELDS, check_finite_differences, compare_with_python_node
 from robots import frame, load
 
 import crocopy
@@ -95,28 +96,10 @@ def point(state, nu: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
     return x, rng.standard_normal(nu)
 
 
-FIELDS = ("xnext", "Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu")
-
-
 def compare(iam, state, terminal: bool, seed: int = 0) -> None:
     """The compiled node's outputs equal the Python node's at a random point."""
     x, u = point(state, iam.nu, seed)
-    fast, slow = iam.createData(), iam.createData()
-    evaluator = iam._compiled_node(fast, terminal, {})
-    assert evaluator is not None
-    uu = None if terminal else u
-    evaluator.calcDiff(x, uu, False)
-    iam.calc(slow, x, uu)
-    iam.calcDiff(slow, x, uu)
-    assert fast.cost == pytest.approx(slow.cost, rel=1e-10, abs=1e-12)
-    fields = ("xnext", "Fx", "Lx", "Lxx") if terminal else FIELDS
-    for name in fields:
-        np.testing.assert_allclose(getattr(fast, name), getattr(slow, name), rtol=1e-8, atol=1e-9, err_msg=name)
-    other = iam.createData()
-    evaluator.calc(x, uu)
-    iam.calc(other, x, uu)
-    assert fast.cost == pytest.approx(other.cost, rel=1e-10, abs=1e-12)
-    np.testing.assert_allclose(fast.xnext, other.xnext, rtol=1e-10, atol=1e-12)
+    compare_with_python_node(iam, x, u, terminal, rtol=1e-8, atol=1e-9, cost_rel=1e-10)
 
 
 @pytest.mark.parametrize("robot", ROBOTS)
@@ -137,27 +120,7 @@ def test_derivatives_match_finite_differences(robot):
     """``Fx, Fu, Lx, Lu`` of the compiled node against central differences of its own ``calc``."""
     iam, state = node(robot, KINDS, seed=5)
     x, u = point(state, iam.nu, 5)
-    data = iam.createData()
-    evaluator = iam._compiled_node(data, False, {})
-    evaluator.calcDiff(x, u, False)
-    Fx, Fu, Lx, Lu = (getattr(data, n).copy() for n in ("Fx", "Fu", "Lx", "Lu"))
-    h = 1e-6
-
-    def at(dx, du):
-        evaluator.calc(state.integrate(x, dx), u + du)
-        return data.xnext.copy(), data.cost
-
-    ndx, nu = state.ndx, iam.nu
-    xnext0 = at(np.zeros(ndx), np.zeros(nu))[0]
-    for j in range(ndx + nu):
-        e = np.zeros(ndx + nu)
-        e[j] = h
-        (xp, cp), (xm, cm) = at(e[:ndx], e[ndx:]), at(-e[:ndx], -e[ndx:])
-        column = (state.diff(xnext0, xp) - state.diff(xnext0, xm)) / (2 * h)
-        jac = Fx[:, j] if j < ndx else Fu[:, j - ndx]
-        grad = Lx[j] if j < ndx else Lu[j - ndx]
-        np.testing.assert_allclose(column, jac, rtol=1e-4, atol=1e-5)
-        assert (cp - cm) / (2 * h) == pytest.approx(grad, rel=1e-4, abs=1e-5)
+    check_finite_differences(iam, state, x, u, h=1e-6, atol=1e-5)
 
 
 def test_nodes_that_do_not_qualify():

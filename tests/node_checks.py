@@ -1,0 +1,59 @@
+"""Checks shared by the compiled-node tests: a compiled node against the Python node, and against central
+differences of its own ``calc``."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+FIELDS = ("xnext", "Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu")
+"""The node data fields a compiled ``calcDiff`` writes (a terminal node: ``xnext``, ``Fx``, ``Lx``, ``Lxx``)."""
+
+
+def compare_with_python_node(iam, x: np.ndarray, u: np.ndarray, terminal: bool, rtol: float, atol: float,
+                             cost_rel: float) -> None:
+    """The compiled node's ``calcDiff`` and ``calc`` at ``(x, u)`` equal the Python node's: ``rtol`` and an
+    absolute tolerance of ``atol`` times the field's largest entry (at least 1); costs to ``cost_rel``."""
+    fast, slow = iam.createData(), iam.createData()
+    evaluator = iam._compiled_node(fast, terminal, {})
+    assert evaluator is not None
+    uu = None if terminal else u
+    evaluator.calcDiff(x, uu, False)
+    iam.calc(slow, x, uu)
+    iam.calcDiff(slow, x, uu)
+    assert fast.cost == pytest.approx(slow.cost, rel=cost_rel, abs=1e-12)
+    for name in ("xnext", "Fx", "Lx", "Lxx") if terminal else FIELDS:
+        a, b = getattr(fast, name), getattr(slow, name)
+        np.testing.assert_allclose(a, b, rtol=rtol, atol=atol * max(1.0, np.abs(b).max()), err_msg=name)
+    other = iam.createData()
+    evaluator.calc(x, uu)
+    iam.calc(other, x, uu)
+    assert fast.cost == pytest.approx(other.cost, rel=1e-10, abs=1e-12)
+    np.testing.assert_allclose(fast.xnext, other.xnext, rtol=1e-10, atol=1e-12)
+
+
+def check_finite_differences(iam, state, x: np.ndarray, u: np.ndarray, h: float, atol: float,
+                             roundoff: float = 0.0) -> None:
+    """``Fx, Fu, Lx, Lu`` of the compiled node against central differences (step ``h``) of its own ``calc``:
+    ``rtol = 1e-4``, Jacobian columns to ``atol`` times their largest entry (at least 1), gradients to ``atol``
+    plus ``roundoff`` times the cost."""
+    data = iam.createData()
+    evaluator = iam._compiled_node(data, False, {})
+    evaluator.calcDiff(x, u, False)
+    Fx, Fu, Lx, Lu = (getattr(data, n).copy() for n in ("Fx", "Fu", "Lx", "Lu"))
+
+    def at(dx, du):
+        evaluator.calc(state.integrate(x, dx), u + du)
+        return data.xnext.copy(), data.cost
+
+    ndx, nu = state.ndx, iam.nu
+    xnext0, cost = at(np.zeros(ndx), np.zeros(nu))
+    for j in range(ndx + nu):
+        e = np.zeros(ndx + nu)
+        e[j] = h
+        (xp, cp), (xm, cm) = at(e[:ndx], e[ndx:]), at(-e[:ndx], -e[ndx:])
+        column = (state.diff(xnext0, xp) - state.diff(xnext0, xm)) / (2 * h)
+        jac = Fx[:, j] if j < ndx else Fu[:, j - ndx]
+        grad = Lx[j] if j < ndx else Lu[j - ndx]
+        np.testing.assert_allclose(column, jac, rtol=1e-4, atol=atol * max(1.0, np.abs(jac).max()))
+        assert (cp - cm) / (2 * h) == pytest.approx(grad, rel=1e-4, abs=atol + roundoff * abs(cost))
