@@ -186,7 +186,7 @@ def _standing_problem(T: int = 12):
     return crocopy.ShootingProblem(x0, running, problem.terminalModel), [x0] * (T + 1), [us[0]] * T
 
 
-@pytest.mark.parametrize("solver", ["SolverFDDP", "SolverBoxFDDP"])
+@pytest.mark.parametrize("solver", ["SolverDDP", "SolverFDDP", "SolverBoxDDP", "SolverBoxFDDP"])
 def test_solves_with_compiled_contact_nodes_match_the_python_nodes(solver):
     outcomes = []
     for compiled in (True, False):
@@ -203,3 +203,20 @@ def test_solves_with_compiled_contact_nodes_match_the_python_nodes(solver):
     assert outcomes[0][1] == pytest.approx(outcomes[1][1], rel=1e-9)
     for a, b in zip(outcomes[0][2], outcomes[1][2]):
         np.testing.assert_allclose(a, b, rtol=1e-7, atol=1e-8)
+
+
+def test_a_diverging_contact_solve_stops_as_without_compiled_nodes():
+    """Ten times the time step (the standing problem's nodes share one model): every trial rollout overflows; both
+    paths stop the same way, with a finite iterate."""
+    outcomes = []
+    for compiled in (True, False):
+        problem, xs, us = _standing_problem()
+        problem.runningModels[0].dt = 0.1
+        cls = crocopy.SolverFDDP if compiled else type("Uncompiled", (crocopy.SolverFDDP,), {"_nodes_compiled": False})
+        s = cls(problem)
+        solved = s.solve(xs, us, 15)
+        assert all(np.isfinite(x).all() for x in s.xs) and all(np.isfinite(u).all() for u in s.us)
+        assert np.isfinite(s.cost)
+        outcomes.append((solved, s.iter, s.reason))
+    assert outcomes[0] == outcomes[1]
+    assert outcomes[0][0] is False and "non-finite" in outcomes[0][2]
