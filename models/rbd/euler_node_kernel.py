@@ -506,7 +506,8 @@ def _dynamics_jacobians(tbl, ints, x, rb, ws):
 @compiled
 def _integrate_chain(tbl, ints, x, rb):
     """Lie-group end of the Euler chain rule: ``rows = Jv [Fx Fu][:nv]`` (the transport), then
-    :func:`~crocopy.integrators.euler_kernel.add_integrate_jacobian` with ``Jq``."""
+    :func:`~crocopy.integrators.euler_kernel.add_integrate_jacobian` with ``Jq``.  ``Jv`` is block diagonal, one
+    block per joint, so each row sums over its joint's block only (the terms a dense product adds are zeros)."""
     nq, nv, nu = ints[NQ], ints[NV], ints[NU]
     Fx, Fu, dx = _mat(tbl, ints, E_FX), _mat(tbl, ints, E_FU), _vec(tbl, ints, E_DX)
     Jq, Jv, rows = _mat(tbl, ints, E_JQ), _mat(tbl, ints, E_JV), _mat(tbl, ints, E_ROWS)
@@ -514,12 +515,15 @@ def _integrate_chain(tbl, ints, x, rb):
     dintegrate(rb.jtype, rb.idx_q, rb.idx_v, q, dx[:nv], 0, Jq)
     dintegrate(rb.jtype, rb.idx_q, rb.idx_v, q, dx[:nv], 1, Jv)
     ndx = 2 * nv
-    for i in range(nv):
-        for j in range(ndx + nu):
-            acc = 0.0
-            for k in range(nv):
-                acc += Jv[i, k] * (Fx[k, j] if j < ndx else Fu[k, j - ndx])
-            rows[i, j] = acc
+    for joint in range(1, ints[NJOINTS]):
+        first = rb.idx_v[joint]
+        last = first + rb.nvj[joint]
+        for i in range(first, last):
+            for j in range(ndx + nu):
+                acc = 0.0
+                for k in range(first, last):
+                    acc += Jv[i, k] * (Fx[k, j] if j < ndx else Fu[k, j - ndx])
+                rows[i, j] = acc
     add_integrate_jacobian(rows, Jq, Fx, Fu)
 
 
