@@ -153,6 +153,11 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
     def createData(self) -> "DifferentialActionDataContactFwdDynamics":
         return DifferentialActionDataContactFwdDynamics(self)
 
+    def _redundant_contacts(self) -> bool:
+        """Whether ``calc`` solves the contact dynamics in the least-squares sense from the start: active contacts
+        sharing a body, and no damping."""
+        return bool(self.contacts.nc) and self._damping == 0.0 and self.contacts._shared_joints
+
     def _compiled_euler_node(self, iam, data, terminal: bool, memo: dict) -> object | None:
         """The compiled evaluator of the Euler node ``(iam, data)`` over this model (:func:`.rbd.euler_node.euler_node`
         with its active contacts, :mod:`.rbd.contact_lowering`), or None for a subclass or a node it cannot compile."""
@@ -194,7 +199,7 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         data.rigid = None
         data.aba = False
         # redundant contacts (shared body) or a singular KKT system: least squares, see redundant_kkt.py
-        data.lstsq = bool(nc) and self._damping == 0.0 and self.contacts._shared_joints
+        data.lstsq = self._redundant_contacts()
         if nc and self.use_pinocchio_constraints and not self._with_armature and self._damping == 0.0 \
                 and not data.lstsq:
             data.rigid = self.contacts.rigidConstraints(mb.contacts, pd)

@@ -44,7 +44,7 @@ callback may read nested datas).
 from __future__ import annotations
 
 from collections.abc import Callable
-from itertools import islice
+from itertools import groupby, islice
 from operator import is_
 
 from .. import kernels
@@ -86,15 +86,11 @@ class CompiledNodes:
         self.segments: dict[int, int] = {}
         """First node → one past the last node of each maximal range of nodes the horizon runs."""
         t = 0
-        while t < len(in_horizon):
-            if in_horizon[t]:
-                end = t
-                while end < len(in_horizon) and in_horizon[end]:
-                    end += 1
+        for inside, run in groupby(in_horizon):
+            end = t + len(list(run))
+            if inside:
                 self.segments[t] = end
-                t = end
-            else:
-                t += 1
+            t = end
         self.in_horizon = in_horizon
         self.python_nodes = [t for t, inside in enumerate(in_horizon) if not inside]
         """The running nodes outside the horizon's ranges."""
@@ -144,7 +140,7 @@ class CompiledNodes:
                 d = datas[t]
                 cost += d.cost
                 if fs is not None:
-                    fs[t + 1][:] = problem.runningModels[t].state.diff(xs[t + 1], d.xnext)
+                    problem.runningModels[t].state._diff_into(xs[t + 1], d.xnext, fs[t + 1])
         else:
             cost = 0.0
             for calc_diff, d, x, u in zip(self.calc_diffs, problem.runningDatas, xs, us):

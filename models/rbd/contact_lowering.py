@@ -8,7 +8,7 @@ become, in the order of the contact model (by name):
 * ``ints``: per contact ``(frame, rows, reference frame, first row)`` (:data:`.euler_node_kernel.CONTACT_FIELDS`;
   ``WORLD`` is read as ``LOCAL_WORLD_ALIGNED``, as the contacts do);
 * arrays ``gains (n, 2)`` (Baumgarte ``kp, kd``), ``ref_R (n, 3, 3)`` and ``ref_p (n, 3)`` (the reference
-  placement; a 3D contact's rotation is unused), rewritten in place at each solve.
+  placement; a 3D contact's rotation is unused and left zero), rewritten in place at each solve.
 
 The force residuals (``ResidualModelContactFrictionCone``, ``ResidualModelContactWrenchCone``) find their
 contact's first row here.
@@ -27,11 +27,8 @@ CONTACTS = (ContactModel3D, ContactModel6D)
 def active_contacts(dam) -> list | None:
     """The active contact models of ``dam`` (a ``DifferentialActionModelContactFwdDynamics``), or None if the node
     cannot compile (see the module docstring)."""
-    contacts = dam.contacts
-    models = [m for _, m in contacts._active]
-    if any(type(m) not in CONTACTS for m in models):
-        return None
-    if models and contacts._shared_joints and dam._damping == 0.0:
+    models = [m for _, m in dam.contacts._active]
+    if any(type(m) not in CONTACTS for m in models) or dam._redundant_contacts():
         return None
     return models
 
@@ -58,7 +55,6 @@ class ContactSet:
         for k, m in enumerate(self.models):
             self.gains[k] = m.gains
             if m.nc == 3:
-                self.ref_R[k] = np.eye(3)
                 self.ref_p[k] = m.reference
             else:
                 self.ref_R[k] = m.reference.rotation
