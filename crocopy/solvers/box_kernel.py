@@ -26,6 +26,7 @@ from .riccati_kernel import (
     SMALL,
     action_value_function,
     cholesky_lower,
+    cholesky_solve,
     finish_value_function,
     node_arrays,
     node_riccati,
@@ -45,15 +46,8 @@ def _chol_inverse(H, idx, nf, out, L, col):
         return False
     for c in range(nf):
         for i in range(nf):
-            s = 1.0 if i == c else 0.0
-            for p in range(i):
-                s -= L[i, p] * col[p]
-            col[i] = s / L[i, i]
-        for i in range(nf - 1, -1, -1):
-            s = col[i]
-            for p in range(i + 1, nf):
-                s -= L[p, i] * col[p]
-            col[i] = s / L[i, i]
+            col[i] = 1.0 if i == c else 0.0
+        cholesky_solve(L, nf, col)
         for i in range(nf):
             out[i, c] = col[i]
     return True

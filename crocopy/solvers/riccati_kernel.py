@@ -75,6 +75,23 @@ def _cholesky_lower(A, idx, n, L):
 cholesky_lower = compiled(_cholesky_lower)
 
 
+def _cholesky_solve(L, n, x):
+    """``x[:n] ← (L Lᵀ)⁻¹ x[:n]`` with the lower factor ``L[:n, :n]`` of :func:`cholesky_lower`."""
+    for r in range(n):
+        acc = x[r]
+        for k in range(r):
+            acc -= L[r, k] * x[k]
+        x[r] = acc / L[r, r]
+    for r in range(n - 1, -1, -1):
+        acc = x[r]
+        for k in range(r + 1, n):
+            acc -= L[k, r] * x[k]
+        x[r] = acc / L[r, r]
+
+
+cholesky_solve = compiled(_cholesky_solve)
+
+
 def _combine(A, C, sign):
     """``C ← A + sign C`` entrywise in loops (2-D; ``sign = ±1``).  Loops, not array expressions: numba's
     broadcast checks compile seconds of error-message code into each kernel."""

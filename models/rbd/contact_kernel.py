@@ -56,6 +56,7 @@ from typing import NamedTuple
 import numpy as np
 
 from crocopy.kernels import compiled
+from crocopy.solvers.riccati_kernel import cholesky_solve
 
 from .dynamics_kernel import LOCAL, LOCAL_WORLD_ALIGNED, factor_solve, frame_jacobian, frame_pose, to_reference
 from .lie_kernel import jlog6, log6
@@ -324,21 +325,6 @@ def contact_force_derivatives(
 
 
 @compiled
-def _schur_solve(G, n, x):
-    """``x[:n] ← (Lc Lcᵀ)⁻¹ x[:n]`` with the lower factor ``Lc`` in ``G``."""
-    for r in range(n):
-        acc = x[r]
-        for k in range(r):
-            acc -= G[r, k] * x[k]
-        x[r] = acc / G[r, r]
-    for r in range(n - 1, -1, -1):
-        acc = x[r]
-        for k in range(r + 1, n):
-            acc -= G[k, r] * x[k]
-        x[r] = acc / G[r, r]
-
-
-@compiled
 def contact_forward_dynamics(
     rb: RigidBodyModel,
     ws: RigidBodyWorkspace,
@@ -375,7 +361,7 @@ def contact_forward_dynamics(
         for k in range(nv):
             acc += Jc[r, k] * a_out[k]
         lam_out[r] = -acc
-    _schur_solve(G, nc, lam_out)
+    cholesky_solve(G, nc, lam_out)
     for r in range(nc):
         for k in range(nv):
             a_out[k] += Y[r, k] * lam_out[r]
@@ -405,7 +391,7 @@ def contact_dynamics_derivatives(
     :func:`contact_calc_diff` at ``a``.  Uses the factors left by :func:`contact_forward_dynamics` (``ws.L``,
     ``cw.Y``, ``cw.G``); ``O((2 nv + nu) (nv · depth + nc nv))``.
     """
-    nv, z, w, Y, lam, L, dinv = rb.nv, cw.z, cw.w, cw.Y, rb.dof_parent, ws.L, ws.dinv
+    nv, z, w, Y, dof_parent, L, dinv = rb.nv, cw.z, cw.w, cw.Y, rb.dof_parent, ws.L, ws.dinv
     for c in range(2 * nv + S.shape[1]):
         for k in range(nv):
             if c < nv:
@@ -414,13 +400,13 @@ def contact_dynamics_derivatives(
                 z[k] = -did_dv[k, c - nv]
             else:
                 z[k] = S[k, c - 2 * nv]
-        factor_solve(lam, L, dinv, z)
+        factor_solve(dof_parent, L, dinv, z)
         for r in range(nc):  # w = G⁻¹ (Jc z + ∂c/∂x_c), z -= Yᵀ w
             acc = da0_dx[r, c] if c < 2 * nv else 0.0
             for k in range(nv):
                 acc += Jc[r, k] * z[k]
             w[r] = acc
-        _schur_solve(cw.G, nc, w)
+        cholesky_solve(cw.G, nc, w)
         for r in range(nc):
             for k in range(nv):
                 z[k] -= Y[r, k] * w[r]
