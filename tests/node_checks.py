@@ -1,10 +1,12 @@
 """Checks shared by the compiled-node tests: a compiled node against the Python node, and against central
-differences of its own ``calc``."""
+differences of its own ``calc``; solvers with and without compiled nodes."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
+
+import crocopy
 
 FIELDS = ("xnext", "Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu")
 """The node data fields a compiled ``calcDiff`` writes (a terminal node: ``xnext``, ``Fx``, ``Lx``, ``Lxx``)."""
@@ -57,3 +59,22 @@ def check_finite_differences(iam, state, x: np.ndarray, u: np.ndarray, h: float,
         grad = Lx[j] if j < ndx else Lu[j - ndx]
         np.testing.assert_allclose(column, jac, rtol=1e-4, atol=atol * max(1.0, np.abs(jac).max()))
         assert (cp - cm) / (2 * h) == pytest.approx(grad, rel=1e-4, abs=atol + roundoff * abs(cost))
+
+
+def make_solver(name: str, problem, compiled: bool = True):
+    """crocopy's solver ``name`` on ``problem``; with ``compiled=False`` a subclass that does not opt in to compiled
+    nodes, so its solves run the Python nodes."""
+    cls = getattr(crocopy, name)
+    if not compiled:
+        cls = type("Uncompiled" + name, (cls,), {"_nodes_compiled": False})
+    return cls(problem)
+
+
+def failed_solve(problem, xs, us, compiled: bool, maxiter: int) -> tuple:
+    """``(solved, iter, reason)`` of an FDDP solve that is expected to fail; the iterate and cost it keeps are
+    checked finite."""
+    s = make_solver("SolverFDDP", problem, compiled)
+    solved = s.solve(xs, us, maxiter)
+    assert all(np.isfinite(x).all() for x in s.xs) and all(np.isfinite(u).all() for u in s.us)
+    assert np.isfinite(s.cost)
+    return solved, s.iter, s.reason

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from node_checks import failed_solve, make_solver
 
 import crocopy
 from crocopy.problems import registry
@@ -16,10 +17,7 @@ SOLVERS = ("SolverDDP", "SolverFDDP", "SolverBoxDDP", "SolverBoxFDDP")
 
 def solve(name: str, solver: str, compiled: bool, maxiter: int = 40, **overrides):
     problem, xs, us = registry.build(name, **overrides)
-    cls = getattr(crocopy, solver)
-    s = cls(problem)
-    if not compiled:
-        s.__class__ = type("Uncompiled" + solver, (cls,), {"_nodes_compiled": False})
+    s = make_solver(solver, problem, compiled)
     s.solve(xs, us, maxiter)
     return s, problem
 
@@ -133,12 +131,7 @@ def test_a_diverging_solve_stops_as_without_compiled_nodes():
         problem, xs, us = registry.build("quad-goal")
         for m in problem.runningModels:
             m.dt = 50.0
-        cls = crocopy.SolverFDDP if compiled else type("Uncompiled", (crocopy.SolverFDDP,), {"_nodes_compiled": False})
-        s = cls(problem)
-        solved = s.solve(xs, us, 20)
-        assert all(np.isfinite(x).all() for x in s.xs) and all(np.isfinite(u).all() for u in s.us)
-        assert np.isfinite(s.cost)
-        outcomes.append((solved, s.iter, s.reason))
+        outcomes.append(failed_solve(problem, xs, us, compiled, 20))
     assert outcomes[0] == outcomes[1]
     assert outcomes[0][0] is False and "non-finite" in outcomes[0][2]
 

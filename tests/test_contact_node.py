@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
-from node_checks import check_finite_differences, compare_with_python_node
+from node_checks import check_finite_differences, compare_with_python_node, failed_solve, make_solver
 from robots import load
 
 import crocopy
@@ -191,11 +191,8 @@ def test_solves_with_compiled_contact_nodes_match_the_python_nodes(solver):
     outcomes = []
     for compiled in (True, False):
         problem, xs, us = _standing_problem()
-        cls = getattr(crocopy, solver)
-        s = cls(problem)
-        if not compiled:
-            s.__class__ = type("Uncompiled" + solver, (cls,), {"_nodes_compiled": False})
-        else:
+        s = make_solver(solver, problem, compiled)
+        if compiled:
             assert compiled_nodes.select(s).horizon is not None
         s.solve(xs, us, 30)
         outcomes.append((s.iter, s.cost, [x.copy() for x in s.xs]))
@@ -212,11 +209,6 @@ def test_a_diverging_contact_solve_stops_as_without_compiled_nodes():
     for compiled in (True, False):
         problem, xs, us = _standing_problem()
         problem.runningModels[0].dt = 0.1
-        cls = crocopy.SolverFDDP if compiled else type("Uncompiled", (crocopy.SolverFDDP,), {"_nodes_compiled": False})
-        s = cls(problem)
-        solved = s.solve(xs, us, 15)
-        assert all(np.isfinite(x).all() for x in s.xs) and all(np.isfinite(u).all() for u in s.us)
-        assert np.isfinite(s.cost)
-        outcomes.append((solved, s.iter, s.reason))
+        outcomes.append(failed_solve(problem, xs, us, compiled, 15))
     assert outcomes[0] == outcomes[1]
     assert outcomes[0][0] is False and "non-finite" in outcomes[0][2]
