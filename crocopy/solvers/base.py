@@ -206,7 +206,7 @@ class SolverAbstract:
         problem = self.problem
         xs = self.xs
         for t, (m, d) in enumerate(zip(problem.runningModels, problem.runningDatas)):
-            self.fs[t + 1][:] = m.state.diff(xs[t + 1], d.xnext)
+            m.state._diff_into(xs[t + 1], d.xnext, self.fs[t + 1])
         return self._close_gaps()
 
     def _close_gaps(self) -> float:
