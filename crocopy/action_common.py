@@ -19,6 +19,7 @@ import numpy as np
 from .guards import Guard, Guarded, unchecked
 from .state import StateAbstract
 from .validation import as_count, as_vector, control_arg, data_arg, state_arg, warn_nonfinite
+from .versioning import Parametrized
 from .watched import Watched
 
 
@@ -126,7 +127,7 @@ _ACTION_DATA = data_arg({"Lx": lambda m: (m.state.ndx,), "Lu": lambda m: (m.nu,)
 _ACTION_PARAMS = (("data", _ACTION_DATA), ("x", state_arg), ("u", control_arg))
 
 
-class ActionModelBase(ControlLimitsMixin, Guarded):
+class ActionModelBase(Parametrized, ControlLimitsMixin, Guarded):
     """Constructor, stubs and quasi-static solve of Crocoddyl's two action-model abstractions.
 
     The parameters ``(state, nu, nr=1, ng=0, nh=0, ng_T=0, nh_T=0)`` are described by
@@ -147,6 +148,10 @@ class ActionModelBase(ControlLimitsMixin, Guarded):
     (:class:`~crocopy.validation.NonFiniteWarning`); a ``calcDiff`` on a data that ``calc`` never
     evaluated runs ``calc`` first.  A solve calls them unchecked.
     """
+
+    _read_only = frozenset(
+        {"state", "actuation", "differential", "control", "costs", "contacts", "impulses", "constraints"}
+    )
 
     _guards = {
         "calc": Guard(_ACTION_PARAMS, after=_after_calc),

@@ -15,9 +15,10 @@ from .array_views import KeepsViews, tolerate_python_model
 from .guards import Guard, Guarded, point_control_guards
 from .state import StateAbstract
 from .validation import as_vector, control_arg, state_arg
+from .versioning import Parametrized
 
 
-class ActuationModelAbstract(ControlBounds, Guarded):
+class ActuationModelAbstract(Parametrized, ControlBounds, Guarded):
     """Abstract actuation model (Crocoddyl's ``ActuationModelAbstract(state, nu)``).
 
     Parameters
@@ -37,6 +38,8 @@ class ActuationModelAbstract(ControlBounds, Guarded):
     A user's ``calc``, ``calcDiff``, ``commands`` and ``torqueTransform`` are checked (``x (nx,)``,
     ``u (nu,)``, ``tau (nv,)``, finite).
     """
+
+    _read_only = frozenset({"state"})
 
     _guards = point_control_guards(
         commands=Guard((("data", None), ("x", state_arg), ("tau", lambda m, v, n: as_vector(v, m.state.nv, n)))),

@@ -13,7 +13,7 @@ from typing import Any
 
 from .state import StateAbstract
 from .validation import ArgumentTypeError, as_bool
-from .versioning import touch
+from .versioning import Parametrized, structure_changed, touch
 
 
 def article(word: str) -> str:
@@ -68,12 +68,16 @@ class NamedItems:
         self._get(name).active = as_bool(active, "active")
         self._changed()
 
-    def _changed(self) -> None:
+    def _changed(self, structural: bool = True) -> None:
+        """Recount and touch; ``structural``: the datas made before have the wrong shape (see
+        :func:`crocopy.versioning.structure_changed`)."""
         self._recount()
         touch(self)
+        if structural:
+            structure_changed(self)
 
 
-class ModelItems(NamedItems):
+class ModelItems(Parametrized, NamedItems):
     """Named models on one state and control dimension ``nu`` (cost sums, constraint managers, contact
     and impulse sets).
 
@@ -87,6 +91,8 @@ class ModelItems(NamedItems):
     nu : int, optional
         Control dimension of every item (default ``state.nv``).
     """
+
+    _read_only = frozenset({"state"})
 
     _model_type: type = object
 

@@ -19,6 +19,7 @@ import numpy as np
 from .action_base import ActionDataAbstract, ActionModelAbstract
 from .guards import Guard, Guarded
 from .validation import ArgumentTypeError, as_count, as_vector
+from .versioning import STRUCTURE, holds_stale_data
 
 
 def _sequence(value: object, name: str) -> list:
@@ -99,6 +100,7 @@ class ShootingProblem(Guarded):
         self._runningModels = runningModels
         self._terminalModel = terminalModel
         self.x0 = x0
+        self._structure_seen = STRUCTURE[0] if runningDatas is None and terminalData is None else -1
         if runningDatas is None:
             runningDatas = [m.createData() for m in runningModels]
         elif len(runningDatas) != len(runningModels):
@@ -173,8 +175,33 @@ class ShootingProblem(Guarded):
         us = [as_vector(u, m.nu, f"{us_name}[{t}]") for t, (u, m) in enumerate(zip(us, self._runningModels))]
         return xs, us
 
+    def refresh_datas(self) -> list[int]:
+        """Replace the node datas made before a registry in their model changed its item set (a cost, constraint,
+        contact or impulse added or removed, a contact, impulse or constraint switched on or off) by new ones, as
+        a freshly built problem would have (crocopy extension; ``calc``, ``calcDiff``, ``rollout`` and every
+        solve call it first).  One integer comparison when no item set changed since the last call.
+
+        Returns
+        -------
+        list of int
+            The nodes whose data was replaced (``T`` for the terminal node).
+        """
+        if self._structure_seen == STRUCTURE[0]:
+            return []
+        replaced = []
+        for t, (m, d) in enumerate(zip(self._runningModels, self._runningDatas)):
+            if holds_stale_data(d):
+                self._runningDatas[t] = m.createData()
+                replaced.append(t)
+        if holds_stale_data(self._terminalData):
+            self._terminalData = self._terminalModel.createData()
+            replaced.append(self.T)
+        self._structure_seen = STRUCTURE[0]
+        return replaced
+
     def calc(self, xs: Sequence[np.ndarray], us: Sequence[np.ndarray]) -> float:
         """Evaluate every node at ``(xs, us)`` and return the total cost."""
+        self.refresh_datas()
         cost = 0.0
         for m, d, x, u in zip(self._runningModels, self._runningDatas, xs, us):
             m.calc(d, x, u)
@@ -186,6 +213,7 @@ class ShootingProblem(Guarded):
 
     def calcDiff(self, xs: Sequence[np.ndarray], us: Sequence[np.ndarray]) -> float:
         """Compute every node's derivatives at ``(xs, us)`` (after :meth:`calc`) and return the cost."""
+        self.refresh_datas()
         cost = 0.0
         for m, d, x, u in zip(self._runningModels, self._runningDatas, xs, us):
             m.calcDiff(d, x, u)
@@ -197,6 +225,7 @@ class ShootingProblem(Guarded):
 
     def rollout(self, us: Sequence[np.ndarray]) -> list[np.ndarray]:
         """Integrate the dynamics from ``x0`` with controls ``us``; returns T+1 states."""
+        self.refresh_datas()
         xs = [self._x0.copy()]
         for t, (m, d) in enumerate(zip(self._runningModels, self._runningDatas)):
             m.calc(d, xs[-1], us[t])
@@ -241,6 +270,7 @@ class ShootingProblem(Guarded):
         self.__dict__.update(state)
         self._runningDatas = [m.createData() for m in self._runningModels]
         self._terminalData = self._terminalModel.createData()
+        self._structure_seen = STRUCTURE[0]
 
     def __repr__(self) -> str:
         return f"ShootingProblem(T={self.T}, nx={self.nx}, nu_max={self.nu_max})"

@@ -15,6 +15,7 @@ from .enums import Jcomponent
 from .guards import Guard, Guarded
 from .kernels import overridden
 from .validation import as_count, as_vector, point_arg, tangent_arg
+from .versioning import Parametrized
 
 
 def _component_arg(owner: "StateAbstract", value: object, name: str) -> Jcomponent:
@@ -36,7 +37,7 @@ _BINARY = (("x0", point_arg), ("x1", point_arg), ("firstsecond", _component_arg)
 _TANGENT = (("x", point_arg), ("dx", tangent_arg), ("firstsecond", _component_arg))
 
 
-class StateAbstract(Guarded):
+class StateAbstract(Parametrized, Guarded):
     """Abstract state manifold (Crocoddyl's ``StateAbstract``).
 
     ``diff``, ``integrate``, ``Jdiff``, ``Jintegrate`` and ``JintegrateTransport`` of every subclass
@@ -51,6 +52,8 @@ class StateAbstract(Guarded):
     ndx : int
         Dimension of the tangent space.
     """
+
+    _read_only = frozenset({"pinocchio"})
 
     _guards = {
         "diff": Guard(_BINARY[:2]),

@@ -7,7 +7,10 @@ Pinocchio constraint models built from its contacts' references and gains
 :func:`touch` on the object it belongs to: one global clock, ``ParametersVersion.value``, moves on
 by one, and the object is stamped with the new value (``_stamp``; 0 for an object never touched).
 Registries of named items (:mod:`crocopy.named_items`) touch themselves when an item is added,
-removed, activated or deactivated.
+removed, activated or deactivated.  The model classes derive :class:`Parametrized`: assigning any public
+attribute of a model (a property setter such as ``residual.id`` or ``dam.armature``, or a plain attribute)
+touches it, so no setter can be forgotten; the attributes Crocoddyl makes read-only (``state``,
+``actuation``, ``differential``, ``costs``, ...) raise ``AttributeError`` once set.
 
 A cache keeps a :class:`ParametersSeen`: the clock value it was filled at.  It is up to date when
 the clock has not moved (one comparison), or when none of the objects it was filled from carries a
@@ -17,6 +20,7 @@ the setters, so it raises instead.
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Callable, Iterable
 
 import numpy as np
@@ -39,6 +43,69 @@ def frozen_copy(values: np.ndarray) -> np.ndarray:
     out = np.array(values, dtype=float)
     out.setflags(write=False)
     return out
+
+
+STRUCTURE = [0]
+"""``STRUCTURE[0]`` moves on at every change of a registry's item set (a cost, constraint, contact or impulse added or
+removed, a contact, impulse or constraint switched on or off): the changes that leave the datas made before them
+with the wrong shape (:func:`structure_changed`)."""
+
+_MADE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+"""Registry model → the datas it made (weakly)."""
+
+
+def made_from(model: object, data: object) -> None:
+    """Record that ``model`` (a registry of named items) made ``data``; ``data.structure_stale`` starts False."""
+    data.structure_stale = False
+    _MADE.setdefault(model, weakref.WeakSet()).add(data)
+
+
+def structure_changed(model: object) -> None:
+    """``model``'s item set changed: every data it made so far is stale (``structure_stale``), and the clock
+    :data:`STRUCTURE` moves on so that a problem looks for such datas before its next evaluation."""
+    STRUCTURE[0] += 1
+    for data in _MADE.get(model, ()):
+        data.structure_stale = True
+
+
+def holds_stale_data(data: object) -> bool:
+    """Whether ``data`` (a node's data) or a data nested in it (attributes, lists and dicts of crocopy's data
+    classes) was made by a registry whose item set changed since (:func:`structure_changed`)."""
+    seen: set[int] = set()
+    stack = [data]
+    while stack:
+        obj = stack.pop()
+        if id(obj) in seen:
+            continue
+        seen.add(id(obj))
+        if isinstance(obj, dict):
+            stack.extend(obj.values())
+        elif isinstance(obj, list | tuple):
+            stack.extend(obj)
+        elif type(obj).__module__.startswith("crocopy") and hasattr(obj, "__dict__"):
+            if obj.__dict__.get("structure_stale", False):
+                return True
+            stack.extend(obj.__dict__.values())
+    return False
+
+
+class Parametrized:
+    """Mixin of model classes: assigning a public attribute touches the model (:func:`touch`), and the names in
+    ``_read_only`` can be assigned once (by the constructor), as in Crocoddyl's bindings."""
+
+    __slots__ = ()
+    _read_only: frozenset[str] = frozenset()
+
+    def __setattr__(self, name: str, value: object) -> None:
+        if name[0] == "_":
+            object.__setattr__(self, name, value)
+            return
+        if name in self._read_only and name in self.__dict__:
+            raise AttributeError(
+                f"{type(self).__name__}.{name} is read-only (as in Crocoddyl): build a new model with the new {name}"
+            )
+        object.__setattr__(self, name, value)
+        touch(self)
 
 
 class ParametersSeen:

@@ -281,6 +281,10 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         if data.aba:
             self._calcDiff_aba(data, x, u)
             return
+        # Pinocchio writes only the tree's entries of dtau_dq/dtau_dv; the constraint-dynamics path of an earlier
+        # evaluation (no damping, no armature) leaves other values in the rest
+        pd.dtau_dq[:] = 0.0
+        pd.dtau_dv[:] = 0.0
         pin.computeRNEADerivatives(model, pd, q, v, data.xout, cdata.fext)
         self.contacts.updateRneaDiff(cdata, pd)
         self.actuation.calcDiff(adata, x, u)

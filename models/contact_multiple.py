@@ -111,10 +111,14 @@ class ContactModelMultiple(ForceModelMultiple):
         They reproduce these contacts exactly (same drift, Baumgarte terms and coordinates) when every
         active contact is a 3D contact, a LOCAL 6D contact or a 6D contact without position gain;
         ``None`` otherwise.  They are rebuilt (and ``initConstraintDynamics`` called) only when the
-        active set, a reference or a gain changed (:mod:`crocopy.versioning`).
+        active set, a reference or a gain changed (:mod:`crocopy.versioning`), or a 6D contact's live reference
+        placement was changed in place.
         """
-        if data.rigid_seen.stale(self._rigid_sources):
+        if data.rigid_seen.stale(self._rigid_sources) or any(
+            not np.array_equal(placement.homogeneous, seen) for placement, seen in data.rigid_placements
+        ):
             data.rigid = self._build_rigid(pinocchio)
+            data.rigid_placements = [(c._pref, c._pref.homogeneous) for _, c in self._active if hasattr(c, "_pref")]
             data.rigid_seen.filled()
         return data.rigid
 
@@ -203,7 +207,8 @@ class ContactDataMultiple(ForceDataMultiple):
         self.ddv_dx = np.zeros((nv, ndx))
         self.rigid = None
         self.rigid_seen = ParametersSeen()
+        self.rigid_placements: list = []
 
     def __getstate__(self) -> dict:
         """Copy or pickle without the Pinocchio constraint cache (``rigid``, rebuilt on first use)."""
-        return {**self.__dict__, "rigid": None}
+        return {**self.__dict__, "rigid": None, "rigid_placements": []}

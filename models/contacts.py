@@ -246,8 +246,8 @@ class ContactModel6D(_FrameContact):
 
     @property
     def reference(self) -> pin.SE3:
-        """Contact placement ``pref`` (a copy; assign a new placement to change it)."""
-        return self._pref.copy()
+        """Contact placement ``pref`` (live: a change made in place is seen by the next evaluation)."""
+        return self._pref
 
     @reference.setter
     def reference(self, value: pin.SE3) -> None:
@@ -255,7 +255,6 @@ class ContactModel6D(_FrameContact):
             raise ValueError(f"pref must be a pinocchio.SE3, got {type(value).__name__}")
         check_finite(value.homogeneous, "pref")
         self._pref = value.copy()
-        self._prefinv = value.inverse()
         touch(self)
 
     def _reference_placement(self) -> pin.SE3:
@@ -274,7 +273,7 @@ class ContactModel6D(_FrameContact):
         kp, kd = self._gains
         oMf = pd.oMf[fid]
         if kp != 0.0:
-            data.rMf = self._prefinv * oMf
+            data.rMf = self._pref.actInv(oMf)
             a0l += kp * pin.log6(data.rMf).vector
         if kd != 0.0:
             a0l += kd * v.vector

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from crocopy.validation import as_vector
+from crocopy.versioning import frozen_copy
 
 from .actuations import (
     ActuationModelFloatingBase,
@@ -31,12 +32,12 @@ class ArmatureMixin:
 
     @property
     def armature(self) -> np.ndarray:
-        """Armature added to the diagonal of the mass matrix, shape ``(nv,)``."""
+        """Armature added to the diagonal of the mass matrix, shape ``(nv,)`` (read-only: assign a new array)."""
         return self._armature
 
     @armature.setter
     def armature(self, value: np.ndarray) -> None:
-        arm = as_vector(value, self.state.nv, "armature").copy()
+        arm = frozen_copy(as_vector(value, self.state.nv, "armature"))
         self._armature = arm
         self._with_armature = bool(np.any(arm != 0.0))
 

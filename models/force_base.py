@@ -29,6 +29,7 @@ from crocopy.guards import Guarded, point_guards
 from crocopy.named_items import ModelItems
 from crocopy.state import StateAbstract
 from crocopy.validation import as_count
+from crocopy.versioning import Parametrized, made_from
 
 REFERENCE_FRAMES = (pin.LOCAL, pin.WORLD, pin.LOCAL_WORLD_ALIGNED)
 _LOCAL = pin.LOCAL
@@ -80,7 +81,7 @@ def world_aligned(type: pin.ReferenceFrame) -> pin.ReferenceFrame:
     return pin.LOCAL if type == pin.LOCAL else pin.LOCAL_WORLD_ALIGNED
 
 
-class ForceModelAbstract(Guarded):
+class ForceModelAbstract(Parametrized, Guarded):
     """Common base of ``ContactModelAbstract`` and ``ImpulseModelAbstract``.
 
     Parameters
@@ -99,6 +100,8 @@ class ForceModelAbstract(Guarded):
     -----
     A user's ``calc(data, x)``/``calcDiff(data, x)`` is checked (``x (nx,)``, finite).
     """
+
+    _read_only = frozenset({"state"})
 
     _guards = point_guards()
 
@@ -335,6 +338,7 @@ class ForceDataMultiple:
     ``fext_by_joint``, and ``touched`` (the joints some item acts on)."""
 
     def __init__(self, model: ForceModelMultiple, data: pin.Data) -> None:
+        made_from(model, self)
         kind = model._kind
         self.items: dict[str, ForceDataAbstract] = {
             name: getattr(item, kind).createData(data) for name, item in model._items.items()

@@ -24,6 +24,7 @@ from crocopy.data_collector import DataCollectorAbstract
 from crocopy.residuals.base import ResidualDataAbstract, ResidualModelAbstract
 from crocopy.state import StateAbstract
 from crocopy.validation import as_vector
+from crocopy.versioning import frozen_copy
 
 from .residuals_frame import check_same_robot, check_state, shared_pinocchio
 from .state_multibody import StateMultibody
@@ -55,12 +56,12 @@ class ResidualModelCoMPosition(ResidualModelAbstract):
 
     @property
     def reference(self) -> np.ndarray:
-        """Reference CoM position ``cref``, shape ``(3,)``."""
+        """Reference CoM position ``cref``, shape ``(3,)`` (a read-only copy: assign a new array to change it)."""
         return self._cref
 
     @reference.setter
     def reference(self, value: np.ndarray) -> None:
-        self._cref = as_vector(value, 3, "cref").copy()
+        self._cref = frozen_copy(as_vector(value, 3, "cref"))
 
     def createData(self, data: DataCollectorAbstract | None = None) -> ResidualDataCoMPosition:
         d = ResidualDataCoMPosition(self, data)

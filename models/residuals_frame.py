@@ -22,6 +22,7 @@ import pinocchio as pin
 from crocopy.data_collector import DataCollectorAbstract
 from crocopy.residuals.base import ResidualDataAbstract, ResidualModelAbstract
 from crocopy.validation import as_matrix, as_vector, check_finite
+from crocopy.versioning import frozen_copy
 
 from .state_multibody import StateMultibody
 
@@ -121,7 +122,7 @@ class ResidualModelFramePlacement(_FrameResidual):
 
     @property
     def reference(self) -> pin.SE3:
-        """Reference placement ``pref``."""
+        """Reference placement ``pref`` (live: a change made in place is seen by the next evaluation)."""
         return self._pref
 
     @reference.setter
@@ -130,11 +131,10 @@ class ResidualModelFramePlacement(_FrameResidual):
             raise ValueError(f"pref must be a pinocchio.SE3, got {type(value).__name__}")
         check_finite(value.homogeneous, "pref")
         self._pref = value.copy()
-        self._prefinv = value.inverse()
 
     def calc(self, data: ResidualDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
         oMf = pin.updateFramePlacement(self.state.pinocchio, data.pinocchio, self._id)
-        data.rMf = self._prefinv * oMf
+        data.rMf = self._pref.actInv(oMf)
         data.r[:] = pin.log6(data.rMf).vector
 
     def calcDiff(self, data: ResidualDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
@@ -153,12 +153,12 @@ class ResidualModelFrameTranslation(_FrameResidual):
 
     @property
     def reference(self) -> np.ndarray:
-        """Reference translation ``xref``, shape ``(3,)``."""
+        """Reference translation ``xref``, shape ``(3,)`` (a read-only copy: assign a new array to change it)."""
         return self._xref
 
     @reference.setter
     def reference(self, value: np.ndarray) -> None:
-        self._xref = as_vector(value, 3, "xref").copy()
+        self._xref = frozen_copy(as_vector(value, 3, "xref"))
 
     def createData(self, data: DataCollectorAbstract | None = None) -> "ResidualDataFrameTranslation":
         d = ResidualDataFrameTranslation(self, data)
@@ -186,7 +186,7 @@ class ResidualModelFrameRotation(_FrameResidual):
 
     @property
     def reference(self) -> np.ndarray:
-        """Reference rotation ``Rref``, shape ``(3, 3)``."""
+        """Reference rotation ``Rref``, shape ``(3, 3)`` (read-only: assign a new matrix)."""
         return self._Rref
 
     @reference.setter
@@ -194,12 +194,11 @@ class ResidualModelFrameRotation(_FrameResidual):
         R = as_matrix(value, (3, 3), "Rref")
         if not np.allclose(R.T @ R, np.eye(3), atol=1e-6):
             raise ValueError("Rref must be a rotation matrix (orthonormal)")
-        self._Rref = R.copy()
-        self._RrefT = R.T.copy()
+        self._Rref = frozen_copy(R)
 
     def calc(self, data: ResidualDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
         oMf = pin.updateFramePlacement(self.state.pinocchio, data.pinocchio, self._id)
-        data.rRf = self._RrefT @ oMf.rotation
+        data.rRf = self._Rref.T @ oMf.rotation
         data.r[:] = pin.log3(data.rRf)
 
     def calcDiff(self, data: ResidualDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
@@ -231,7 +230,7 @@ class ResidualModelFrameVelocity(_FrameResidual):
 
     @property
     def reference(self) -> pin.Motion:
-        """Reference velocity ``vref``."""
+        """Reference velocity ``vref`` (live: a change made in place is seen by the next evaluation)."""
         return self._vref
 
     @reference.setter
@@ -240,7 +239,6 @@ class ResidualModelFrameVelocity(_FrameResidual):
             raise ValueError(f"vref must be a pinocchio.Motion, got {type(value).__name__}")
         check_finite(value.vector, "vref")
         self._vref = value.copy()
-        self._vref_vec = value.vector.copy()
 
     @property
     def type(self) -> pin.ReferenceFrame:
@@ -258,7 +256,7 @@ class ResidualModelFrameVelocity(_FrameResidual):
         if self._type != pin.LOCAL:
             pin.updateFramePlacement(model, pd, self._id)
         v = pin.getFrameVelocity(model, pd, self._id, self._type)
-        np.subtract(v.vector, self._vref_vec, out=data.r)
+        np.subtract(v.vector, self._vref.vector, out=data.r)
 
     def calcDiff(self, data: ResidualDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
         nv = self.state.nv

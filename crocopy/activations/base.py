@@ -12,11 +12,12 @@ import numpy as np
 from ..array_views import KeepsViews, tolerate_python_model
 from ..guards import Guard, Guarded
 from ..validation import as_count, residual_arg
+from ..versioning import Parametrized
 
 _R_PARAMS = (("data", None), ("r", residual_arg))
 
 
-class ActivationModelAbstract(Guarded):
+class ActivationModelAbstract(Parametrized, Guarded):
     """Abstract activation of a residual of dimension ``nr`` (Crocoddyl's ``ActivationModelAbstract(nr)``).
 
     A subclass written from Python fills ``data.a_value``, ``data.Ar`` and ``data.Arr`` (dense).

@@ -22,6 +22,7 @@ from ..guards import Guarded, point_control_guards
 from ..residuals.base import ResidualModelAbstract
 from ..state import StateAbstract
 from ..validation import as_vector, check_bounds
+from ..versioning import Parametrized
 
 
 class ConstraintType(enum.IntEnum):
@@ -32,7 +33,7 @@ class ConstraintType(enum.IntEnum):
     Both = 2
 
 
-class ConstraintModelAbstract(Guarded):
+class ConstraintModelAbstract(Parametrized, Guarded):
     """Abstract constraint (Crocoddyl's ``ConstraintModelAbstract``).
 
     Constructed, positionally or with keywords, as ``(state, residual, ng, nh)``,
@@ -43,6 +44,8 @@ class ConstraintModelAbstract(Guarded):
     ``v``, and the other forms hold an abstract residual of ``ng + nh`` rows that sizes
     ``data.residual``.  A user's ``calc``/``calcDiff`` is checked (``x (nx,)``, ``u (nu,)`` or ``None``).
     """
+
+    _read_only = frozenset({"state"})
 
     _guards = point_control_guards()
 

@@ -11,6 +11,7 @@ from ..array_views import share_arrays
 from ..data_collector import DataCollectorAbstract
 from ..guards import Guarded, point_control_guards
 from ..named_items import ModelItems
+from ..versioning import made_from
 from .base import ConstraintModelAbstract
 
 
@@ -150,6 +151,7 @@ class ConstraintDataManager:
     def __init__(self, model: ConstraintModelManager, data: DataCollectorAbstract | None) -> None:
         ndx, nu = model.state.ndx, model.nu
         self.shared = data
+        made_from(model, self)
         self.constraints = {name: item.constraint.createData(data) for name, item in model.constraints.items()}
         self.g, self.Gx, self.Gu, self.h, self.Hx, self.Hu = constraint_arrays(model.ng, model.nh, ndx, nu)
 

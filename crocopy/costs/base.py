@@ -15,13 +15,14 @@ from ..data_collector import DataCollectorAbstract
 from ..guards import Guarded, point_control_guards
 from ..residuals.base import ResidualModelAbstract
 from ..state import StateAbstract
+from ..versioning import Parametrized
 
 
 def _is_int(value: object) -> bool:
     return isinstance(value, (int, np.integer)) and not isinstance(value, bool)
 
 
-class CostModelAbstract(Guarded):
+class CostModelAbstract(Parametrized, Guarded):
     """Abstract cost ``l(x, u)`` of an activation and a residual (Crocoddyl's ``CostModelAbstract``).
 
     Crocoddyl's constructor forms, positional or with keywords:
@@ -49,6 +50,8 @@ class CostModelAbstract(Guarded):
     -----
     A user's ``calc``/``calcDiff`` is checked (``x (nx,)``, ``u (nu,)`` or ``None``, finite).
     """
+
+    _read_only = frozenset({"state", "activation", "residual"})
 
     _guards = point_control_guards()
 

@@ -11,7 +11,7 @@ from ..data_collector import DataCollectorAbstract
 from ..guards import Guarded, point_control_guards
 from ..named_items import ModelItems
 from ..validation import as_bool, as_number
-from ..versioning import ParametersSeen, ParametersVersion, touch
+from ..versioning import ParametersSeen, ParametersVersion, made_from, touch
 from .base import CostModelAbstract, CostModelResidual
 from .stack import CostStack
 
@@ -78,8 +78,9 @@ class CostModelSum(ModelItems, Guarded):
         self._remove(name)
 
     def changeCostStatus(self, name: str, active: bool) -> None:
-        """Activate or deactivate the cost ``name``."""
-        self._set_active(name, active)
+        """Activate or deactivate the cost ``name`` (a data made before keeps its shape: no rebuild)."""
+        self._get(name).active = as_bool(active, "active")
+        self._changed(structural=False)
 
     def getCostStatus(self, name: str) -> bool:
         """True if the cost ``name`` is active (``KeyError`` if unknown)."""
@@ -149,6 +150,7 @@ class CostDataSum:
     def __init__(self, model: CostModelSum, data: DataCollectorAbstract | None) -> None:
         ndx, nu = model.state.ndx, model.nu
         self.shared = data
+        made_from(model, self)
         self.items_seen = ParametersSeen()
         self.items_seen.filled()
         self.costs = {name: item.cost.createData(data) for name, item in model.costs.items()}

@@ -13,9 +13,10 @@ from ..array_views import KeepsViews, tolerate_python_model
 from ..data_collector import DataCollectorAbstract
 from ..guards import Guarded, point_control_guards
 from ..state import StateAbstract
+from ..versioning import Parametrized
 
 
-class ResidualModelAbstract(Guarded):
+class ResidualModelAbstract(Parametrized, Guarded):
     """Abstract residual (Crocoddyl's ``ResidualModelAbstract``).
 
     As in Crocoddyl, ``nu`` may be left out positionally:
@@ -37,6 +38,8 @@ class ResidualModelAbstract(Guarded):
     -----
     A user's ``calc``/``calcDiff`` is checked (``x (nx,)``, ``u (nu,)`` or ``None``, finite).
     """
+
+    _read_only = frozenset({"state"})
 
     _guards = point_control_guards()
 

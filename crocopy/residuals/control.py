@@ -7,6 +7,7 @@ import numpy as np
 from ..data_collector import DataCollectorAbstract
 from ..state import StateAbstract
 from ..validation import as_vector
+from ..versioning import frozen_copy
 from .base import ResidualDataAbstract, ResidualModelAbstract
 
 
@@ -23,7 +24,7 @@ class ResidualModelControl(ResidualModelAbstract):
 
     @property
     def reference(self) -> np.ndarray:
-        """Reference control ``uref``, shape ``(nu,)``."""
+        """Reference control ``uref``, shape ``(nu,)`` (a read-only copy: assign a new array to change it)."""
         return self._uref
 
     @reference.setter
@@ -36,7 +37,7 @@ class ResidualModelControl(ResidualModelAbstract):
 
     @uref.setter
     def uref(self, value: np.ndarray) -> None:
-        self._uref = as_vector(value, self.nu, "uref")
+        self._uref = frozen_copy(as_vector(value, self.nu, "uref"))
 
     def calc(self, data: ResidualDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
         if u is None:

@@ -7,6 +7,7 @@ import numpy as np
 from ..data_collector import DataCollectorAbstract
 from ..state import StateAbstract
 from ..validation import as_vector
+from ..versioning import frozen_copy
 from .base import ResidualDataAbstract, ResidualModelAbstract
 
 
@@ -21,7 +22,7 @@ class ResidualModelState(ResidualModelAbstract):
 
     @property
     def reference(self) -> np.ndarray:
-        """Reference state ``xref``, shape ``(nx,)``."""
+        """Reference state ``xref``, shape ``(nx,)`` (a read-only copy: assign a new array to change it)."""
         return self._xref
 
     @reference.setter
@@ -34,7 +35,7 @@ class ResidualModelState(ResidualModelAbstract):
 
     @xref.setter
     def xref(self, value: np.ndarray) -> None:
-        self._xref = as_vector(value, self.state.nx, "xref")
+        self._xref = frozen_copy(as_vector(value, self.state.nx, "xref"))
 
     def calc(self, data: ResidualDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
         self.state._diff_into(self._xref, x, data.r)

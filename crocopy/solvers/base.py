@@ -34,7 +34,8 @@ def check_solve_arguments(solver: "SolverAbstract", maxiter: object, is_feasible
 
     ``maxiter`` is an integer >= 0, ``is_feasible`` a bool, ``init_reg`` ``None``, NaN (the default
     regularisation) or a number >= 0.  ``reg_min <= reg_max`` and every running model's ``u_lb <= u_ub``
-    are checked here, where they are used, so that their setters may be called in any order.
+    are checked here, where they are used, so that their setters may be called in any order.  The problem's datas
+    made before a registry in their model changed its item set are replaced first (``problem.refresh_datas()``).
 
     Raises
     ------
@@ -48,6 +49,7 @@ def check_solve_arguments(solver: "SolverAbstract", maxiter: object, is_feasible
     reg_min, reg_max = getattr(solver, "reg_min", None), getattr(solver, "reg_max", None)
     if reg_min is not None and reg_max is not None and reg_min > reg_max:
         raise ValueError(f"reg_min = {reg_min} is above reg_max = {reg_max}")
+    solver.problem.refresh_datas()
     for t, m in enumerate(solver.problem.runningModels):
         if getattr(m, "inverted_control_limits", False):
             check_bounds(m.u_lb, m.u_ub, f"runningModels[{t}].u_lb", f"runningModels[{t}].u_ub")

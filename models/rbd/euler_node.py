@@ -39,6 +39,7 @@ from crocopy.costs.base import CostModelResidual
 from crocopy.kernels import AddressCache, checked_address
 from crocopy.residuals.control import ResidualModelControl
 from crocopy.residuals.state import ResidualModelState
+from crocopy.versioning import ParametersVersion
 
 from ..actuations import (
     ActuationModelFloatingBase,
@@ -199,20 +200,25 @@ class EulerNode:
         self._residuals: list | None = None
         self._items: list = []
         self._lowered: Lowered | None = None
+        self._seen = -1
 
     def refresh(self, low: Lowered, memo: dict) -> bool:
         """Re-read the models' parameters and the data arrays' addresses; False if the node no longer qualifies.
 
-        The cost stack's items are read again only when the stack's parameters were touched (its
-        :meth:`~crocopy.costs.stack.CostStack.refresh_if_stale`); the references, the time step, the
-        armature and ``S`` at every call; the table only when an array it lists changed."""
+        The cost stack's items (kinds, frames, reference frames) are read again when any parameter anywhere was
+        touched since this node last read them (:mod:`crocopy.versioning`: every public assignment to a model
+        touches it); the references, the time step, the armature and ``S`` at every call; the table only when an
+        array it lists or the items changed."""
         data = self._data()
         iam = self.model
         dam, ddata = iam.differential, data.differential
         stack = ddata.costs.stack
-        changed = stack.refresh_if_stale(self.terminal) or self._residuals is None
-        if changed and not self._read_items(stack, ddata):
-            return False
+        changed = stack.refresh_if_stale(self.terminal)
+        changed = changed or self._residuals is None or self._seen != ParametersVersion.value
+        if changed:
+            if not self._read_items(stack, ddata):
+                return False
+            self._seen = ParametersVersion.value
         self.contacts.refresh()
         par = [float(iam.dt), float(getattr(dam, "_damping", 0.0))]
         for kind, residual in self._residuals:
