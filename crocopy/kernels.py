@@ -130,6 +130,42 @@ def _pointer_intrinsic(element: str) -> Callable:
 float64_pointer = _pointer_intrinsic("float64")
 int64_pointer = _pointer_intrinsic("int64")
 
+C_ARGUMENTS = 7
+"""The arguments of a C callback (:func:`c_callback`, :func:`call_address`): seven addresses."""
+
+
+def _call_address(typingctx, function, a1, a2, a3, a4, a5, a6, a7):
+    """``function(a1, ..., a7)``: call the C function at integer address ``function`` with seven addresses (a
+    ``void f(void*, ..., void*)``), from a kernel; the caller keeps the function and the arrays alive."""
+    signature = numba.types.void(function, a1, a2, a3, a4, a5, a6, a7)
+
+    def codegen(context, builder, sig, args):
+        from llvmlite import ir
+
+        pointer = ir.IntType(8).as_pointer()
+        callee = builder.inttoptr(args[0], ir.FunctionType(ir.VoidType(), [pointer] * C_ARGUMENTS).as_pointer())
+        builder.call(callee, [builder.inttoptr(a, pointer) for a in args[1:]])
+        return context.get_dummy_value()
+
+    return signature, codegen
+
+
+call_address = numba.extending.intrinsic(_call_address) if available else None
+
+
+def c_callback(function: Callable) -> tuple[int, object]:
+    """``(address, keep)``: ``function(a1, ..., a7)`` (seven int64 addresses, e.g. a wrapper that turns them into
+    arrays with :func:`vector_at`/:func:`matrix_at`) compiled as a C callback for :func:`call_address`; ``keep``
+    must stay alive while the address is used.  Compiled once per process (not cached on disk)."""
+    signature = numba.types.void(*([numba.types.int64] * C_ARGUMENTS))
+    callback = numba.cfunc(signature)(function)
+    return callback.address, callback
+
+
+def jit(function: Callable) -> Callable:
+    """``numba.njit(function)`` (not cached: a user's function), or ``function`` without numba."""
+    return numba.njit(function) if available else function
+
 
 def _address(array):
     return array.ctypes.data

@@ -37,6 +37,7 @@ from .impulse_base import ImpulseDataAbstract, ImpulseModelAbstract
 from .impulse_fwd_dynamics import ActionDataImpulseFwdDynamics, ActionModelImpulseFwdDynamics
 from .impulse_multiple import ImpulseDataMultiple, ImpulseItem, ImpulseModelMultiple
 from .impulses import ImpulseData3D, ImpulseData6D, ImpulseModel3D, ImpulseModel6D
+from .residual_numba import NodeKinematics, ResidualDataNumba, ResidualModelNumba, check_residual_derivatives
 from .residuals_contact import (
     ResidualDataContactControlGrav,
     ResidualDataContactCoPPosition,
@@ -150,6 +151,10 @@ __all__ = [
     "ResidualModelFrameRotation",
     "ResidualModelFrameTranslation",
     "ResidualModelFrameVelocity",
+    "NodeKinematics",
+    "ResidualDataNumba",
+    "ResidualModelNumba",
+    "check_residual_derivatives",
     "ResidualModelJointAcceleration",
     "ResidualModelJointEffort",
     "StateMultibody",

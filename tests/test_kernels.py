@@ -359,7 +359,7 @@ def test_euler_on_a_state_without_transport_is_logged(caplog):
 
     caplog.set_level(logging.DEBUG, logger="crocopy")
     dam = crocopy.DifferentialActionModelLQR.Random(2, 2)
-    dam.state = PlainLie(4)
+    object.__setattr__(dam, "state", PlainLie(4))  # state is read-only; the LQR model has no state argument
     iam = crocopy.IntegratedActionModelEuler(dam, 1e-2)
     if iam._euclidean:
         pytest.fail("the test state must not be treated as Euclidean")

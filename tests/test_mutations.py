@@ -364,3 +364,45 @@ def test_mutation_gives_a_fresh_problems_solve(problem, case):
         results[kernels] = fresh
     assert results[True][0] == results[False][0]
     assert results[True][1] == pytest.approx(results[False][1], rel=1e-7)
+
+
+def mpc_targets(steps: int) -> list[np.ndarray]:
+    """A reference that moves every step (a circle in front of the arm)."""
+    s = np.linspace(0.0, 2.0 * np.pi, steps)
+    return [np.array([0.4 + 0.1 * np.cos(a), 0.3 + 0.1 * np.sin(a), 0.6]) for a in s]
+
+
+def mpc_fresh(target: np.ndarray, x0: np.ndarray, weight: float):
+    problem, _, _ = arm.build_arm_reaching(crocopy, target=target, nodes=10)
+    problem.x0 = x0
+    for dam in dams(problem):
+        dam.costs.costs["goal"].weight = weight * dam.costs.costs["goal"].weight
+    return problem
+
+
+@pytest.mark.parametrize(("kernels", "steps"), [(True, 500), (False, 60)])
+def test_mpc_loop_equals_fresh_problems(kernels, steps):
+    """Receding horizon: every step moves x0 and the goal reference (setters) and every tenth step the goal weight,
+    then solves from the previous solution; each step equals a problem built afresh with those values."""
+    with crocopy.use_kernels(kernels):
+        problem, xs, us = build_arm()
+        solver = crocopy.SolverFDDP(problem)
+        weight = 1.0
+        for step, target in enumerate(mpc_targets(steps)):
+            if step % 10 == 9:
+                weight = 2.0 if weight == 1.0 else 1.0
+                for dam in dams(problem):
+                    item = dam.costs.costs["goal"]
+                    item.weight = (1e4 if dam is dams(problem)[-1] else 1e1) * weight
+            for r in residuals(problem, crocopy.ResidualModelFrameTranslation):
+                r.reference = target
+            warm_xs, warm_us = [x.copy() for x in xs], [u.copy() for u in us]
+            solver.solve(warm_xs, warm_us, 2)
+            fresh = crocopy.SolverFDDP(mpc_fresh(target, problem.x0, weight))
+            fresh.solve(warm_xs, warm_us, 2)
+            assert solver.iter == fresh.iter, step
+            assert solver.cost == pytest.approx(fresh.cost, rel=1e-9), step
+            assert np.isfinite(solver.cost)
+            xs = [*solver.xs[1:], solver.xs[-1].copy()]
+            us = [*solver.us[1:], solver.us[-1].copy()]
+            problem.x0 = solver.xs[1].copy()

@@ -36,7 +36,7 @@ import numpy as np
 import pinocchio as pin
 
 from crocopy.costs.base import CostModelResidual
-from crocopy.kernels import AddressCache, checked_address
+from crocopy.kernels import AddressCache, checked_address, overridden
 from crocopy.residuals.control import ResidualModelControl
 from crocopy.residuals.state import ResidualModelState
 from crocopy.versioning import ParametersVersion
@@ -47,6 +47,7 @@ from ..actuations import (
     ActuationModelFull,
     ActuationModelLinear,
 )
+from ..residual_numba import ResidualModelNumba, kinematics_size
 from ..residuals_contact import ResidualModelContactFrictionCone, ResidualModelContactWrenchCone
 from ..residuals_dynamics import ResidualModelCoMPosition
 from ..residuals_frame import (
@@ -74,6 +75,19 @@ KINDS = {
     ResidualModelContactWrenchCone: kernel.CONE,
     ResidualModelCoMPosition: kernel.COM,
 }
+
+
+
+def residual_kind(residual) -> int | None:
+    """The kernel's kind of ``residual`` (:data:`KINDS`, or ``USER`` for a :class:`ResidualModelNumba` that keeps
+    the base class's ``calc``/``calcDiff``), or None when compiled nodes cannot evaluate it."""
+    kind = KINDS.get(type(residual))
+    if kind is None and isinstance(residual, ResidualModelNumba) and not overridden(
+        residual, ResidualModelNumba, ("calc", "calcDiff")
+    ):
+        return kernel.USER
+    return kind
+
 
 _NODES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 """Node data → its :class:`EulerNode`."""
@@ -192,7 +206,8 @@ class EulerNode:
         self.armature = np.zeros(nv)
         self.contacts = ContactSet(contacts)
         self.parameters = {"S": np.zeros((nv, iam.nu)), "gains": self.contacts.gains, "ref_R": self.contacts.ref_R,
-                           "ref_p": self.contacts.ref_p}
+                           "ref_p": self.contacts.ref_p, "kin": np.zeros(kinematics_size(nv)),
+                           "user_dims": np.zeros(5, dtype=np.int64), "user_Ru": np.zeros((1, iam.nu))}
         self.no_control = np.zeros(0)
         self._armature_entry = table_entries([self.armature])
         self._data_arrays: list = []
@@ -201,6 +216,7 @@ class EulerNode:
         self._items: list = []
         self._lowered: Lowered | None = None
         self._seen = -1
+        self._n_parameters = 0
 
     def refresh(self, low: Lowered, memo: dict) -> bool:
         """Re-read the models' parameters and the data arrays' addresses; False if the node no longer qualifies.
@@ -223,6 +239,9 @@ class EulerNode:
         par = [float(iam.dt), float(getattr(dam, "_damping", 0.0))]
         for kind, residual in self._residuals:
             par += self._parameters(kind, residual)
+        if len(par) != self._n_parameters:  # a user residual's parameters() changed length: read the items again
+            self._residuals = None
+            return self.refresh(low, memo)
         self.par = np.array(par)
         np.add(low.rb.armature, dam.armature, out=self.armature)
         self._actuation_matrix(dam, ddata, memo)
@@ -234,26 +253,34 @@ class EulerNode:
         self._residuals = None
         if stack.unfused or ddata.costs.generic:
             return False
-        items, residuals, offset = [], [], 2
+        items, residuals, offset, rows_u = [], [], 2, 1
         for (_, item, cdata), rows in zip(stack.items, stack.slices):
             if type(item.cost) is not CostModelResidual:
                 return False
             if not item.active or cdata.zero:
                 continue
             residual = item.cost.residual
-            kind = KINDS.get(type(residual))
+            kind = residual_kind(residual)
             if kind is None:
                 return False
             frame, reference = getattr(residual, "id", 0), int(residual.type) if kind == kernel.VELOCITY else 0
+            user = [0, 0, 0, 0]
+            if kind == kernel.USER:
+                frame, reference = residual.frame, int(residual.frame_reference)
+                user = [residual.flags, *residual.callbacks(), len(self._parameters(kind, residual))]
+                rows_u = max(rows_u, rows.stop - rows.start)
             if kind == kernel.CONE:
                 row, nc = self.contacts.rows.get(frame, (0, 0))
                 if nc < residual.ncf:
                     return False
                 frame, reference = row, residual.ncf
-            items += [kind, rows.start, rows.stop - rows.start, frame, reference, offset]
+            items += [kind, rows.start, rows.stop - rows.start, frame, reference, offset, *user]
             residuals.append((kind, residual))
             offset += len(self._parameters(kind, residual))
         self._items, self._residuals = items, residuals
+        self._n_parameters = offset
+        if self.parameters["user_Ru"].shape[0] < rows_u:
+            self.parameters["user_Ru"] = np.zeros((rows_u, self.model.nu))
         return True
 
     @staticmethod
@@ -274,6 +301,8 @@ class EulerNode:
             return list(np.asarray(residual.reference.A, dtype=float).reshape(-1))
         if kind == kernel.COM:
             return list(residual.reference)
+        if kind == kernel.USER:
+            return list(residual.checked_parameters())
         return list(residual.reference.vector)
 
     def _actuation_matrix(self, dam, ddata, memo: dict) -> None:

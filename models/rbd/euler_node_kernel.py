@@ -28,7 +28,16 @@ from __future__ import annotations
 
 from crocopy.costs.stack_kernel import activation_values, derivatives_and_sums
 from crocopy.integrators.euler_kernel import add_integrate_jacobian, euler_chain
-from crocopy.kernels import carray, compiled, float64_pointer, int64_pointer, matrix_at, vector_at
+from crocopy.kernels import (
+    address,
+    call_address,
+    carray,
+    compiled,
+    float64_pointer,
+    int64_pointer,
+    matrix_at,
+    vector_at,
+)
 from crocopy.solvers.riccati_kernel import feedback_control
 
 from .com_kernel import center_of_mass
@@ -53,9 +62,12 @@ from .dynamics_kernel import (
 from .lie_kernel import dintegrate, jlog3, jlog6, log3, log6, state_diff, state_integrate, state_jdiff
 from .lowering import RigidBodyModel, RigidBodyWorkspace
 
-STATE, CONTROL, PLACEMENT, TRANSLATION, ROTATION, VELOCITY, CONE, COM = range(8)
+STATE, CONTROL, PLACEMENT, TRANSLATION, ROTATION, VELOCITY, CONE, COM, USER = range(9)
 """Residual kinds.  ``CONE``: ``r = A λ_c`` (friction and wrench cones; the item's frame field is the contact's first
-row, its reference field the force components ``ncf``, ``A`` row-major in ``par``); ``COM``: ``r = com - cref``."""
+row, its reference field the force components ``ncf``, ``A`` row-major in ``par``); ``COM``: ``r = com - cref``;
+``USER``: a :class:`~crocopy.models.residual_numba.ResidualModelNumba`, whose two C callbacks (item fields
+``RESIDUAL_ADDRESS``, ``JACOBIANS_ADDRESS``) the node calls with its kinematics (item field ``FLAGS``: what they
+read, and ``u`` dependence; ``N_PARAMETERS``: the length of its parameters in ``par``)."""
 
 WORLD, LOCAL, LOCAL_WORLD_ALIGNED = 0, 1, 2
 """Pinocchio's reference frames (``int(pinocchio.ReferenceFrame)``)."""
@@ -63,14 +75,16 @@ WORLD, LOCAL, LOCAL_WORLD_ALIGNED = 0, 1, 2
 (NQ, NV, NU, U_START, N_ITEMS, EUCLIDEAN, NJOINTS, NFRAMES, N_STACK, ITEMS, STARTS, TERMINAL, N_CONTACTS, CONTACTS,
  NC) = range(15)
 SHAPES = 15
-ITEM_FIELDS = 6
+ITEM_FIELDS = 10
+FLAGS, RESIDUAL_ADDRESS, JACOBIANS_ADDRESS, N_PARAMETERS = range(6, 10)
+"""Fields of a ``USER`` item after the six every item has (kind, first row, rows, frame, reference, offset)."""
 CONTACT_FIELDS = 4
 
 NODE_ARRAYS = (
     "xnext", "dx", "Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu",
     "a", "dFx", "dFu", "Minv", "dLx", "dLu", "dLxx", "dLxu", "dLuu",
     "r", "lb", "ub", "act_weights", "item_costs", "item_weights", "weights", "Ar", "Arr",
-    "Jx", "Ju", "Jc", "HJx", "Juc", "HJu", "S", "gains", "ref_R", "ref_p",
+    "Jx", "Ju", "Jc", "HJx", "Juc", "HJu", "S", "gains", "ref_R", "ref_p", "kin", "user_dims", "user_Ru",
 )
 """The node's own arrays (its data's, its cost stack's, its actuation matrix and contacts)."""
 SCRATCH_ARRAYS = (
@@ -87,7 +101,7 @@ NODE = N_RB + N_WS
 (E_XNEXT, E_DX, E_FX, E_FU, E_LX, E_LU, E_LXX, E_LXU, E_LUU,
  E_A, E_DFX, E_DFU, E_MINV, E_DLX, E_DLU, E_DLXX, E_DLXU, E_DLUU,
  E_R, E_LB, E_UB, E_ACT_W, E_ITEM_COSTS, E_ITEM_WEIGHTS, E_WEIGHTS, E_AR, E_ARR,
- E_JX, E_JU, E_JC, E_HJX, E_JUC, E_HJU, E_S, E_GAINS, E_REF_R, E_REF_P,
+ E_JX, E_JU, E_JC, E_HJX, E_JUC, E_HJU, E_S, E_GAINS, E_REF_R, E_REF_P, E_KIN, E_USER_DIMS, E_USER_RU,
  E_TAU, E_DTAU_DQ, E_DTAU_DV, E_J6, E_K6, E_M6, E_R3, E_P3, E_V6, E_JQ, E_JV, E_ROWS, E_GAP,
  E_JCS, E_A0, E_LAM, E_DA0_DX, E_DF_DX, E_DF_DU, E_COM, E_JCOM,
  E_CJ6) = range(NODE, NODE + len(NODE_ARRAYS) + len(SCRATCH_ARRAYS) - 8)
@@ -228,11 +242,16 @@ def _residuals(tbl, ints, par, rb, ws, x, u):
                 for j in range(ref):
                     acc += par[o + ref * i + j] * lam[fid + j]
                 rows[i] = acc
-        else:
+        elif kind == COM:
             com = _vec(tbl, ints, E_COM)
             center_of_mass(rb, ws, com, _mat(tbl, ints, E_JCOM))
             for i in range(3):
                 rows[i] = com[i] - par[o + i]
+        elif kind == USER:
+            _user_kinematics(tbl, ints, rb, ws, fid, ref, ints[b + FLAGS], False)
+            _user_call(tbl, ints, par, b, x, u, ints[b + RESIDUAL_ADDRESS], rows, _vec(tbl, ints, E_USER_RU))
+        else:
+            raise ValueError("compiled node: unknown residual kind")
 
 
 @compiled
@@ -258,7 +277,66 @@ def _force_jacobians(tbl, ints, par, nr, row, ncf, o, Jx_rows, start):
 
 
 @compiled
-def _jacobians(tbl, ints, par, rb, ws, x):
+def _user_kinematics(tbl, ints, rb, ws, fid, ref, flags, derivatives):
+    """The kinematics buffer of a ``USER`` item (:mod:`crocopy.models.residual_numba`): placement (flag 1), frame
+    Jacobian in ``ref`` (flag 2, ``derivatives``), centre of mass (flag 4) and its Jacobian (``derivatives``)."""
+    nv = ints[NV]
+    kin = _vec(tbl, ints, E_KIN)
+    if flags & 1:
+        frame_placement(rb, ws, fid, ws.Rf, ws.pf)
+        for i in range(3):
+            for j in range(3):
+                kin[3 * i + j] = ws.Rf[i, j]
+            kin[9 + i] = ws.pf[i]
+        if derivatives and flags & 2:
+            J6 = _mat(tbl, ints, E_J6)
+            frame_jacobian(rb, ws, fid, ref, J6)
+            for i in range(6):
+                for j in range(nv):
+                    kin[15 + nv * i + j] = J6[i, j]
+    if flags & 4:
+        com, Jcom = _vec(tbl, ints, E_COM), _mat(tbl, ints, E_JCOM)
+        center_of_mass(rb, ws, com, Jcom)
+        for i in range(3):
+            kin[12 + i] = com[i]
+        if derivatives:
+            for i in range(3):
+                for j in range(nv):
+                    kin[15 + 6 * nv + nv * i + j] = Jcom[i, j]
+
+
+@compiled
+def _user_call(tbl, ints, par, b, x, u, function, out, out_u):
+    """Call a ``USER`` item's C callback ``function`` (:func:`crocopy.kernels.call_address`) on ``out``/``out_u``."""
+    dims = _index(tbl, ints, E_USER_DIMS)
+    o, npar = ints[b + 5], ints[b + N_PARAMETERS]
+    dims[0], dims[1], dims[2], dims[3], dims[4] = ints[NQ], ints[NV], u.shape[0], ints[b + 2], npar
+    call_address(function, address(dims), address(par[o: o + npar]), address(x), address(u),
+                 address(_vec(tbl, ints, E_KIN)), address(out), address(out_u))
+
+
+@compiled
+def _user_jacobians(tbl, ints, par, rb, ws, b, x, u, rows):
+    """A ``USER`` item's rows of ``Jx`` and, when it depends on ``u`` at a running node, of ``Ju`` (zeroed, then
+    written by its callback)."""
+    start, nr, flags = ints[b + 1], ints[b + 2], ints[b + FLAGS]
+    for i in range(nr):
+        for j in range(rows.shape[1]):
+            rows[i, j] = 0.0
+    if flags & 8 and not ints[TERMINAL]:
+        Ju, u0 = _mat(tbl, ints, E_JU), start - ints[U_START]
+        out_u = Ju[u0: u0 + nr]
+    else:
+        out_u = _mat(tbl, ints, E_USER_RU)[:nr]
+    for i in range(out_u.shape[0]):
+        for j in range(out_u.shape[1]):
+            out_u[i, j] = 0.0
+    _user_kinematics(tbl, ints, rb, ws, ints[b + 3], ints[b + 4], flags, True)
+    _user_call(tbl, ints, par, b, x, u, ints[b + JACOBIANS_ADDRESS], rows, out_u)
+
+
+@compiled
+def _jacobians(tbl, ints, par, rb, ws, x, u):
     """Every compiled item's rows of the stacked ``Jx`` (a control residual's are zero and stay so) and the force
     residuals' rows of ``Ju`` (after :func:`_dynamics_jacobians` at a running node)."""
     nq, nv = ints[NQ], ints[NV]
@@ -279,6 +357,9 @@ def _jacobians(tbl, ints, par, rb, ws, x):
             continue
         if kind == CONE:
             _force_jacobians(tbl, ints, par, nr, fid, ref, o, rows, start)
+            continue
+        if kind == USER:
+            _user_jacobians(tbl, ints, par, rb, ws, b, x, u, rows)
             continue
         for i in range(nr):
             for j in range(nv, ndx):
@@ -541,7 +622,7 @@ def node_calc_diff(tbl, ints, par, x, u):
         for i in range(ints[NC]):
             for j in range(df_dx.shape[1]):
                 df_dx[i, j] = 0.0
-    _jacobians(tbl, ints, par, rb, ws, x)
+    _jacobians(tbl, ints, par, rb, ws, x, u)
     Lx, Lu, Lxx = _vec(tbl, ints, E_LX), _vec(tbl, ints, E_LU), _mat(tbl, ints, E_LXX)
     Lxu, Luu = _mat(tbl, ints, E_LXU), _mat(tbl, ints, E_LUU)
     r, lb, ub, act_w = _vec(tbl, ints, E_R), _vec(tbl, ints, E_LB), _vec(tbl, ints, E_UB), _vec(tbl, ints, E_ACT_W)
