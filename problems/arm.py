@@ -27,6 +27,7 @@ from .common import load_model
 ARMS: dict[str, tuple[str, str | None]] = {
     "kinova": ("j2s6s200_end_effector", "arm_up"),
     "ur5": ("tool0", None),
+    "talos_arm": ("gripper_left_joint", "half_sitting"),
 }
 """Supported arms: end-effector frame and reference configuration (``None`` = a bent posture)."""
 

@@ -222,9 +222,11 @@ def test_contact_parameters_change_through_their_setters_only():
         frame.gains[0] = 1.0
     data = dam.createData()
     first = _xout(dam, data, x, u)
-    frame.reference.translation = np.ones(3)
-    np.testing.assert_array_equal(frame.reference.translation, np.zeros(3))
-    np.testing.assert_array_equal(_xout(dam, data, x, u), first)
+    frame.reference.translation = np.ones(3)  # a 6D contact's placement is live: the next evaluation sees it
+    np.testing.assert_array_equal(frame.reference.translation, np.ones(3))
+    moved = _xout(dam, data, x, u)
+    assert not np.allclose(moved, first)
+    np.testing.assert_allclose(moved, _xout(dam, dam.createData(), x, u), rtol=1e-12, atol=1e-12)
 
 
 def test_a_copied_or_pickled_cache_mark_is_never_filled():

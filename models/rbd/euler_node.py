@@ -37,6 +37,7 @@ import pinocchio as pin
 
 from crocopy.costs.base import CostModelResidual
 from crocopy.kernels import AddressCache, checked_address, overridden
+from crocopy.residuals.base import ResidualModelAbstract
 from crocopy.residuals.control import ResidualModelControl
 from crocopy.residuals.state import ResidualModelState
 from crocopy.versioning import ParametersVersion
@@ -62,6 +63,7 @@ from .contact_kernel import make_contact_workspace
 from .contact_lowering import ContactSet
 from .joint_types import NotLowerable
 from .lowering import RigidBodyModel, lower_model, make_workspace
+from .python_residuals import PythonResiduals
 
 ACTUATIONS = (ActuationModelFull, ActuationModelFloatingBase, ActuationModelFloatingBaseThrusters, ActuationModelLinear)
 KINDS = {
@@ -87,6 +89,15 @@ def residual_kind(residual) -> int | None:
     ):
         return kernel.USER
     return kind
+
+
+def python_residual(residual) -> bool:
+    """Whether ``residual`` may run in Python inside a compiled free-dynamics node (:mod:`.python_residuals`): a
+    residual class of the user's, not one of the library's models (some of which read the actuation's or the
+    contacts' data)."""
+    return isinstance(residual, ResidualModelAbstract) and not type(residual).__module__.startswith(
+        ("crocopy.models.", "crocopy.residuals.")
+    )
 
 
 _NODES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -214,6 +225,7 @@ class EulerNode:
         self._data_entries = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
         self._residuals: list | None = None
         self._items: list = []
+        self.python = PythonResiduals(iam.state.pinocchio, data.differential.pinocchio, [])
         self._lowered: Lowered | None = None
         self._seen = -1
         self._n_parameters = 0
@@ -253,7 +265,7 @@ class EulerNode:
         self._residuals = None
         if stack.unfused or ddata.costs.generic:
             return False
-        items, residuals, offset, rows_u = [], [], 2, 1
+        items, residuals, offset, rows_u, python = [], [], 2, 1, []
         for (_, item, cdata), rows in zip(stack.items, stack.slices):
             if type(item.cost) is not CostModelResidual:
                 return False
@@ -262,7 +274,10 @@ class EulerNode:
             residual = item.cost.residual
             kind = residual_kind(residual)
             if kind is None:
-                return False
+                if not python_residual(residual) or self.contacts.models:
+                    return False
+                python.append((residual, cdata.residual))
+                continue
             frame, reference = getattr(residual, "id", 0), int(residual.type) if kind == kernel.VELOCITY else 0
             user = [0, 0, 0, 0]
             if kind == kernel.USER:
@@ -279,6 +294,7 @@ class EulerNode:
             offset += len(self._parameters(kind, residual))
         self._items, self._residuals = items, residuals
         self._n_parameters = offset
+        self.python = PythonResiduals(self.model.state.pinocchio, ddata.pinocchio, python)
         if self.parameters["user_Ru"].shape[0] < rows_u:
             self.parameters["user_Ru"] = np.zeros((rows_u, self.model.nu))
         return True
@@ -370,16 +386,23 @@ class EulerNode:
         self._lowered = low
 
     def calc(self, x: np.ndarray, u: np.ndarray | None) -> None:
+        if self.python.items:
+            self.python.evaluate(x, u, False)
         self._data().cost = kernel.node_calc(self.tbl, self.ints, self.par, x, self.no_control if u is None else u)
 
     @property
-    def rollout_step(self) -> Callable:
+    def rollout_step(self) -> Callable | None:
         """One node of the DDP family's rollout (:func:`.euler_node_kernel.node_rollout_step` on this node's
         arrays): ``rollout_step(x_ref, x, u_ref, k, K, alpha, lb, ub, u, dx, x_next, f, gap) -> cost``
-        (the caller stores the cost in the node's data)."""
+        (the caller stores the cost in the node's data); None when the node has Python residuals (the rollout
+        then steps it through :meth:`calc`)."""
+        if self.python.items:
+            return None
         return partial(kernel.node_rollout_step, self.tbl, self.ints, self.par)
 
     def calcDiff(self, x: np.ndarray, u: np.ndarray | None, synced: bool) -> None:
+        if self.python.items:
+            self.python.evaluate(x, u, True)
         self._data().cost = kernel.node_calc_diff(
             self.tbl, self.ints, self.par, x, self.no_control if u is None else u
         )

@@ -283,17 +283,18 @@ def _user_kinematics(tbl, ints, rb, ws, fid, ref, flags, derivatives):
     nv = ints[NV]
     kin = _vec(tbl, ints, E_KIN)
     if flags & 1:
-        frame_placement(rb, ws, fid, ws.Rf, ws.pf)
+        if derivatives and flags & 2:
+            J6 = _mat(tbl, ints, E_J6)
+            frame_jacobian(rb, ws, fid, ref, J6)  # leaves the frame's placement in ws.Rf, ws.pf
+            for i in range(6):
+                for j in range(nv):
+                    kin[15 + nv * i + j] = J6[i, j]
+        else:
+            frame_placement(rb, ws, fid, ws.Rf, ws.pf)
         for i in range(3):
             for j in range(3):
                 kin[3 * i + j] = ws.Rf[i, j]
             kin[9 + i] = ws.pf[i]
-        if derivatives and flags & 2:
-            J6 = _mat(tbl, ints, E_J6)
-            frame_jacobian(rb, ws, fid, ref, J6)
-            for i in range(6):
-                for j in range(nv):
-                    kin[15 + nv * i + j] = J6[i, j]
     if flags & 4:
         com, Jcom = _vec(tbl, ints, E_COM), _mat(tbl, ints, E_JCOM)
         center_of_mass(rb, ws, com, Jcom)
