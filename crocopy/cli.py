@@ -19,6 +19,8 @@
   :mod:`crocopy.bench.scaling`)
 * ``crocopy bench --latency [--problems P] [--solver S] [--repeats N]``: seconds from launching
   ``crocopy solve`` to its first iteration line, fresh (empty caches) and warm (:mod:`crocopy.bench.latency`)
+* ``crocopy bench --user-residual [--repeats N]``: the Talos-arm reach with its goal as the built-in residual, a
+  ``ResidualModelNumba`` and a Python subclass, next to Crocoddyl's when installed (:mod:`crocopy.bench.user_residual`)
 * ``crocopy list``: the bundled problems
 * ``crocopy compile``: compile the numba kernels into numba's on-disk cache now (once after
   installing), so that the first ``solve`` starts at once; exit status 1 if a kernel is left uncached
@@ -113,6 +115,11 @@ def _bench(args: argparse.Namespace) -> int:
         problem = args.problems[0] if args.problems else "jump"
         print(run_latency_bench(problem, args.solver, repeats=args.repeats or 3))
         return 0
+    if args.user_residual:
+        from .bench.user_residual import run_user_residual_bench
+
+        print(run_user_residual_bench(repeats=args.repeats or 7))
+        return 0
     if args.floor:
         from .bench.floor import FLOOR_PROBLEMS, run_floor_bench
 
@@ -161,8 +168,9 @@ def _bench_vs(args: argparse.Namespace) -> int:
     return 0
 
 
-ROBOT_OF_MODEL = {"2dof_planar": "double_pendulum", "": "talos_legs"}
-"""example-robot-data name of a Pinocchio model, where it differs from the model's own name."""
+ROBOT_OF_MODEL = {"2dof_planar": ("double_pendulum",), "": ("talos_legs",), "talos": ("talos", "talos_arm")}
+"""example-robot-data names of a Pinocchio model, where they differ from the model's own name (the first of the
+same size is the one)."""
 
 
 def _display_robot(problem):
@@ -172,12 +180,14 @@ def _display_robot(problem):
     model = getattr(problem.terminalModel.state, "pinocchio", None)
     if model is None:
         return None
-    name = ROBOT_OF_MODEL.get(model.name, model.name)
-    try:
-        robot = example_robot_data.load(name)
-    except Exception:
-        return None
-    return robot if robot.model.nq == model.nq and robot.model.nv == model.nv else None
+    for name in ROBOT_OF_MODEL.get(model.name, (model.name,)):
+        try:
+            robot = example_robot_data.load(name)
+        except Exception:
+            continue
+        if robot.model.nq == model.nq and robot.model.nv == model.nv:
+            return robot
+    return None
 
 
 def _list(args: argparse.Namespace) -> int:
@@ -464,6 +474,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--latency", action="store_true",
                        help="seconds from launching `crocopy solve` to its first iteration line, with empty and "
                             "with filled caches, and of `import crocopy` (crocopy.bench.latency; first --problems)")
+    bench.add_argument("--user-residual", action="store_true",
+                       help="the Talos-arm reach with its goal as the built-in residual, a ResidualModelNumba and a "
+                            "Python subclass, ms per iteration and ratios (crocopy.bench.user_residual)")
     bench.add_argument("--workers", type=_positive_int, default=2, help="with --batch: worker processes")
     bench.add_argument("--runs", type=_positive_int, default=3,
                        help="with --batch/--scaling: repetitions (median reported)")

@@ -27,7 +27,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from types import ModuleType
 
-from . import arm, humanoid, pendulum, quadruped
+from . import arm, humanoid, pendulum, quadruped, user_residual
 
 SUCCESS_FACTOR = 10.0
 """A converged run counts as a solution when its cost is within this factor of Box-FDDP's."""
@@ -107,6 +107,10 @@ _SPECS = [
           slow=False),
     _spec("arm", arm.build_arm_reaching, "Kinova arm reaching a point in 1 s (100 nodes)",
           (100, 15, 6), {"fddp": R(13, 5.74301), "boxfddp": R(14, 5.74302), "boxddp": R(46, 7.87886)}, slow=False),
+    _spec("reach", user_residual.build_user_reach,
+          "Talos arm reaching a point in 1 s (100 nodes), its goal a user's residual (ResidualModelNumba)",
+          (100, 14, 7), {"fddp": R(55, 186.988338), "boxfddp": R(131, 115.953970), "boxddp": R(131, 115.953970)},
+          slow=False),
     _spec("man", humanoid.build_manipulation, "Talos whole-body manipulation, right hand to a target",
           (60, 77, 32), {"fddp": R(23, 381.07740), "boxfddp": R(46, 381.75535), "boxddp": R(112, 381.75517)}),
     _spec("taichi", humanoid.build_taichi, "Talos taichi: manipulation, one foot, balance (3 phases)",

@@ -25,6 +25,7 @@ RUNS = [
     pytest.param("quadrotor.py", ["narrow", "--maxiter", "2"], ["quad-narrow.html"], id="quadrotor"),
     pytest.param("quadruped_gaits.py", ["pace", "--maxiter", "1"], ["pace.html"], id="quadruped_gaits"),
     pytest.param("arm_reaching.py", [], ["arm.html"], id="arm_reaching"),
+    pytest.param("user_residual.py", [], ["reach.html"], id="user_residual"),
     pytest.param("double_pendulum.py", [], ["pend.html"], id="double_pendulum"),
     pytest.param("quadruped_jump.py", [], ["jump.html"], id="quadruped_jump"),
     pytest.param("boxfddp_vs_boxddp.py", [], ["pend_gaps.png", "trot-short_gaps.png"], id="boxfddp_vs_boxddp"),
