@@ -406,3 +406,20 @@ def test_mpc_loop_equals_fresh_problems(kernels, steps):
             xs = [*solver.xs[1:], solver.xs[-1].copy()]
             us = [*solver.us[1:], solver.us[-1].copy()]
             problem.x0 = solver.xs[1].copy()
+
+
+@pytest.mark.parametrize("kernels", [True, False], ids=["kernels", "python"])
+@pytest.mark.parametrize("name", sorted(PROBLEMS))
+def test_evaluations_and_solves_touch_no_parameter(name, kernels):
+    """Neither a solve nor a Python-path evaluation assigns a model's public attribute: the parameter clock, read
+    by compiled nodes and the cost stacks, stays where it was (else every solve would re-read every node)."""
+    from crocopy.versioning import STRUCTURE, ParametersVersion
+
+    with crocopy.use_kernels(kernels):
+        problem, xs, us = PROBLEMS[name]()
+        solve(problem, xs, us, 2)
+        clock, structure = ParametersVersion.value, STRUCTURE[0]
+        problem.calc(xs, us)
+        problem.calcDiff(xs, us)
+        solve(problem, xs, us, 2)
+        assert (ParametersVersion.value, STRUCTURE[0]) == (clock, structure)

@@ -36,7 +36,6 @@ def test_node_with_a_python_residual_stays_compiled(kind, terminal):
     data = iam.createData()
     evaluator = iam._compiled_node(data, terminal, {})
     assert evaluator is not None and evaluator.python.items
-    assert (evaluator.rollout_step is None) == bool(evaluator.python.items)
     state = iam.state
     rng = np.random.default_rng(7)
     x = state.integrate(state.zero(), 0.3 * rng.standard_normal(state.ndx))

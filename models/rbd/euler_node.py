@@ -15,7 +15,9 @@ exact classes (a subclass may override a step, so it keeps the Python path):
   family (:mod:`crocopy.costs.stack`), and every active one's residual is a ``ResidualModelState``,
   ``ResidualModelControl``, ``ResidualModelFramePlacement``, ``ResidualModelFrameTranslation``,
   ``ResidualModelFrameRotation``, ``ResidualModelFrameVelocity``, ``ResidualModelCoMPosition``, or (on an
-  active contact) ``ResidualModelContactFrictionCone``/``ResidualModelContactWrenchCone``.
+  active contact) ``ResidualModelContactFrictionCone``/``ResidualModelContactWrenchCone``, or a user's
+  ``ResidualModelNumba`` (kind ``USER``: C callbacks, :mod:`crocopy.models.residual_numba`); in a node without
+  active contacts, a user's Python residual runs in Python around the compiled call (:mod:`.python_residuals`).
 
 :meth:`EulerNode.refresh` (at the start of every solve) re-reads everything the kernels take from the
 models: the lowered Pinocchio model, the armature (the Pinocchio model's, which Pinocchio's own
@@ -36,6 +38,7 @@ import numpy as np
 import pinocchio as pin
 
 from crocopy.costs.base import CostModelResidual
+from crocopy.costs.stack_kernel import activation_values
 from crocopy.kernels import AddressCache, checked_address, overridden
 from crocopy.residuals.base import ResidualModelAbstract
 from crocopy.residuals.control import ResidualModelControl
@@ -391,14 +394,29 @@ class EulerNode:
         self._data().cost = kernel.node_calc(self.tbl, self.ints, self.par, x, self.no_control if u is None else u)
 
     @property
-    def rollout_step(self) -> Callable | None:
+    def rollout_step(self) -> Callable:
         """One node of the DDP family's rollout (:func:`.euler_node_kernel.node_rollout_step` on this node's
         arrays): ``rollout_step(x_ref, x, u_ref, k, K, alpha, lb, ub, u, dx, x_next, f, gap) -> cost``
-        (the caller stores the cost in the node's data); None when the node has Python residuals (the rollout
-        then steps it through :meth:`calc`)."""
-        if self.python.items:
-            return None
-        return partial(kernel.node_rollout_step, self.tbl, self.ints, self.par)
+        (the caller stores the cost in the node's data); with Python residuals, their rows and the cost are
+        evaluated after the compiled step (:meth:`python_cost`)."""
+        step = partial(kernel.node_rollout_step, self.tbl, self.ints, self.par)
+        if not self.python.items:
+            return step
+
+        def step_and_python_rows(x_ref, x, u_ref, k, K, alpha, lb, ub, u, dx, x_next, f, gap):
+            step(x_ref, x, u_ref, k, K, alpha, lb, ub, u, dx, x_next, f, gap)
+            return self.python_cost(x, u)
+
+        return step_and_python_rows
+
+    def python_cost(self, x: np.ndarray, u: np.ndarray) -> float:
+        """The running node's cost at ``(x, u)`` after a compiled evaluation there that left the Python residuals'
+        rows stale: those rows, then the stack's activations and sum again (:mod:`.python_residuals`)."""
+        self.python.evaluate(x, u, False)
+        stack = self._data().differential.costs.stack
+        value = activation_values(stack.r, stack.lb, stack.ub, stack.act_weights, stack.starts, stack.item_costs,
+                                  stack.item_weights)
+        return self.par[0] * value
 
     def calcDiff(self, x: np.ndarray, u: np.ndarray | None, synced: bool) -> None:
         if self.python.items:
@@ -434,6 +452,10 @@ class EulerHorizon:
         self.nus = np.array(nus, dtype=np.int64)
         self.nx, self.ndx = first.model.state.nx, first.model.state.ndx
         self.costs = np.zeros(len(nodes))
+        self.python = [(t, n) for t, n in enumerate(nodes) if n is not None and n.python.items]
+        """The nodes with Python residuals (:mod:`.python_residuals`): their rows are evaluated before a compiled
+        ``calc_diff`` and their costs again after a compiled rollout."""
+        self._trials: tuple = ()
         self.no_gaps = np.zeros(len(nodes) + 1, dtype=np.int64)
         self.fixed = [AddressCache() for _ in range(6)]
         self.trajectories: dict[int, AddressCache] = {}
@@ -450,6 +472,9 @@ class EulerHorizon:
     def calc_diff(self, xs, us, fs, gaps: bool, t0: int, t1: int) -> float:
         """Values and derivatives of the nodes ``t0 <= t < t1`` (and their gaps ``fs[t+1]`` when ``gaps``)."""
         trajectory = self._trajectory
+        for t, node in self.python:
+            if t0 <= t < t1:
+                node.python.evaluate(xs[t], us[t], True)
         return kernel.horizon_calc_diff(
             self.tbls, self.ints, self.ioff, self.par, self.poff, trajectory(xs), trajectory(us), self.nus, self.nx,
             self.ndx, gaps, self.fixed[3](fs) if gaps else self.no_gaps, t0, t1, self.costs,
@@ -458,12 +483,23 @@ class EulerHorizon:
     def addresses(self, xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs) -> tuple:
         """The addresses of a rollout's arrays (valid while no entry of those lists is replaced)."""
         f, trajectory = self.fixed, self._trajectory
+        self._trials = (xs_try, us_try)
         return (trajectory(xs), trajectory(us), trajectory(xs_try), trajectory(us_try), f[0](dxs), f[1](ks),
                 f[2](Ks), f[3](fs), f[4](lbs), f[5](ubs))
 
     def rollout(self, addresses: tuple, alpha: float, gaps: bool, gap_at: int, t0: int, t1: int) -> float:
-        """The rollout steps of the nodes ``t0 <= t < t1``."""
-        return kernel.horizon_rollout(
+        """The rollout steps of the nodes ``t0 <= t < t1`` (the Python residuals' rows and costs after them)."""
+        total = kernel.horizon_rollout(
             self.tbls, self.ints, self.ioff, self.par, self.poff, *addresses, self.nus, self.nx, self.ndx, alpha,
             gaps, gap_at, t0, t1, self.costs,
         )
+        if self.python:
+            xs_try, us_try = self._trials
+            inside = []
+            for t, node in self.python:
+                if t0 <= t < t1:
+                    node.python.evaluate(xs_try[t], us_try[t])
+                    inside.append(t)
+            total += kernel.horizon_recost(self.tbls, self.ints, self.ioff, self.par, self.poff,
+                                           np.array(inside, dtype=np.int64), self.costs)
+        return total

@@ -535,6 +535,25 @@ def horizon_rollout(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, ks
 
 
 @compiled
+def horizon_recost(tbls, ints, ioff, par, poff, nodes, costs):
+    """The costs of the running ``nodes`` again from their cost stacks as they stand (after the rows of their Python
+    residuals were written, :mod:`.python_residuals`), into ``costs[t]``; returns the change of their sum."""
+    change = 0.0
+    for t in nodes:
+        tbl, node_ints = tbls[t], ints[ioff[t]: ioff[t + 1]]
+        starts = node_ints[node_ints[STARTS]: node_ints[STARTS] + node_ints[N_STACK]]
+        value = activation_values(
+            _vec(tbl, node_ints, E_R), _vec(tbl, node_ints, E_LB), _vec(tbl, node_ints, E_UB),
+            _vec(tbl, node_ints, E_ACT_W), starts, _vec(tbl, node_ints, E_ITEM_COSTS),
+            _vec(tbl, node_ints, E_ITEM_WEIGHTS),
+        )
+        cost = par[poff[t]] * value
+        change += cost - costs[t]
+        costs[t] = cost
+    return change
+
+
+@compiled
 def horizon_calc_diff(tbls, ints, ioff, par, poff, xs, us, nus, nx, ndx, gaps, fs, t0, t1, costs):
     """:func:`node_calc_diff` over the running nodes ``t0 <= t < t1`` in one call (tables as in
     :func:`horizon_rollout`); returns the sum of their costs (each into ``costs[t]``).  With ``gaps``, also

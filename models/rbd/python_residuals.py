@@ -28,7 +28,7 @@ class PythonResiduals:
         self.zero_a = np.zeros(model.nv)
         self.velocities = any(residual.v_dependent for residual, _ in items)
 
-    def evaluate(self, x: np.ndarray, u: np.ndarray | None, derivatives: bool) -> None:
+    def evaluate(self, x: np.ndarray, u: np.ndarray | None, derivatives: bool = False) -> None:
         """The residuals' rows (and Jacobians with ``derivatives``) at ``(x, u)``."""
         model, pdata, nq = self.model, self.pdata, self.nq
         if self.velocities:
