@@ -164,6 +164,14 @@ class ResidualModelContactFrictionCone(_ForceResidual):
     """Crocoddyl's ``ResidualModelContactFrictionCone(state, id, fref, nu=state.nv, fwddyn=True)``
     with ``fref`` a :class:`FrictionCone`; ``r = A f_linear`` (``nf + 1``; a contact of dimension 2 or more)."""
 
+    compiled_kind = "cone"
+    """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""
+
+    def compiled_parameters(self) -> list[float]:
+        """The parameters compiled nodes read: the cone matrix ``A`` row-major."""
+        return list(np.asarray(self.reference.A, dtype=float).reshape(-1))
+
+
     min_nc = 2
 
     def createData(self, data: DataCollectorAbstract | None = None) -> "ResidualDataContactFrictionCone":
@@ -181,6 +189,14 @@ class ResidualModelContactFrictionCone(_ForceResidual):
 class ResidualModelContactWrenchCone(_ForceResidual):
     """Crocoddyl's ``ResidualModelContactWrenchCone(state, id, fref, nu=state.nv, fwddyn=True)``
     with ``fref`` a :class:`WrenchCone`; ``r = A f`` (``nf + 13``, 6D contacts)."""
+
+    compiled_kind = "cone"
+    """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""
+
+    def compiled_parameters(self) -> list[float]:
+        """The parameters compiled nodes read: the cone matrix ``A`` row-major."""
+        return list(np.asarray(self.reference.A, dtype=float).reshape(-1))
+
 
     ncf = min_nc = 6
 

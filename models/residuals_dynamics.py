@@ -50,6 +50,14 @@ class ResidualDataControlGrav(ResidualDataAbstract):
 class ResidualModelCoMPosition(ResidualModelAbstract):
     """``ResidualModelCoMPosition(state, cref, nu=state.nv)``: ``r = com(q) - cref``."""
 
+    compiled_kind = "com"
+    """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""
+
+    def compiled_parameters(self) -> list[float]:
+        """The parameters compiled nodes read: ``cref``."""
+        return list(self._cref)
+
+
     def __init__(self, state: StateMultibody, cref: np.ndarray, nu: int | None = None) -> None:
         super().__init__(check_state(state), 3, nu, True, False, False)
         self.reference = cref

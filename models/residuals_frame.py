@@ -114,6 +114,15 @@ class ResidualDataFrameVelocity(ResidualDataAbstract):
 class ResidualModelFramePlacement(_FrameResidual):
     """``ResidualModelFramePlacement(state, id, pref, nu=state.nv)``: ``r = log6(pref⁻¹ oMf)``."""
 
+    compiled_kind = "placement"
+    """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""
+
+    def compiled_parameters(self) -> list[float]:
+        """The parameters compiled nodes read: ``pref⁻¹`` (rotation row-major, translation)."""
+        inverse = self._pref.inverse()
+        return [*inverse.rotation.reshape(-1), *inverse.translation]
+
+
     _data_class = ResidualDataFramePlacement
 
     def __init__(self, state: StateMultibody, id: int | str, pref: pin.SE3, nu: int | None = None) -> None:
@@ -147,6 +156,14 @@ class ResidualModelFramePlacement(_FrameResidual):
 class ResidualModelFrameTranslation(_FrameResidual):
     """``ResidualModelFrameTranslation(state, id, xref, nu=state.nv)``: ``r = oMf.translation - xref``."""
 
+    compiled_kind = "translation"
+    """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""
+
+    def compiled_parameters(self) -> list[float]:
+        """The parameters compiled nodes read: ``xref``."""
+        return list(self._xref)
+
+
     def __init__(self, state: StateMultibody, id: int | str, xref: np.ndarray, nu: int | None = None) -> None:
         super().__init__(state, id, 3, nu, False)
         self.reference = xref
@@ -177,6 +194,14 @@ class ResidualModelFrameTranslation(_FrameResidual):
 
 class ResidualModelFrameRotation(_FrameResidual):
     """``ResidualModelFrameRotation(state, id, Rref, nu=state.nv)``: ``r = log3(Rrefᵀ oMf.rotation)``."""
+
+    compiled_kind = "rotation"
+    """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""
+
+    def compiled_parameters(self) -> list[float]:
+        """The parameters compiled nodes read: ``Rrefᵀ`` row-major."""
+        return list(self._Rref.T.reshape(-1))
+
 
     _data_class = ResidualDataFrameRotation
 
@@ -218,6 +243,14 @@ class ResidualModelFrameVelocity(_FrameResidual):
     the derivative of the frame rotation is included (Pinocchio's LOCAL_WORLD_ALIGNED output, used
     as is by Crocoddyl 3.2, omits it from the linear rows).
     """
+
+    compiled_kind = "velocity"
+    """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""
+
+    def compiled_parameters(self) -> list[float]:
+        """The parameters compiled nodes read: ``vref`` (linear, angular); ``type`` is the item's reference frame."""
+        return list(self._vref.vector)
+
 
     _data_class = ResidualDataFrameVelocity
 

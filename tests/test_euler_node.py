@@ -224,3 +224,19 @@ def test_nodes_of_one_model_share_their_scratch_and_keep_their_own_arrays():
     iam.calcDiff(slow, x, u)
     for name in FIELDS:
         np.testing.assert_allclose(getattr(first, name), getattr(slow, name), rtol=1e-10, atol=1e-12, err_msg=name)
+
+
+def test_the_registry_of_compiled_kinds_is_covered_and_documented():
+    """Every residual class that declares a compiled kind beside its maths is built by this file's factory (or by
+    the contact-node tests for the cones) and named in docs/DEVELOPING.md; the kernel knows each kind."""
+    from pathlib import Path
+
+    from crocopy.models.rbd import euler_node_kernel
+    from crocopy.models.rbd.euler_node import compiled_residual_classes
+
+    registry = compiled_residual_classes()
+    factory = {kind.split("_")[0] for kind in KINDS} | {"com", "cone"}
+    assert set(registry.values()) == factory == set(euler_node_kernel.KIND)
+    developing = (Path(__file__).resolve().parents[1] / "docs" / "DEVELOPING.md").read_text()
+    for cls in registry:
+        assert f"`{cls.__name__}`" in developing, cls.__name__

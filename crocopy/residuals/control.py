@@ -14,6 +14,14 @@ from .base import ResidualDataAbstract, ResidualModelAbstract
 class ResidualModelControl(ResidualModelAbstract):
     """``ResidualModelControl(state, uref)``, ``(state, nu)`` or ``(state)`` (``uref = 0``, ``nu = nv``)."""
 
+    compiled_kind = "control"
+    """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""
+
+    def compiled_parameters(self) -> list[float]:
+        """The parameters compiled nodes read: ``uref``."""
+        return list(self._uref)
+
+
     def __init__(self, state: StateAbstract, uref: np.ndarray | int | None = None) -> None:
         if uref is None or np.isscalar(uref):
             nu = state.nv if uref is None else int(uref)

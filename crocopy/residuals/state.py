@@ -14,6 +14,14 @@ from .base import ResidualDataAbstract, ResidualModelAbstract
 class ResidualModelState(ResidualModelAbstract):
     """``ResidualModelState(state, xref=state.zero(), nu=state.nv)``; also ``(state, nu)``."""
 
+    compiled_kind = "state"
+    """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""
+
+    def compiled_parameters(self) -> list[float]:
+        """The parameters compiled nodes read: ``xref``."""
+        return list(self._xref)
+
+
     def __init__(self, state: StateAbstract, xref: np.ndarray | int | None = None, nu: int | None = None) -> None:
         if xref is not None and np.isscalar(xref):
             xref, nu = None, int(xref)

@@ -41,8 +41,6 @@ from crocopy.costs.base import CostModelResidual
 from crocopy.costs.stack_kernel import activation_values
 from crocopy.kernels import AddressCache, checked_address, overridden
 from crocopy.residuals.base import ResidualModelAbstract
-from crocopy.residuals.control import ResidualModelControl
-from crocopy.residuals.state import ResidualModelState
 from crocopy.versioning import ParametersVersion
 
 from ..actuations import (
@@ -52,14 +50,6 @@ from ..actuations import (
     ActuationModelLinear,
 )
 from ..residual_numba import ResidualModelNumba, kinematics_size
-from ..residuals_contact import ResidualModelContactFrictionCone, ResidualModelContactWrenchCone
-from ..residuals_dynamics import ResidualModelCoMPosition
-from ..residuals_frame import (
-    ResidualModelFramePlacement,
-    ResidualModelFrameRotation,
-    ResidualModelFrameTranslation,
-    ResidualModelFrameVelocity,
-)
 from ..state_multibody import StateMultibody
 from . import euler_node_kernel as kernel
 from .contact_kernel import make_contact_workspace
@@ -69,29 +59,29 @@ from .lowering import RigidBodyModel, lower_model, make_workspace
 from .python_residuals import PythonResiduals
 
 ACTUATIONS = (ActuationModelFull, ActuationModelFloatingBase, ActuationModelFloatingBaseThrusters, ActuationModelLinear)
-KINDS = {
-    ResidualModelState: kernel.STATE,
-    ResidualModelControl: kernel.CONTROL,
-    ResidualModelFramePlacement: kernel.PLACEMENT,
-    ResidualModelFrameTranslation: kernel.TRANSLATION,
-    ResidualModelFrameRotation: kernel.ROTATION,
-    ResidualModelFrameVelocity: kernel.VELOCITY,
-    ResidualModelContactFrictionCone: kernel.CONE,
-    ResidualModelContactWrenchCone: kernel.CONE,
-    ResidualModelCoMPosition: kernel.COM,
-}
-
+def compiled_residual_classes() -> dict[type, str]:
+    """Every residual class that declares a ``compiled_kind`` of its own (beside its maths, with its
+    ``compiled_parameters()``), with that kind: the registry of the kinds compiled nodes evaluate (a subclass
+    inherits none: it may override ``calc``)."""
+    found, stack = {}, [ResidualModelAbstract]
+    while stack:
+        cls = stack.pop()
+        stack.extend(cls.__subclasses__())
+        if "compiled_kind" in cls.__dict__:
+            found[cls] = cls.__dict__["compiled_kind"]
+    return found
 
 
 def residual_kind(residual) -> int | None:
-    """The kernel's kind of ``residual`` (:data:`KINDS`, or ``USER`` for a :class:`ResidualModelNumba` that keeps
+    """The kernel's kind of ``residual`` (its class's own ``compiled_kind``, or ``USER`` for a
+    :class:`ResidualModelNumba` that keeps
     the base class's ``calc``/``calcDiff``), or None when compiled nodes cannot evaluate it."""
-    kind = KINDS.get(type(residual))
-    if kind is None and isinstance(residual, ResidualModelNumba) and not overridden(
-        residual, ResidualModelNumba, ("calc", "calcDiff")
-    ):
+    name = type(residual).__dict__.get("compiled_kind")
+    if name is not None:
+        return kernel.KIND[name]
+    if isinstance(residual, ResidualModelNumba) and not overridden(residual, ResidualModelNumba, ("calc", "calcDiff")):
         return kernel.USER
-    return kind
+    return None
 
 
 def python_residual(residual) -> bool:
@@ -304,25 +294,9 @@ class EulerNode:
 
     @staticmethod
     def _parameters(kind: int, residual) -> list[float]:
-        """The residual's reference in the layout :mod:`.euler_node_kernel` reads."""
-        if kind == kernel.STATE:
-            return list(residual.xref)
-        if kind == kernel.CONTROL:
-            return list(residual.uref)
-        if kind == kernel.PLACEMENT:
-            inverse = residual.reference.inverse()
-            return [*inverse.rotation.reshape(-1), *inverse.translation]
-        if kind == kernel.TRANSLATION:
-            return list(residual.reference)
-        if kind == kernel.ROTATION:
-            return list(np.asarray(residual.reference).T.reshape(-1))
-        if kind == kernel.CONE:
-            return list(np.asarray(residual.reference.A, dtype=float).reshape(-1))
-        if kind == kernel.COM:
-            return list(residual.reference)
-        if kind == kernel.USER:
-            return list(residual.checked_parameters())
-        return list(residual.reference.vector)
+        """The residual's parameters in the layout :mod:`.euler_node_kernel` reads (its ``compiled_parameters()``,
+        a user residual's ``parameters()``)."""
+        return list(residual.checked_parameters()) if kind == kernel.USER else residual.compiled_parameters()
 
     def _actuation_matrix(self, dam, ddata, memo: dict) -> None:
         """``S = ∂τ/∂u`` of the (linear, state-independent) actuation, once per actuation and ``memo``."""

@@ -69,6 +69,11 @@ row, its reference field the force components ``ncf``, ``A`` row-major in ``par`
 ``RESIDUAL_ADDRESS``, ``JACOBIANS_ADDRESS``) the node calls with its kinematics (item field ``FLAGS``: what they
 read, and ``u`` dependence; ``N_PARAMETERS``: the length of its parameters in ``par``)."""
 
+KIND = {"state": STATE, "control": CONTROL, "placement": PLACEMENT, "translation": TRANSLATION,
+        "rotation": ROTATION, "velocity": VELOCITY, "cone": CONE, "com": COM}
+"""The kinds written into this kernel, by the ``compiled_kind`` name a residual class declares beside its maths
+(with its ``compiled_parameters()``); ``USER`` residuals bring their own functions."""
+
 WORLD, LOCAL, LOCAL_WORLD_ALIGNED = 0, 1, 2
 """Pinocchio's reference frames (``int(pinocchio.ReferenceFrame)``)."""
 
