@@ -31,7 +31,13 @@ def build_walk():
     return quadruped.build_gait(crocopy, "walk", step_knots=3, support_knots=1, cycles=1)
 
 
-PROBLEMS = {"arm": build_arm, "walk": build_walk}
+def build_quadrotor():
+    from crocopy.problems.quadrotor import build_quadrotor
+
+    return build_quadrotor(crocopy, "goal")
+
+
+PROBLEMS = {"arm": build_arm, "walk": build_walk, "quadrotor": build_quadrotor}
 
 
 def dams(problem) -> list:
@@ -281,6 +287,21 @@ def set_velocity_reference(p):
         r.reference = pin.Motion(np.array([0.2, -0.1, 0.0, 0.0, 0.1, 0.0]))
 
 
+def set_control_bounds(p):
+    for m in p.runningModels:
+        if m.nu:
+            m.u_lb = 0.5 * m.u_lb
+            m.u_ub = 0.5 * m.u_ub
+
+
+def set_thrusters(p):
+    for m in p.runningModels:
+        actuation = m.differential.actuation
+        thrusters = [crocopy.Thruster(t.pose, 1.05 * t.ctorque, t.type, t.min_thrust, t.max_thrust)
+                     for t in actuation.thrusters]
+        actuation.thrusters = thrusters
+
+
 CASES = {
     # name: (problems, prepare (on both, before the fresh ShootingProblem), mutation)
     "frame id": (("arm", "walk"), None, set_frame_id),
@@ -317,6 +338,8 @@ CASES = {
     "velocity type": (("arm",), add_arm_kinds, set_velocity_type),
     "velocity reference": (("arm",), add_arm_kinds, set_velocity_reference),
     "velocity reference in place": (("arm",), add_arm_kinds, write_velocity_reference),
+    "control bounds": (("arm", "quadrotor"), None, set_control_bounds),
+    "thrusters": (("quadrotor",), None, set_thrusters),
 }
 
 
@@ -329,7 +352,8 @@ def prepared(name: str, prepare):
 
 
 def solve(problem, xs, us, maxiter: int) -> tuple[int, float]:
-    solver = crocopy.SolverFDDP(problem)
+    """A Box-FDDP solve (it reads the control bounds; without active bounds its steps are FDDP's)."""
+    solver = crocopy.SolverBoxFDDP(problem)
     solver.solve([x.copy() for x in xs], [u.copy() for u in us], maxiter)
     return solver.iter, solver.cost
 
@@ -423,3 +447,25 @@ def test_evaluations_and_solves_touch_no_parameter(name, kernels):
         problem.calcDiff(xs, us)
         solve(problem, xs, us, 2)
         assert (ParametersVersion.value, STRUCTURE[0]) == (clock, structure)
+
+
+def test_read_only_attributes_as_in_crocoddyl():
+    problem, _, _ = build_arm()
+    iam = problem.runningModels[0]
+    dam = iam.differential
+    for owner, name, value in ((dam, "actuation", dam.actuation), (iam, "differential", dam), (dam, "state", dam.state),
+                               (dam, "costs", dam.costs), (dam.costs.costs["goal"].cost, "residual",
+                                                           dam.costs.costs["goal"].cost.residual)):
+        with pytest.raises(AttributeError, match="read-only"):
+            setattr(owner, name, value)
+
+
+def test_constructors_copy_their_references():
+    problem, _, _ = build_arm()
+    state = problem.runningModels[0].state
+    xref = state.zero()
+    residual = crocopy.ResidualModelState(state, xref, state.nv)
+    xref[-1] += 0.5
+    assert residual.reference[-1] == xref[-1] - 0.5
+    with pytest.raises(ValueError, match="read-only"):
+        residual.reference[0] = 1.0
