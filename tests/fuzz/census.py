@@ -1,0 +1,516 @@
+"""Census of bad inputs at crocopy's public boundary (issue 27): every case, one outcome.
+
+Run ``python tests/fuzz/census.py`` (``-v`` lists the cases that are not clear errors).  It enumerates,
+without randomness, bad values for the arguments of the public constructors, setters and
+``calc``/``calcDiff``/state operations of the core and multibody models (wrong shapes, NaN/inf,
+strings, complex, booleans, ``None``, impossible bounds, non-rotations, wrong key types), plus valid
+but extreme points (``±1e300``), and classifies each call:
+
+``clear``
+    ``ValueError``/``TypeError``/``KeyError`` whose message names the argument;
+``unclear``
+    any other exception, or one whose message does not name the argument;
+``accepted``
+    a bad value taken without an error (NumPy's ``ComplexWarning`` does not count as an error);
+``silent-nonfinite`` / ``warned-nonfinite``
+    NaN or inf in the result, without / with a :class:`crocopy.validation.NonFiniteWarning`;
+``ok``
+    an extreme but valid point answered with a finite result (or refused clearly);
+``hang`` / ``crash``
+    no answer within :data:`CASE_SECONDS`, or the process died (the cases run in a worker process
+    that is restarted after the case that killed it).
+"""
+
+from __future__ import annotations
+
+import collections
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import warnings
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import numpy as np
+
+CASE_SECONDS = 20
+OUTCOMES = ("clear", "ok", "unclear", "accepted", "silent-nonfinite", "warned-nonfinite", "hang", "crash")
+
+
+# ------------------------------------------------------------------ bad values, by kind of argument
+def bad_vectors(n: int) -> list[tuple[str, Any]]:
+    z = np.zeros(n)
+    with_nan, with_inf = z.copy(), z.copy()
+    if n:
+        with_nan[-1], with_inf[-1] = np.nan, np.inf
+    out = [("short", np.zeros(max(n - 1, 0)) if n > 1 else np.zeros(n + 2)), ("long", np.zeros(n + 1)),
+           ("matrix", np.zeros((n, 2))), ("strings", ["1"] * n if n else ["1"]), ("text", "abc"),
+           ("complex", z + 1j), ("complex-real", z.astype(complex)), ("bool", np.ones(n, bool)), ("none", None),
+           ("float", 0.5), ("int", 1), ("dict", {}), ("object", np.array([object()] * max(n, 1), dtype=object)),
+           ("ragged", [[1.0], [1.0, 2.0]])]
+    if n:
+        out += [("nan", with_nan), ("inf", with_inf)]
+    return out
+
+
+NUMBERS = [("nan", np.nan), ("inf", np.inf), ("-inf", -np.inf), ("string", "1"), ("none", None), ("bool", True),
+           ("complex", 1j), ("list", [1.0, 2.0]), ("array", np.array([1.0, 2.0]))]
+NEGATIVE = [("negative", -1.0)]
+COUNTS = [("negative", -1), ("float", 1.5), ("bool", True), ("string", "3"), ("none", None), ("list", [3]),
+          ("complex", 3j)]
+FRAMES = [("true", True), ("false", False), ("float", 1.0), ("np-float", np.float64(2.0)), ("unknown", "no_frame"),
+          ("none", None), ("negative", -1), ("huge", 10**6), ("list", [1]), ("bytes", b"x"), ("complex", 1j)]
+KEYS = [("true", True), ("int", 1), ("float", 1.0), ("none", None), ("tuple", ("a",)), ("bytes", b"x")]
+BOOLS = [("string", "yes"), ("two", 2), ("float", 0.5), ("none", None), ("list", [True]), ("array", np.ones(2, bool))]
+
+
+def _rotations() -> list[tuple[str, Any]]:
+    shear = np.eye(3)
+    shear[0, 1] = 0.5
+    return [("reflection", np.diag([1.0, 1.0, -1.0])), ("minus-identity", -np.eye(3)), ("scaled", 2 * np.eye(3)),
+            ("shear", shear), ("nan", np.full((3, 3), np.nan)), ("shape", np.eye(2)), ("complex", np.eye(3) + 0j),
+            ("none", None), ("float", 1.0), ("strings", [["1"] * 3] * 3), ("near", np.eye(3) + 1e-3)]
+
+
+def _placements() -> list[tuple[str, Any]]:
+    import pinocchio as pin
+
+    out = [(name, pin.SE3(R, np.zeros(3))) for name, R in _rotations()[:4]]
+    nan = pin.SE3.Identity()
+    nan.translation = np.array([0.0, np.nan, 0.0])
+    return out + [("nan", nan), ("matrix", np.eye(4)), ("none", None), ("string", "x")]
+
+
+def _spatial(cls_name: str, n: int = 6) -> list[tuple[str, Any]]:
+    import pinocchio as pin
+
+    nan = getattr(pin, cls_name)(np.full(n, np.nan))
+    return [("vector", np.zeros(n)), ("none", None), ("nan", nan), ("string", "x")]
+
+
+FRAME_TYPES = [("int", 0), ("string", "LOCAL"), ("none", None), ("bool", True)]
+
+
+# ------------------------------------------------------------------ fixtures
+def robot(name: str) -> Any:
+    sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
+    from robots import load
+
+    return load(name)
+
+
+def mb_state(name: str = "solo12") -> Any:
+    import crocopy
+
+    return crocopy.StateMultibody(robot(name))
+
+
+def mb_point(state: Any) -> np.ndarray:
+    import pinocchio as pin
+
+    return np.concatenate([pin.neutral(state.pinocchio), np.zeros(state.nv)])
+
+
+def _collector(state: Any) -> Any:
+    import pinocchio as pin
+
+    import crocopy
+
+    pdata = pin.Data(state.pinocchio)
+    x = mb_point(state)
+    pin.forwardKinematics(state.pinocchio, pdata, x[: state.nq], x[state.nq:])
+    pin.computeJointJacobians(state.pinocchio, pdata)
+    pin.updateFramePlacements(state.pinocchio, pdata)
+    return crocopy.DataCollectorMultibody(pdata)
+
+
+# ------------------------------------------------------------------ the cases
+Case = tuple[str, str, str, Callable[[], Any], bool, Any]
+"""(target, argument, label, call, valid, value): ``call()`` returns what to scan for NaN/inf (or None)."""
+
+
+def _cases_of(target: str, build: Callable[..., Any], good: dict[str, Any],
+              bad: dict[str, list[tuple[str, Any]]]) -> Iterator[Case]:
+    """The call with ``good`` arguments (must be ``ok``: a check of the census itself), then with each
+    bad value of ``bad`` in place of its argument."""
+    yield target, "-", "good", (lambda: build(**good)), True, None
+    for arg, values in bad.items():
+        for label, value in values:
+            yield target, arg, label, (lambda a=arg, v=value: build(**{**good, a: v})), False, value
+
+
+def _extreme(target: str, call: Callable[[Any], Any], size: int, arg: str) -> Iterator[Case]:
+    for label, scale in (("+1e300", 1e300), ("-1e300", -1e300), ("1e160", 1e160)):
+        yield target, arg, label, (lambda s=scale: call(np.full(size, s))), True, scale
+
+
+def core_cases() -> Iterator[Case]:
+    import crocopy as c
+
+    sv = c.StateVector(4)
+    acts = {
+        "ActivationModelQuad": lambda n: c.ActivationModelQuad(n),
+        "ActivationModelWeightedQuad": lambda n: c.ActivationModelWeightedQuad(np.ones(n)),
+        "ActivationModelSmooth1Norm": lambda n: c.ActivationModelSmooth1Norm(n, 0.1),
+        "ActivationModelSmooth2Norm": lambda n: c.ActivationModelSmooth2Norm(n, 0.1),
+        "ActivationModelQuadFlatLog": lambda n: c.ActivationModelQuadFlatLog(n, 0.3),
+        "ActivationModelQuadFlatExp": lambda n: c.ActivationModelQuadFlatExp(n, 0.3),
+        "ActivationModelQuadraticBarrier": lambda n: c.ActivationModelQuadraticBarrier(
+            c.ActivationBounds(-np.ones(n), np.ones(n))),
+        "ActivationModelWeightedQuadraticBarrier": lambda n: c.ActivationModelWeightedQuadraticBarrier(
+            c.ActivationBounds(-np.ones(n), np.ones(n)), np.ones(n)),
+        "ActivationModel2NormBarrier": lambda n: c.ActivationModel2NormBarrier(n, 0.5),
+    }
+    for name, make in acts.items():
+        def calc(r, make=make):
+            act = make(3)
+            d = act.createData()
+            act.calc(d, r)
+            act.calcDiff(d, r)
+            return d
+        yield from _cases_of(name + ".calc", calc, {"r": np.zeros(3)}, {"r": bad_vectors(3)})
+        yield from _extreme(name + ".calc", calc, 3, "r")
+    yield from _cases_of("ActivationModelQuad", c.ActivationModelQuad, {"nr": 3}, {"nr": COUNTS})
+    yield from _cases_of("ActivationModelWeightedQuad", c.ActivationModelWeightedQuad, {"weights": np.ones(3)},
+                         {"weights": bad_vectors(3)})
+    for name in ("ActivationModelSmooth1Norm", "ActivationModelSmooth2Norm"):
+        yield from _cases_of(name, getattr(c, name), {"nr": 3, "eps": 0.1},
+                             {"nr": COUNTS, "eps": NUMBERS + NEGATIVE})
+    for name in ("ActivationModelQuadFlatLog", "ActivationModelQuadFlatExp", "ActivationModel2NormBarrier"):
+        yield from _cases_of(name, getattr(c, name), {"nr": 3, "alpha": 0.3},
+                             {"nr": COUNTS, "alpha": NUMBERS + NEGATIVE})
+    inf3 = np.full(3, np.inf)
+    yield from _cases_of("ActivationBounds", c.ActivationBounds, {"lb": -np.ones(3), "ub": np.ones(3), "beta": 1.0},
+                         {"lb": bad_vectors(3) + [("+inf", inf3), ("above-ub", 2 * np.ones(3))],
+                          "ub": [b for b in bad_vectors(3) if b[0] != "inf"] + [("-inf", -inf3)],
+                          "beta": NUMBERS + NEGATIVE})
+
+    for op, names in (("diff", ("x0", "x1")), ("integrate", ("x", "dx")), ("Jdiff", ("x0", "x1")),
+                      ("Jintegrate", ("x", "dx"))):
+        for k in range(2):
+            def call(v, op=op, k=k):
+                args = [np.zeros(4), np.zeros(4)]
+                args[k] = v
+                return getattr(sv, op)(*args)
+            yield from ((f"StateVector.{op}", names[k], lab, (lambda v=v, call=call: call(v)), False, v)
+                        for lab, v in bad_vectors(4))
+            yield from _extreme(f"StateVector.{op}", call, 4, names[k])
+    yield from _cases_of("StateVector", c.StateVector, {"nx": 3}, {"nx": COUNTS})
+
+    def residual_state(xref, nu=2):
+        return c.ResidualModelState(sv, xref, nu)
+    yield from _cases_of("ResidualModelState", residual_state, {"xref": np.zeros(4)},
+                         {"xref": [b for b in bad_vectors(4) if b[0] not in ("none", "int")],
+                          "nu": [b for b in COUNTS if b[0] != "none"]})
+
+    def residual_state_ref(xref):
+        c.ResidualModelState(sv, np.zeros(4), 2).reference = xref
+    yield from _cases_of("ResidualModelState.reference", residual_state_ref, {"xref": np.ones(4)},
+                         {"xref": bad_vectors(4)})
+
+    def residual_control(uref):
+        return c.ResidualModelControl(sv, uref)
+    yield from _cases_of("ResidualModelControl", residual_control, {"uref": np.ones(2)},
+                         {"uref": [b for b in bad_vectors(2) if b[0] not in ("none", "int")]})
+
+    def residual_control_ref(uref):
+        c.ResidualModelControl(sv, np.zeros(2)).reference = uref
+    yield from _cases_of("ResidualModelControl.reference", residual_control_ref, {"uref": np.ones(2)},
+                         {"uref": bad_vectors(2)})
+
+    def cost_sum():
+        costs = c.CostModelSum(sv, 2)
+        costs.addCost("x", c.CostModelResidual(sv, c.ResidualModelState(sv, np.ones(4), 2)), 2.0)
+        costs.addCost("u", c.CostModelResidual(
+            sv, c.ActivationModelSmooth1Norm(2, 0.1), c.ResidualModelControl(sv, 2)), 0.5)
+        return costs
+
+    def add_cost(name, weight, active):
+        cost_sum().addCost(name, c.CostModelResidual(sv, c.ResidualModelControl(sv, 2)), weight, active)
+    yield from _cases_of("CostModelSum.addCost", add_cost, {"name": "new", "weight": 1.0, "active": True},
+                         {"name": KEYS, "weight": NUMBERS, "active": BOOLS})
+    yield from _cases_of("CostModelSum.changeCostStatus", lambda name, active: cost_sum().changeCostStatus(
+        name, active), {"name": "x", "active": False}, {"name": KEYS + [("unknown", "zz")], "active": BOOLS})
+
+    def set_weight(weight):
+        cost_sum().costs["x"].weight = weight
+    yield from _cases_of("CostItem.weight", set_weight, {"weight": 2.0}, {"weight": NUMBERS})
+    models = {
+        "ResidualModelState": lambda: c.ResidualModelState(sv, np.ones(4), 2),
+        "ResidualModelControl": lambda: c.ResidualModelControl(sv, np.ones(2)),
+        "CostModelResidual": lambda: c.CostModelResidual(sv, c.ResidualModelState(sv, np.zeros(4), 2)),
+        "CostModelSum": cost_sum,
+    }
+    for name, make in models.items():
+        for k, arg in enumerate(("x", "u")):
+            def calc(v, make=make, k=k):
+                model = make()
+                d = model.createData(c.DataCollectorAbstract())
+                args = [np.zeros(4), np.zeros(2)]
+                args[k] = v
+                model.calc(d, *args)
+                model.calcDiff(d, *args)
+                return d
+            values = bad_vectors(4 if k == 0 else 2)
+            yield from ((f"{name}.calc", arg, lab, (lambda v=v, calc=calc: calc(v)), False, v) for lab, v in values
+                        if not (k == 1 and lab == "none"))
+            yield from _extreme(f"{name}.calc", calc, 4 if k == 0 else 2, arg)
+    yield from action_cases()
+
+
+def action_cases() -> Iterator[Case]:
+    import crocopy as c
+
+    actions = {
+        "ActionModelUnicycle": c.ActionModelUnicycle,
+        "ActionModelLQR": lambda: c.ActionModelLQR.Random(3, 2),
+        "IntegratedActionModelEuler": lambda: c.IntegratedActionModelEuler(c.DifferentialActionModelLQR.Random(2, 2),
+                                                                          0.05),
+        "IntegratedActionModelRK": lambda: c.IntegratedActionModelRK(
+            c.DifferentialActionModelLQR.Random(2, 2), c.RKType.four, 0.05),
+    }
+    for name, make in actions.items():
+        for k, arg in enumerate(("x", "u")):
+            def calc(v, make=make, k=k):
+                model = make()
+                d = model.createData()
+                args = [np.zeros(model.state.nx), np.zeros(model.nu)]
+                args[k] = v
+                model.calc(d, *args)
+                model.calcDiff(d, *args)
+                return d
+            n = make().state.nx if k == 0 else make().nu
+            yield from ((f"{name}.calc", arg, lab, (lambda v=v, calc=calc: calc(v)), False, v)
+                        for lab, v in bad_vectors(n) if not (k == 1 and lab == "none"))
+            yield from _extreme(f"{name}.calc", calc, n, arg)
+        for bound, wrong in (("u_lb", ("+inf", np.full(2, np.inf))), ("u_ub", ("-inf", np.full(2, -np.inf)))):
+            values = [b for b in bad_vectors(2) if not (bound == "u_ub" and b[0] == "inf")] + [wrong]
+            yield from _cases_of(f"{name}.{bound}", lambda make=make, bound=bound, **kw: setattr(
+                make(), bound, kw[bound]), {bound: np.zeros(2)}, {bound: values})
+        if "Integrated" in name or name == "ActionModelUnicycle":
+            yield from _cases_of(f"{name}.dt", lambda dt, make=make: setattr(make(), "dt", dt), {"dt": 0.1},
+                                 {"dt": NUMBERS + NEGATIVE})
+    yield from _cases_of("IntegratedActionModelEuler", lambda timeStep: c.IntegratedActionModelEuler(
+        c.DifferentialActionModelLQR.Random(2, 2), timeStep), {"timeStep": 0.1}, {"timeStep": NUMBERS + NEGATIVE})
+    yield from _cases_of("ActionModelUnicycle.costWeights", lambda costWeights: setattr(
+        c.ActionModelUnicycle(), "costWeights", costWeights), {"costWeights": np.ones(2)},
+        {"costWeights": bad_vectors(2)})
+    unicycle = c.ActionModelUnicycle()
+    yield from _cases_of("ShootingProblem", lambda x0: c.ShootingProblem(x0, [unicycle] * 3, unicycle),
+                         {"x0": np.zeros(3)},
+                         {"x0": bad_vectors(3)})
+
+
+def multibody_cases() -> Iterator[Case]:
+    import pinocchio as pin
+
+    import crocopy as c
+
+    st = mb_state("solo12")
+    fid = st.pinocchio.getFrameId("FL_FOOT")
+    x = mb_point(st)
+    R = pin.SE3.Identity()
+    yield from _cases_of("StateMultibody", c.StateMultibody, {"model": st.pinocchio},
+                         {"model": [("none", None), ("string", "solo"), ("int", 3)]})
+    for op, names in (("diff", ("x0", "x1")), ("integrate", ("x", "dx"))):
+        for k in range(2):
+            def call(v, op=op, k=k):
+                args = [x.copy(), x.copy() if op == "diff" else np.zeros(st.ndx)]
+                args[k] = v
+                return getattr(st, op)(*args)
+            size = st.nx if (op == "diff" or k == 0) else st.ndx
+            yield from ((f"StateMultibody.{op}", names[k], lab, (lambda v=v, call=call: call(v)), False, v)
+                        for lab, v in bad_vectors(size))
+            yield from _extreme(f"StateMultibody.{op}", call, size, names[k])
+    frames = {
+        "ResidualModelFrameTranslation": (c.ResidualModelFrameTranslation, "xref", np.zeros(3), bad_vectors(3)),
+        "ResidualModelFrameRotation": (c.ResidualModelFrameRotation, "Rref", np.eye(3), _rotations()),
+        "ResidualModelFramePlacement": (c.ResidualModelFramePlacement, "pref", R, _placements()),
+        "ResidualModelContactForce": (lambda state, id, fref, nu: c.ResidualModelContactForce(
+            state, id, fref, 6, nu), "fref", pin.Force.Zero(), _spatial("Force")),
+    }
+    for name, (cls, ref, good, bads) in frames.items():
+        yield from _cases_of(name, cls, {"state": st, "id": fid, ref: good, "nu": 12},
+                             {"id": FRAMES, ref: bads, "nu": [b for b in COUNTS if b[0] != "none"],
+                              "state": [("none", None), ("vector-state", c.StateVector(3))]})
+        yield from _cases_of(f"{name}.reference", lambda cls=cls, ref=ref, good=good, **kw: setattr(
+            cls(st, fid, good, 12), "reference", kw[ref]), {ref: good}, {ref: bads})
+    yield from _cases_of("ResidualModelFrameVelocity", c.ResidualModelFrameVelocity,
+                         {"state": st, "id": fid, "vref": pin.Motion.Zero(), "type": pin.LOCAL, "nu": 12},
+                         {"id": FRAMES, "vref": _spatial("Motion"), "type": FRAME_TYPES})
+    yield from _cases_of("ResidualModelCoMPosition", c.ResidualModelCoMPosition, {"state": st, "cref": np.zeros(3)},
+                         {"cref": bad_vectors(3)})
+    residual = c.ResidualModelFrameTranslation(st, fid, np.zeros(3), 12)
+    for k, arg in enumerate(("x", "u")):
+        def calc(v, k=k):
+            d = residual.createData(_collector(st))
+            args = [x.copy(), np.zeros(12)]
+            args[k] = v
+            residual.calc(d, *args)
+            residual.calcDiff(d, *args)
+            return d
+        n = st.nx if k == 0 else 12
+        yield from (("ResidualModelFrameTranslation.calc", arg, lab, (lambda v=v, calc=calc: calc(v)), False, v)
+                    for lab, v in bad_vectors(n) if not (k == 1 and lab == "none"))
+    contacts = {
+        "ContactModel3D": (lambda state, id, xref, type, nu, gains: c.ContactModel3D(state, id, xref, type, nu, gains),
+                           "xref", np.zeros(3), bad_vectors(3)),
+        "ContactModel6D": (lambda state, id, pref, type, nu, gains: c.ContactModel6D(state, id, pref, type, nu, gains),
+                           "pref", R, _placements()),
+    }
+    for name, (cls, ref, good, bads) in contacts.items():
+        yield from _cases_of(name, cls, {"state": st, "id": fid, ref: good, "type": pin.LOCAL, "nu": 12,
+                                         "gains": np.array([0.0, 50.0])},
+                             {"id": FRAMES, ref: bads, "type": FRAME_TYPES,
+                              "gains": [b for b in bad_vectors(2) if b[0] != "none"]})
+        yield from _cases_of(f"{name}.reference", lambda cls=cls, ref=ref, good=good, **kw: setattr(
+            cls(st, fid, good, pin.LOCAL, 12, None), "reference", kw[ref]), {ref: good}, {ref: bads})
+    yield from _cases_of("ContactModel1D", c.ContactModel1D,
+                         {"state": st, "id": fid, "xref": 0.0, "type": pin.LOCAL, "rotation": np.eye(3), "nu": 12},
+                         {"xref": NUMBERS, "rotation": [b for b in _rotations() if b[0] != "none"]})
+
+    def add_contact(name, active):
+        cm = c.ContactModelMultiple(st, 12)
+        cm.addContact(name, c.ContactModel3D(st, fid, np.zeros(3), pin.LOCAL, 12), active)
+    yield from _cases_of("ContactModelMultiple.addContact", add_contact, {"name": "fl", "active": True},
+                         {"name": KEYS, "active": BOOLS})
+
+    def change_contact(name, active):
+        cm = c.ContactModelMultiple(st, 12)
+        cm.addContact("fl", c.ContactModel3D(st, fid, np.zeros(3), pin.LOCAL, 12))
+        cm.changeContactStatus(name, active)
+    yield from _cases_of("ContactModelMultiple.changeContactStatus", change_contact, {"name": "fl", "active": False},
+                         {"name": KEYS + [("unknown", "zz")], "active": BOOLS})
+    yield from _cases_of("FrictionCone", c.FrictionCone, {"R": np.eye(3), "mu": 0.7, "nf": 4, "inner_appr": True,
+                                                          "min_nforce": 0.0, "max_nforce": np.inf},
+                         {"R": [b for b in _rotations() if b[0] != "none"], "mu": NUMBERS + NEGATIVE, "nf": COUNTS,
+                          "inner_appr": BOOLS, "min_nforce": NUMBERS, "max_nforce": [("nan", np.nan),
+                                                                                      ("below-min", -1.0)]})
+    act = c.ActuationModelFloatingBase(st)
+    for k, arg in enumerate(("x", "u")):
+        def act_calc(v, k=k):
+            ad = act.createData()
+            args = [x.copy(), np.zeros(act.nu)]
+            args[k] = v
+            act.calc(ad, *args)
+            act.calcDiff(ad, *args)
+            return ad
+        n = st.nx if k == 0 else act.nu
+        yield from (("ActuationModelFloatingBase.calc", arg, lab, (lambda v=v, f=act_calc: f(v)), False, v)
+                    for lab, v in bad_vectors(n) if not (k == 1 and lab == "none"))
+        yield from _extreme("ActuationModelFloatingBase.calc", act_calc, n, arg) if k == 1 else iter(())
+
+
+def cases() -> list[Case]:
+    return list(core_cases()) + list(multibody_cases())
+
+
+# ------------------------------------------------------------------ classification
+class _Hang(Exception):
+    pass
+
+
+QUANTITIES = ("cost", "r", "Rx", "Ru", "a_value", "Ar", "Arr", "Lx", "Lu", "Lxx", "Luu", "Lxu", "Fx", "Fu", "xnext",
+              "tau", "dtau_dx", "dtau_du")
+"""Results of a data scanned for NaN and inf; any other array of a returned object is scanned for NaN only
+(a bound may be infinite)."""
+
+
+def _has(value: Any, test: Callable[[np.ndarray], np.ndarray]) -> bool:
+    try:
+        arr = np.asarray(value)
+    except Exception:  # noqa: BLE001 - not an array
+        return False
+    return arr.dtype.kind in "fc" and bool(np.any(test(arr)))
+
+
+def _nonfinite(obj: Any) -> bool:
+    if not hasattr(obj, "__dict__"):
+        return any(_has(v, lambda a: ~np.isfinite(a)) for v in (obj if isinstance(obj, tuple | list) else [obj]))
+    return (any(_has(getattr(obj, q, None), lambda a: ~np.isfinite(a)) for q in QUANTITIES)
+            or any(_has(v, np.isnan) for v in vars(obj).values()))
+
+
+def names_argument(message: str, name: str) -> bool:
+    return re.search(rf"(?<![A-Za-z_]){re.escape(name)}(?![A-Za-z_])", message) is not None
+
+
+def classify(arg: str, call: Callable[[], Any], valid: bool, value: Any = None) -> tuple[str, str]:
+    """The outcome of ``call()`` for argument ``arg`` (a ``KeyError`` quoting the unknown key ``value``
+    is clear too) and a detail (the error or warnings)."""
+    from crocopy.validation import NonFiniteWarning
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        signal.alarm(CASE_SECONDS)
+        try:
+            out = call()
+        except _Hang:
+            return "hang", ""
+        except (ValueError, TypeError, KeyError) as exc:
+            text = f"{type(exc).__name__}: {exc}"
+            quoted = isinstance(exc, KeyError) and isinstance(value, str) and repr(value) in str(exc)
+            return ("clear" if quoted or names_argument(str(exc), arg) else "unclear"), text
+        except Exception as exc:  # noqa: BLE001 - what the census counts
+            return "unclear", f"{type(exc).__name__}: {exc}"
+        finally:
+            signal.alarm(0)
+    if out is not None and _nonfinite(out):
+        warned = any(issubclass(w.category, NonFiniteWarning) for w in caught)
+        return ("warned-nonfinite" if warned else "silent-nonfinite"), ""
+    return ("ok" if valid else "accepted"), "; ".join(str(w.message) for w in caught)[:100]
+
+
+def _raise_hang(signum: int, frame: Any) -> None:
+    raise _Hang
+
+
+def worker(start: int) -> None:
+    """Run the cases from ``start`` on, one JSON line each."""
+    signal.signal(signal.SIGALRM, _raise_hang)
+    all_cases = cases()
+    print(json.dumps(["total", len(all_cases)]), flush=True)
+    for i in range(start, len(all_cases)):
+        target, arg, label, call, valid, value = all_cases[i]
+        outcome, detail = classify(arg, call, valid, value)
+        print(json.dumps([i, target, arg, label, outcome, detail]), flush=True)
+
+
+def run() -> list[list]:
+    """Every case's ``[i, target, argument, label, outcome, detail]``, each worker in its own process."""
+    rows: list[list] = []
+    start, total = 0, None
+    while total is None or start < total:
+        done = subprocess.run([sys.executable, __file__, "--worker", str(start)], capture_output=True, text=True,
+                              env={**os.environ, "OMP_NUM_THREADS": "1"}, check=False)
+        lines = [json.loads(line) for line in done.stdout.splitlines()]
+        if not lines or lines[0][0] != "total":
+            raise RuntimeError(f"the census worker failed before its first case:\n{done.stderr}")
+        total = lines[0][1]
+        rows += lines[1:]
+        start = rows[-1][0] + 1 if rows else 0
+        if start < total:  # the worker died in case ``start``
+            rows.append([start, "?", "?", "?", "crash", " ".join(done.stderr.strip().splitlines()[-1:])])
+            start += 1
+    return rows
+
+
+def main(argv: list[str]) -> int:
+    if argv[:1] == ["--worker"]:
+        worker(int(argv[1]))
+        return 0
+    rows = run()
+    counts = collections.Counter(row[4] for row in rows)
+    print(f"{len(rows)} cases: " + ", ".join(f"{k} {counts.get(k, 0)}" for k in OUTCOMES))
+    if "-v" in argv:
+        for row in rows:
+            if row[4] not in ("clear", "ok"):
+                print(f"  {row[4]:17s} {row[1]}({row[2]}={row[3]}) {row[5]}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
