@@ -18,7 +18,7 @@ import numpy as np
 
 from .guards import Guard, Guarded, unchecked
 from .state import StateAbstract
-from .validation import as_count, as_vector, control_arg, data_arg, state_arg, warn_nonfinite
+from .validation import as_bound, as_count, as_vector, control_arg, data_arg, state_arg, warn_nonfinite
 from .watched import Watched
 
 
@@ -68,7 +68,7 @@ class ControlBounds:
 
     @u_lb.setter
     def u_lb(self, value: np.ndarray) -> None:
-        self._set_control_limits(as_vector(value, self.nu, "u_lb", allow_nonfinite=True), self._u_ub)
+        self._set_control_limits(as_bound(value, self.nu, "u_lb", upper=False), self._u_ub)
 
     @property
     def u_ub(self) -> np.ndarray:
@@ -77,7 +77,7 @@ class ControlBounds:
 
     @u_ub.setter
     def u_ub(self, value: np.ndarray) -> None:
-        self._set_control_limits(self._u_lb, as_vector(value, self.nu, "u_ub", allow_nonfinite=True))
+        self._set_control_limits(self._u_lb, as_bound(value, self.nu, "u_ub", upper=True))
 
     def _set_control_limits(self, lb: np.ndarray, ub: np.ndarray) -> None:
         if (lb > ub).any():

@@ -14,7 +14,7 @@ import numpy as np
 from .enums import Jcomponent
 from .guards import Guard, Guarded
 from .kernels import overridden
-from .validation import as_count, as_vector, point_arg, tangent_arg
+from .validation import as_bound, as_count, point_arg, tangent_arg, warn_nonfinite_result
 
 
 def _component_arg(owner: "StateAbstract", value: object, name: str) -> Jcomponent:
@@ -53,11 +53,12 @@ class StateAbstract(Guarded):
     """
 
     _guards = {
-        "diff": Guard(_BINARY[:2]),
-        "integrate": Guard(_TANGENT[:2]),
-        "Jdiff": Guard(_BINARY),
-        "Jintegrate": Guard(_TANGENT),
-        "JintegrateTransport": Guard((*_TANGENT[:2], ("Jin", _jacobian_arg), ("firstsecond", _component_arg))),
+        "diff": Guard(_BINARY[:2], returns=warn_nonfinite_result),
+        "integrate": Guard(_TANGENT[:2], returns=warn_nonfinite_result),
+        "Jdiff": Guard(_BINARY, returns=warn_nonfinite_result),
+        "Jintegrate": Guard(_TANGENT, returns=warn_nonfinite_result),
+        "JintegrateTransport": Guard((*_TANGENT[:2], ("Jin", _jacobian_arg), ("firstsecond", _component_arg)),
+                                     returns=warn_nonfinite_result),
     }
 
     def __init__(self, nx: int, ndx: int) -> None:
@@ -76,7 +77,7 @@ class StateAbstract(Guarded):
 
     @lb.setter
     def lb(self, value: np.ndarray) -> None:
-        self._set_limits(as_vector(value, self.nx, "lb", allow_nonfinite=True), self._ub)
+        self._set_limits(as_bound(value, self.nx, "lb", upper=False), self._ub)
 
     @property
     def ub(self) -> np.ndarray:
@@ -85,7 +86,7 @@ class StateAbstract(Guarded):
 
     @ub.setter
     def ub(self, value: np.ndarray) -> None:
-        self._set_limits(self._lb, as_vector(value, self.nx, "ub", allow_nonfinite=True))
+        self._set_limits(self._lb, as_bound(value, self.nx, "ub", upper=True))
 
     def _set_limits(self, lb: np.ndarray, ub: np.ndarray) -> None:
         self._lb = lb

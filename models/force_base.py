@@ -28,7 +28,7 @@ import pinocchio as pin
 from crocopy.guards import Guarded, point_guards
 from crocopy.named_items import ModelItems
 from crocopy.state import StateAbstract
-from crocopy.validation import as_count
+from crocopy.validation import ArgumentTypeError, as_count
 
 REFERENCE_FRAMES = (pin.LOCAL, pin.WORLD, pin.LOCAL_WORLD_ALIGNED)
 _LOCAL = pin.LOCAL
@@ -57,18 +57,17 @@ def frame_id(state: StateAbstract, id: int | str, name: str = "id") -> int:
         if not model.existFrame(id):
             raise ValueError(f"{name}: the model has no frame named {id!r}")
         return int(model.getFrameId(id))
-    try:
-        fid = int(id)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a frame index or a frame name, got {id!r}") from exc
-    if fid != id or not 0 <= fid < model.nframes:
+    if isinstance(id, bool | np.bool_) or not isinstance(id, int | np.integer):
+        raise ArgumentTypeError(f"{name} must be a frame index (int) or a frame name (str), got {type(id).__name__}"
+                                f" {id!r:.40}")
+    if not 0 <= id < model.nframes:
         raise ValueError(f"{name} = {id!r} is not a frame index of the model (0 <= id < {model.nframes})")
-    return fid
+    return int(id)
 
 
 def check_reference_frame(type: pin.ReferenceFrame) -> pin.ReferenceFrame:
     """Accept ``pinocchio.LOCAL``, ``pinocchio.WORLD`` and ``pinocchio.LOCAL_WORLD_ALIGNED``."""
-    if type not in REFERENCE_FRAMES:
+    if not isinstance(type, pin.ReferenceFrame) or type not in REFERENCE_FRAMES:
         raise ValueError(
             f"type must be pinocchio.LOCAL, pinocchio.WORLD or pinocchio.LOCAL_WORLD_ALIGNED, got {type!r}"
         )

@@ -15,6 +15,7 @@ from ..data_collector import DataCollectorAbstract
 from ..guards import Guarded, point_control_guards
 from ..residuals.base import ResidualModelAbstract
 from ..state import StateAbstract
+from ..validation import warn_after
 
 
 def _is_int(value: object) -> bool:
@@ -50,7 +51,7 @@ class CostModelAbstract(Guarded):
     A user's ``calc``/``calcDiff`` is checked (``x (nx,)``, ``u (nu,)`` or ``None``, finite).
     """
 
-    _guards = point_control_guards()
+    _guards = point_control_guards(warn_after("cost", diff=("Lx", "Lu", "Lxx", "Lxu", "Luu")))
 
     def __init__(
         self,
