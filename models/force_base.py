@@ -28,7 +28,7 @@ import pinocchio as pin
 from crocopy.guards import Guarded, point_guards
 from crocopy.named_items import ModelItems
 from crocopy.state import StateAbstract
-from crocopy.validation import ArgumentTypeError, as_count
+from crocopy.validation import as_count, as_index
 
 REFERENCE_FRAMES = (pin.LOCAL, pin.WORLD, pin.LOCAL_WORLD_ALIGNED)
 _LOCAL = pin.LOCAL
@@ -49,6 +49,8 @@ def frame_id(state: StateAbstract, id: int | str, name: str = "id") -> int:
     ------
     ValueError
         If the model has no such frame.
+    TypeError
+        If ``id`` is neither an int (a bool is not) nor a str.
     """
     model = getattr(state, "pinocchio", None)
     if not isinstance(model, pin.Model):
@@ -57,12 +59,10 @@ def frame_id(state: StateAbstract, id: int | str, name: str = "id") -> int:
         if not model.existFrame(id):
             raise ValueError(f"{name}: the model has no frame named {id!r}")
         return int(model.getFrameId(id))
-    if isinstance(id, bool | np.bool_) or not isinstance(id, int | np.integer):
-        raise ArgumentTypeError(f"{name} must be a frame index (int) or a frame name (str), got {type(id).__name__}"
-                                f" {id!r:.40}")
-    if not 0 <= id < model.nframes:
+    fid = as_index(id, name, None, "a frame index (int) or a frame name (str)")
+    if not 0 <= fid < model.nframes:
         raise ValueError(f"{name} = {id!r} is not a frame index of the model (0 <= id < {model.nframes})")
-    return int(id)
+    return fid
 
 
 def check_reference_frame(type: pin.ReferenceFrame) -> pin.ReferenceFrame:

@@ -433,3 +433,21 @@ def test_direct_calls_that_overflow_warn_at_every_level():
         residual.calc(residual.createData(collector), huge, np.zeros(1))  # r = x - xref: finite, no warning
     with pytest.warns(NonFiniteWarning, match=r"StateVector.diff: the result is not finite"):
         state.diff(np.full(2, -1.7e308), np.full(2, 1.7e308))
+
+
+def test_index_and_rotation_checkers():
+    from crocopy.validation import as_index, as_rotation
+
+    assert as_index(np.int64(2), "i", 3) == 2
+    for value, error, message in ((True, TypeError, "i must be an int index, got bool"),
+                                  (1.0, TypeError, "i must be an int index, got float"),
+                                  (3, ValueError, r"i = 3 is out of range \(0 <= i < 3\)"),
+                                  (-1, ValueError, "i = -1 is out of range")):
+        with pytest.raises(error, match=message):
+            as_index(value, "i", 3)
+    R = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    np.testing.assert_array_equal(as_rotation(R, "R"), R)
+    with pytest.raises(ValueError, match="R must be a rotation matrix .* got a reflection of determinant -1"):
+        as_rotation(R @ np.diag([1.0, 1.0, -1.0]), "R")
+    with pytest.raises(ValueError, match=r"R must be a rotation matrix .* \|RᵀR - I\| = 0.002 of determinant 1.003"):
+        as_rotation(1.001 * R, "R")

@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-CASE_SECONDS = 20
+CASE_SECONDS = 120
 OUTCOMES = ("clear", "ok", "unclear", "accepted", "silent-nonfinite", "warned-nonfinite", "hang", "crash")
 
 
@@ -54,6 +54,11 @@ def bad_vectors(n: int) -> list[tuple[str, Any]]:
     if n:
         out += [("nan", with_nan), ("inf", with_inf)]
     return out
+
+
+def sizeless(values: list[tuple[str, Any]]) -> list[tuple[str, Any]]:
+    """``values`` without the wrong lengths, for an argument that sets the dimension (weights, ``uref``)."""
+    return [b for b in values if b[0] not in ("short", "long")]
 
 
 NUMBERS = [("nan", np.nan), ("inf", np.inf), ("-inf", -np.inf), ("string", "1"), ("none", None), ("bool", True),
@@ -175,7 +180,7 @@ def core_cases() -> Iterator[Case]:
         yield from _extreme(name + ".calc", calc, 3, "r")
     yield from _cases_of("ActivationModelQuad", c.ActivationModelQuad, {"nr": 3}, {"nr": COUNTS})
     yield from _cases_of("ActivationModelWeightedQuad", c.ActivationModelWeightedQuad, {"weights": np.ones(3)},
-                         {"weights": bad_vectors(3)})
+                         {"weights": sizeless(bad_vectors(3))})
     for name in ("ActivationModelSmooth1Norm", "ActivationModelSmooth2Norm"):
         yield from _cases_of(name, getattr(c, name), {"nr": 3, "eps": 0.1},
                              {"nr": COUNTS, "eps": NUMBERS + NEGATIVE})
@@ -214,7 +219,7 @@ def core_cases() -> Iterator[Case]:
     def residual_control(uref):
         return c.ResidualModelControl(sv, uref)
     yield from _cases_of("ResidualModelControl", residual_control, {"uref": np.ones(2)},
-                         {"uref": [b for b in bad_vectors(2) if b[0] not in ("none", "int")]})
+                         {"uref": [b for b in sizeless(bad_vectors(2)) if b[0] not in ("none", "int")]})
 
     def residual_control_ref(uref):
         c.ResidualModelControl(sv, np.zeros(2)).reference = uref
@@ -294,7 +299,8 @@ def action_cases() -> Iterator[Case]:
             yield from _cases_of(f"{name}.dt", lambda dt, make=make: setattr(make(), "dt", dt), {"dt": 0.1},
                                  {"dt": NUMBERS + NEGATIVE})
     yield from _cases_of("IntegratedActionModelEuler", lambda timeStep: c.IntegratedActionModelEuler(
-        c.DifferentialActionModelLQR.Random(2, 2), timeStep), {"timeStep": 0.1}, {"timeStep": NUMBERS + NEGATIVE})
+        c.DifferentialActionModelLQR.Random(2, 2), timeStep), {"timeStep": 0.1},
+        {"timeStep": [b for b in NUMBERS + NEGATIVE if b[0] != "none"]})  # None: the default step
     yield from _cases_of("ActionModelUnicycle.costWeights", lambda costWeights: setattr(
         c.ActionModelUnicycle(), "costWeights", costWeights), {"costWeights": np.ones(2)},
         {"costWeights": bad_vectors(2)})
@@ -404,8 +410,98 @@ def multibody_cases() -> Iterator[Case]:
         yield from _extreme("ActuationModelFloatingBase.calc", act_calc, n, arg) if k == 1 else iter(())
 
 
+def more_cases() -> Iterator[Case]:
+    """Cones, impulses, 2D contacts, momentum/effort residuals, constraints, state limits, contact dynamics
+    options, problems and solvers."""
+    import pinocchio as pin
+
+    import crocopy as c
+
+    st = mb_state("solo12")
+    fid = st.pinocchio.getFrameId("FL_FOOT")
+    x = mb_point(st)
+    box = np.array([0.1, 0.05])
+    yield from _cases_of("WrenchCone", c.WrenchCone, {"R": np.eye(3), "mu": 0.7, "box": box, "nf": 4},
+                         {"R": [b for b in _rotations() if b[0] != "none"], "mu": NUMBERS + NEGATIVE,
+                          "box": [b for b in bad_vectors(2) if b[0] != "none"] + [("negative", -box)],
+                          "nf": COUNTS + [("odd", 3)]})
+    yield from _cases_of("CoPSupport", c.CoPSupport, {"R": np.eye(3), "box": box},  # inf: Crocoddyl's default
+                         {"R": [b for b in _rotations() if b[0] != "none"],
+                          "box": [b for b in bad_vectors(2) if b[0] not in ("none", "inf")] + [("negative", -box)]})
+    for name in ("ImpulseModel3D", "ImpulseModel6D"):
+        yield from _cases_of(name, getattr(c, name), {"state": st, "frame": fid, "type": pin.LOCAL},
+                             {"frame": FRAMES, "type": FRAME_TYPES})
+    yield from _cases_of("ContactModel2D", c.ContactModel2D, {"state": st, "id": fid, "xref": np.zeros(2), "nu": 12},
+                         {"id": FRAMES, "xref": bad_vectors(2), "nu": [b for b in COUNTS if b[0] != "none"]})
+    yield from _cases_of("ResidualModelCentroidalMomentum", c.ResidualModelCentroidalMomentum,
+                         {"state": st, "href": np.zeros(6), "nu": 12},
+                         {"href": bad_vectors(6), "nu": [b for b in COUNTS if b[0] != "none"]})
+    actuation = c.ActuationModelFloatingBase(st)
+    yield from _cases_of("ResidualModelJointEffort", c.ResidualModelJointEffort,
+                         {"state": st, "actuation": actuation, "uref": np.zeros(12), "nu": 12},
+                         {"uref": [b for b in bad_vectors(12) if b[0] not in ("none", "int")]})
+    yield from _cases_of("ResidualModelJointAcceleration", c.ResidualModelJointAcceleration,
+                         {"state": st, "aref": np.zeros(st.nv), "nu": 12},
+                         {"aref": [b for b in bad_vectors(st.nv) if b[0] not in ("none", "int")]})
+    cone = c.FrictionCone(np.eye(3), 0.7)
+    yield from _cases_of("ResidualModelContactFrictionCone", c.ResidualModelContactFrictionCone,
+                         {"state": st, "id": fid, "fref": cone, "nu": 12},
+                         {"id": FRAMES, "fref": [("none", None), ("matrix", np.eye(3)), ("string", "cone")],
+                          "nu": [b for b in COUNTS if b[0] != "none"]})
+    sv = c.StateVector(3)
+    residual = c.ResidualModelState(sv, np.zeros(3), 2)
+    yield from _cases_of("ConstraintModelResidual", lambda lower, upper: c.ConstraintModelResidual(
+        sv, residual, lower, upper), {"lower": -np.ones(3), "upper": np.ones(3)},
+        {"lower": bad_vectors(3) + [("+inf", np.full(3, np.inf)), ("above-ub", 2 * np.ones(3))],
+         "upper": [b for b in bad_vectors(3) if b[0] != "inf"] + [("-inf", np.full(3, -np.inf))]})
+    for bound, upper in (("lb", False), ("ub", True)):
+        values = [b for b in bad_vectors(3) if not (upper and b[0] == "inf")]
+        values.append(("-inf", np.full(3, -np.inf)) if upper else ("+inf", np.full(3, np.inf)))
+        yield from _cases_of(f"StateVector.{bound}", lambda bound=bound, **kw: setattr(
+            c.StateVector(3), bound, kw[bound]), {bound: np.zeros(3)}, {bound: values})
+    costs = c.CostModelSum(st, 12)
+    costs.addCost("x", c.CostModelResidual(st, c.ResidualModelState(st, st.zero(), 12)), 1.0)
+    contacts = c.ContactModelMultiple(st, 12)
+    for foot in ("FL_FOOT", "FR_FOOT", "HL_FOOT"):
+        contacts.addContact(foot, c.ContactModel3D(st, foot, np.zeros(3), pin.LOCAL, 12, np.array([0.0, 50.0])))
+    yield from _cases_of("DifferentialActionModelContactFwdDynamics",
+                         lambda inv_damping, enable_force: c.DifferentialActionModelContactFwdDynamics(
+                             st, actuation, contacts, costs, None, inv_damping, enable_force),
+                         {"inv_damping": 0.0, "enable_force": True},
+                         {"inv_damping": NUMBERS + NEGATIVE, "enable_force": BOOLS})
+    unicycle = c.ActionModelUnicycle()
+    problem = c.ShootingProblem(np.zeros(3), [unicycle] * 3, unicycle)
+    xs, us = [np.zeros(3)] * 4, [np.zeros(2)] * 3
+
+    def problem_calc(xs, us):
+        return problem.calc(xs, us)
+    yield from _cases_of("ShootingProblem.calc", problem_calc, {"xs": xs, "us": us},
+                         {"xs": [("short", xs[:-1]), ("none", None), ("string", "xs"),
+                                 ("nan", [np.full(3, np.nan)] * 4), ("item", [np.zeros(2)] * 4),
+                                 ("complex", [np.zeros(3) + 1j] * 4)],
+                          "us": [("long", us + us[:1]), ("none", None), ("item", [np.zeros(3)] * 3),
+                                 ("inf", [np.full(2, np.inf)] * 3)]})
+    finite = [b for b in NUMBERS + NEGATIVE if b[0] != "inf"]  # +inf: no threshold / no maximum
+    for setting, values in (("th_stop", finite), ("reg_min", NUMBERS + NEGATIVE), ("reg_max", finite),
+                            ("th_acceptStep", NUMBERS + NEGATIVE)):
+        yield from _cases_of(f"SolverFDDP.{setting}", lambda setting=setting, **kw: setattr(
+            c.SolverFDDP(problem), setting, kw[setting]), {setting: 0.1}, {setting: values})
+
+    def solve(maxiter, is_feasible, init_reg):
+        c.SolverFDDP(problem).solve([], [], maxiter, is_feasible, init_reg)
+    yield from _cases_of("SolverFDDP.solve", solve, {"maxiter": 2, "is_feasible": False, "init_reg": None},
+                         {"maxiter": COUNTS, "is_feasible": BOOLS,
+                          "init_reg": [b for b in NUMBERS + NEGATIVE if b[0] not in ("none", "nan")]})  # the defaults
+    yield from _cases_of("ResidualModelFrameVelocity.type", lambda type: setattr(c.ResidualModelFrameVelocity(
+        st, fid, pin.Motion.Zero(), pin.LOCAL, 12), "type", type), {"type": pin.WORLD}, {"type": FRAME_TYPES})
+    yield from _cases_of("ContactModel3D.gains", lambda gains: setattr(c.ContactModel3D(
+        st, fid, np.zeros(3), pin.LOCAL, 12), "gains", gains), {"gains": np.ones(2)},
+        {"gains": [b for b in bad_vectors(2) if b[0] != "none"]})
+    del x
+
+
 def cases() -> list[Case]:
-    return list(core_cases()) + list(multibody_cases())
+    return list(core_cases()) + list(multibody_cases()) + list(more_cases())
 
 
 # ------------------------------------------------------------------ classification
