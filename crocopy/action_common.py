@@ -198,7 +198,7 @@ class ActionModelBase(ControlLimitsMixin, Guarded):
             return getattr(self._constraint_source, name)
 
         def set(self, value: np.ndarray) -> None:
-            self.__dict__[private] = np.array(value, dtype=float).reshape(-1)
+            self.__dict__[private] = as_bound(value, None, name, upper=name.endswith("ub")).copy()
 
         return property(get, set, doc=f"``{name}``, shape ``(ng,)`` (the constraints' unless assigned)")
 

@@ -497,6 +497,19 @@ def more_cases() -> Iterator[Case]:
     yield from _cases_of("ContactModel3D.gains", lambda gains: setattr(c.ContactModel3D(
         st, fid, np.zeros(3), pin.LOCAL, 12), "gains", gains), {"gains": np.ones(2)},
         {"gains": [b for b in bad_vectors(2) if b[0] != "none"]})
+    yield from _cases_of("ActionModelSquashed", lambda smooth, s_lb: c.ActionModelSquashed(
+        unicycle, "smooth-sat", s_lb, np.ones(2), smooth), {"smooth": 2.0, "s_lb": -np.ones(2)},
+        {"smooth": NUMBERS + NEGATIVE, "s_lb": bad_vectors(2)[:-1]})
+    yield from _cases_of("SquashingModelSmoothSat", lambda u_lb, ns: c.SquashingModelSmoothSat(
+        u_lb, np.ones(2), ns), {"u_lb": -np.ones(2), "ns": 2},
+        {"u_lb": [b for b in bad_vectors(2) if b[0] != "none"], "ns": [b for b in COUNTS if b[0] != "list"]})
+    yield from _cases_of("ActionModelControlPenalty", lambda weight, lb: c.ActionModelControlPenalty(
+        unicycle, weight, lb), {"weight": 10.0, "lb": -np.ones(2)},
+        {"weight": NUMBERS + NEGATIVE,
+         "lb": [b for b in bad_vectors(2)[:-1] if b[0] != "none"] + [("+inf", np.full(2, np.inf))]})
+    yield from _cases_of("BoxQP", c.BoxQP, {"nx": 2, "maxiter": 10, "th_acceptStep": 0.1, "th_grad": 1e-9, "reg": 1e-9},
+                         {"nx": COUNTS, "maxiter": COUNTS, "th_acceptStep": NUMBERS + NEGATIVE,
+                          "th_grad": NUMBERS + NEGATIVE, "reg": NUMBERS + NEGATIVE})
     del x
 
 
