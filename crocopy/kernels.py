@@ -128,6 +128,9 @@ if available:
         def _load_index(self) -> dict:
             try:
                 seen = _identity(self._index_path)
+            except OSError:  # no index (yet), or none that can be read: the kernels compile
+                return {}
+            try:
                 overloads = super()._load_index()
                 if not isinstance(overloads, dict) or not all(isinstance(v, str) for v in overloads.values()):
                     raise TypeError(f"an index holding a {type(overloads).__name__}, not file names")
