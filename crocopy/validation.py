@@ -136,12 +136,12 @@ def as_name(value: Any, name: str) -> str:
 
 
 def as_index(value: Any, name: str, size: int | None, what: str = "an int index") -> int:
-    """Return ``value`` as an index in ``[0, size)`` (any non-negative one if ``size`` is None): an ``int`` or
-    NumPy integer, not a bool or a float (:class:`ArgumentTypeError`, saying ``name`` must be ``what``); out of
-    range: ``ValueError``."""
+    """Return ``value`` as an index in ``[0, size)``: an ``int`` or NumPy integer, not a bool or a float
+    (:class:`ArgumentTypeError`, saying ``name`` must be ``what``); out of range: ``ValueError``.  With
+    ``size`` None only the type is checked (the caller checks the range)."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
         raise ArgumentTypeError(f"{name} must be {what}, got {type(value).__name__} {value!r:.40}")
-    if value < 0 or (size is not None and value >= size):
+    if size is not None and not 0 <= value < size:
         raise ValueError(f"{name} = {value} is out of range (0 <= {name} < {size})")
     return int(value)
 
