@@ -18,7 +18,7 @@ import numpy as np
 
 from .guards import Guard, Guarded, unchecked
 from .state import StateAbstract
-from .validation import as_count, as_vector, control_arg, data_arg, state_arg, warn_nonfinite
+from .validation import as_bound, as_count, as_vector, control_arg, data_arg, state_arg, warn_nonfinite
 from .versioning import Parametrized
 from .watched import Watched
 
@@ -69,7 +69,7 @@ class ControlBounds:
 
     @u_lb.setter
     def u_lb(self, value: np.ndarray) -> None:
-        self._set_control_limits(as_vector(value, self.nu, "u_lb", allow_nonfinite=True), self._u_ub)
+        self._set_control_limits(as_bound(value, self.nu, "u_lb", upper=False), self._u_ub)
 
     @property
     def u_ub(self) -> np.ndarray:
@@ -78,7 +78,7 @@ class ControlBounds:
 
     @u_ub.setter
     def u_ub(self, value: np.ndarray) -> None:
-        self._set_control_limits(self._u_lb, as_vector(value, self.nu, "u_ub", allow_nonfinite=True))
+        self._set_control_limits(self._u_lb, as_bound(value, self.nu, "u_ub", upper=True))
 
     def _set_control_limits(self, lb: np.ndarray, ub: np.ndarray) -> None:
         if (lb > ub).any():
@@ -203,7 +203,7 @@ class ActionModelBase(Parametrized, ControlLimitsMixin, Guarded):
             return getattr(self._constraint_source, name)
 
         def set(self, value: np.ndarray) -> None:
-            self.__dict__[private] = np.array(value, dtype=float).reshape(-1)
+            self.__dict__[private] = as_bound(value, None, name, upper=name.endswith("ub")).copy()
 
         return property(get, set, doc=f"``{name}``, shape ``(ng,)`` (the constraints' unless assigned)")
 

@@ -62,13 +62,16 @@ class Guard:
         ``check(owner, args, kwargs)`` run after the converters, for checks across arguments.
     after : callable, optional
         ``after(owner, args, kwargs)`` run after the method (e.g. a warning on non-finite results).
+    returns : callable, optional
+        ``returns(owner, name, out)`` run on the value ``out`` the method ``name`` returned.
     """
 
     def __init__(self, params: tuple[tuple[str, Converter | None], ...] = (), check: Callable | None = None,
-                 after: Callable | None = None) -> None:
+                 after: Callable | None = None, returns: Callable | None = None) -> None:
         self.params = params
         self.check = check
         self.after = after
+        self.returns = returns
 
     def convert(self, owner: object, args: tuple, kwargs: dict) -> tuple[list, dict]:
         """The converted ``(args, kwargs)`` of a call on ``owner``."""
@@ -111,6 +114,8 @@ def _wrap(raw: Callable, guard: Guard, cls: type) -> Callable:
             _Trust.depth -= 1
         if guard.after is not None:
             guard.after(self, args, kwargs)
+        if guard.returns is not None:
+            guard.returns(self, raw.__name__, out)
         return out
 
     guarded._crocopy_raw = raw
@@ -176,9 +181,12 @@ def point_guards(**extra: Guard) -> dict[str, Guard]:
     return {"calc": Guard(params), "calcDiff": Guard(params), **extra}
 
 
-def point_control_guards(**extra: Guard) -> dict[str, Guard]:
-    """``calc(data, x, u=None)``/``calcDiff(data, x, u=None)`` of a model with ``state`` and ``nu``."""
+def point_control_guards(after: dict[str, Callable] | None = None, **extra: Guard) -> dict[str, Guard]:
+    """``calc(data, x, u=None)``/``calcDiff(data, x, u=None)`` of a model with ``state`` and ``nu`` (with the
+    ``after`` hooks of ``calc``/``calcDiff`` in ``after``, e.g. :func:`crocopy.validation.warn_after`)."""
     from .validation import control_arg, state_arg
 
     params = (("data", None), ("x", state_arg), ("u", control_arg))
-    return {"calc": Guard(params), "calcDiff": Guard(params), **extra}
+    after = after or {}
+    return {"calc": Guard(params, after=after.get("calc")), "calcDiff": Guard(params, after=after.get("calcDiff")),
+            **extra}

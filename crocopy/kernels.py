@@ -39,7 +39,10 @@ else beside the sources (``__pycache__``); when crocopy's folder is read-only (a
 ``NUMBA_CACHE_DIR`` is unset, it is crocopy's user cache folder
 (:func:`crocopy.user_cache.user_cache_dir` ``/ "numba"``).  :func:`cache_is_cold` tells, without
 compiling anything, whether some kernel has nothing usable in that cache (a fresh install, a new
-numba, an edited kernel); ``crocopy compile`` fills it ahead of the first solve.
+numba, an edited kernel); ``crocopy compile`` fills it ahead of the first solve.  A cache file that
+cannot be read back (truncated by a full disk or a killed write, garbage, another function's entry)
+is deleted with a one-line warning on the ``"crocopy"`` logger and the kernel is compiled again, so
+the run goes on.
 
 A subclass that overrides a step a kernel fuses (a solver's ``computeGains``, a multibody state's
 ``integrate``, an activation's ``calc``) keeps its override: that step then runs in Python/numpy.
@@ -92,19 +95,106 @@ cache_dir: str = cache_dir_fallback(os.path.dirname(__file__), numba.config.CACH
 """Where :func:`compiled` caches the kernels (``""``: beside the sources), see :func:`cache_dir_fallback`."""
 
 
+def _identity(path: str) -> tuple[int, int, int]:
+    """What tells one version of the file at ``path`` from another (OSError if there is none)."""
+    stat = os.stat(path)
+    return stat.st_ino, stat.st_size, stat.st_mtime_ns
+
+
+def set_aside(path: str, seen: tuple[int, int, int], reason: BaseException) -> None:
+    """Delete the damaged cache file ``path`` if it is still the version ``seen`` (:func:`_identity`; a process
+    may have written a good one meanwhile) and log it in one line at WARNING level on the ``crocopy`` logger."""
+    with contextlib.suppress(OSError):
+        if _identity(path) == seen:
+            os.unlink(path)
+    detail = " ".join(str(reason).split())[:80]
+    logger.warning("crocopy: damaged kernel cache file %s set aside (%s%s), compiling it again",
+                   path, type(reason).__name__, f": {detail}" if detail else "")
+
+
+if available:
+    from numba.core import caching as _caching
+    from numba.core import sigutils as _sigutils
+    from numba.core.utils import _dynamic_modname
+
+    class _GuardedCacheFile(_caching.IndexDataCacheFile):
+        """numba's index and data files of one kernel, where a file that cannot be read back (truncated by a
+        full disk or a killed write, garbage, another program's) is set aside (:func:`set_aside`) and read as
+        missing, so that the kernel is compiled and saved again."""
+
+        last_data: tuple[str, tuple[int, int, int]] | None = None
+        """The data file read last and its :func:`_identity`, for :meth:`_GuardedCache._load_overload`."""
+
+        def _load_index(self) -> dict:
+            try:
+                seen = _identity(self._index_path)
+            except OSError:  # no index (yet), or none that can be read: the kernels compile
+                return {}
+            try:
+                overloads = super()._load_index()
+                if not isinstance(overloads, dict) or not all(isinstance(v, str) for v in overloads.values()):
+                    raise TypeError(f"an index holding a {type(overloads).__name__}, not file names")
+            except FileNotFoundError:
+                return {}
+            except Exception as exc:  # noqa: BLE001 - whatever unpickling an unreadable file raises
+                set_aside(self._index_path, seen, exc)
+                return {}
+            return overloads
+
+        def _load_data(self, name: str) -> object:
+            path = self._data_path(name)
+            seen = _identity(path)  # OSError: numba reads the entry as missing
+            try:
+                data = super()._load_data(name)
+            except OSError:
+                raise
+            except Exception as exc:  # noqa: BLE001 - whatever unpickling an unreadable file raises
+                set_aside(path, seen, exc)
+                return None
+            self.last_data = path, seen
+            return data
+
+    class _GuardedCache(_caching.FunctionCache):
+        """numba's cache of one kernel (``numba.njit(cache=True)``) reading through :class:`_GuardedCacheFile`,
+        and refusing (setting aside) an entry that rebuilds another function or signature, or does not rebuild."""
+
+        def __init__(self, py_func: Callable) -> None:
+            super().__init__(py_func)
+            self._cache_file = _GuardedCacheFile(self._cache_path, self._impl.filename_base,
+                                                 self._impl.locator.get_source_stamp())
+
+        def _load_overload(self, sig, target_context):
+            if not self._enabled:
+                return None
+            data = self._cache_file.load(self._index_key(sig, target_context.codegen()))
+            if data is None:
+                return None
+            try:
+                fndesc, signature = data[1], data[3]
+                args = tuple(_sigutils.normalize_signature(sig)[0])
+                expected = self._py_func.__qualname__, self._py_func.__module__ or _dynamic_modname, args
+                if (fndesc.qualname, fndesc.modname, tuple(signature.args)) != expected:
+                    raise TypeError(f"an entry of {fndesc.modname}.{fndesc.qualname}{tuple(signature.args)}")
+                return self._impl.rebuild(target_context, data)
+            except Exception as exc:  # noqa: BLE001 - a foreign or damaged payload fails in many ways
+                set_aside(*self._cache_file.last_data, exc)
+                return None
+
+
 def compiled(function: Callable) -> Callable:
     """``numba.njit(cache=True)(function)`` cached in :data:`cache_dir` and registered in :data:`KERNELS`;
     ``function`` itself without numba.  Where no folder can be written at all, the kernel is compiled
-    in every process (uncached) and a warning is logged."""
+    in every process (uncached) and a warning is logged.  A cache entry that cannot be read back
+    (truncated, garbage, another function's) is set aside with a one-line warning and compiled again."""
     if not available:
         return function
+    kernel = numba.njit(function)
     previous = numba.config.CACHE_DIR
-    numba.config.CACHE_DIR = cache_dir  # read by numba when the decorator picks the cache folder
+    numba.config.CACHE_DIR = cache_dir  # read by numba when the cache picks its folder
     try:
-        kernel = numba.njit(cache=True)(function)
+        kernel._cache = _GuardedCache(function)  # what numba.njit(cache=True) sets, reading through the guard
     except RuntimeError as exc:  # numba found no writable cache folder
         logger.warning("%s: compiled in every process, not cached (%s)", function.__qualname__, exc)
-        kernel = numba.njit(cache=False)(function)
     finally:
         numba.config.CACHE_DIR = previous
     KERNELS.append(kernel)

@@ -12,7 +12,7 @@ from __future__ import annotations
 from typing import Any
 
 from .state import StateAbstract
-from .validation import ArgumentTypeError, as_bool
+from .validation import ArgumentTypeError, as_bool, as_name
 from .versioning import Parametrized, structure_changed, touch
 
 
@@ -41,7 +41,8 @@ class NamedItems:
         raise NotImplementedError
 
     def _get(self, name: str) -> Any:
-        """The item ``name`` (``KeyError`` if unknown)."""
+        """The item ``name`` (``KeyError`` if unknown, :class:`ArgumentTypeError` if not a str)."""
+        as_name(name, "name")
         try:
             return self._items[name]
         except KeyError:

@@ -14,7 +14,7 @@ import numpy as np
 from .enums import Jcomponent
 from .guards import Guard, Guarded
 from .kernels import overridden
-from .validation import as_count, as_vector, point_arg, tangent_arg
+from .validation import as_bound, as_count, point_arg, tangent_arg, warn_nonfinite_result
 from .versioning import Parametrized
 
 
@@ -56,11 +56,12 @@ class StateAbstract(Parametrized, Guarded):
     _read_only = frozenset({"pinocchio"})
 
     _guards = {
-        "diff": Guard(_BINARY[:2]),
-        "integrate": Guard(_TANGENT[:2]),
-        "Jdiff": Guard(_BINARY),
-        "Jintegrate": Guard(_TANGENT),
-        "JintegrateTransport": Guard((*_TANGENT[:2], ("Jin", _jacobian_arg), ("firstsecond", _component_arg))),
+        "diff": Guard(_BINARY[:2], returns=warn_nonfinite_result),
+        "integrate": Guard(_TANGENT[:2], returns=warn_nonfinite_result),
+        "Jdiff": Guard(_BINARY, returns=warn_nonfinite_result),
+        "Jintegrate": Guard(_TANGENT, returns=warn_nonfinite_result),
+        "JintegrateTransport": Guard((*_TANGENT[:2], ("Jin", _jacobian_arg), ("firstsecond", _component_arg)),
+                                     returns=warn_nonfinite_result),
     }
 
     def __init__(self, nx: int, ndx: int) -> None:
@@ -79,7 +80,7 @@ class StateAbstract(Parametrized, Guarded):
 
     @lb.setter
     def lb(self, value: np.ndarray) -> None:
-        self._set_limits(as_vector(value, self.nx, "lb", allow_nonfinite=True), self._ub)
+        self._set_limits(as_bound(value, self.nx, "lb", upper=False), self._ub)
 
     @property
     def ub(self) -> np.ndarray:
@@ -88,7 +89,7 @@ class StateAbstract(Parametrized, Guarded):
 
     @ub.setter
     def ub(self, value: np.ndarray) -> None:
-        self._set_limits(self._lb, as_vector(value, self.nx, "ub", allow_nonfinite=True))
+        self._set_limits(self._lb, as_bound(value, self.nx, "ub", upper=True))
 
     def _set_limits(self, lb: np.ndarray, ub: np.ndarray) -> None:
         self._lb = lb

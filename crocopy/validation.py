@@ -24,8 +24,8 @@ class NonFiniteWarning(RuntimeWarning):
 
 
 def _as_float_array(value: Any, name: str, expected: str) -> np.ndarray:
-    if value is None:
-        raise ArgumentTypeError(f"{name} must be {expected}, got None")
+    if value is None or isinstance(value, (str, bytes, dict, set)):
+        raise ArgumentTypeError(f"{name} must be {expected}, got {type(value).__name__} {value!r:.40}")
     try:
         arr = np.asarray(value)
     except (TypeError, ValueError) as exc:
@@ -35,15 +35,15 @@ def _as_float_array(value: Any, name: str, expected: str) -> np.ndarray:
     return arr.astype(float, copy=False)
 
 
-def as_vector(value: Any, size: int, name: str, allow_nonfinite: bool = False) -> np.ndarray:
+def as_vector(value: Any, size: int | None, name: str, allow_nonfinite: bool = False) -> np.ndarray:
     """Return ``value`` as a float vector of length ``size`` or raise.
 
     Parameters
     ----------
     value : array_like
         Input to check: shape ``(size,)``, ``(size, 1)`` or ``(1, size)``, or a sequence of numbers.
-    size : int
-        Expected length.
+    size : int or None
+        Expected length (``None``: any length, e.g. weights that set a model's dimension).
     name : str
         Argument name used in the error message.
     allow_nonfinite : bool
@@ -62,11 +62,11 @@ def as_vector(value: Any, size: int, name: str, allow_nonfinite: bool = False) -
             return value
         arr = value
     else:
-        arr = _as_float_array(value, name, f"a vector of shape ({size},)")
+        arr = _as_float_array(value, name, f"a vector of shape ({'n' if size is None else size},)")
         if arr.ndim == 2 and 1 in arr.shape:
             arr = arr.reshape(-1)
-        if arr.shape != (size,):
-            raise ValueError(f"{name} has shape {arr.shape}, expected ({size},)")
+        if arr.ndim != 1 or (size is not None and arr.shape != (size,)):
+            raise ValueError(f"{name} has shape {arr.shape}, expected ({'n' if size is None else size},)")
     bad = np.isnan(arr) if allow_nonfinite else ~np.isfinite(arr)
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
@@ -85,6 +85,20 @@ def as_matrix(value: Any, shape: tuple[int, int], name: str) -> np.ndarray:
     return arr
 
 
+def as_bound(value: Any, size: int | None, name: str, upper: bool) -> np.ndarray:
+    """:func:`as_vector` of a lower (``upper`` False) or upper bound: ±inf allowed (unbounded), but not a
+    lower bound of ``+inf`` nor an upper bound of ``-inf``, which no value satisfies (``ValueError``)."""
+    arr = as_vector(value, size, name, allow_nonfinite=True)
+    impossible = -np.inf if upper else np.inf
+    bad = np.flatnonzero(arr == impossible)
+    if bad.size:
+        i = int(bad[0])
+        kind, none = ("an upper", "inf") if upper else ("a lower", "-inf")
+        raise ValueError(f"{name}[{i}] = {arr[i]}: {kind} bound of {impossible} admits no value"
+                         f" (a finite bound, or {none} for none)")
+    return arr
+
+
 def check_bounds(lb: np.ndarray, ub: np.ndarray, lb_name: str, ub_name: str) -> None:
     """Raise ``ValueError`` if a lower bound is above its upper bound."""
     bad = np.nonzero(lb > ub)[0]
@@ -93,6 +107,43 @@ def check_bounds(lb: np.ndarray, ub: np.ndarray, lb_name: str, ub_name: str) -> 
         raise ValueError(
             f"{lb_name}[{i}] = {lb[i]} is above {ub_name}[{i}] = {ub[i]}: lower bound above upper bound"
         )
+
+
+ROTATION_TOLERANCE = 1e-6
+"""How far ``RᵀR`` may be from the identity (largest entry) for ``R`` to count as a rotation."""
+
+
+def as_rotation(value: Any, name: str) -> np.ndarray:
+    """Return ``value`` as a rotation matrix ``(3, 3)``: finite, orthonormal within
+    :data:`ROTATION_TOLERANCE` and of determinant ``+1`` (a reflection is refused); else raise
+    ``ValueError``/:class:`ArgumentTypeError` naming ``name``."""
+    R = as_matrix(value, (3, 3), name)
+    error = float(np.abs(R.T @ R - np.eye(3)).max())
+    det = float(np.linalg.det(R))
+    if error > ROTATION_TOLERANCE or det <= 0.0:
+        what = "a reflection" if error <= ROTATION_TOLERANCE else f"a matrix with |RᵀR - I| = {error:.2g}"
+        raise ValueError(f"{name} must be a rotation matrix (orthonormal, determinant +1), got {what}"
+                         f" of determinant {det:.6g}")
+    return R
+
+
+def as_name(value: Any, name: str) -> str:
+    """Return ``value`` if it is a ``str`` (the name of a cost, contact, frame...), else raise
+    :class:`ArgumentTypeError`."""
+    if not isinstance(value, str):
+        raise ArgumentTypeError(f"{name} must be a str, got {type(value).__name__} {value!r:.40}")
+    return value
+
+
+def as_index(value: Any, name: str, size: int | None, what: str = "an int index") -> int:
+    """Return ``value`` as an index in ``[0, size)``: an ``int`` or NumPy integer, not a bool or a float
+    (:class:`ArgumentTypeError`, saying ``name`` must be ``what``); out of range: ``ValueError``.  With
+    ``size`` None only the type is checked (the caller checks the range)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise ArgumentTypeError(f"{name} must be {what}, got {type(value).__name__} {value!r:.40}")
+    if size is not None and not 0 <= value < size:
+        raise ValueError(f"{name} = {value} is out of range (0 <= {name} < {size})")
+    return int(value)
 
 
 def check_finite(values: Any, name: str) -> None:
@@ -133,6 +184,11 @@ def as_count(value: Any, name: str, minimum: int = 0) -> int:
         bound = "non-negative" if minimum == 0 else f">= {minimum}"
         raise ValueError(f"{name} must be {bound}, got {value}")
     return int(value)
+
+
+def as_optional_count(value: Any, name: str) -> int | None:
+    """``None``, or :func:`as_count` of ``value`` (e.g. a model's ``nu``, ``None`` for its default)."""
+    return None if value is None else as_count(value, name)
 
 
 def as_bool(value: Any, name: str) -> bool:
@@ -187,6 +243,26 @@ def data_arg(expected: dict[str, tuple]) -> Any:
                 )
         return data
     return convert
+
+
+def warn_nonfinite_result(owner: Any, method: str, out: Any) -> None:
+    """Warn (:class:`NonFiniteWarning`) if the array, or one of the arrays, ``out`` that ``owner.method``
+    returned holds NaN or inf."""
+    for value in out if isinstance(out, (tuple, list)) else (out,):
+        if isinstance(value, np.ndarray) and not np.all(np.isfinite(value)):
+            warnings.warn(f"{type(owner).__name__}.{method}: the result is not finite after a call on finite inputs"
+                          " (overflow?)", NonFiniteWarning, stacklevel=4)
+            return
+
+
+def warn_after(*calc: str, diff: tuple[str, ...] = ()) -> dict[str, Any]:
+    """``after`` hooks of :class:`crocopy.guards.Guard` for ``calc`` and ``calcDiff``: :func:`warn_nonfinite`
+    on the data's quantities ``calc`` and ``diff``."""
+    def make(names: tuple[str, ...]) -> Any:
+        def after(owner: Any, args: list, kwargs: dict) -> None:
+            warn_nonfinite(owner, args[0] if args else kwargs.get("data"), names)
+        return after
+    return {"calc": make(calc), "calcDiff": make(diff)}
 
 
 def warn_nonfinite(owner: Any, data: Any, names: tuple[str, ...]) -> None:

@@ -14,21 +14,24 @@ from __future__ import annotations
 
 import numpy as np
 
-from crocopy.validation import as_matrix
+from crocopy.validation import as_bool, as_count, as_number, as_rotation, as_vector
 
 
 def _check_rotation(R: np.ndarray) -> np.ndarray:
-    R = as_matrix(R, (3, 3), "R")
-    if not np.allclose(R.T @ R, np.eye(3), atol=1e-6):
-        raise ValueError("R must be a rotation matrix (Rᵀ R = I)")
-    return R
+    return as_rotation(R, "R")
 
 
-def _check_box(box: np.ndarray) -> np.ndarray:
-    box = np.asarray(box, dtype=float).reshape(-1)
-    if box.shape != (2,) or not np.all(np.isfinite(box)) or np.any(box < 0.0):
-        raise ValueError(f"box must be (length, width), two non-negative numbers, got shape {box.shape}")
+def _check_box(box: np.ndarray, allow_inf: bool = False) -> np.ndarray:
+    box = as_vector(box, 2, "box (length, width)", allow_nonfinite=allow_inf)
+    if np.any(box < 0.0):
+        raise ValueError(f"box (length, width) must be non-negative, got {box}")
     return box
+
+
+def _check_facet_parameters(cone: "FrictionCone | WrenchCone") -> None:
+    """Check and convert ``cone.mu``, ``cone.nf`` and ``cone.inner_appr`` in place."""
+    cone.mu, cone.nf = as_number(cone.mu, "mu"), as_count(cone.nf, "nf")
+    cone.inner_appr = as_bool(cone.inner_appr, "inner_appr")
 
 
 def _facets(nf: int, mu: float, inner_appr: bool) -> tuple[np.ndarray, float]:
@@ -46,8 +49,9 @@ def _facets(nf: int, mu: float, inner_appr: bool) -> tuple[np.ndarray, float]:
 
 
 def _check_nforce(min_nforce: float, max_nforce: float) -> tuple[float, float]:
-    min_nforce, max_nforce = float(min_nforce), float(max_nforce)
-    if min_nforce < 0.0 or max_nforce < min_nforce:
+    min_nforce = as_number(min_nforce, "min_nforce", 0.0)
+    max_nforce = as_number(max_nforce, "max_nforce", allow_inf=True)
+    if max_nforce < min_nforce:
         raise ValueError(f"need 0 <= min_nforce <= max_nforce, got {min_nforce}, {max_nforce}")
     return min_nforce, max_nforce
 
@@ -69,7 +73,7 @@ class FrictionCone:
         max_nforce: float = np.inf,
     ) -> None:
         self.R = np.eye(3) if R is None else R
-        self.mu, self.nf, self.inner_appr = float(mu), int(nf), bool(inner_appr)
+        self.mu, self.nf, self.inner_appr = mu, nf, inner_appr
         self.min_nforce, self.max_nforce = min_nforce, max_nforce
         self.update()
 
@@ -77,6 +81,7 @@ class FrictionCone:
         """Recompute ``A``, ``lb`` and ``ub`` from the cone parameters."""
         self.R = _check_rotation(self.R)
         self.min_nforce, self.max_nforce = _check_nforce(self.min_nforce, self.max_nforce)
+        _check_facet_parameters(self)
         F, _ = _facets(self.nf, self.mu, self.inner_appr)
         self.A = np.vstack([F, [0.0, 0.0, 1.0]]) @ self.R.T
         self.lb = np.r_[np.full(self.nf, -np.inf), self.min_nforce]
@@ -113,9 +118,7 @@ class CoPSupport:
     def update(self) -> None:
         """Recompute ``A``, ``lb`` and ``ub``."""
         self.R = _check_rotation(self.R)
-        self.box = np.asarray(self.box, dtype=float).reshape(-1)
-        if self.box.shape != (2,):
-            raise ValueError(f"box must be (length, width), got shape {self.box.shape}")
+        self.box = _check_box(self.box, allow_inf=True)  # Crocoddyl's default: unbounded
         rows = _cop_rows(self.box)
         self.A = np.zeros((4, 6))
         with np.errstate(invalid="ignore"):
@@ -145,7 +148,7 @@ class WrenchCone:
         max_nforce: float = np.inf,
     ) -> None:
         self.R = np.eye(3) if R is None else R
-        self.mu, self.nf, self.inner_appr = float(mu), int(nf), bool(inner_appr)
+        self.mu, self.nf, self.inner_appr = mu, nf, inner_appr
         self.box = np.array([np.inf, np.inf]) if box is None else box
         self.min_nforce, self.max_nforce = min_nforce, max_nforce
         self.update()
@@ -155,6 +158,7 @@ class WrenchCone:
         self.R = _check_rotation(self.R)
         self.box = _check_box(self.box)
         self.min_nforce, self.max_nforce = _check_nforce(self.min_nforce, self.max_nforce)
+        _check_facet_parameters(self)
         F, m = _facets(self.nf, self.mu, self.inner_appr)
         X, Y = 0.5 * self.box[0], 0.5 * self.box[1]
         s = -(X + Y) * m

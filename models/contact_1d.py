@@ -24,6 +24,7 @@ import numpy as np
 import pinocchio as pin
 
 from crocopy.state import StateAbstract
+from crocopy.validation import as_number, as_rotation
 from crocopy.versioning import frozen_copy, touch
 
 from .contact_base import ContactDataAbstract, ContactModelAbstract
@@ -34,19 +35,11 @@ _LOCAL = pin.LOCAL
 
 
 def _check_rotation(rotation: np.ndarray) -> np.ndarray:
-    R = np.asarray(rotation, dtype=float)
-    if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-8) or np.linalg.det(R) <= 0.0:
-        raise ValueError(f"rotation must be a rotation matrix of shape (3, 3), got shape {np.shape(rotation)}")
-    return R
+    return as_rotation(rotation, "rotation")
 
 
 def _check_xref(xref: float) -> float:
-    if not np.isscalar(xref) and np.shape(xref) not in ((), (1,)):
-        raise ValueError(f"xref must be a scalar, got shape {np.shape(xref)}")
-    value = float(np.reshape(xref, -1)[0]) if np.ndim(xref) else float(xref)
-    if not np.isfinite(value):
-        raise ValueError(f"xref must be finite, got {xref!r}")
-    return value
+    return as_number(xref, "xref")
 
 
 class ContactModel1D(PointContactProjection, FrameForce, ContactModelAbstract):

@@ -38,6 +38,7 @@ from crocopy.actuation_base import ActuationModelAbstract, JointDataAbstract
 from crocopy.constraints.manager import ConstraintModelManager
 from crocopy.costs.sum import CostModelSum
 from crocopy.diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
+from crocopy.validation import as_bool
 
 from .contact_multiple import ContactModelMultiple
 from .data_collectors import DataCollectorJointActMultibodyInContact
@@ -109,7 +110,7 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         enable_force: bool = False,
     ) -> None:
         if constraints is not None and not isinstance(constraints, ConstraintModelManager):
-            constraints, inv_damping, enable_force = None, constraints, bool(inv_damping)
+            constraints, inv_damping, enable_force = None, constraints, inv_damping
         if not isinstance(getattr(state, "pinocchio", None), pin.Model):
             raise ValueError(f"state must be a StateMultibody, got {type(state).__name__}")
         if not isinstance(actuation, ActuationModelAbstract):
@@ -138,7 +139,7 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         self.costs = costs
         self.constraints = constraints
         self.pinocchio = state.pinocchio
-        self.enable_force = bool(enable_force)
+        self.enable_force = as_bool(enable_force, "enable_force")
         self._act = ActuationStructure(actuation, state.nv)
         self.use_pinocchio_constraints = True
         self.JMinvJt_damping = inv_damping

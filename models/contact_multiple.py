@@ -15,6 +15,7 @@ import numpy as np
 import pinocchio as pin
 
 from crocopy.state import StateAbstract
+from crocopy.validation import as_bool
 from crocopy.versioning import ParametersSeen
 
 from .contact_base import ContactDataAbstract, ContactModelAbstract
@@ -73,7 +74,7 @@ class ContactModelMultiple(ForceModelMultiple):
             If ``contact`` is not a ``ContactModelAbstract``, ``name`` is already used, or ``contact``
             has another ``nu`` or another robot.
         """
-        self._add(name, contact, ContactItem(name, contact, bool(active)))
+        self._add(name, contact, ContactItem(name, contact, as_bool(active, "active")))
 
     def removeContact(self, name: str) -> None:
         """Remove the contact ``name`` (``KeyError`` if unknown)."""

@@ -21,7 +21,7 @@ import numpy as np
 import pinocchio as pin
 
 from crocopy.state import StateAbstract
-from crocopy.validation import check_finite
+from crocopy.validation import as_rotation, check_finite
 from crocopy.versioning import frozen_copy, touch
 
 from .contact_base import ContactDataAbstract, ContactModelAbstract, check_gains, check_position
@@ -254,6 +254,7 @@ class ContactModel6D(_FrameContact):
         if not isinstance(value, pin.SE3):
             raise ValueError(f"pref must be a pinocchio.SE3, got {type(value).__name__}")
         check_finite(value.homogeneous, "pref")
+        as_rotation(value.rotation, "pref.rotation")
         self._pref = value.copy()
         touch(self)
 

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from crocopy.validation import as_vector
+from crocopy.validation import as_number, as_vector
 from crocopy.versioning import frozen_copy
 
 from .actuations import (
@@ -52,10 +52,7 @@ class KKTDampingMixin:
 
     @JMinvJt_damping.setter
     def JMinvJt_damping(self, value: float) -> None:
-        value = float(value)
-        if not value >= 0.0:
-            raise ValueError(f"inv_damping must be non-negative, got {value}")
-        self._damping = value
+        self._damping = as_number(value, "JMinvJt_damping (inv_damping)", 0.0)
 
 
 class ActuationStructure:

@@ -28,7 +28,7 @@ import pinocchio as pin
 from crocopy.guards import Guarded, point_guards
 from crocopy.named_items import ModelItems
 from crocopy.state import StateAbstract
-from crocopy.validation import as_count
+from crocopy.validation import as_count, as_index
 from crocopy.versioning import Parametrized, made_from
 
 REFERENCE_FRAMES = (pin.LOCAL, pin.WORLD, pin.LOCAL_WORLD_ALIGNED)
@@ -50,6 +50,8 @@ def frame_id(state: StateAbstract, id: int | str, name: str = "id") -> int:
     ------
     ValueError
         If the model has no such frame.
+    TypeError
+        If ``id`` is neither an int (a bool is not) nor a str.
     """
     model = getattr(state, "pinocchio", None)
     if not isinstance(model, pin.Model):
@@ -58,18 +60,15 @@ def frame_id(state: StateAbstract, id: int | str, name: str = "id") -> int:
         if not model.existFrame(id):
             raise ValueError(f"{name}: the model has no frame named {id!r}")
         return int(model.getFrameId(id))
-    try:
-        fid = int(id)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a frame index or a frame name, got {id!r}") from exc
-    if fid != id or not 0 <= fid < model.nframes:
+    fid = as_index(id, name, None, "a frame index (int) or a frame name (str)")
+    if not 0 <= fid < model.nframes:
         raise ValueError(f"{name} = {id!r} is not a frame index of the model (0 <= id < {model.nframes})")
     return fid
 
 
 def check_reference_frame(type: pin.ReferenceFrame) -> pin.ReferenceFrame:
     """Accept ``pinocchio.LOCAL``, ``pinocchio.WORLD`` and ``pinocchio.LOCAL_WORLD_ALIGNED``."""
-    if type not in REFERENCE_FRAMES:
+    if not isinstance(type, pin.ReferenceFrame) or type not in REFERENCE_FRAMES:
         raise ValueError(
             f"type must be pinocchio.LOCAL, pinocchio.WORLD or pinocchio.LOCAL_WORLD_ALIGNED, got {type!r}"
         )

@@ -34,6 +34,7 @@ from crocopy.action_base import ActionDataAbstract, ActionModelAbstract
 from crocopy.array_views import share_arrays
 from crocopy.constraints.manager import ConstraintModelManager
 from crocopy.costs.sum import CostModelSum
+from crocopy.validation import as_bool
 
 from .contact_fwd_dynamics import all_finite, link_cost_data
 from .data_collectors import DataCollectorMultibodyInImpulse
@@ -101,7 +102,7 @@ class ActionModelImpulseFwdDynamics(ArmatureMixin, KKTDampingMixin, ActionModelA
         self.pinocchio = state.pinocchio
         self.r_coeff = r_coeff
         self.JMinvJt_damping = inv_damping
-        self.enable_force = bool(enable_force)
+        self.enable_force = as_bool(enable_force, "enable_force")
         self.armature = np.zeros(state.nv)
         self._model_nograv = state.pinocchio.copy()
         self._model_nograv.gravity.setZero()

@@ -14,6 +14,7 @@ import numpy as np
 import pinocchio as pin
 
 from crocopy.state import StateAbstract
+from crocopy.validation import as_bool
 
 from .force_base import ForceDataMultiple, ForceModelMultiple
 from .impulse_base import ImpulseDataAbstract, ImpulseModelAbstract
@@ -55,7 +56,7 @@ class ImpulseModelMultiple(ForceModelMultiple):
     def addImpulse(self, name: str, impulse: ImpulseModelAbstract, active: bool = True) -> None:
         """Add ``impulse`` under ``name`` (``ValueError`` if it is no ``ImpulseModelAbstract``, the name is
         taken or the robot differs)."""
-        self._add(name, impulse, ImpulseItem(name, impulse, bool(active)))
+        self._add(name, impulse, ImpulseItem(name, impulse, as_bool(active, "active")))
 
     def removeImpulse(self, name: str) -> None:
         """Remove the impulse ``name`` (``KeyError`` if unknown)."""

@@ -27,7 +27,7 @@ import pinocchio as pin
 from crocopy.data_collector import DataCollectorAbstract
 from crocopy.residuals.base import ResidualDataAbstract, ResidualModelAbstract
 from crocopy.state import StateAbstract
-from crocopy.validation import check_finite
+from crocopy.validation import as_bool, as_optional_count, check_finite
 
 from .cones import CoPSupport, FrictionCone, WrenchCone
 from .force_base import frame_id
@@ -72,9 +72,9 @@ class _ForceResidual(ResidualModelAbstract):
 
     def __init__(self, state: StateAbstract, id: int | str, nr: int, nu: int | None, fwddyn: bool) -> None:
         fid = frame_id(state, id)
-        super().__init__(state, nr, nu, True, True, True)
+        super().__init__(state, nr, as_optional_count(nu, "nu"), True, True, True)
         self.id = fid
-        self.fwddyn = bool(fwddyn)
+        self.fwddyn = as_bool(fwddyn, "fwddyn")
 
     def createData(self, data: DataCollectorAbstract | None = None) -> "ResidualDataContactForce":
         return ResidualDataContactForce(self, data)

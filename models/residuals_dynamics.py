@@ -23,18 +23,21 @@ from crocopy.actuation_base import ActuationModelAbstract
 from crocopy.data_collector import DataCollectorAbstract
 from crocopy.residuals.base import ResidualDataAbstract, ResidualModelAbstract
 from crocopy.state import StateAbstract
-from crocopy.validation import as_vector
+from crocopy.validation import ArgumentTypeError, as_optional_count, as_vector
 from crocopy.versioning import frozen_copy
 
 from .residuals_frame import check_same_robot, check_state, shared_pinocchio
 from .state_multibody import StateMultibody
 
 
-def _split_ref_nu(ref: np.ndarray | int | None, nu: int | None, default_size: int) -> tuple[np.ndarray, int | None]:
-    """Crocoddyl's overloads ``(state, ref, nu)``, ``(state, ref)``, ``(state, nu)``, ``(state)``."""
+def _split_ref_nu(ref: np.ndarray | int | None, nu: int | None, default_size: int,
+                  name: str) -> tuple[np.ndarray, int | None]:
+    """Crocoddyl's overloads ``(state, ref, nu)``, ``(state, ref)``, ``(state, nu)``, ``(state)`` (``name``: the
+    reference's argument name, for errors)."""
     if ref is not None and np.isscalar(ref):
-        if nu is not None:
-            raise ValueError("give the reference as an array when nu is also given")
+        if nu is not None or not isinstance(ref, int | np.integer) or isinstance(ref, bool | np.bool_):
+            raise ArgumentTypeError(f"{name} must be a vector (or, without nu, an int nu), got"
+                                    f" {type(ref).__name__} {ref!r:.40}")
         return np.zeros(default_size), int(ref)
     return (np.zeros(default_size) if ref is None else ref), nu
 
@@ -92,7 +95,7 @@ class ResidualModelCentroidalMomentum(ResidualModelAbstract):
     """
 
     def __init__(self, state: StateMultibody, href: np.ndarray, nu: int | None = None) -> None:
-        super().__init__(check_state(state), 6, nu, True, True, False)
+        super().__init__(check_state(state), 6, as_optional_count(nu, "nu"), True, True, False)
         self.reference = href
 
     @property
@@ -199,7 +202,7 @@ class ResidualModelJointEffort(ResidualModelAbstract):
             raise ValueError(f"actuation must be an ActuationModelAbstract, got {type(actuation).__name__}")
         if isinstance(state, StateMultibody):
             check_same_robot(state, actuation, "actuation")
-        uref, nu = _split_ref_nu(uref, nu, actuation.nu)
+        uref, nu = _split_ref_nu(uref, nu, actuation.nu, "uref")
         super().__init__(state, actuation.nu, nu, not fwddyn, not fwddyn, True)
         self.actuation = actuation
         self.fwddyn = bool(fwddyn)
@@ -247,7 +250,7 @@ class ResidualModelJointAcceleration(ResidualModelAbstract):
     """
 
     def __init__(self, state: StateAbstract, aref: np.ndarray | int | None = None, nu: int | None = None) -> None:
-        aref, nu = _split_ref_nu(aref, nu, state.nv)
+        aref, nu = _split_ref_nu(aref, nu, state.nv, "aref")
         super().__init__(state, state.nv, nu, True, True, True)
         self.reference = aref
 

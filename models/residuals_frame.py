@@ -21,7 +21,7 @@ import pinocchio as pin
 
 from crocopy.data_collector import DataCollectorAbstract
 from crocopy.residuals.base import ResidualDataAbstract, ResidualModelAbstract
-from crocopy.validation import as_matrix, as_vector, check_finite
+from crocopy.validation import as_optional_count, as_rotation, as_vector, check_finite
 from crocopy.versioning import frozen_copy
 
 from .state_multibody import StateMultibody
@@ -76,7 +76,7 @@ class _FrameResidual(ResidualModelAbstract):
     def __init__(self, state: StateMultibody, id: int | str, nr: int, nu: int | None, v_dependent: bool) -> None:
         check_state(state)
         fid = frame_id(state, id)
-        super().__init__(state, nr, nu, True, v_dependent, False)
+        super().__init__(state, nr, as_optional_count(nu, "nu"), True, v_dependent, False)
         self._id = fid
 
     @property
@@ -139,6 +139,7 @@ class ResidualModelFramePlacement(_FrameResidual):
         if not isinstance(value, pin.SE3):
             raise ValueError(f"pref must be a pinocchio.SE3, got {type(value).__name__}")
         check_finite(value.homogeneous, "pref")
+        as_rotation(value.rotation, "pref.rotation")
         self._pref = value.copy()
 
     def calc(self, data: ResidualDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
@@ -216,10 +217,7 @@ class ResidualModelFrameRotation(_FrameResidual):
 
     @reference.setter
     def reference(self, value: np.ndarray) -> None:
-        R = as_matrix(value, (3, 3), "Rref")
-        if not np.allclose(R.T @ R, np.eye(3), atol=1e-6):
-            raise ValueError("Rref must be a rotation matrix (orthonormal)")
-        self._Rref = frozen_copy(R)
+        self._Rref = frozen_copy(as_rotation(value, "Rref"))
 
     def calc(self, data: ResidualDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
         oMf = pin.updateFramePlacement(self.state.pinocchio, data.pinocchio, self._id)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from robots import load
 
@@ -79,24 +79,63 @@ def test_containers_are_python_containers():
     assert isinstance(costs.active_set, crocopy.StdSet_String)
 
 
+def _direction(v: np.ndarray) -> np.ndarray:
+    v = v / np.abs(v).max()
+    return v / np.linalg.norm(v)
+
+
+ADVERSARIAL_PAIRS = [
+    ([1.0, 0.0, 2.2e-158], [-1.0, 0.0, 0.0]),  # issue 27: NaN (the old s² underflowed)
+    ([1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]),  # exactly opposite along each axis
+    ([0.0, 2.0, 0.0], [0.0, -1e-300, 0.0]),
+    ([0.0, 0.0, 3e300], [0.0, 0.0, -5e-324]),
+    ([0.6, 0.8, 0.0], [-0.6, -0.8, 1e-17]),  # nearly opposite off the axes: u × w is round-off
+    ([0.6, 0.8, 1e-300], [-0.6, -0.8, 0.0]),
+    ([1.0, 1e-320, 0.0], [-1.0, 0.0, 0.0]),  # subnormal components
+    ([5e-324, 0.0, 0.0], [0.0, 5e-324, 5e-324]),
+    ([1e-300, 2e-300, -1e-300], [3e-310, 0.0, 1e-310]),  # tiny
+    ([1.7e308, -1.7e308, 1.7e308], [-1.7e308, 1.7e308, -1.6e308]),  # huge: |a| overflows
+    ([1.0, 1e-200, 0.0], [1.0, 0.0, 1e-200]),  # nearly parallel
+    ([2.0, 2.0, 2.0], [1.0, 1.0, 1.0]),  # parallel
+]
+COMPONENT = st.one_of(st.floats(-10, 10), st.floats(allow_nan=False, allow_infinity=False))
+
+
+def _with_examples(pairs):
+    def decorate(test):
+        for a, b in reversed(pairs):
+            test = example(a, b)(test)
+        return test
+    return decorate
+
+
 @settings(max_examples=60, deadline=None)
-@given(st.lists(st.floats(-10, 10), min_size=3, max_size=3), st.lists(st.floats(-10, 10), min_size=3, max_size=3))
+@given(st.lists(COMPONENT, min_size=3, max_size=3), st.lists(COMPONENT, min_size=3, max_size=3))
+@_with_examples(ADVERSARIAL_PAIRS)
 def test_rotation_from_two_vectors(a, b):
     a, b = np.array(a), np.array(b)
     R = crocopy.rotationMatrixFromTwoVectors(a, b)
-    np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-9)
-    assert np.linalg.det(R) == pytest.approx(1.0, abs=1e-9)
-    na, nb = np.linalg.norm(a), np.linalg.norm(b)
-    axis = np.cross(a, b)
-    if na > 1e-6 and nb > 1e-6 and np.linalg.norm(axis) > 1e-6 * na * nb:
-        np.testing.assert_allclose(R @ (a / na), b / nb, atol=1e-9)
-        np.testing.assert_allclose(R @ axis, axis, atol=1e-9 * max(1.0, np.linalg.norm(axis)))  # smallest angle
+    assert np.all(np.isfinite(R))
+    np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-12)
+    assert np.linalg.det(R) == pytest.approx(1.0, abs=1e-12)
+    if not a.any() or not b.any():
+        np.testing.assert_array_equal(R, np.eye(3))
+        return
+    u, w = _direction(a), _direction(b)
+    np.testing.assert_allclose(R @ u, w, atol=1e-12)  # every pair of non-zero vectors, at every scale
+    axis = np.cross(u, w)
+    if np.linalg.norm(axis) > 1e-6:
+        np.testing.assert_allclose(R @ axis, axis, atol=1e-12)  # about u × w: the smallest angle
 
 
 def test_rotation_from_two_vectors_degenerate_and_bad_input():
     ez = np.array([0.0, 0.0, 1.0])
-    for b in (ez, -ez, 2 * ez, np.zeros(3)):
+    for b in (ez, 2 * ez, np.zeros(3)):
         np.testing.assert_array_equal(crocopy.rotationMatrixFromTwoVectors(ez, b), np.eye(3))
+    for e in np.eye(3):  # opposite: a half-turn about an axis perpendicular to a
+        R = crocopy.rotationMatrixFromTwoVectors(e, -3 * e)
+        np.testing.assert_allclose(R @ e, -e, atol=1e-15)
+        assert np.trace(R) == pytest.approx(-1.0, abs=1e-15)
     np.testing.assert_allclose(crocopy.rotationMatrixFromTwoVectors([0, 0, 2], [0, 3, 0]),
                                [[1, 0, 0], [0, 0, 1], [0, -1, 0]], atol=1e-15)
     with pytest.raises(ValueError, match=r"a has shape \(2,\), expected \(3,\)"):

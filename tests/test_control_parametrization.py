@@ -401,7 +401,7 @@ def test_bad_integrator_arguments_raise_clear_errors():
         Euler(diff, crocopy.ControlParametrizationModelPolyOne(3))
     with pytest.raises(TypeError, match="control must be a ControlParametrizationModelAbstract, got str"):
         Euler(diff, control="poly1")
-    with pytest.raises(TypeError, match="timeStep must be a number, got str"):
+    with pytest.raises(TypeError, match="timeStep must be a real number, got str"):
         Euler(diff, "0.1")
     with pytest.raises(TypeError, match="takes at most 4 positional arguments"):
         Euler(diff, crocopy.ControlParametrizationModelPolyZero(2), 0.1, True, 1)
@@ -413,5 +413,5 @@ def test_bad_integrator_arguments_raise_clear_errors():
         RKModel(diff, crocopy.ControlParametrizationModelPolyZero(2))
     with pytest.raises(ValueError, match="rktype must be RKType.two, three or four"):
         RKModel(diff, crocopy.ControlParametrizationModelPolyZero(2), 5)
-    with pytest.raises(ValueError, match="timeStep must be a non-negative number"):
+    with pytest.raises(ValueError, match="timeStep must be >= 0.0, got -1.0"):
         RKModel(diff, RK.four, -1.0)

@@ -24,6 +24,7 @@ from robots import load
 from test_batch import _dlqr, _limited_unicycle
 
 import crocopy
+from crocopy.problems.user_residual import NumbaFrameTranslation
 
 OUTPUTS = ("cost", "xnext", "xout", "Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu", "g", "Gx", "Gu", "h", "Hx", "Hu")
 PART_ARRAYS = ("r", "Rx", "Ru", "Ar", "Arr", "a_value", "tau", "dtau_dx", "dtau_du", "u", "du_ds", "Jc", "a0",
@@ -218,6 +219,9 @@ CASES: dict[str, Callable] = {
     "ResidualModelControl": _residual_case(lambda st, nu: crocopy.ResidualModelControl(st, np.ones(nu))),
     "ResidualModelFramePlacement": _residual_case(
         lambda st, nu: crocopy.ResidualModelFramePlacement(st, st.pinocchio.nframes - 1, pin.SE3.Random(), nu)
+    ),
+    "ResidualModelNumba": _residual_case(
+        lambda st, nu: NumbaFrameTranslation(st, st.pinocchio.nframes - 1, np.ones(3), nu)
     ),
     "ResidualModelFrameTranslation": _residual_case(
         lambda st, nu: crocopy.ResidualModelFrameTranslation(st, st.pinocchio.nframes - 1, np.ones(3), nu)

@@ -70,6 +70,73 @@ def test_a_stale_or_unreadable_index_counts_as_cold(monkeypatch, tmp_path):
     assert not kernels.cache_is_cold([])
 
 
+def _thrice(x):
+    return 3.0 * x
+
+
+def _truncate(path: Path) -> None:
+    path.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+
+
+@pytest.mark.parametrize("damage", ["truncated index", "garbage index", "truncated data", "foreign data"])
+def test_a_damaged_cache_entry_is_set_aside_with_one_warning_and_rebuilt(damage, monkeypatch, tmp_path, caplog):
+    monkeypatch.setattr(kernels, "KERNELS", [])
+    monkeypatch.setattr(kernels, "cache_dir", str(tmp_path))
+    assert kernels.compiled(_twice)(1.0) == 2.0 and kernels.compiled(_thrice)(1.0) == 3.0
+    (index,) = tmp_path.rglob("*._twice-*.nbi")
+    (data,) = tmp_path.rglob("*._twice-*.nbc")
+    (other,) = tmp_path.rglob("*._thrice-*.nbc")
+    {"truncated index": lambda: _truncate(index), "garbage index": lambda: index.write_bytes(b"\x80\x04garbage"),
+     "truncated data": lambda: _truncate(data), "foreign data": lambda: data.write_bytes(other.read_bytes()),
+     }[damage]()
+    damaged = index if "index" in damage else data
+    with caplog.at_level("WARNING", logger="crocopy"):
+        again = kernels.compiled(_twice)  # a later process: reads the damaged entry
+        assert again(2.5) == 5.0 and kernel_warmup.compilations([again]) == 1  # compiled, not loaded
+    (record,) = caplog.records
+    assert record.levelname == "WARNING" and "\n" not in record.getMessage()
+    assert f"damaged kernel cache file {damaged} set aside" in record.getMessage()
+    caplog.clear()
+    with caplog.at_level("WARNING", logger="crocopy"):
+        third = kernels.compiled(_twice)  # the rebuilt entry loads cleanly
+        assert kernels.is_cached(third) and third(1.0) == 2.0 and kernel_warmup.compilations([third]) == 0
+    assert caplog.records == []
+
+
+TINY = """
+import sys
+from crocopy import kernel_warmup, kernels
+
+def _scaled(x, s):
+    return s * x.sum()
+
+scaled = kernels.compiled(_scaled)
+import numpy as np
+print(scaled(np.arange(4.0), 0.5), kernel_warmup.compilations([scaled]))
+"""
+
+
+@pytest.mark.parametrize("suffix", [".nbi", ".nbc"])
+def test_a_run_on_a_cache_with_a_file_cut_in_half_succeeds_with_one_warning_line(suffix, tmp_path):
+    (tmp_path / "tiny.py").write_text(TINY)
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba"), "OMP_NUM_THREADS": "1"}
+
+    def run() -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "tiny.py"], capture_output=True, text=True, env=env, cwd=tmp_path,
+                              timeout=300)
+
+    first = run()
+    assert (first.returncode, first.stdout, first.stderr) == (0, "3.0 1\n", "")
+    (cut,) = (tmp_path / "numba").rglob(f"*._scaled-*{suffix}")
+    _truncate(cut)
+    damaged = run()
+    assert damaged.returncode == 0 and damaged.stdout == "3.0 1\n"  # right answer, compiled again
+    (line,) = damaged.stderr.splitlines()
+    assert line.startswith(f"crocopy: damaged kernel cache file {cut} set aside (")
+    repaired = run()
+    assert (repaired.returncode, repaired.stdout, repaired.stderr) == (0, "3.0 0\n", "")  # loaded, no warning
+
+
 def test_announce_cold_cache(monkeypatch, capsys):
     monkeypatch.setattr(kernels, "cache_is_cold", lambda: True)
     assert kernel_warmup.announce_cold_cache()

@@ -352,3 +352,102 @@ def test_flag_only_trusted_path_leaves_the_classes_alone(monkeypatch):
     inside = []
     assert solver.solve([], [], 20)
     assert m.calls > 0 and m.checked_calls == 0 and inside and all(inside)
+
+
+# ---------------------------------------------------------------- issue 27: the last unclear errors and nonsense
+def test_scalar_and_misshaped_references_name_the_argument():
+    state = crocopy.StateVector(4)
+    assert crocopy.ResidualModelState(state, 3).nu == 3  # Crocoddyl's (state, nu)
+    with pytest.raises(ValueError, match=r"xref has shape \(\), expected \(4,\)"):
+        crocopy.ResidualModelState(state, 1.0, 2)
+    with pytest.raises(TypeError, match=r"xref must be a vector of shape \(4,\), got str 'abc'"):
+        crocopy.ResidualModelState(state, "abc", 2)
+    with pytest.raises(TypeError, match="nu must be an integer, got float"):
+        crocopy.ResidualModelState(state, np.zeros(4), 2.0)
+    assert crocopy.ResidualModelControl(state, 2).nu == 2
+    with pytest.raises(TypeError, match=r"uref must be a vector of shape \(n,\) of real numbers, got dtype complex"):
+        crocopy.ResidualModelControl(state, np.zeros(2) + 1j)
+    with pytest.raises(ValueError, match=r"weights has shape \(2, 2\), expected \(n,\)"):
+        crocopy.ActivationModelWeightedQuad(np.ones((2, 2)))
+
+
+def test_impossible_bounds_are_refused():
+    model = crocopy.ActionModelUnicycle()
+    with pytest.raises(ValueError, match=r"u_lb\[1\] = inf: a lower bound of inf admits no value"):
+        model.u_lb = np.array([0.0, np.inf])
+    with pytest.raises(ValueError, match=r"u_ub\[0\] = -inf: an upper bound of -inf admits no value"):
+        model.u_ub = np.array([-np.inf, 1.0])
+    model.u_lb, model.u_ub = np.array([-np.inf, -1.0]), np.array([np.inf, 1.0])  # unbounded sides are fine
+    with pytest.raises(ValueError, match=r"lb\[0\] = inf"):
+        crocopy.ActivationBounds(np.full(2, np.inf), np.full(2, np.inf))
+    with pytest.raises(ValueError, match="lb and ub must have the same shape"):
+        crocopy.ActivationBounds(np.zeros(2), np.ones(3))
+    with pytest.raises(ValueError, match=r"ub\[1\] = -inf"):
+        crocopy.StateVector(2).ub = np.array([1.0, -np.inf])
+
+
+def test_complex_and_boolean_numbers_are_refused():
+    with pytest.raises(TypeError, match="alpha must be a real number, got complex"):
+        crocopy.ActivationModelQuadFlatLog(2, 1j)
+    with pytest.raises(TypeError, match="beta must be a real number, got bool"):
+        crocopy.ActivationBounds(np.zeros(2), np.ones(2), True)
+    integrated = crocopy.IntegratedActionModelEuler(crocopy.DifferentialActionModelLQR(2, 1), 0.1)
+    with pytest.raises(TypeError, match=r"dt \(timeStep\) must be a real number, got str"):
+        integrated.dt = "0.1"
+    solver = crocopy.SolverFDDP(crocopy.ShootingProblem(np.zeros(3), [crocopy.ActionModelUnicycle()] * 2,
+                                                        crocopy.ActionModelUnicycle()))
+    with pytest.raises(ValueError, match="reg_min must be a finite number, got inf"):
+        solver.reg_min = np.inf
+    solver.reg_max = np.inf  # no maximum
+
+
+def test_names_and_flags_of_named_items_have_their_types():
+    state = crocopy.StateVector(2)
+    costs = crocopy.CostModelSum(state, 1)
+    costs.addCost("u", crocopy.CostModelResidual(state, crocopy.ResidualModelControl(state, 1)), 1.0)
+    for key in (True, 1, 1.0, None, b"u"):
+        with pytest.raises(TypeError, match=rf"name must be a str, got {type(key).__name__}"):
+            costs.changeCostStatus(key, False)
+    manager = crocopy.ConstraintModelManager(state, 1)
+    residual = crocopy.ResidualModelControl(state, 1)
+    with pytest.raises(TypeError, match="active must be a bool, got str"):
+        manager.addConstraint("c", crocopy.ConstraintModelResidual(state, residual, -np.ones(1), np.ones(1)), "yes")
+
+
+def test_direct_calls_that_overflow_warn_at_every_level():
+    state = crocopy.StateVector(2)
+    huge = np.full(2, 1e200)
+    activation = crocopy.ActivationModelQuad(2)
+    residual = crocopy.ResidualModelState(state, np.zeros(2), 1)
+    cost = crocopy.CostModelResidual(state, residual)
+    costs = crocopy.CostModelSum(state, 1)
+    costs.addCost("x", cost, 1.0)
+    collector = crocopy.DataCollectorAbstract()
+    for model, data, args, what in ((activation, activation.createData(), (huge,), "a_value"),
+                                    (cost, cost.createData(collector), (huge, np.zeros(1)), "cost"),
+                                    (costs, costs.createData(collector), (huge, np.zeros(1)), "cost")):
+        with pytest.warns(NonFiniteWarning, match=rf"{type(model).__name__}: data.{what} is not finite"):
+            model.calc(data, *args)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        residual.calc(residual.createData(collector), huge, np.zeros(1))  # r = x - xref: finite, no warning
+    with pytest.warns(NonFiniteWarning, match=r"StateVector.diff: the result is not finite"):
+        state.diff(np.full(2, -1.7e308), np.full(2, 1.7e308))
+
+
+def test_index_and_rotation_checkers():
+    from crocopy.validation import as_index, as_rotation
+
+    assert as_index(np.int64(2), "i", 3) == 2
+    for value, error, message in ((True, TypeError, "i must be an int index, got bool"),
+                                  (1.0, TypeError, "i must be an int index, got float"),
+                                  (3, ValueError, r"i = 3 is out of range \(0 <= i < 3\)"),
+                                  (-1, ValueError, "i = -1 is out of range")):
+        with pytest.raises(error, match=message):
+            as_index(value, "i", 3)
+    R = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    np.testing.assert_array_equal(as_rotation(R, "R"), R)
+    with pytest.raises(ValueError, match="R must be a rotation matrix .* got a reflection of determinant -1"):
+        as_rotation(R @ np.diag([1.0, 1.0, -1.0]), "R")
+    with pytest.raises(ValueError, match=r"R must be a rotation matrix .* \|RᵀR - I\| = 0.002 of determinant 1.003"):
+        as_rotation(1.001 * R, "R")

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..action_base import ActionDataAbstract, ActionModelAbstract
-from ..validation import as_vector, check_bounds
+from ..validation import as_bound, as_number, check_bounds
 
 __all__ = ["ActionDataControlPenalty", "ActionModelControlPenalty"]
 
@@ -48,12 +48,10 @@ class ActionModelControlPenalty(ActionModelAbstract):
             raise ValueError(f"model must be an ActionModelAbstract, got {type(model).__name__}")
         super().__init__(model.state, model.nu, model.nr, model.ng, model.nh, model.ng_T, model.nh_T)
         self._follow_constraints(model)
-        if not weight >= 0.0:
-            raise ValueError(f"weight must be non-negative, got {weight}")
         self.model = model
-        self.weight = float(weight)
-        self.lb = as_vector(model.u_lb if lb is None else lb, model.nu, "lb", allow_nonfinite=True)
-        self.ub = as_vector(model.u_ub if ub is None else ub, model.nu, "ub", allow_nonfinite=True)
+        self.weight = as_number(weight, "weight", 0.0)
+        self.lb = as_bound(model.u_lb if lb is None else lb, model.nu, "lb", upper=False)
+        self.ub = as_bound(model.u_ub if ub is None else ub, model.nu, "ub", upper=True)
         check_bounds(self.lb, self.ub, "lb", "ub")
 
     def createData(self) -> "ActionDataControlPenalty":

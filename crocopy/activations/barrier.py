@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..validation import as_vector, check_bounds
+from ..validation import as_bound, as_number, as_vector, check_bounds
 from ..versioning import frozen_copy, touch
 from .base import ActivationDataAbstract, ActivationModelAbstract
 from .quad import ActivationWeights
@@ -22,10 +22,11 @@ class ActivationBounds:
     """
 
     def __init__(self, lb: np.ndarray, ub: np.ndarray, beta: float = 1.0) -> None:
-        lb = np.asarray(lb, dtype=float).reshape(-1)
-        ub = as_vector(ub, lb.size, "ub", allow_nonfinite=True)
-        lb = as_vector(lb, lb.size, "lb", allow_nonfinite=True)
+        lb, ub = as_bound(lb, None, "lb", upper=False), as_bound(ub, None, "ub", upper=True)
+        if lb.shape != ub.shape:
+            raise ValueError(f"lb and ub must have the same shape, got {lb.shape} and {ub.shape}")
         check_bounds(lb, ub, "lb", "ub")
+        beta = as_number(beta, "beta")
         if not 0.0 < beta <= 1.0:
             raise ValueError(f"beta must be in (0, 1], got {beta}")
         if beta < 1.0:
@@ -42,7 +43,7 @@ class ActivationBounds:
 
     @lb.setter
     def lb(self, value: np.ndarray) -> None:
-        value = as_vector(value, self._lb.size, "lb", allow_nonfinite=True)
+        value = as_bound(value, self._lb.size, "lb", upper=False)
         check_bounds(value, self._ub, "lb", "ub")
         self._lb = frozen_copy(value)
         touch(self)
@@ -54,7 +55,7 @@ class ActivationBounds:
 
     @ub.setter
     def ub(self, value: np.ndarray) -> None:
-        value = as_vector(value, self._ub.size, "ub", allow_nonfinite=True)
+        value = as_bound(value, self._ub.size, "ub", upper=True)
         check_bounds(self._lb, value, "lb", "ub")
         self._ub = frozen_copy(value)
         touch(self)

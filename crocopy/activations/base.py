@@ -11,7 +11,7 @@ import numpy as np
 
 from ..array_views import KeepsViews, tolerate_python_model
 from ..guards import Guard, Guarded
-from ..validation import as_count, residual_arg
+from ..validation import as_count, residual_arg, warn_after
 from ..versioning import Parametrized
 
 _R_PARAMS = (("data", None), ("r", residual_arg))
@@ -28,7 +28,7 @@ class ActivationModelAbstract(Parametrized, Guarded):
     diagonal = False
 
     #: A user's ``calc(data, r)``/``calcDiff(data, r)`` is checked: ``r`` of shape ``(nr,)``, finite.
-    _guards = {"calc": Guard(_R_PARAMS), "calcDiff": Guard(_R_PARAMS)}
+    _guards = {name: Guard(_R_PARAMS, after=after) for name, after in warn_after("a_value", diff=("Ar", "Arr")).items()}
 
     def __init__(self, nr: int) -> None:
         self.nr = as_count(nr, "nr")

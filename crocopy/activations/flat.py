@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..validation import as_bool, as_number
 from .base import ActivationDataAbstract, ActivationModelAbstract
 
 
@@ -35,7 +36,7 @@ class _QuadFlat(ActivationModelAbstract):
     def __init__(self, nr: int, alpha: float = 1.0, true_hessian: bool = False) -> None:
         super().__init__(nr)
         self.alpha = alpha
-        self._true_hessian = bool(true_hessian)
+        self._true_hessian = as_bool(true_hessian, "true_hessian")
         self.diagonal = not self._true_hessian
 
     @property
@@ -45,10 +46,7 @@ class _QuadFlat(ActivationModelAbstract):
 
     @alpha.setter
     def alpha(self, value: float) -> None:
-        value = float(value)
-        if not value > 0.0 or not np.isfinite(value):
-            raise ValueError(f"alpha must be a positive finite number, got {value}")
-        self._alpha = value
+        self._alpha = as_number(value, "alpha", 0.0, strict=True)
 
     @property
     def true_hessian(self) -> bool:

@@ -49,9 +49,9 @@ class ActivationModelWeightedQuad(ActivationWeights, ActivationModelAbstract):
     diagonal = True
 
     def __init__(self, weights: np.ndarray) -> None:
-        weights = np.asarray(weights, dtype=float).reshape(-1)
+        weights = as_vector(weights, None, "weights")
         super().__init__(weights.size)
-        self._weights = frozen_copy(as_vector(weights, self.nr, "weights"))
+        self._weights = frozen_copy(weights)
 
     def barrier_form(self) -> tuple:
         return 0.0, 0.0, self._weights

@@ -11,6 +11,7 @@ from ..array_views import share_arrays
 from ..data_collector import DataCollectorAbstract
 from ..guards import Guarded, point_control_guards
 from ..named_items import ModelItems
+from ..validation import as_bool
 from ..versioning import made_from
 from .base import ConstraintModelAbstract
 
@@ -78,7 +79,7 @@ class ConstraintModelManager(ModelItems, Guarded):
             has another ``nu`` or another state dimension.
         """
         self._check_model(name, constraint)
-        self._insert(name, ConstraintItem(name, constraint, bool(active)))
+        self._insert(name, ConstraintItem(name, constraint, as_bool(active, "active")))
 
     def removeConstraint(self, name: str) -> None:
         """Remove the constraint ``name``."""

@@ -15,6 +15,7 @@ from ..data_collector import DataCollectorAbstract
 from ..guards import Guarded, point_control_guards
 from ..residuals.base import ResidualModelAbstract
 from ..state import StateAbstract
+from ..validation import warn_after
 from ..versioning import Parametrized
 
 
@@ -53,7 +54,7 @@ class CostModelAbstract(Parametrized, Guarded):
 
     _read_only = frozenset({"state", "activation", "residual"})
 
-    _guards = point_control_guards()
+    _guards = point_control_guards(warn_after("cost", diff=("Lx", "Lu", "Lxx", "Lxu", "Luu")))
 
     def __init__(
         self,

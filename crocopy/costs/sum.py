@@ -10,7 +10,7 @@ from ..array_views import share_arrays
 from ..data_collector import DataCollectorAbstract
 from ..guards import Guarded, point_control_guards
 from ..named_items import ModelItems
-from ..validation import as_bool, as_number
+from ..validation import as_bool, as_number, warn_after
 from ..versioning import ParametersSeen, ParametersVersion, made_from, touch
 from .base import CostModelAbstract, CostModelResidual
 from .stack import CostStack
@@ -50,7 +50,7 @@ class CostModelSum(ModelItems, Guarded):
 
     _kind = "cost"
     _model_type = CostModelAbstract
-    _guards = point_control_guards()
+    _guards = point_control_guards(warn_after("cost", diff=("Lx", "Lu", "Lxx", "Lxu", "Luu")))
 
     @property
     def costs(self) -> dict[str, CostItem]:

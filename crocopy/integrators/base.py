@@ -22,13 +22,12 @@ Crocoddyl's keyword for ``timeStep``)::
 
 from __future__ import annotations
 
-import numbers
-
 import numpy as np
 
 from ..action_base import ActionDataAbstract, ActionModelAbstract
 from ..diff_action_base import DifferentialActionModelAbstract
 from ..state import StateVector
+from ..validation import as_number
 from .control_base import ControlParametrizationDataAbstract, ControlParametrizationModelAbstract
 from .control_poly import ControlParametrizationModelPolyZero
 
@@ -98,8 +97,7 @@ class IntegratedActionModelAbstract(ActionModelAbstract):
             raise TypeError(f"control must be a ControlParametrizationModelAbstract, got {type(control).__name__}")
         if control.nw != diffModel.nu:
             raise ValueError(f"control.nw ({control.nw}) must equal diffModel.nu ({diffModel.nu})")
-        if isinstance(timeStep, bool) or not isinstance(timeStep, numbers.Real):
-            raise TypeError(f"timeStep must be a number, got {type(timeStep).__name__}")
+        timeStep = as_number(timeStep, "timeStep", 0.0)
         super().__init__(
             diffModel.state, control.nu, diffModel.nr if withCostResidual else 0,
             diffModel.ng, diffModel.nh, diffModel.ng_T, diffModel.nh_T,
@@ -126,9 +124,7 @@ class IntegratedActionModelAbstract(ActionModelAbstract):
 
     @dt.setter
     def dt(self, value: float) -> None:
-        if not np.isfinite(value) or value < 0:
-            raise ValueError(f"timeStep must be a non-negative number, got {value}")
-        self._dt = float(value)
+        self._dt = as_number(value, "dt (timeStep)", 0.0)
 
     def quasiStatic(self, data: ActionDataAbstract, x: np.ndarray, maxiter: int = 100, tol: float = 1e-9) -> np.ndarray:
         """The differential model's quasi-static control (zero acceleration at ``x``) as parameters.

@@ -13,6 +13,7 @@ from ..array_views import KeepsViews, tolerate_python_model
 from ..data_collector import DataCollectorAbstract
 from ..guards import Guarded, point_control_guards
 from ..state import StateAbstract
+from ..validation import as_count, warn_after
 from ..versioning import Parametrized
 
 
@@ -41,7 +42,7 @@ class ResidualModelAbstract(Parametrized, Guarded):
 
     _read_only = frozenset({"state"})
 
-    _guards = point_control_guards()
+    _guards = point_control_guards(warn_after("r", diff=("Rx", "Ru")))
 
     def __init__(
         self,
@@ -56,13 +57,9 @@ class ResidualModelAbstract(Parametrized, Guarded):
             raise ValueError(f"state must be a StateAbstract, got {type(state).__name__}")
         if isinstance(nu, (bool, np.bool_)):
             nu, q_dependent, v_dependent, u_dependent = None, nu, q_dependent, v_dependent
-        if nr < 0:
-            raise ValueError(f"nr must be non-negative, got {nr}")
         self.state = state
-        self.nr = int(nr)
-        self.nu = state.nv if nu is None else int(nu)
-        if self.nu < 0:
-            raise ValueError(f"nu must be non-negative, got {self.nu}")
+        self.nr = as_count(nr, "nr")
+        self.nu = state.nv if nu is None else as_count(nu, "nu")
         self.q_dependent = bool(q_dependent)
         self.v_dependent = bool(v_dependent)
         self.u_dependent = bool(u_dependent)

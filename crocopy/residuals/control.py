@@ -6,7 +6,7 @@ import numpy as np
 
 from ..data_collector import DataCollectorAbstract
 from ..state import StateAbstract
-from ..validation import as_vector
+from ..validation import as_count, as_vector
 from ..versioning import frozen_copy
 from .base import ResidualDataAbstract, ResidualModelAbstract
 
@@ -23,10 +23,9 @@ class ResidualModelControl(ResidualModelAbstract):
 
 
     def __init__(self, state: StateAbstract, uref: np.ndarray | int | None = None) -> None:
-        if uref is None or np.isscalar(uref):
-            nu = state.nv if uref is None else int(uref)
-            uref = np.zeros(nu)
-        uref = np.asarray(uref, dtype=float).reshape(-1)
+        if uref is None or (isinstance(uref, int | np.integer) and not isinstance(uref, bool | np.bool_)):
+            uref = np.zeros(state.nv if uref is None else as_count(uref, "nu"))  # Crocoddyl's (state, nu)
+        uref = as_vector(uref, None, "uref")
         super().__init__(state, uref.size, uref.size, False, False, True)
         self.uref = uref
 

@@ -6,7 +6,7 @@ import numpy as np
 
 from ..data_collector import DataCollectorAbstract
 from ..state import StateAbstract
-from ..validation import as_vector
+from ..validation import as_optional_count, as_vector
 from ..versioning import frozen_copy
 from .base import ResidualDataAbstract, ResidualModelAbstract
 
@@ -23,9 +23,9 @@ class ResidualModelState(ResidualModelAbstract):
 
 
     def __init__(self, state: StateAbstract, xref: np.ndarray | int | None = None, nu: int | None = None) -> None:
-        if xref is not None and np.isscalar(xref):
-            xref, nu = None, int(xref)
-        super().__init__(state, state.ndx, nu, True, True, False)
+        if isinstance(xref, int | np.integer) and not isinstance(xref, bool | np.bool_):
+            xref, nu = None, xref  # Crocoddyl's ResidualModelState(state, nu)
+        super().__init__(state, state.ndx, as_optional_count(nu, "nu"), True, True, False)
         self.xref = state.zero() if xref is None else xref
 
     @property

@@ -68,11 +68,13 @@ def _checked_solve(solve: Callable) -> Callable:
 
 
 class Setting:
-    """A solver setting checked on assignment: a number ``>= minimum`` (``> minimum`` if ``strict``)."""
+    """A solver setting checked on assignment: a number ``>= minimum`` (``> minimum`` if ``strict``), infinite
+    only if ``allow_inf`` (a bound that may be absent, e.g. ``reg_max``)."""
 
-    def __init__(self, minimum: float = 0.0, strict: bool = False) -> None:
+    def __init__(self, minimum: float = 0.0, strict: bool = False, allow_inf: bool = True) -> None:
         self.minimum = minimum
         self.strict = strict
+        self.allow_inf = allow_inf
 
     def __set_name__(self, owner: type, name: str) -> None:
         self.name = name
@@ -86,7 +88,7 @@ class Setting:
             raise AttributeError(self.name) from None
 
     def __set__(self, obj: object, value: object) -> None:
-        obj.__dict__[self.name] = as_number(value, self.name, self.minimum, self.strict, allow_inf=True)
+        obj.__dict__[self.name] = as_number(value, self.name, self.minimum, self.strict, allow_inf=self.allow_inf)
 
 
 class SolverAbstract:
@@ -109,14 +111,14 @@ class SolverAbstract:
 
     #: Settings checked on assignment (``ValueError`` naming the setting); the pairs whose order
     #: matters (``reg_min <= reg_max``) are checked when ``solve`` starts.
-    reg_min = Setting()
+    reg_min = Setting(allow_inf=False)
     reg_max = Setting()
-    reg_incFactor = Setting(1.0)
-    reg_decFactor = Setting(1.0)
+    reg_incFactor = Setting(1.0, allow_inf=False)
+    reg_decFactor = Setting(1.0, allow_inf=False)
     th_stop = Setting()
     th_grad = Setting()
     th_gapTol = Setting()
-    th_acceptStep = Setting()
+    th_acceptStep = Setting(allow_inf=False)
     th_stepDec = Setting(0.0, strict=True)
     th_stepInc = Setting(0.0, strict=True)
 

@@ -44,7 +44,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.linalg import lapack
 
-from ..validation import as_matrix, as_vector, check_bounds
+from ..validation import as_count, as_matrix, as_number, as_vector, check_bounds
 
 __all__ = ["BoxQP", "BoxQPSolution", "BoxQPError"]
 
@@ -106,13 +106,11 @@ class BoxQP:
     def __init__(
         self, nx: int, maxiter: int = 100, th_acceptStep: float = 0.1, th_grad: float = 1e-9, reg: float = 1e-9
     ) -> None:
-        if int(nx) < 0:
-            raise ValueError(f"nx must be non-negative, got {nx}")
-        self.nx = int(nx)
-        self.maxiter = int(maxiter)
-        self.th_acceptStep = float(th_acceptStep)
-        self.th_grad = float(th_grad)
-        self.reg = float(reg)
+        self.nx = as_count(nx, "nx")
+        self.maxiter = as_count(maxiter, "maxiter")
+        self.th_acceptStep = as_number(th_acceptStep, "th_acceptStep", 0.0)
+        self.th_grad = as_number(th_grad, "th_grad", 0.0)
+        self.reg = as_number(reg, "reg", 0.0)
         self.alphas = [0.5**n for n in range(10)]
         self.solution = BoxQPSolution(np.zeros((0, 0)), np.zeros(self.nx), [], list(range(self.nx)))
         self.nfactorizations = 0
@@ -127,7 +125,7 @@ class BoxQP:
 
     @maxIter.setter
     def maxIter(self, value: int) -> None:
-        self.maxiter = int(value)
+        self.maxiter = as_count(value, "maxIter")
 
     def solve(self, H: np.ndarray, q: np.ndarray, lb: np.ndarray, ub: np.ndarray, xinit: np.ndarray) -> BoxQPSolution:
         """Solve the box QP from the warm start ``xinit``.

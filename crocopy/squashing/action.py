@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from ..action_base import ActionDataAbstract, ActionModelAbstract
-from ..validation import as_vector, check_bounds
+from ..validation import as_number, as_vector, check_bounds
 
 __all__ = [
     "ActionDataSquashed",
@@ -119,9 +119,7 @@ class ActionModelSquashed(ActionModelAbstract):
             check_bounds(lb, ub, "s_lb", "s_ub")
             if not (np.all(np.isfinite(lb)) and np.all(np.isfinite(ub))):
                 raise ValueError("squashing bounds s_lb/s_ub must be finite (set model.u_lb/u_ub or pass them)")
-            if smooth <= 0.0:
-                raise ValueError(f"smooth must be positive, got {smooth}")
-            self.s_lb, self.s_ub, self.smooth = lb, ub, float(smooth)
+            self.s_lb, self.s_ub, self.smooth = lb, ub, as_number(smooth, "smooth", 0.0, strict=True)
         else:
             if getattr(squashing, "ns", None) != nu:
                 raise ValueError(f"squashing model must have ns == model.nu == {nu}")

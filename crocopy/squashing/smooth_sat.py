@@ -19,7 +19,7 @@ import numpy as np
 from crocopy.actuation_base import ActuationDataAbstract, ActuationModelAbstract
 from crocopy.array_views import KeepsViews, tolerate_python_model
 from crocopy.guards import Guard, Guarded
-from crocopy.validation import as_vector, check_bounds
+from crocopy.validation import as_count, as_number, as_vector, check_bounds
 
 
 class SquashingModelAbstract(Guarded):
@@ -34,9 +34,7 @@ class SquashingModelAbstract(Guarded):
     }
 
     def __init__(self, ns: int) -> None:
-        if ns <= 0:
-            raise ValueError(f"ns must be positive, got {ns}")
-        self.ns = int(ns)
+        self.ns = as_count(ns, "ns", 1)
         self._s_lb = np.full(self.ns, -np.inf)
         self._s_ub = np.full(self.ns, np.inf)
 
@@ -116,9 +114,7 @@ class SquashingModelSmoothSat(SquashingModelAbstract):
 
     @smooth.setter
     def smooth(self, value: float) -> None:
-        if not value > 0.0:
-            raise ValueError(f"smooth must be positive, got {value}")
-        self._smooth = float(value)
+        self._smooth = as_number(value, "smooth", 0.0, strict=True)
         self._update()
 
     def _update(self) -> None:

@@ -203,3 +203,50 @@ def test_control_bounds_in_any_order_then_a_box_solve(data):
     assert all(np.all(np.isfinite(x)) for x in solver.xs) and np.isfinite(solver.cost)
     if converged:  # the warm start (zero controls) may lie outside the box until a step is accepted
         assert all(np.all(u >= lb - 1e-9) and np.all(u <= ub + 1e-9) for u in solver.us)
+
+
+BOUND_ENTRY = st.one_of(st.floats(-3.0, 3.0), st.sampled_from([-np.inf, np.inf]))
+
+
+@FUZZ
+@given(lb=st.lists(BOUND_ENTRY, min_size=3, max_size=3), ub=st.lists(BOUND_ENTRY, min_size=3, max_size=3))
+def test_bounds_refuse_impossible_values(lb, ub):
+    lb, ub = np.array(lb), np.array(ub)
+    impossible = np.any(lb == np.inf) or np.any(ub == -np.inf)
+    if impossible or np.any(lb > ub):
+        with pytest.raises(ValueError, match=r"\b(lb|ub)\b"):
+            crocopy.ActivationBounds(lb, ub)
+    else:
+        bounds = crocopy.ActivationBounds(lb, ub)
+        np.testing.assert_array_equal(bounds.lb, lb)
+    model = crocopy.ActionModelLQR.Random(2, 3)
+    for name, value, bad in (("u_lb", lb, np.any(lb == np.inf)), ("u_ub", ub, np.any(ub == -np.inf))):
+        if bad:
+            with pytest.raises(ValueError, match=rf"{name}\[\d\] = .*admits no value"):
+                setattr(model, name, value)
+        else:
+            setattr(model, name, value)
+            np.testing.assert_array_equal(getattr(model, name), value)
+
+
+KEYS = st.one_of(st.sampled_from(["x", "u", "nope"]), st.integers(-2, 2), st.floats(allow_nan=False), st.booleans(),
+                 st.none(), st.binary(max_size=2), st.tuples(st.text(max_size=1)))
+
+
+@FUZZ
+@given(key=KEYS, active=st.one_of(st.booleans(), st.sampled_from([0, 1, 2, 0.5, "yes", None])))
+def test_cost_names_must_be_strings_and_flags_bools(key, active):
+    costs = _cost_sum(3, 2)
+    valid_flag = isinstance(active, bool) or (isinstance(active, int) and active in (0, 1))
+    if not isinstance(key, str):
+        with pytest.raises(TypeError, match=r"\bname must be a str"):
+            costs.changeCostStatus(key, True)
+    elif key not in costs.costs:
+        with pytest.raises(KeyError, match=repr(key)):
+            costs.changeCostStatus(key, True)
+    elif not valid_flag:
+        with pytest.raises(TypeError, match=r"\bactive must be a bool"):
+            costs.changeCostStatus(key, active)
+    else:
+        costs.changeCostStatus(key, active)
+        assert (key in costs.active_set) == bool(active)

@@ -5,6 +5,7 @@ shape-correct result, and the dynamics derivatives still match numerical differe
 from __future__ import annotations
 
 import functools
+import re
 
 import example_robot_data
 import numpy as np
@@ -180,3 +181,61 @@ def test_contacts_and_frame_residuals(data):
     else:
         with pytest.raises(ValueError, match="pref contains NaN or inf"):
             placement.reference = M
+
+
+@st.composite
+def rotation_like(draw) -> tuple[np.ndarray, bool]:
+    """A 3x3 matrix near a random rotation: itself, a reflection of it, or it perturbed or scaled; and
+    whether it is a rotation (orthonormal within 1e-6, determinant +1)."""
+    q = np.array(draw(st.lists(st.floats(-1.0, 1.0), min_size=4, max_size=4)))
+    R = pin.Quaternion(*(q / np.linalg.norm(q))).toRotationMatrix() if np.linalg.norm(q) > 1e-3 else np.eye(3)
+    kind = draw(st.sampled_from(["rotation", "reflection", "noise", "scaled"]))
+    if kind == "reflection":
+        return R @ np.diag([1.0, 1.0, -1.0]), False
+    if kind == "noise":
+        eps = draw(st.sampled_from([1e-9, 1e-4, 1e-2]))
+        E = R + eps * np.array(draw(st.lists(st.floats(-1.0, 1.0), min_size=9, max_size=9))).reshape(3, 3)
+        return E, bool(np.abs(E.T @ E - np.eye(3)).max() <= 1e-6)
+    if kind == "scaled":
+        return 1.5 * R, False
+    return R, True
+
+
+@FUZZ
+@given(data=rotation_like())
+def test_rotation_references_must_be_rotations(data):
+    R, is_rotation = data
+    state = _state("solo12")
+    fid = state.pinocchio.getFrameId("FL_FOOT")
+    makers = (
+        ("Rref", lambda: crocopy.ResidualModelFrameRotation(state, fid, R, 12)),
+        ("pref.rotation", lambda: crocopy.ResidualModelFramePlacement(state, fid, pin.SE3(R, np.zeros(3)), 12)),
+        ("pref.rotation", lambda: crocopy.ContactModel6D(state, fid, pin.SE3(R, np.zeros(3)), pin.LOCAL, 12)),
+        ("rotation", lambda: crocopy.ContactModel1D(state, fid, 0.0, pin.LOCAL, R, 12)),
+        ("R", lambda: crocopy.FrictionCone(R, 0.7)),
+    )
+    for name, make in makers:
+        if is_rotation:
+            make()
+        else:
+            with pytest.raises(ValueError, match=rf"{re.escape(name)} must be a rotation matrix"):
+                make()
+
+
+@FUZZ
+@given(id=st.one_of(st.integers(-3, 40), st.booleans(), st.floats(0.0, 5.0), st.sampled_from(["FL_FOOT", "nope"]),
+                    st.none()))
+def test_frame_ids_are_ints_or_names(id):
+    state = _state("solo12")
+    model = state.pinocchio
+    valid = (isinstance(id, int) and not isinstance(id, bool) and 0 <= id < model.nframes) or (
+        isinstance(id, str) and model.existFrame(id))
+    for make in (lambda: crocopy.ContactModel3D(state, id, np.zeros(3), pin.LOCAL, 12),
+                 lambda: crocopy.ResidualModelFrameTranslation(state, id, np.zeros(3), 12),
+                 lambda: crocopy.ImpulseModel3D(state, id, pin.LOCAL)):
+        if valid:
+            make()
+        else:
+            with pytest.raises((TypeError, ValueError, KeyError)) as err:
+                make()
+            assert re.search(r"\b(id|frame)\b", str(err.value)), str(err.value)

@@ -14,8 +14,9 @@ import crocopy
 #: containers and wrappers the node builder uses around every residual
 CONTAINERS = {"CostModelResidual", "CostModelSum", "ConstraintModelResidual", "ConstraintModelManager"}
 PREFIXES = ("ResidualModel", "ActivationModel", "CostModel", "ConstraintModel")
-#: bases and numerical-differentiation wrappers (they compute nothing of their own to compare)
-NOT_MODELS = ("Abstract", "NumDiff")
+#: bases and numerical-differentiation wrappers (they compute nothing of their own to compare); ResidualModelNumba
+#: is the base of a user's numba residual (crocopy's own, tested in tests/test_residual_numba.py)
+NOT_MODELS = ("Abstract", "NumDiff", "Numba")
 DOC = pathlib.Path(__file__).resolve().parents[2] / "docs" / "crocoddyl_deviations.md"
 
 
