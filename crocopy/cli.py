@@ -156,6 +156,11 @@ def _bench_vs(args: argparse.Namespace) -> int:
                                 memory=not args.no_memory, progress=progress))
         if shipped:
             parts.append(run_shipped(args.shipped, repeats=args.repeats or 3, progress=progress))
+        if args.problems is None and args.shipped is None:
+            from .bench.user_residual import SECTION, run_user_residual_bench
+
+            progress("user residual: the Talos-arm reach, three ways")
+            parts.append(SECTION + run_user_residual_bench(repeats=args.repeats or 5, crocoddyl=True))
     except (BenchDependencyError, KeyError) as exc:
         print(exc.args[0], file=sys.stderr)
         return 2

@@ -20,6 +20,17 @@ from .timing import limit_threads
 
 BARS = {"numba": 1.10, "python": 1.5}
 
+SECTION = """
+## A user's residual
+
+`crocopy bench --user-residual`: Talos' arm reaching a point (`crocopy solve reach`, T = 100, FDDP, one thread),
+its goal residual written as the built-in `ResidualModelFrameTranslation`, as a `ResidualModelNumba` (numba
+functions: the node stays compiled) and as a Crocoddyl-style Python subclass (only that residual runs in Python);
+Crocoddyl runs its built-in residual and the same Python subclass.  Medians of interleaved solves; the ratio is to
+the same library's built-in residual, on CPU time (less sensitive to the machine's load than wall time).
+
+"""
+
 
 def _solve_ms(lib: ModuleType, problem, xs: list, us: list) -> tuple[int, float, float, float]:
     """``(iterations, cost, wall ms/iter, CPU ms/iter)`` of one FDDP solve."""
