@@ -6,9 +6,20 @@ actuation torques and the stacked contacts ``Jc a + a0 = 0``::
     [M  Jcᵀ] [ a ]   [τ - b]
     [Jc  0 ] [-λ ] = [ -a0 ],      K⁻¹ = [[A, B], [Bᵀ, C]]
 
-(``inv_damping`` regularises ``Jc M⁻¹ Jcᵀ``).  Without damping, a contact set that is redundant
-(two active contacts on one body) or whose KKT solve gives NaN (a singular ``Jc``) is solved by
-least squares, :mod:`~crocopy.models.redundant_kkt`: unique accelerations, minimum-norm forces.
+(``inv_damping`` regularises ``Jc M⁻¹ Jcᵀ``).
+
+Redundant contacts.  Without damping, a contact set whose stacked ``Jc`` has dependent rows is solved by least
+squares, :mod:`~crocopy.models.redundant_kkt` (unique accelerations, minimum-norm forces: a redundant force is
+shared equally), on both paths: the compiled node declines it (:mod:`.rbd.contact_lowering`) and the Python
+node takes the least-squares route from the start.  A set is redundant when two active contacts share a body, or
+when ``Jc`` loses rank at a generic configuration (checked once per active set, at a fixed pseudo-random
+configuration): 6D contacts on the four 3-dof legs of ANYmal, 3D contacts on the four 2-dof legs of solo8 or
+``quadruped``.  A ``JMinvJt_damping > 0`` instead regularises the regular KKT solve (and compiles).  A set that
+loses rank only at particular configurations (a stretched leg) takes least squares where the KKT solve gives
+NaN.  Known limitation: when the rank deficiency is structural, the redundant force directions turn with the
+configuration, and the forces' configuration derivatives (``df_dx[:, :nv]``) omit that term,
+``(I - P) ∂Jc/∂q Jc⁺ λ`` (``P`` the projector onto the range of ``Jc``); the accelerations' derivatives and the
+forces' velocity and control derivatives are exact.
 Differentiating ``M a + b - Jcᵀ λ = τ`` (RNEA with the
 contact forces as external forces, ``∂ID/∂x``) and the contact constraint (``da0_dx``)::
 
@@ -84,7 +95,8 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         Constraints (Crocoddyl's overload without it is also accepted:
         ``(state, actuation, contacts, costs, inv_damping, enable_force)``).
     inv_damping : float
-        Damping of ``Jc M⁻¹ Jcᵀ`` (needed when ``Jc`` is rank deficient).
+        Damping of ``Jc M⁻¹ Jcᵀ``.  Without it a redundant contact set (contacts sharing a body, or a ``Jc`` of
+        deficient rank) is solved by least squares (see the module docstring).
     enable_force : bool
         Compute the contact-force Jacobians (needed by force residuals).
 
@@ -154,9 +166,30 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         return DifferentialActionDataContactFwdDynamics(self)
 
     def _redundant_contacts(self) -> bool:
-        """Whether ``calc`` solves the contact dynamics in the least-squares sense from the start: active contacts
-        sharing a body, and no damping."""
-        return bool(self.contacts.nc) and self._damping == 0.0 and self.contacts._shared_joints
+        """Whether ``calc`` solves the contact dynamics in the least-squares sense from the start: no damping, and
+        active contacts sharing a body or a stacked ``Jc`` of deficient rank at a generic configuration (see the
+        module docstring)."""
+        if not self.contacts.nc or self._damping != 0.0:
+            return False
+        if self.contacts._shared_joints:
+            return True
+        cached = self.__dict__.get("_rank_checked")
+        if cached is None or cached[0] is not self.contacts._active:
+            cached = self._rank_checked = (self.contacts._active, self._generic_rank() < self.contacts.nc)
+        return cached[1]
+
+    def _generic_rank(self) -> int:
+        """The rank of the active contacts' stacked ``Jc (nc, nv)`` at a pseudo-random configuration (the same at
+        every call): singular values above ``1e-9`` times the largest."""
+        state, nc = self.state, self.contacts.nc
+        rng = np.random.default_rng(0)
+        q = pin.integrate(self.pinocchio, pin.neutral(self.pinocchio), rng.uniform(-1.0, 1.0, state.nv))
+        x = np.concatenate([q, rng.uniform(-1.0, 1.0, state.nv)])
+        data = self.createData()
+        self._kinematics(data, q, x[state.nq:])
+        self.contacts.calc(data.multibody.contacts, x)
+        sigma = np.linalg.svd(data.multibody.contacts.Jc[:nc], compute_uv=False)
+        return int(np.sum(sigma > 1e-9 * max(float(sigma[0]), np.finfo(float).tiny)))
 
     def _compiled_euler_node(self, iam, data, terminal: bool, memo: dict) -> object | None:
         """The compiled evaluator of the Euler node ``(iam, data)`` over this model (:func:`.rbd.euler_node.euler_node`
