@@ -16,10 +16,12 @@ when ``Jc`` loses rank at a generic configuration (checked once per active set, 
 configuration): 6D contacts on the four 3-dof legs of ANYmal, 3D contacts on the four 2-dof legs of solo8 or
 ``quadruped``.  A ``JMinvJt_damping > 0`` instead regularises the regular KKT solve (and compiles).  A set that
 loses rank only at particular configurations (a stretched leg) takes least squares where the KKT solve gives
-NaN.  Known limitation: when the rank deficiency is structural, the redundant force directions turn with the
-configuration, and the forces' configuration derivatives (``df_dx[:, :nv]``) omit that term,
-``(I - P) ∂Jc/∂q Jc⁺ λ`` (``P`` the projector onto the range of ``Jc``); the accelerations' derivatives and the
-forces' velocity and control derivatives are exact.
+NaN.  When the rank deficiency is structural the redundant force directions turn with the configuration: the
+forces' configuration derivatives add ``dP λ = (I - P) ∂(Jc w)/∂q``, ``w = Jc⁺ λ`` (``P`` the projector onto the
+range of ``Jc``; :func:`turning_forces`, 3D/6D contacts).  The derivatives are exact where the redundant rows
+agree (the drift ``a0`` in the range of ``Jc``: the same contact twice, a robot at rest without position gains);
+where they contradict each other (a moving robot whose redundant rows disagree, position errors) the
+least-squares compromise's derivatives are approximate (they leave out the pseudo-inverse's own derivative).
 Differentiating ``M a + b - Jcᵀ λ = τ`` (RNEA with the
 contact forces as external forces, ``∂ID/∂x``) and the contact constraint (``da0_dx``)::
 
@@ -51,11 +53,13 @@ from crocopy.costs.sum import CostModelSum
 from crocopy.diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
 
 from .contact_multiple import ContactModelMultiple
+from .contacts import ContactModel3D, ContactModel6D
 from .data_collectors import DataCollectorJointActMultibodyInContact
 from .dynamics_options import ActuationStructure, ArmatureMixin, KKTDampingMixin
 from .redundant_kkt import solve_redundant_kkt
 
 _LOCAL_CONVENTION = pin.Convention.LOCAL
+_FRAME_CONTACTS = (ContactModel3D, ContactModel6D)
 _all, _isfinite = np.logical_and.reduce, np.isfinite
 
 
@@ -74,6 +78,51 @@ def link_cost_data(data: object, costs_data: object) -> None:
     """Make the action data's cost derivatives the cost-sum data's arrays (no copies per call)."""
     for name in ("Lx", "Lu", "Lxx", "Lxu", "Luu"):
         setattr(data, name, getattr(costs_data, name))
+
+
+def turning_forces(model: pin.Model, pd: pin.Data, q: np.ndarray, active: list, Jc: np.ndarray,
+                   lam: np.ndarray) -> np.ndarray:
+    """``(I - P) ∂(Jc(q) w)/∂q`` at ``w = Jc⁺ λ`` (``(nc, nv)``, ``P = Jc Jc⁺``): the configuration derivative of the
+    minimum-norm forces ``λ = P λ`` beyond what the KKT solution operator gives, ``dP λ``, for ``active`` 3D/6D
+    contacts (``pd.oMf`` at ``q`` read).
+
+    With ``V = Σ oS_i w_i`` the world spatial velocity (at the origin) of a contact's joint for joint velocity ``w``
+    and ``V_j`` that of the parent of joint ``j``, a dof ``k`` of joint ``j`` in the support (``s = oS_k``) moves
+    ``V`` by ``s × (V - V_j)``; a LOCAL row reads ``oX_f⁻¹ (V_j × s)``, a LOCAL_WORLD_ALIGNED (or WORLD) row
+    ``[dV_v - (s_v + s_ω × p) × V_ω - p × dV_ω; dV_ω]`` at the frame position ``p``.
+    """
+    nv = model.nv
+    w = np.linalg.pinv(Jc, rcond=1e-9) @ lam
+    J = pin.computeJointJacobians(model, pd, q)
+    D = np.zeros((Jc.shape[0], nv))
+    row = 0
+    for _, m in active:
+        placement = pd.oMf[m.id]
+        R, p = placement.rotation, placement.translation
+        chain = list(model.supports[model.frames[m.id].parentJoint])[1:]
+        V = sum((J[:, model.joints[j].idx_v: model.joints[j].idx_v + model.joints[j].nv]
+                 @ w[model.joints[j].idx_v: model.joints[j].idx_v + model.joints[j].nv] for j in chain), np.zeros(6))
+        Vb = np.zeros(6)
+        for j in chain:
+            iv, n = model.joints[j].idx_v, model.joints[j].nv
+            for k in range(iv, iv + n):
+                s = J[:, k]
+                if m.type == pin.LOCAL:
+                    dm = _motion_cross(Vb, s)
+                    col = np.r_[R.T @ (dm[:3] - np.cross(p, dm[3:])), R.T @ dm[3:]]
+                else:
+                    dV = _motion_cross(s, V - Vb)
+                    dp = s[:3] + np.cross(s[3:], p)
+                    col = np.r_[dV[:3] - np.cross(dp, V[3:]) - np.cross(p, dV[3:]), dV[3:]]
+                D[row: row + m.nc, k] = col[: m.nc]
+            Vb = Vb + J[:, iv: iv + n] @ w[iv: iv + n]
+        row += m.nc
+    return D - Jc @ (np.linalg.pinv(Jc, rcond=1e-9) @ D)
+
+
+def _motion_cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a × b`` of two spatial motions ``[linear; angular]``."""
+    return np.r_[np.cross(a[3:], b[:3]) + np.cross(a[:3], b[3:]), np.cross(a[3:], b[3:])]
 
 
 class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, DifferentialActionModelAbstract):
@@ -286,6 +335,7 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         except np.linalg.LinAlgError:  # a diverged trial state (non-finite inertia)
             data.xout[:] = np.nan
             lam = np.full(nc, np.nan)
+        data.lam = lam
         return lam
 
     def calcDiff(
@@ -333,6 +383,8 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
                 np.negative(data.KinvRhs[nv:], out=data.df_dx)
                 np.dot(Kinv[nv:, :nv], adata.dtau_du, out=data.df_du)
                 np.negative(data.df_du, out=data.df_du)
+                if data.lstsq and all(type(m) in _FRAME_CONTACTS for _, m in self.contacts._active):
+                    data.df_dx[:, :nv] += turning_forces(model, pd, q, self.contacts._active, cdata.Jc[:nc], data.lam)
         else:
             Minv = np.linalg.inv(data.M)
             np.dot(Minv, rhs, out=data.Fx)
@@ -455,4 +507,5 @@ class DifferentialActionDataContactFwdDynamics(DifferentialActionDataAbstract):
         self.rigid = None
         self.aba = False
         self.lstsq = False
+        self.lam = np.zeros(nc)
         self.prox = pin.ProximalSettings(1e-12, 0.0, 1)

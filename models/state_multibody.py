@@ -24,6 +24,7 @@ operation at DEBUG level on the ``"crocopy"`` logger.
 from __future__ import annotations
 
 import copyreg
+import math
 import threading
 
 import numpy as np
@@ -166,10 +167,14 @@ class StateMultibody(StateAbstract):
         return np.concatenate([dq, x1[nq:] - x0[nq:]])
 
     def _continuous_difference(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:
-        """``out[idx_v] = θ1 - θ0`` of every continuous joint, exactly: ``atan2(c0 s1 - s0 c1, c0 c1 + s0 s1)``."""
+        """Where Pinocchio's difference ``out`` of a continuous joint is exactly 0, write ``atan2(c0 s1 - s0 c1,
+        c0 c1 + s0 s1)`` (elsewhere Pinocchio's value is that formula already, bit for bit, as in the kernel)."""
         iq, iv = self._continuous
-        c0, s0, c1, s1 = x0[iq], x0[iq + 1], x1[iq], x1[iq + 1]
-        out[iv] = np.arctan2(c0 * s1 - s0 * c1, c0 * c1 + s0 * s1)
+        zero = out[iv] == 0.0
+        if zero.any():
+            for a, k in zip(iq[zero], iv[zero]):
+                c0, s0, c1, s1 = x0[a], x0[a + 1], x1[a], x1[a + 1]
+                out[k] = math.atan2(c0 * s1 - s0 * c1, c0 * c1 + s0 * s1)
 
     def integrate(self, x: np.ndarray, dx: np.ndarray) -> np.ndarray:
         nq, nv = self.nq, self.nv
