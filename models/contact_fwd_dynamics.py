@@ -6,9 +6,22 @@ actuation torques and the stacked contacts ``Jc a + a0 = 0``::
     [M  Jcᵀ] [ a ]   [τ - b]
     [Jc  0 ] [-λ ] = [ -a0 ],      K⁻¹ = [[A, B], [Bᵀ, C]]
 
-(``inv_damping`` regularises ``Jc M⁻¹ Jcᵀ``).  Without damping, a contact set that is redundant
-(two active contacts on one body) or whose KKT solve gives NaN (a singular ``Jc``) is solved by
-least squares, :mod:`~crocopy.models.redundant_kkt`: unique accelerations, minimum-norm forces.
+(``inv_damping`` regularises ``Jc M⁻¹ Jcᵀ``).
+
+Redundant contacts.  Without damping, a contact set whose stacked ``Jc`` has dependent rows is solved by least
+squares, :mod:`~crocopy.models.redundant_kkt` (unique accelerations, minimum-norm forces: a redundant force is
+shared equally), on both paths: the compiled node declines it (:mod:`.rbd.contact_lowering`) and the Python
+node takes the least-squares route from the start.  A set is redundant when two active contacts share a body, or
+when ``Jc`` loses rank at a generic configuration (checked once per active set, at a fixed pseudo-random
+configuration): 6D contacts on the four 3-dof legs of ANYmal, 3D contacts on the four 2-dof legs of solo8 or
+``quadruped``.  A ``JMinvJt_damping > 0`` instead regularises the regular KKT solve (and compiles).  A set that
+loses rank only at particular configurations (a stretched leg) takes least squares where the KKT solve gives
+NaN.  When the rank deficiency is structural the redundant force directions turn with the configuration: the
+forces' configuration derivatives add ``dP λ = (I - P) ∂(Jc w)/∂q``, ``w = Jc⁺ λ`` (``P`` the projector onto the
+range of ``Jc``; :func:`turning_forces`, 3D/6D contacts).  The derivatives are exact where the redundant rows
+agree (the drift ``a0`` in the range of ``Jc``: the same contact twice, a robot at rest without position gains);
+where they contradict each other (a moving robot whose redundant rows disagree, position errors) the
+least-squares compromise's derivatives are approximate (they leave out the pseudo-inverse's own derivative).
 Differentiating ``M a + b - Jcᵀ λ = τ`` (RNEA with the
 contact forces as external forces, ``∂ID/∂x``) and the contact constraint (``da0_dx``)::
 
@@ -41,11 +54,13 @@ from crocopy.diff_action_base import DifferentialActionDataAbstract, Differentia
 from crocopy.validation import as_bool
 
 from .contact_multiple import ContactModelMultiple
+from .contacts import ContactModel3D, ContactModel6D
 from .data_collectors import DataCollectorJointActMultibodyInContact
 from .dynamics_options import ActuationStructure, ArmatureMixin, KKTDampingMixin
 from .redundant_kkt import solve_redundant_kkt
 
 _LOCAL_CONVENTION = pin.Convention.LOCAL
+_FRAME_CONTACTS = (ContactModel3D, ContactModel6D)
 _all, _isfinite = np.logical_and.reduce, np.isfinite
 
 
@@ -64,6 +79,51 @@ def link_cost_data(data: object, costs_data: object) -> None:
     """Make the action data's cost derivatives the cost-sum data's arrays (no copies per call)."""
     for name in ("Lx", "Lu", "Lxx", "Lxu", "Luu"):
         setattr(data, name, getattr(costs_data, name))
+
+
+def turning_forces(model: pin.Model, pd: pin.Data, q: np.ndarray, active: list, Jc: np.ndarray,
+                   lam: np.ndarray) -> np.ndarray:
+    """``(I - P) ∂(Jc(q) w)/∂q`` at ``w = Jc⁺ λ`` (``(nc, nv)``, ``P = Jc Jc⁺``): the configuration derivative of the
+    minimum-norm forces ``λ = P λ`` beyond what the KKT solution operator gives, ``dP λ``, for ``active`` 3D/6D
+    contacts (``pd.oMf`` at ``q`` read).
+
+    With ``V = Σ oS_i w_i`` the world spatial velocity (at the origin) of a contact's joint for joint velocity ``w``
+    and ``V_j`` that of the parent of joint ``j``, a dof ``k`` of joint ``j`` in the support (``s = oS_k``) moves
+    ``V`` by ``s × (V - V_j)``; a LOCAL row reads ``oX_f⁻¹ (V_j × s)``, a LOCAL_WORLD_ALIGNED (or WORLD) row
+    ``[dV_v - (s_v + s_ω × p) × V_ω - p × dV_ω; dV_ω]`` at the frame position ``p``.
+    """
+    nv = model.nv
+    w = np.linalg.pinv(Jc, rcond=1e-9) @ lam
+    J = pin.computeJointJacobians(model, pd, q)
+    D = np.zeros((Jc.shape[0], nv))
+    row = 0
+    for _, m in active:
+        placement = pd.oMf[m.id]
+        R, p = placement.rotation, placement.translation
+        chain = list(model.supports[model.frames[m.id].parentJoint])[1:]
+        V = sum((J[:, model.joints[j].idx_v: model.joints[j].idx_v + model.joints[j].nv]
+                 @ w[model.joints[j].idx_v: model.joints[j].idx_v + model.joints[j].nv] for j in chain), np.zeros(6))
+        Vb = np.zeros(6)
+        for j in chain:
+            iv, n = model.joints[j].idx_v, model.joints[j].nv
+            for k in range(iv, iv + n):
+                s = J[:, k]
+                if m.type == pin.LOCAL:
+                    dm = _motion_cross(Vb, s)
+                    col = np.r_[R.T @ (dm[:3] - np.cross(p, dm[3:])), R.T @ dm[3:]]
+                else:
+                    dV = _motion_cross(s, V - Vb)
+                    dp = s[:3] + np.cross(s[3:], p)
+                    col = np.r_[dV[:3] - np.cross(dp, V[3:]) - np.cross(p, dV[3:]), dV[3:]]
+                D[row: row + m.nc, k] = col[: m.nc]
+            Vb = Vb + J[:, iv: iv + n] @ w[iv: iv + n]
+        row += m.nc
+    return D - Jc @ (np.linalg.pinv(Jc, rcond=1e-9) @ D)
+
+
+def _motion_cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a × b`` of two spatial motions ``[linear; angular]``."""
+    return np.r_[np.cross(a[3:], b[:3]) + np.cross(a[:3], b[3:]), np.cross(a[3:], b[3:])]
 
 
 class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, DifferentialActionModelAbstract):
@@ -85,7 +145,8 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         Constraints (Crocoddyl's overload without it is also accepted:
         ``(state, actuation, contacts, costs, inv_damping, enable_force)``).
     inv_damping : float
-        Damping of ``Jc M⁻¹ Jcᵀ`` (needed when ``Jc`` is rank deficient).
+        Damping of ``Jc M⁻¹ Jcᵀ``.  Without it a redundant contact set (contacts sharing a body, or a ``Jc`` of
+        deficient rank) is solved by least squares (see the module docstring).
     enable_force : bool
         Compute the contact-force Jacobians (needed by force residuals).
 
@@ -155,9 +216,30 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         return DifferentialActionDataContactFwdDynamics(self)
 
     def _redundant_contacts(self) -> bool:
-        """Whether ``calc`` solves the contact dynamics in the least-squares sense from the start: active contacts
-        sharing a body, and no damping."""
-        return bool(self.contacts.nc) and self._damping == 0.0 and self.contacts._shared_joints
+        """Whether ``calc`` solves the contact dynamics in the least-squares sense from the start: no damping, and
+        active contacts sharing a body or a stacked ``Jc`` of deficient rank at a generic configuration (see the
+        module docstring)."""
+        if not self.contacts.nc or self._damping != 0.0:
+            return False
+        if self.contacts._shared_joints:
+            return True
+        cached = self.__dict__.get("_rank_checked")
+        if cached is None or cached[0] is not self.contacts._active:
+            cached = self._rank_checked = (self.contacts._active, self._generic_rank() < self.contacts.nc)
+        return cached[1]
+
+    def _generic_rank(self) -> int:
+        """The rank of the active contacts' stacked ``Jc (nc, nv)`` at a pseudo-random configuration (the same at
+        every call): singular values above ``1e-9`` times the largest."""
+        state, nc = self.state, self.contacts.nc
+        rng = np.random.default_rng(0)
+        q = pin.integrate(self.pinocchio, pin.neutral(self.pinocchio), rng.uniform(-1.0, 1.0, state.nv))
+        x = np.concatenate([q, rng.uniform(-1.0, 1.0, state.nv)])
+        data = self.createData()
+        self._kinematics(data, q, x[state.nq:])
+        self.contacts.calc(data.multibody.contacts, x)
+        sigma = np.linalg.svd(data.multibody.contacts.Jc[:nc], compute_uv=False)
+        return int(np.sum(sigma > 1e-9 * max(float(sigma[0]), np.finfo(float).tiny)))
 
     def _compiled_euler_node(self, iam, data, terminal: bool, memo: dict) -> object | None:
         """The compiled evaluator of the Euler node ``(iam, data)`` over this model (:func:`.rbd.euler_node.euler_node`
@@ -254,6 +336,7 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         except np.linalg.LinAlgError:  # a diverged trial state (non-finite inertia)
             data.xout[:] = np.nan
             lam = np.full(nc, np.nan)
+        data.lam = lam
         return lam
 
     def calcDiff(
@@ -305,6 +388,8 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
                 np.negative(data.KinvRhs[nv:], out=data.df_dx)
                 np.dot(Kinv[nv:, :nv], adata.dtau_du, out=data.df_du)
                 np.negative(data.df_du, out=data.df_du)
+                if data.lstsq and all(type(m) in _FRAME_CONTACTS for _, m in self.contacts._active):
+                    data.df_dx[:, :nv] += turning_forces(model, pd, q, self.contacts._active, cdata.Jc[:nc], data.lam)
         else:
             Minv = np.linalg.inv(data.M)
             np.dot(Minv, rhs, out=data.Fx)
@@ -427,4 +512,5 @@ class DifferentialActionDataContactFwdDynamics(DifferentialActionDataAbstract):
         self.rigid = None
         self.aba = False
         self.lstsq = False
+        self.lam = np.zeros(nc)
         self.prox = pin.ProximalSettings(1e-12, 0.0, 1)

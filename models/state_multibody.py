@@ -2,7 +2,10 @@
 
 ``nq``/``nv`` come from the Pinocchio model, ``nx = nq + nv`` and ``ndx = 2 nv``.
 ``diff(x0, x1) = (q1 ⊖ q0, v1 - v0)`` and ``integrate(x, dx) = (q ⊕ dq, v + dv)`` use
-``pinocchio.difference``/``pinocchio.integrate``.  The Jacobians are block diagonal:
+``pinocchio.difference``/``pinocchio.integrate``, except on continuous joints (``q = [cos θ, sin θ]``), whose
+difference is ``atan2(c0 s1 - s0 c1, c0 c1 + s0 s1)`` computed here: Pinocchio returns exactly 0 when
+``c0 c1 + s0 s1`` rounds above 1, i.e. for some angles below about 1e-8 (the compiled
+:func:`~crocopy.models.rbd.lie_kernel.difference` uses the same formula).  The Jacobians are block diagonal:
 
     Jdiff   = (diag(∂(q1 ⊖ q0)/∂q0, -I), diag(∂(q1 ⊖ q0)/∂q1, I))
     Jintegrate = (diag(∂(q ⊕ dq)/∂q, I), diag(∂(q ⊕ dq)/∂dq, I))
@@ -21,6 +24,7 @@ operation at DEBUG level on the ``"crocopy"`` logger.
 from __future__ import annotations
 
 import copyreg
+import math
 import threading
 
 import numpy as np
@@ -57,6 +61,9 @@ def _scratch_rows(shape: tuple[int, int]) -> np.ndarray:
     rows = _SCRATCH.rows[shape] = np.empty(shape)
     return rows
 
+
+_CONTINUOUS = ("JointModelRUBX", "JointModelRUBY", "JointModelRUBZ", "JointModelRevoluteUnboundedUnaligned")
+"""Pinocchio's continuous (unbounded revolute) joints, ``q = [cos θ, sin θ]``."""
 
 _MODEL_VECTORS = ("lowerPositionLimit", "upperPositionLimit", "velocityLimit", "effortLimit", "armature")
 
@@ -125,6 +132,8 @@ class StateMultibody(StateAbstract):
         vlim = _finite_or_inf(model.velocityLimit, 1.0)
         self._set_limits(np.concatenate([lq, -vlim]), np.concatenate([uq, vlim]))
         self._q0 = pin.neutral(model)
+        continuous = [(j.idx_q, j.idx_v) for j in model.joints[1:] if j.shortname() in _CONTINUOUS]
+        self._continuous = np.array(continuous, dtype=np.int64).reshape(-1, 2).T.copy()  # (2, n): idx_q, idx_v
         self._rand_lo = np.where(np.isfinite(lq), lq, -1.0)
         self._rand_hi = np.where(np.isfinite(uq), uq, 1.0)
         nv, ndx = self.nv, self.ndx
@@ -152,7 +161,20 @@ class StateMultibody(StateAbstract):
 
     def diff(self, x0: np.ndarray, x1: np.ndarray) -> np.ndarray:
         nq = self.nq
-        return np.concatenate([pin.difference(self.pinocchio, x0[:nq], x1[:nq]), x1[nq:] - x0[nq:]])
+        dq = pin.difference(self.pinocchio, x0[:nq], x1[:nq])
+        if self._continuous.shape[1]:
+            self._continuous_difference(x0, x1, dq)
+        return np.concatenate([dq, x1[nq:] - x0[nq:]])
+
+    def _continuous_difference(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:
+        """Where Pinocchio's difference ``out`` of a continuous joint is exactly 0, write ``atan2(c0 s1 - s0 c1,
+        c0 c1 + s0 s1)`` (elsewhere Pinocchio's value is that formula already, bit for bit, as in the kernel)."""
+        iq, iv = self._continuous
+        zero = out[iv] == 0.0
+        if zero.any():
+            for a, k in zip(iq[zero], iv[zero]):
+                c0, s0, c1, s1 = x0[a], x0[a + 1], x1[a], x1[a + 1]
+                out[k] = math.atan2(c0 * s1 - s0 * c1, c0 * c1 + s0 * s1)
 
     def integrate(self, x: np.ndarray, dx: np.ndarray) -> np.ndarray:
         nq, nv = self.nq, self.nv
@@ -210,6 +232,8 @@ class StateMultibody(StateAbstract):
             return
         nq, nv = self.nq, self.nv
         out[:nv] = pin.difference(self.pinocchio, x0[:nq], x1[:nq])
+        if self._continuous.shape[1]:
+            self._continuous_difference(x0, x1, out)
         np.subtract(x1[nq:], x0[nq:], out=out[nv:])
 
     def _Jdiff_second_into(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:

@@ -30,3 +30,26 @@ def frame(name: str) -> str:
         "kinova": "j2s6s200_end_effector",
         "talos": "left_sole_link",
     }[name]
+
+
+QUADRUPED_FEET = {
+    **dict.fromkeys(("anymal", "anymal_c", "anymal_kinova"), ("LF_FOOT", "RF_FOOT", "LH_FOOT", "RH_FOOT")),
+    **dict.fromkeys(("b1", "b1_z1", "go1", "go2", "a1", "laikago"), ("FL_foot", "FR_foot", "RL_foot", "RR_foot")),
+    "hyq": ("lf_foot", "rf_foot", "lh_foot", "rh_foot"),
+    **dict.fromkeys(("solo8", "solo12"), ("FL_FOOT", "FR_FOOT", "HL_FOOT", "HR_FOOT")),
+    "quadruped": ("BL_contact", "BR_contact", "FL_contact", "FR_contact"),
+    "centauro": ("contact_1", "contact_2", "contact_3", "contact_4"),
+    "bolt": ("FL_FOOT", "FR_FOOT"),
+}
+"""Point feet of the example-robot-data robots (3D contacts)."""
+
+BIPED_SOLES = {
+    **dict.fromkeys(("talos", "talos_box", "talos_full", "talos_full_box", "talos_legs"),
+                    ("left_sole_link", "right_sole_link")),
+    **dict.fromkeys(("romeo", "icub", "icub_reduced"), ("l_sole", "r_sole")),
+    "human": ("left_foot", "right_foot"),
+    "alexander": ("LEFT_FOOT", "RIGHT_FOOT"),
+    **dict.fromkeys(("g1", "g1_with_hands"), ("left_ankle_roll_link", "right_ankle_roll_link")),
+    **dict.fromkeys(("simple_humanoid", "simple_humanoid_classical"), ("l_ankle", "r_ankle")),
+}
+"""Soles of the example-robot-data humanoids (6D contacts)."""

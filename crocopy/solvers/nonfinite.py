@@ -14,7 +14,10 @@ it arose:
 * :func:`locate_in_rollout`: ``xs_try``, ``us_try`` and the node costs, t = 0..T.
 
 The solver stops with ``solve() -> False``, keeps its best finite iterate and states the result in
-``solver.reason``, e.g. ``"non-finite Quu at node 9 in the backward pass"``.
+``solver.reason``, e.g. ``"non-finite Quu at node 9 in the backward pass"``.  When the first non-finite
+quantity of a node's evaluation is found, the node's model (or the differential model it integrates) may name
+the cause through a method ``nonfinite_cause() -> str | None`` (crocopy extension, called only then), which is
+appended: ``"non-finite Fx at node 0 in the derivatives: the mass matrix is singular (...)"``.
 """
 
 from __future__ import annotations
@@ -42,9 +45,9 @@ class NonFiniteError(RuntimeError):
         Phase of the iteration (``"derivatives"``, ``"backward pass"``, ``"rollout"``, ...).
     """
 
-    def __init__(self, quantity: str, node: int | None, where: str) -> None:
+    def __init__(self, quantity: str, node: int | None, where: str, cause: str | None = None) -> None:
         at = "" if node is None else f" at node {node}"
-        super().__init__(f"non-finite {quantity}{at} in the {where}")
+        super().__init__(f"non-finite {quantity}{at} in the {where}" + (f": {cause}" if cause else ""))
         self.quantity = quantity
         self.node = node
         self.where = where
@@ -54,16 +57,25 @@ def _finite(value) -> bool:
     return bool(np.isfinite(value).all())
 
 
+def _cause(problem, t: int | None) -> str | None:
+    """What the model of node ``t`` (or the differential model it integrates) says caused its NaN/inf, if anything."""
+    if t is None:
+        return None
+    model = problem.runningModels[t] if t < problem.T else problem.terminalModel
+    explain = getattr(getattr(model, "differential", model), "nonfinite_cause", None)
+    return explain() if callable(explain) else None
+
+
 def locate_in_derivatives(problem) -> NonFiniteError | None:
     """The first non-finite cost or derivative of the problem's nodes (None if all are finite)."""
     datas = [*problem.runningDatas, problem.terminalData]
     for t, d in enumerate(datas):
         names = _RUNNING_DERIVATIVES if t < problem.T else _TERMINAL_DERIVATIVES
         if not np.isfinite(d.cost):
-            return NonFiniteError("cost", t, "problem evaluation")
+            return NonFiniteError("cost", t, "problem evaluation", _cause(problem, t))
         for name in names:
             if not _finite(getattr(d, name)):
-                return NonFiniteError(name, t, "derivatives")
+                return NonFiniteError(name, t, "derivatives", _cause(problem, t))
     return None
 
 
@@ -71,7 +83,7 @@ def locate_cost(problem) -> NonFiniteError:
     """The first node whose cost is not finite (after ``problem.calc``/``calcDiff`` gave a non-finite total)."""
     datas = [*problem.runningDatas, problem.terminalData]
     node = next((t for t, d in enumerate(datas) if not np.isfinite(d.cost)), None)
-    return NonFiniteError("cost", node, "problem evaluation")
+    return NonFiniteError("cost", node, "problem evaluation", _cause(problem, node))
 
 
 def locate_in_backward_pass(solver) -> NonFiniteError | None:
@@ -92,11 +104,11 @@ def locate_in_rollout(problem, xs: Sequence[np.ndarray], us: Sequence[np.ndarray
     datas = [*problem.runningDatas, problem.terminalData]
     for t, (x, d) in enumerate(zip(xs, datas)):
         if not _finite(x):
-            return NonFiniteError("state", t, "rollout")
+            return NonFiniteError("state", t, "rollout", _cause(problem, t - 1) if t else None)
         if t < len(us) and not _finite(us[t]):
             return NonFiniteError("control", t, "rollout")
         if not np.isfinite(d.cost):
-            return NonFiniteError("cost", t, "rollout")
+            return NonFiniteError("cost", t, "rollout", _cause(problem, t))
     return None
 
 

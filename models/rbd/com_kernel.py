@@ -13,6 +13,8 @@ sums are taken per joint (``O(njoints²)`` flops, no scratch).  Shapes: ``com_ou
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from crocopy.kernels import compiled
@@ -41,7 +43,7 @@ def center_of_mass(rb: RigidBodyModel, ws: RigidBodyWorkspace, com_out: np.ndarr
     """``com_out (3,)``: the world centre of mass; ``Jcom_out (3, nv)``: its Jacobian (after
     :func:`~.dynamics_kernel.forward_kinematics`)."""
     m, hx, hy, hz = _subtree_moment(rb, ws, 0)
-    inv = 1.0 / m
+    inv = 1.0 / m if m > 0.0 else math.nan  # a massless robot: NaN, as Pinocchio's centerOfMass
     com_out[0], com_out[1], com_out[2] = hx * inv, hy * inv, hz * inv
     oS = ws.oS
     for j in range(1, rb.njoints):

@@ -340,7 +340,8 @@ def contact_forward_dynamics(
     """``a_out (nv,)`` and ``lam_out[:nc]`` of the contact forward dynamics with the first ``nc`` rows of the stacked
     ``Jc (·, nv)`` and ``a0 (·,)`` (see the module docstring).  Needs :func:`~.dynamics_kernel.forward_dynamics`
     at the same ``(q, v)`` (its factor of ``M`` and ``ws.tau = b``); leaves ``cw.Y`` and ``cw.G``.  ``nc = 0`` is
-    free dynamics.  Not a number if ``Jc M⁻¹ Jcᵀ + damping I`` is not positive definite."""
+    free dynamics.  Not a number (never a division by zero) if ``Jc M⁻¹ Jcᵀ + damping I`` is not positive
+    definite."""
     nv, Y, G = rb.nv, cw.Y, cw.G
     for k in range(nv):
         a_out[k] = tau[k] - ws.tau[k]
@@ -356,7 +357,7 @@ def contact_forward_dynamics(
                 acc += Jc[r, k] * Y[c, k]
             for k in range(c):
                 acc -= G[r, k] * G[c, k]
-            G[r, c] = math.sqrt(acc) if r == c else acc / G[c, c]
+            G[r, c] = (math.sqrt(acc) if acc > 0.0 else math.nan) if r == c else acc / G[c, c]
         acc = a0[r]
         for k in range(nv):
             acc += Jc[r, k] * a_out[k]

@@ -1,8 +1,10 @@
 """The rigid contacts of a contact-dynamics node, lowered for :mod:`.euler_node_kernel`.
 
 A ``DifferentialActionModelContactFwdDynamics`` node compiles when its active contacts are all
-``ContactModel3D``/``ContactModel6D`` (exact classes) on distinct joints or with a positive damping (a
-redundant set takes the least-squares path of the Python model), and it has no constraints.  Its contacts
+``ContactModel3D``/``ContactModel6D`` (exact classes), it has no constraints, and the set is not redundant
+(``_redundant_contacts``: without damping, contacts sharing a body or a stacked Jacobian of deficient rank at a
+generic configuration; such a set takes the least-squares path of the Python model, which the kernels do not
+implement).  Its contacts
 become, in the order of the contact model (by name):
 
 * ``ints``: per contact ``(frame, rows, reference frame, first row)`` (:data:`.euler_node_kernel.CONTACT_FIELDS`;

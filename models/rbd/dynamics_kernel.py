@@ -235,14 +235,16 @@ def _crba(rb, ws):
 @compiled
 def _factor(rb, ws):
     """``ws.L``: the lower-triangular ``L`` with ``ws.M = Lᵀ L`` and the branch-induced sparsity of ``M``
-    (Featherstone's LTL factorization: no fill-in, ``O(nv · depth²)``)."""
+    (Featherstone's LTL factorization: no fill-in, ``O(nv · depth²)``).  A pivot that is not positive (a
+    singular ``M``: a moving joint whose subtree has no mass, no inertia about its axis and no armature) is
+    NaN, so the dynamics come out NaN as Pinocchio's ABA gives them, instead of a division by zero."""
     n = rb.nv
     L, M, dinv, lam = ws.L, ws.M, ws.dinv, rb.dof_parent
     for r in range(n):
         for c in range(n):
             L[r, c] = M[r, c] if c <= r else 0.0
     for k in range(n - 1, -1, -1):
-        d = math.sqrt(L[k, k])
+        d = math.sqrt(L[k, k]) if L[k, k] > 0.0 else math.nan
         L[k, k] = d
         dinv[k] = 1.0 / d
         i = lam[k]

@@ -5,17 +5,24 @@ code               value  nq    nv    Pinocchio joint
 =================  =====  ====  ====  ==========================================================
 ``FREEFLYER``      0      7     6     ``JointModelFreeFlyer`` (``q = [p, quaternion xyzw]``, SE(3))
 ``REVOLUTE``       1      1     1     ``JointModelRX/RY/RZ``, ``JointModelRevoluteUnaligned``
-``REVOLUTE_UB``    2      2     1     ``JointModelRUBX/RUBY/RUBZ`` (``q = [cos θ, sin θ]``)
+``REVOLUTE_UB``    2      2     1     ``JointModelRUBX/RUBY/RUBZ``, ``JointModelRevoluteUnboundedUnaligned``
+                                       (``q = [cos θ, sin θ]``)
 ``PRISMATIC``      3      1     1     ``JointModelPX/PY/PZ``, ``JointModelPrismaticUnaligned``
 =================  =====  ====  ====  ==========================================================
 
 The axis of a revolute or prismatic joint is stored apart (``RigidBodyModel.axis``), so aligned and
-unaligned joints share a code.
+unaligned joints share a code.  The axis of an unaligned joint is read from its motion subspace ``S``
+(Pinocchio's joint data after ``calc``: ``S = [0; axis]`` for a revolute, ``[axis; 0]`` for a prismatic joint),
+since Pinocchio's binding exposes ``axis`` on some unaligned joints only (not on
+``JointModelRevoluteUnboundedUnaligned``).  Every other joint type (spherical, spherical ZYX, planar,
+translation, helical, universal, ellipsoid, composite, mimic) is not lowered: :class:`NotLowerable`, and the
+node keeps its Python path.
 """
 
 from __future__ import annotations
 
 import numpy as np
+import pinocchio as pin
 
 FREEFLYER = 0
 REVOLUTE = 1
@@ -67,8 +74,17 @@ def joint_arrays(model: object) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.
             axis[i, k] = 1.0
         elif kind in _UNALIGNED:
             jtype[i] = _UNALIGNED[kind]
-            axis[i] = np.asarray(joint.extract().axis, dtype=float)
+            axis[i] = _unaligned_axis(model, joint, jtype[i] == PRISMATIC)
         else:
             raise NotLowerable(f"joint {model.names[i]!r} is a {kind}, which the compiled kernels do not support")
         idx_q[i], idx_v[i] = joint.idx_q, joint.idx_v
     return jtype, idx_q, idx_v, axis
+
+
+def _unaligned_axis(model: object, joint: object, prismatic: bool) -> np.ndarray:
+    """The unit axis ``(3,)`` of an unaligned revolute or prismatic joint, from its motion subspace at the
+    neutral configuration."""
+    jdata = joint.createData()
+    joint.calc(jdata, pin.neutral(model))
+    S = np.asarray(jdata.S, dtype=float).reshape(6)
+    return S[:3].copy() if prismatic else S[3:].copy()

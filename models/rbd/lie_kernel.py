@@ -431,7 +431,8 @@ def integrate(jtype, idx_q, idx_v, q, v, q_out):
 
 @compiled
 def difference(jtype, idx_q, idx_v, q0, q1, v_out):
-    """``v_out (nv,) = q1 ⊖ q0`` (``pinocchio.difference``)."""
+    """``v_out (nv,) = q1 ⊖ q0`` (``pinocchio.difference``; a continuous joint's ``atan2(c0 s1 - s0 c1, c0 c1 + s0 s1)``
+    also where ``c0 c1 + s0 s1`` rounds above 1, where Pinocchio returns 0)."""
     for j in range(1, jtype.shape[0]):
         kind, iq, iv = jtype[j], idx_q[j], idx_v[j]
         if kind == FREEFLYER:
@@ -441,8 +442,7 @@ def difference(jtype, idx_q, idx_v, q0, q1, v_out):
                 v_out[iv + k] = res[k]
         elif kind == REVOLUTE_UB:
             c0, s0, c1, s1 = q0[iq], q0[iq + 1], q1[iq], q1[iq + 1]
-            c = c0 * c1 + s0 * s1
-            v_out[iv] = 0.0 if c > 1.0 else math.atan2(c0 * s1 - s0 * c1, c)
+            v_out[iv] = math.atan2(c0 * s1 - s0 * c1, c0 * c1 + s0 * s1)
         else:
             v_out[iv] = q1[iq] - q0[iq]
 
