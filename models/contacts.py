@@ -26,6 +26,7 @@ from crocopy.versioning import frozen_copy, touch
 
 from .contact_base import ContactDataAbstract, ContactModelAbstract, check_gains, check_position
 from .force_base import FrameForce, frame_id, world_aligned
+from .residuals_frame import frame_jacobian
 
 _LOCAL = pin.LOCAL
 _skew = pin.skew
@@ -132,7 +133,7 @@ class ContactModel3D(_FrameContact):
 
     def calc(self, data: "ContactData3D", x: np.ndarray) -> None:
         model, pd, fid = self.state.pinocchio, data.pinocchio, self.id
-        J = data.fJf = pin.getFrameJacobian(model, pd, fid, _LOCAL)
+        J = data.fJf = frame_jacobian(model, pd, fid, _LOCAL)
         v = data.v = pin.getFrameVelocity(model, pd, fid, _LOCAL)
         data.vl, data.w = v.linear, v.angular
         a0l = pin.getFrameClassicalAcceleration(model, pd, fid, _LOCAL).linear
@@ -266,7 +267,7 @@ class ContactModel6D(_FrameContact):
 
     def calc(self, data: "ContactData6D", x: np.ndarray) -> None:
         model, pd, fid = self.state.pinocchio, data.pinocchio, self.id
-        data.fJf[:] = pin.getFrameJacobian(model, pd, fid, _LOCAL)
+        data.fJf[:] = frame_jacobian(model, pd, fid, _LOCAL)
         v = data.v = pin.getFrameVelocity(model, pd, fid, _LOCAL)
         a0l = data.a0_local
         a0l[:] = pin.getFrameAcceleration(model, pd, fid, _LOCAL).vector

@@ -18,6 +18,7 @@ from crocopy.state import StateAbstract
 
 from .force_base import frame_id
 from .impulse_base import ImpulseDataAbstract, ImpulseModelAbstract
+from .residuals_frame import frame_jacobian
 
 _LOCAL = pin.LOCAL
 _skew = pin.skew
@@ -50,7 +51,7 @@ class _ImpulseFrame(ImpulseModelAbstract):
 
     def calc(self, data: ImpulseDataAbstract, x: np.ndarray) -> None:
         model, pd, fid = self.state.pinocchio, data.pinocchio, self.id
-        data.fJf[:] = pin.getFrameJacobian(model, pd, fid, _LOCAL)
+        data.fJf[:] = frame_jacobian(model, pd, fid, _LOCAL)
         nc = self.nc
         if self.type == _LOCAL:
             data.Jc[:] = data.fJf[:nc]

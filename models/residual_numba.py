@@ -36,7 +36,7 @@ from crocopy.residuals.base import ResidualDataAbstract, ResidualModelAbstract
 
 from .data_collectors import DataCollectorMultibody
 from .force_base import frame_id
-from .residuals_frame import shared_pinocchio
+from .residuals_frame import frame_jacobian, shared_pinocchio
 from .state_multibody import StateMultibody
 
 NodeKinematics = namedtuple("NodeKinematics", "R p com J Jcom")
@@ -181,7 +181,7 @@ class ResidualDataNumba(ResidualDataAbstract):
             kin.R[:] = oMf.rotation
             kin.p[:] = oMf.translation
             if derivatives and flags & JACOBIAN:
-                kin.J[:] = pin.getFrameJacobian(pmodel, pd, model.frame, model.frame_reference)
+                kin.J[:] = frame_jacobian(pmodel, pd, model.frame, model.frame_reference)
         if flags & COM:
             kin.com[:] = pin.centerOfMass(pmodel, pd, pin.POSITION, False)
             if derivatives:

@@ -68,6 +68,11 @@ def shared_pinocchio(shared: DataCollectorAbstract | None, state: StateMultibody
     return pdata
 
 
+def frame_jacobian(model: pin.Model, data: pin.Data, fid: int, reference: pin.ReferenceFrame) -> np.ndarray:
+    """Pinocchio's ``getFrameJacobian`` as a ``(6, nv)`` array (the binding returns a vector when ``nv = 1``)."""
+    return np.reshape(pin.getFrameJacobian(model, data, fid, reference), (6, model.nv))
+
+
 class _FrameResidual(ResidualModelAbstract):
     """Shared construction of the frame residuals (``_data_class``: the data's class, by Crocoddyl's name)."""
 
@@ -149,7 +154,7 @@ class ResidualModelFramePlacement(_FrameResidual):
 
     def calcDiff(self, data: ResidualDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
         nv = self.state.nv
-        data.fJf[:] = pin.getFrameJacobian(self.state.pinocchio, data.pinocchio, self._id, pin.LOCAL)
+        data.fJf[:] = frame_jacobian(self.state.pinocchio, data.pinocchio, self._id, pin.LOCAL)
         data.rJf = pin.Jlog6(data.rMf)
         data.Rx[:, :nv] = data.rJf @ data.fJf
 
@@ -189,7 +194,7 @@ class ResidualModelFrameTranslation(_FrameResidual):
 
     def calcDiff(self, data: ResidualDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
         """``∂r/∂q`` is the linear part of the LOCAL_WORLD_ALIGNED frame Jacobian (``oMf.R fJf[:3]``)."""
-        J = pin.getFrameJacobian(self.state.pinocchio, data.pinocchio, self._id, pin.LOCAL_WORLD_ALIGNED)
+        J = frame_jacobian(self.state.pinocchio, data.pinocchio, self._id, pin.LOCAL_WORLD_ALIGNED)
         data.Rx[:, : self.state.nv] = J[:3]
 
 
@@ -226,7 +231,7 @@ class ResidualModelFrameRotation(_FrameResidual):
 
     def calcDiff(self, data: ResidualDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
         nv = self.state.nv
-        data.fJf[:] = pin.getFrameJacobian(self.state.pinocchio, data.pinocchio, self._id, pin.LOCAL)
+        data.fJf[:] = frame_jacobian(self.state.pinocchio, data.pinocchio, self._id, pin.LOCAL)
         data.rJf = pin.Jlog3(data.rRf)
         data.Rx[:, :nv] = data.rJf @ data.fJf[3:]
 
@@ -294,12 +299,12 @@ class ResidualModelFrameVelocity(_FrameResidual):
         model, pd, fid = self.state.pinocchio, data.pinocchio, self._id
         if self._type != pin.LOCAL_WORLD_ALIGNED:
             dv_dq, dv_dv = pin.getFrameVelocityDerivatives(model, pd, fid, self._type)
-            data.Rx[:, :nv] = dv_dq
-            data.Rx[:, nv:] = dv_dv
+            data.Rx[:, :nv] = np.reshape(dv_dq, (6, nv))
+            data.Rx[:, nv:] = np.reshape(dv_dv, (6, nv))
             return
         # v = (R v_l, R w_l): ∂v/∂q = R (∂v_l/∂q - [v_l]x Jw), with Jw the LOCAL angular Jacobian
-        dv_dq, dv_dv = pin.getFrameVelocityDerivatives(model, pd, fid, pin.LOCAL)
-        Jw = pin.getFrameJacobian(model, pd, fid, pin.LOCAL)[3:]
+        dv_dq, dv_dv = (np.reshape(d, (6, nv)) for d in pin.getFrameVelocityDerivatives(model, pd, fid, pin.LOCAL))
+        Jw = frame_jacobian(model, pd, fid, pin.LOCAL)[3:]
         vl = pin.getFrameVelocity(model, pd, fid, pin.LOCAL)
         R = pd.oMf[fid].rotation
         data.Rx[:3, :nv] = R @ (dv_dq[:3] - pin.skew(vl.linear) @ Jw)

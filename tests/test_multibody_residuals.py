@@ -222,3 +222,32 @@ def test_different_robot_errors():
     grav = crocopy.ResidualModelControlGrav(arm)
     with pytest.raises(ValueError, match="actuation"):
         grav.createData(crocopy.DataCollectorMultibody(load("talos_arm").createData()))
+
+
+def test_frame_residuals_on_a_one_dof_robot():
+    """Pinocchio's binding returns a one-dof robot's frame Jacobian as a vector: the frame residuals and contacts
+    still evaluate, and a solve gives the same answer with and without compiled nodes."""
+    model = pin.Model()
+    joint = model.addJoint(0, pin.JointModelRZ(), pin.SE3.Identity(), "j")
+    model.appendBodyToJoint(joint, pin.Inertia.FromSphere(1.0, 0.1), pin.SE3.Identity())
+    tip = model.addFrame(pin.Frame("tip", joint, 0, pin.SE3(np.eye(3), np.array([1.0, 0.0, 0.0])),
+                                   pin.FrameType.OP_FRAME))
+    state = crocopy.StateMultibody(model)
+    costs = crocopy.CostModelSum(state, 1)
+    residuals = (crocopy.ResidualModelFrameTranslation(state, tip, np.array([0.0, 1.0, 0.0]), 1),
+                 crocopy.ResidualModelFramePlacement(state, tip, pin.SE3.Identity(), 1),
+                 crocopy.ResidualModelFrameRotation(state, tip, np.eye(3), 1),
+                 crocopy.ResidualModelFrameVelocity(state, tip, pin.Motion.Zero(), pin.LOCAL, 1))
+    for n, residual in enumerate(residuals):
+        costs.addCost(str(n), crocopy.CostModelResidual(state, residual), 1.0)
+    dam = crocopy.DifferentialActionModelFreeFwdDynamics(state, crocopy.ActuationModelFull(state), costs)
+    iam = crocopy.IntegratedActionModelEuler(dam, 0.05)
+    results = []
+    for kernels in (True, False):
+        with crocopy.use_kernels(kernels):
+            problem = crocopy.ShootingProblem(np.zeros(2), [iam] * 10, iam)
+            solver = crocopy.SolverFDDP(problem)
+            solver.solve([], [], 20)
+            results.append((solver.iter, solver.cost))
+    assert results[0][0] == results[1][0]
+    assert results[0][1] == pytest.approx(results[1][1], rel=1e-9)
