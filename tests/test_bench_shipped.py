@@ -85,7 +85,7 @@ def test_recorder_keeps_copies_of_the_arguments():
 
 
 @pytest.mark.parametrize(("argv", "parts"), [
-    ([], ["builders", "shipped"]),
+    ([], ["builders", "shipped", "user"]),
     (["--problems", "pend"], ["builders"]),
     (["--shipped"], ["shipped"]),
     (["--shipped", "arm_manipulation_fwddyn", "--problems", "pend"], ["builders", "shipped"]),
@@ -95,9 +95,13 @@ def test_the_command_runs_the_parts_asked_for(monkeypatch, capsys, argv, parts):
     monkeypatch.setattr("crocopy.bench.side_by_side.run_vs", lambda *a, **k: ran.append("builders") or "B\n")
     monkeypatch.setattr(shipped, "run_shipped", lambda *a, **k: ran.append("shipped") or "S\n")
     monkeypatch.setattr(compat, "jobs", lambda names=None: list(names or ()))
+    monkeypatch.setattr("crocopy.bench.user_residual.run_user_residual_bench",
+                        lambda *a, **k: ran.append("user") or "U\n")
+    monkeypatch.setattr("crocopy.bench.user_residual.SECTION", "")
     assert main(["bench", "--vs", "crocoddyl", *argv]) == 0
     assert ran == parts
-    assert capsys.readouterr().out == "\n".join({"builders": "B\n", "shipped": "S\n"}[p] for p in parts) + "\n"
+    expected = {"builders": "B\n", "shipped": "S\n", "user": "U\n"}
+    assert capsys.readouterr().out == "\n".join(expected[p] for p in parts) + "\n"
 
 
 def test_without_crocoddyl_the_shipped_part_names_the_bench_extra(monkeypatch, capsys):
