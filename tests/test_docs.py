@@ -20,7 +20,7 @@ RUNS = [
                  id="first_solve"),
     pytest.param("compose_arm.py", r"\d+ iterations, cost 5\.74\d*, end effector [\d.]+ mm from the target",
                  id="compose_arm"),
-    pytest.param("solver_families.py", r"^(\S.{27}converged=True .*\n){7}$", id="solver_families"),
+    pytest.param("solver_families.py", r"^(\S.{28}converged=True .*\n){7}$", id="solver_families"),
     pytest.param("dask_cluster.py", r"10 solves in [\d.]+ s; best start .*, cost [\d.e-]+",
                  marks=pytest.mark.slow, id="dask_cluster"),
 ]
