@@ -40,9 +40,11 @@ converge, ``2`` usage error (also a missing optional extra, e.g. ``bench --vs`` 
 
 Before ``solve`` times the solve, one iteration of the same solver on the same problem loads the
 compiled (numba) kernels; on the first run after installation (unless ``crocopy compile`` ran) they
-are compiled, which takes 25-40 s and is announced by a ``compiling kernels (first run only) ...``
-line, printed at launch when numba's cache lacks a kernel (:func:`crocopy.kernels.cache_is_cold`)
-and otherwise as soon as a compilation starts.  The reported solve time excludes that warm-up.
+are compiled, which takes about 100 s of CPU time (``time crocopy compile``: 99 s user in a fresh
+cache; the wall time grows with the machine's load) and is announced by a
+``compiling kernels (first run only) ...`` line, printed at launch when numba's cache lacks a
+kernel (:func:`crocopy.kernels.cache_is_cold`) and otherwise as soon as a compilation starts.  The
+reported solve time excludes that warm-up.
 """
 
 from __future__ import annotations
@@ -237,6 +239,8 @@ def _solve(args: argparse.Namespace) -> int:
         f"{why} after {solver.iter} iterations, cost {solver.cost:.6g},"
         f" {elapsed:.2f} s ({1e3 * elapsed / iters:.1f} ms/iteration)"
     )
+    for line in _motion_notes(problem, solver, logger):
+        print(f"{args.problem}: {line}")
     if args.plot:
         from .callbacks.plotting import plot_convergence_from_logger
 
@@ -252,6 +256,46 @@ def _solve(args: argparse.Namespace) -> int:
 
             print(f"meshcat animation written to {export_html_from_solver(robot, solver, html)}")
     return EXIT_CONVERGED if converged else EXIT_NOT_CONVERGED
+
+
+def cost_climb_note(costs: list[float], gaps: list[float]) -> str | None:
+    """Why the verbose table's cost rose above its first value, or ``None`` if it never did.
+
+    ``costs`` and ``gaps`` (``ffeas``) are the logger's per-iteration lists (index = the verbose table's
+    ``iter``).  A multiple-shooting
+    solver (FDDP, Box-FDDP) starting from an infeasible guess reports the cost of its iterate with
+    the gaps still open; the cost climbs while the gaps close, and only then measures a motion the
+    dynamics allow.  A climb anywhere else is reported as unexpected.
+    """
+    if not costs or max(costs) <= costs[0]:
+        return None
+    peak = int(max(range(len(costs)), key=costs.__getitem__))
+    open_gaps = gaps[0] > 0 and min(gaps[: peak + 1]) < gaps[0]
+    if open_gaps:
+        return (f"the cost rose from {costs[0]:.4g} to {costs[peak]:.4g} (iteration {peak}) while the guess's gaps"
+                f" closed ({gaps[0]:.2g} -> {gaps[peak]:.2g}): expected from an infeasible start of multiple"
+                f" shooting (the first costs are those of a guess the dynamics do not allow); then down to"
+                f" {costs[-1]:.4g}")
+    return f"the cost rose from {costs[0]:.4g} to {costs[peak]:.4g} at iteration {peak} (unexpected)"
+
+
+def _motion_notes(problem, solver, logger) -> list[str]:
+    """Summary lines after a solve: flight time and apex of a legged jump, and the cost's climb, if any."""
+    from .problems.flight import flight_report
+
+    notes = []
+    report = flight_report(problem, solver.xs)
+    if report is not None:
+        notes.append(
+            f"flight {report.flight_time:.2f} s, base apex {100 * report.apex:.1f} cm above its start,"
+            f" feet within {report.spread_ratio:.2f}x their standing spread"
+            f" and {100 * report.feet_below_base:.0f} cm below the base in flight,"
+            f" {'landed on every foot' if report.landed else 'did not land on every foot'}"
+        )
+    climb = cost_climb_note(logger.costs, logger.ffeass)
+    if climb:
+        notes.append(climb)
+    return notes
 
 
 COMPILE_RUNS = (("jump", ("boxfddp", "fddp", "ddp", "boxddp")), ("pend", ("fddp", "boxfddp")), ("arm", ("fddp",)))

@@ -1,8 +1,8 @@
 """Getting the compiled kernels ready: the first-run notice, the warm-up call, and ``crocopy compile``.
 
 A kernel (:mod:`crocopy.kernels`) is compiled on its first call with new argument types, unless
-numba's on-disk cache holds it; compiling all of them takes about 90 s on a 2-core machine, loading
-them from the cache a fraction of a second.  Here:
+numba's on-disk cache holds it; compiling all of them takes about 100 s of CPU time (``time crocopy
+compile`` in a fresh cache), loading them from the cache a fraction of a second.  Here:
 
 * :func:`announce_cold_cache` prints :data:`COMPILING_NOTICE` at once when the cache lacks a kernel
   (:func:`crocopy.kernels.cache_is_cold`, which compiles nothing);

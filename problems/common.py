@@ -22,7 +22,9 @@ squared-residual activation ``0.5 * ||r||^2_W``):
 * ``friction``: quadratic barrier keeping each contact force in its linearised friction cone
   (4 facets, outer approximation) or, for 6D contacts, its wrench cone;
 * ``swing``: translation (3D) or placement (6D) tracking of a swinging frame;
-* ``com``: centre-of-mass position tracking.
+* ``com``: centre-of-mass position tracking;
+* ``apex`` and ``foot_xy``: the jump's base apex target and feet kept under the body in flight
+  (:func:`crocopy.problems.quadruped.build_jump`).
 """
 
 from __future__ import annotations
@@ -43,6 +45,8 @@ DEFAULT_WEIGHTS: dict[str, float] = {
     "friction": 1e1,
     "swing": 1e6,
     "com": 1e5,
+    "apex": 1e6,
+    "foot_xy": 1e5,
     "impulse_state": 1e1,
     "impulse_foot": 1e7,
     "terminal_state": 1e3,
@@ -169,11 +173,12 @@ class LeggedSetup:
         w = np.concatenate([[0.0, 0.0, 500.0], [500.0] * 3, [0.01] * (nv - 6), [10.0] * 6, [1.0] * (nv - 6)])
         return w**2
 
-    def _state_cost(self, nu: int, xref: np.ndarray | None = None) -> object:
+    def _state_cost(self, nu: int, xref: np.ndarray | None = None, weights: np.ndarray | None = None) -> object:
         lib = self.lib
         xref = self.x0 if xref is None else xref
+        weights = self.state_weights() if weights is None else weights
         res = lib.ResidualModelState(self.state, xref, nu)
-        return lib.CostModelResidual(self.state, lib.ActivationModelWeightedQuad(self.state_weights()), res)
+        return lib.CostModelResidual(self.state, lib.ActivationModelWeightedQuad(weights), res)
 
     def _limit_cost(self, nu: int) -> object:
         """Quadratic barrier on joint position limits and velocity limits (base unbounded)."""
@@ -225,6 +230,7 @@ class LeggedSetup:
         extra: Mapping[str, tuple[object, float]] | None = None,
         terminal: bool = False,
         xref: np.ndarray | None = None,
+        state_weights: np.ndarray | None = None,
     ) -> object:
         """Integrated contact-dynamics node.
 
@@ -249,13 +255,17 @@ class LeggedSetup:
             Terminal node: state weight ``weights['terminal_state']`` and no control cost.
         xref : numpy.ndarray, optional
             Reference of the state regularisation (default ``x0``).
+        state_weights : numpy.ndarray, optional
+            Squared per-component weights ``(2 nv,)`` of the state regularisation (default
+            :meth:`state_weights`).
         """
         lib, w, nu = self.lib, self.weights, self.nu
         contacts = lib.ContactModelMultiple(self.state, nu)
         for name, ref in support.items():
             contacts.addContact(name + "_contact", self._contact(name, ref))
         costs = lib.CostModelSum(self.state, nu)
-        costs.addCost("state", self._state_cost(nu, xref), w["terminal_state"] if terminal else w["state"])
+        state_weight = w["terminal_state"] if terminal else w["state"]
+        costs.addCost("state", self._state_cost(nu, xref, state_weights), state_weight)
         costs.addCost("limits", self._limit_cost(nu), w["limits"])
         if not terminal:
             costs.addCost("control", lib.CostModelResidual(self.state, lib.ResidualModelControl(self.state, nu)),

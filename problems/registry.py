@@ -116,10 +116,11 @@ _SPECS = [
     _spec("taichi", humanoid.build_taichi, "Talos taichi: manipulation, one foot, balance (3 phases)",
           (120, 77, 32), {"fddp": R(21, 810.68472), "boxfddp": R(14, 811.22359), "boxddp": R(80, 811.22359)}),
     _spec("jump", quadruped.build_jump,
-          "ANYmal jump (30 cm asked; Box-FDDP reaches base +13 cm, CoM +18 cm), 32 N m / 7.5 rad/s,"
-          " 0-300/300-700/700-1000 ms",
+          "ANYmal jump (base apex 22 cm asked; Box-FDDP reaches base +23 cm, CoM +21 cm, feet under the body),"
+          " 32 N m / 7.5 rad/s, 0-300/300-700/700-1000 ms",
           (101, 37, 12),
-          {"fddp": R(77, 7655.03), "boxfddp": R(242, 11150.7), "boxddp": R(800, 2.97471e6, False)}, maxiter=800),
+          {"fddp": R(410, 5476.47975), "boxfddp": R(465, 7069.18086), "boxddp": R(7, 2.90985341e18, False)},
+          maxiter=800),
     _spec("hop", quadruped.build_hop, "ANYmal two-leg hopping, 10 hops with a leg switch, 5.8 s / 580 nodes",
           (592, 37, 12), {"fddp": R(10, 4974.6918), "boxfddp": R(168, 5147.8078), "boxddp": R(404, 1.754609e6)}),
     _spec("bar", humanoid.build_monkey_bar, "Talos monkey bar: grasp, climb, land (arm torques x10)",

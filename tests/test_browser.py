@@ -3,12 +3,15 @@
 Needs Debian's ``chromium`` (``apt-get install -y chromium``); without it these tests are skipped
 (fail in CI: ``tests/conftest.py``). The page is opened from ``file://`` (no server); software WebGL (SwiftShader)
 draws it. Each check compares a screenshot with the robot against one of the same scene with the
-robot hidden: thousands of pixels differ when the robot is drawn, none when WebGL fails.
+robot hidden: thousands of pixels differ when the robot is drawn, none when WebGL fails. One more
+reads the page's DOM after its scripts ran (the controls panel open on the animation's play button)
+and the empty scene's screenshot (a floor filling the view's bottom up to one straight horizon).
 """
 
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -64,9 +67,43 @@ def _screenshot(html: str, png: str, profile: str, attempts: int = 3) -> np.ndar
     pytest.fail(f"chromium produced no screenshot of {html}")
 
 
+PANEL = (slice(0, 310), slice(550, 800))
+"""Where the page's controls panel (open, with the animation's play button) sits in an 800 x 600 shot."""
+
+
 def _differing_pixels(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Pixels that differ between two shots, outside the controls panel (its time read-out moves)."""
     assert a.shape == b.shape == (600, 800, 3)
-    return np.abs(a - b).sum(axis=2) > 30
+    diff = np.abs(a - b).sum(axis=2) > 30
+    diff[PANEL] = False
+    return diff
+
+
+def _dom(html: str, profile: str) -> str:
+    """The page's DOM after its scripts ran (headless Chromium's ``--dump-dom``)."""
+    cmd = [_chromium(), *FLAGS, f"--user-data-dir={profile}", "--dump-dom", f"file://{html}"]
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=300).stdout
+
+
+def test_page_opens_with_play_in_view_over_ground_reaching_the_horizon(tmp_path):
+    """The controls panel is open with the "Animations" folder unfolded (play, pause, time), and the
+    floor covers the whole lower part of the view up to one straight horizon: no slab corner or edge."""
+    anymal = erd.load("anymal")
+    x0 = np.concatenate([anymal.q0, np.zeros(anymal.model.nv)])
+    with MeshcatDisplay(anymal, openDisplay=False) as display:
+        display.setVisibility("robot", False)
+        page = display.exportHTML([x0, x0], str(tmp_path / "empty.html"), dts=[0.1])
+    dom = _dom(page, str(tmp_path / "dom"))
+    assert '<div class="close-button close-bottom" style="width: 245px;">Close Controls</div>' in dom  # open
+    folder = re.search(r'<ul( class="closed")?><li class="title">Animations</li>(.*?)</ul>', dom, re.S)
+    assert folder and not folder.group(1), "the Animations folder is folded"
+    assert all(f'<span class="property-name">{b}</span>' in folder.group(2) for b in ("play", "pause", "time"))
+    shot = _screenshot(page, str(tmp_path / "empty.png"), str(tmp_path / "profile"))
+    sky = shot[..., 2] > shot[..., 0] + 40  # meshcat's blue background; the floor is grey
+    view = sky[:, :PANEL[1].start]
+    assert view[0].all() and not view[-150:].any(), "the floor does not fill the bottom of the view"
+    horizon = np.argmin(view, axis=0)  # first floor row of each column
+    assert horizon.max() - horizon.min() <= 3, f"the floor's far edge is not a straight horizon: rows {horizon}"
 
 
 def _shots_with_and_without_robot(robot, xs, dts, tmp_path, name):

@@ -232,18 +232,72 @@ def test_first_run_notice_with_an_empty_kernel_cache(tmp_path):
 
 
 @pytest.mark.slow
-def test_jump_label_states_the_apex_the_solution_reaches():
-    """``crocopy list`` gives the jump's base and CoM rise; the solved jump reaches them (±1 cm)."""
+def test_default_solve_is_a_jump_measured_on_its_trajectory(monkeypatch, capsys):
+    """``crocopy solve`` (the ANYmal jump, Box-FDDP) converges; on its trajectory the base apex is
+    at least 15 cm above standing and within 2 cm of the height asked, the feet stay within 1.3x
+    their standing spread and under the body in flight, and it lands on its four feet.  The
+    ``crocopy list`` label's base and CoM rises and the summary's figures are the measured ones."""
     import pinocchio as pin
 
-    spec = registry.get("jump")
-    base_cm, com_cm = (float(v) for v in re.search(r"base \+(\d+) cm, CoM \+(\d+) cm", spec.description).groups())
-    problem, xs, us = spec.build(crocopy)
-    solver = crocopy.SolverBoxFDDP(problem)
-    assert solver.solve(xs, us, spec.maxiter, False)
+    from crocopy.problems.quadruped import FEET, JUMP_HEIGHT
+
+    solvers = []
+
+    class Recorded(crocopy.SolverBoxFDDP):
+        def __init__(self, problem):
+            super().__init__(problem)
+            solvers.append(self)
+
+    monkeypatch.setattr(crocopy, "SolverBoxFDDP", Recorded)
+    assert main(["solve", "--quiet", "--no-html"]) == EXIT_CONVERGED
+    out = capsys.readouterr().out
+    solver = solvers[-1]
+    problem = solver.problem
     model = problem.terminalModel.state.pinocchio
     data = model.createData()
-    z = np.array([x[2] for x in solver.xs])
-    com = np.array([pin.centerOfMass(model, data, x[: model.nq])[2] for x in solver.xs])
-    assert abs(100 * (z.max() - z[0]) - base_cm) <= 1.0
-    assert abs(100 * (com.max() - com[0]) - com_cm) <= 1.0
+    fids = [model.getFrameId(f) for f in FEET["anymal"]]
+    base, com, spread, feet_z, below = [], [], [], [], []
+    for k, x in enumerate(solver.xs):
+        q = x[: model.nq]
+        pin.framesForwardKinematics(model, data, q)
+        feet = np.array([data.oMf[f].translation for f in fids])
+        base.append(q[2])
+        com.append(pin.centerOfMass(model, data, q)[2])
+        spread.append(np.abs(feet[:, :2] - q[:2]).max(axis=0))  # the base stays level (checked below)
+        feet_z.append(feet[:, 2])
+        if 30 <= k < 70:
+            below.append(q[2] - feet[:, 2].max())
+            assert np.allclose(q[3:6], 0.0, atol=0.02)  # level: quaternion vector part ~ 0
+    rise = max(base) - base[0]
+    assert rise >= 0.15 and abs(rise - JUMP_HEIGHT) <= 0.02
+    ratio = (np.array(spread) / spread[0]).max()
+    assert ratio <= 1.3
+    assert min(below) > 0.3  # the feet hang under the body, not thrown up to its height
+    np.testing.assert_allclose(feet_z[-1], feet_z[0], atol=0.01)  # back on its four feet
+    assert max(feet_z[50]) > 0.05  # and it did leave the ground
+    base_cm, com_cm = (float(v) for v in re.search(r"base \+(\d+) cm, CoM \+(\d+) cm",
+                                                   registry.get("jump").description).groups())
+    assert abs(100 * rise - base_cm) <= 1.0 and abs(100 * (max(com) - com[0]) - com_cm) <= 1.0
+    assert f"flight 0.40 s, base apex {100 * rise:.1f} cm above its start" in out
+    assert f"feet within {ratio:.2f}x their standing spread" in out and "landed on every foot" in out
+    assert "expected from an infeasible start of multiple shooting" in out
+
+
+def test_cost_climb_is_explained_only_when_the_gaps_were_closing():
+    from crocopy.cli import cost_climb_note
+
+    assert cost_climb_note([5.0, 4.0, 3.0], [0.5, 0.0, 0.0]) is None
+    note = cost_climb_note([5.0, 5.0, 80.0, 9.0, 3.0], [0.5, 0.5, 0.2, 0.0, 0.0])
+    assert "from 5 to 80 (iteration 2)" in note and "infeasible start of multiple shooting" in note
+    assert "then down to 3" in note
+    assert "unexpected" in cost_climb_note([5.0, 4.0, 9.0, 3.0], [0.0, 0.0, 0.0, 0.0])
+
+
+def test_readme_lists_every_solve_choice_and_the_compile_command():
+    """The README's command table names each ``--solver`` choice of ``crocopy solve --help``, and ``compile``."""
+    from crocopy.solvers import SOLVERS
+
+    readme = open(os.path.join(os.path.dirname(__file__), "..", "README.md"), encoding="utf-8").read()
+    listed = re.search(r"`crocopy solve \[PROBLEM\] \[--solver ([a-z\\|]+)\]", readme).group(1).split("\\|")
+    assert listed == sorted(SOLVERS)
+    assert "| `crocopy compile` |" in readme

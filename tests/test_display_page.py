@@ -182,9 +182,13 @@ def test_camera_sees_every_point_and_no_more_than_needed(lo, hi):
 def test_floor_covers_the_motion_and_sinks_under_it_when_needed():
     centre, sides = framing.floor_extent(np.array([-1.0, 0.0, -0.02]), np.array([3.0, 1.0, 1.0]), 0.6)
     np.testing.assert_allclose(centre, [1.0, 0.5, 0.0])
-    np.testing.assert_allclose(sides, [4.0 + 0.5, 1.0 + 0.5])  # a border of 0.25 m (the minimum) on each side
+    border = framing.FLOOR_MIN_BORDER  # the minimum border: 25 robot sizes of 0.6 m are less
+    np.testing.assert_allclose(sides, [4.0 + 2 * border, 1.0 + 2 * border])
     centre, sides = framing.floor_extent(np.array([-0.1, -0.1, -0.5]), np.array([0.1, 0.1, 0.1]), 2.0)
-    assert centre[2] == -0.5 and sides[0] == pytest.approx(0.2 + 2 * framing.FLOOR_BORDER * 2.0)
+    assert centre[2] == -0.5
+    assert sides[0] == pytest.approx(0.2 + 2 * max(framing.FLOOR_BORDER * 2.0, framing.FLOOR_MIN_BORDER))
+    _, sides = framing.floor_extent(np.array([-0.1, -0.1, 0.0]), np.array([0.1, 0.1, 0.1]), 10.0)
+    assert sides[0] == pytest.approx(0.2 + 2 * framing.FLOOR_BORDER * 10.0)  # a big robot: 25 of its sizes
 
 
 def test_motion_bounds_hold_every_geometry_at_every_node(anymal):

@@ -85,3 +85,25 @@ def test_example_runs_and_writes_its_animation(script, argv, outputs, tmp_path, 
             assert len(animations) == 1
             tracks = [t for a in animations[0]["animations"] for t in a["clip"]["tracks"]]
             assert tracks and max(len(t["keys"]) for t in tracks) > 1
+
+
+def test_double_pendulum_animates_the_converged_swing_up(tmp_path, monkeypatch, capsys):
+    """Run in full (no cap): the animation is Box-FDDP's converged solve, not Box-DDP's failed one."""
+    import crocopy.models.display.html as html
+
+    animated = []
+    export = html.export_html_from_solver
+
+    def recording(robot, solver, path, *args, **kwargs):
+        animated.append((type(solver).__name__, solver.iter, solver.cost, solver.reason))
+        return export(robot, solver, path, *args, **kwargs)
+
+    monkeypatch.setattr(html, "export_html_from_solver", recording)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(sys, "argv", [str(EXAMPLES / "double_pendulum.py")])
+    runpy.run_path(str(EXAMPLES / "double_pendulum.py"), run_name="__main__")
+    printed = capsys.readouterr().out
+    [(name, iters, cost, reason)] = animated
+    assert name == "SolverBoxFDDP" and reason == "converged"
+    assert f"animation of SolverBoxFDDP's swing-up ({iters} iterations, cost {cost:.6g})" in printed
+    assert "SolverBoxDDP: converged=False" in printed

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import crocopy
-from crocopy.problems import arm, humanoid, pendulum, quadruped, registry
+from crocopy.problems import arm, flight, humanoid, pendulum, quadruped, registry
 
 SMALL = {
     "pend": (pendulum.build_pendulum, {"nodes": 10}, (4, 1)),
@@ -83,6 +83,63 @@ def test_jump_limits_match_the_paper() -> None:
     model, _, _ = quadruped.load_quadruped("anymal", limited=True)
     np.testing.assert_allclose(model.velocityLimit[6:], 7.5)
     np.testing.assert_allclose(model.effortLimit[6:], 32.0)
+
+
+def _costs(model: object) -> dict:
+    return dict(model.differential.costs.costs.items())
+
+
+def test_jump_flight_asks_for_the_apex_with_the_feet_under_the_body() -> None:
+    """The 40 flight nodes (300-700 ms) are free dynamics; the middle one asks the base to be
+    JUMP_HEIGHT above standing, every one asks each foot to stay above its standing x/y (height free),
+    the flight regularisation leaves the base height free and holds the joints; the impulse lands
+    all four feet on their standing spots."""
+    problem, xs, _ = quadruped.build_jump(crocopy)
+    assert flight.flight_nodes(problem) == list(range(30, 70))
+    model = problem.terminalModel.state.pinocchio
+    data = model.createData()
+    pin = pytest.importorskip("pinocchio")
+    pin.framesForwardKinematics(model, data, xs[0][: model.nq])
+    feet = quadruped.FEET["anymal"]
+    standing = {f: data.oMf[model.getFrameId(f)].translation.copy() for f in feet}
+    for k in range(30, 70):
+        costs = _costs(problem.runningModels[k])
+        assert ("apex" in costs) == (k == 50)
+        for f in feet:
+            item = costs[f + "_xy"]
+            assert item.weight == 1e5
+            np.testing.assert_allclose(item.cost.residual.reference, standing[f])
+            np.testing.assert_allclose(item.cost.activation.weights, [1.0, 1.0, 0.0])
+        weights = costs["state"].cost.activation.weights
+        assert weights[2] == 0.0 and np.all(weights[6:18] == quadruped.FLIGHT_JOINT_WEIGHT**2)
+    apex = _costs(problem.runningModels[50])["apex"]
+    assert apex.cost.residual.reference[2] == pytest.approx(xs[0][2] + quadruped.JUMP_HEIGHT)
+    landing = problem.runningModels[70].costs.costs
+    for f in feet:
+        np.testing.assert_allclose(landing[f + "_landing"].cost.residual.reference, standing[f])
+    assert flight.contact_frames(problem) == sorted(model.getFrameId(f) for f in feet)
+
+
+def test_flight_report_reads_apex_spread_and_landing() -> None:
+    """On hand-made trajectories of the jump problem: the standing guess, the base lifted in flight,
+    the legs splayed, and a last state off the ground."""
+    problem, xs, _ = quadruped.build_jump(crocopy, dt=0.05)
+    assert flight.flight_report(quadruped.build_gait(crocopy, gait="trot", cycles=1, step_knots=3,
+                                                     support_knots=1)[0], xs) is None  # no free-dynamics node
+    still = flight.flight_report(problem, xs)
+    assert still.flight_time == pytest.approx(0.4) and still.apex == 0.0
+    assert still.spread_ratio == pytest.approx(1.0) and still.landed
+    assert still.feet_below_base == pytest.approx(xs[0][2], abs=0.05)
+    lifted = [x.copy() for x in xs]
+    for k in flight.flight_nodes(problem):
+        lifted[k][2] += 0.2
+    report = flight.flight_report(problem, lifted)
+    assert report.apex == pytest.approx(0.2) and report.spread_ratio == pytest.approx(1.0) and report.landed
+    splayed = [x.copy() for x in lifted]
+    splayed[8][7:19:3] = [0.5, -0.5, 0.5, -0.5]  # the four hip abduction (HAA) joints turned by 0.5 rad
+    assert flight.flight_report(problem, splayed).spread_ratio > 1.3
+    lifted[-1][2] += 0.05
+    assert not flight.flight_report(problem, lifted).landed
 
 
 def test_hop_horizon_is_580_nodes_of_10_ms() -> None:

@@ -18,7 +18,9 @@ bisection). The motion fills the view along its binding axis and is centred in b
 windows only add room at the sides.
 
 Floor. A box under ``z = 0`` (or under the motion, see :func:`floor_extent`) covering the motion's
-horizontal extent plus :data:`FLOOR_BORDER` times the robot's size on every side (at least 0.25 m).
+horizontal extent plus :data:`FLOOR_BORDER` times the robot's size on every side (at least
+:data:`FLOOR_MIN_BORDER`): it reaches past meshcat's far clipping plane (100 m), which cuts it
+along one straight horizon, so it reads as ground rather than as a slab with edges and corners.
 """
 
 from __future__ import annotations
@@ -42,6 +44,7 @@ __all__ = [
     "ELEVATION",
     "AZIMUTH",
     "FLOOR_BORDER",
+    "FLOOR_MIN_BORDER",
     "FLOOR_SINK",
 ]
 
@@ -55,8 +58,10 @@ ELEVATION = np.deg2rad(22.0)
 """Height of the camera above the box's centre, as an angle above the horizontal."""
 AZIMUTH = np.deg2rad(20.0)
 """Turn of the camera from the side view towards the motion's positive direction."""
-FLOOR_BORDER = 0.3
+FLOOR_BORDER = 25.0
 """Floor margin around the motion, in robot sizes."""
+FLOOR_MIN_BORDER = 150.0
+"""Smallest floor margin around the motion (m): beyond the viewer's 100 m far plane."""
 FLOOR_SINK = 0.1
 """How far (in robot sizes) the motion may reach under ``z = 0`` before the floor moves under it."""
 
@@ -170,7 +175,7 @@ def floor_extent(lo: np.ndarray, hi: np.ndarray, size: float) -> tuple[np.ndarra
     The top face is at ``z = 0`` unless the motion goes lower than :data:`FLOOR_SINK` robot sizes
     under it (a hanging pendulum, a drone starting at the origin): then it is under the motion.
     """
-    border = max(FLOOR_BORDER * float(size), 0.25)
+    border = max(FLOOR_BORDER * float(size), FLOOR_MIN_BORDER)
     top = 0.0 if lo[2] >= -FLOOR_SINK * float(size) else float(lo[2])
     centre = np.array([0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), top])
     return centre, (hi[:2] - lo[:2]) + 2.0 * border

@@ -4,8 +4,8 @@ The display is built on :class:`pinocchio.visualize.MeshcatVisualizer` (mesh loa
 materials) and :mod:`meshcat` (scene graph, animations, static HTML). It shows
 
 * the robot, one pose per node of a trajectory ``xs`` (only ``q = x[:nq]`` is used);
-* the floor (a thin grey box under ``z = 0``, or under the motion if it goes lower, sized to the
-  motion; meshcat's grid is hidden);
+* the floor (a thin grey box under ``z = 0``, or under the motion if it goes lower, reaching past
+  the viewer's far plane so that it ends on a straight horizon; meshcat's grid is hidden);
 * frame trajectories ``ps`` as poly-lines;
 * contact forces ``fs`` as arrows and their friction cones.
 

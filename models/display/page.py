@@ -324,6 +324,11 @@ _LOADER = r"""
     const handle = viewer.handle_command.bind(viewer);
     viewer.handle_command = (command) => handle(restore(command));
     for (const at of index.commands) viewer.handle_command_bytearray(bytes(at));
+    // meshcat starts with its controls folded under "Open Controls": unfold them with the
+    // animation's folder (play, pause, time) open and the scene tree folded, so play is in view.
+    viewer.gui.open();
+    for (const folder of Object.values(viewer.gui.__folders)) folder.close();
+    if (viewer.animator) viewer.animator.folder.open();
   } catch (error) {
     pane.textContent = "This page could not show the scene (it needs a browser with DecompressionStream: "
       + "Chrome 80, Firefox 113, Safari 16.4 or newer): " + error;
