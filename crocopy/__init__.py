@@ -152,6 +152,8 @@ Exception = _builtins.Exception  # noqa: A001
 #: ``from crocopy import *`` gives every public name, as ``from crocoddyl import *`` does.
 __all__ = sorted(n for n, v in globals().items() if not n.startswith("_") and not isinstance(v, _ModuleType))
 
+from . import libcrocoddyl_pywrap_float64  # noqa: E402,F401  (Crocoddyl's compiled module's name, an alias)
+
 
 def __getattr__(name: str):
     """Names that load lazily (``MeshcatDisplay``, HTML export) come from ``crocopy.models``; a name

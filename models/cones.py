@@ -26,8 +26,8 @@ def _check_rotation(R: np.ndarray) -> np.ndarray:
 
 def _check_box(box: np.ndarray) -> np.ndarray:
     box = np.asarray(box, dtype=float).reshape(-1)
-    if box.shape != (2,) or not np.all(np.isfinite(box)) or np.any(box < 0.0):
-        raise ValueError(f"box must be (length, width), two non-negative numbers, got shape {box.shape}")
+    if box.shape != (2,) or np.any(np.isnan(box)) or np.any(box < 0.0):
+        raise ValueError(f"box must be (length, width), two non-negative numbers or inf, got {box}")
     return box
 
 
@@ -132,6 +132,8 @@ class WrenchCone:
     """Crocoddyl's ``WrenchCone(R, mu, box, nf=4, inner_appr=True, min_nforce=0., max_nforce=inf)``.
 
     ``A (nf+13, 6)``, ``lb``, ``ub``; ``box = (length, width)`` of the contact surface.
+    ``WrenchCone()`` is Crocoddyl's default: ``R = I``, ``mu = 0.7`` and an unbounded box (the CoP and
+    yaw rows of ``A`` are then not finite, as in Crocoddyl).  Call :meth:`update` after changing a parameter.
     """
 
     def __init__(
@@ -172,7 +174,8 @@ class WrenchCone:
         )
         normal = [[0.0, 0.0, 1.0, 0.0, 0.0, 0.0]]
         A = np.vstack([np.hstack([F, np.zeros((self.nf, 3))]), normal, _cop_rows(self.box), yaw])
-        self.A = A @ np.kron(np.eye(2), self.R).T
+        with np.errstate(invalid="ignore"):
+            self.A = A @ np.kron(np.eye(2), self.R).T
         n = self.nf + 13
         self.lb = np.full(n, -np.inf)
         self.ub = np.zeros(n)
