@@ -130,3 +130,18 @@ def test_plot_convergence():
     fig = mim_solvers.plotConvergence(logger.convergence_data, show=False)
     assert [ax.get_ylabel() for ax in fig.axes] == ["iter", "cost", "merit", "step", "KKT"]
     assert fig.axes[-1].get_yscale() == "log"
+
+
+def test_bench_vs_mim_without_the_bench_extra():
+    try:
+        import mim_solvers  # noqa: F401
+    except ImportError:
+        pass
+    else:
+        pytest.skip("mim-solvers is installed (the oracle suite runs the comparison)")
+    from crocopy.cli import main
+
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err):
+        assert main(["bench", "--vs", "mim"]) == 2
+    assert "mim-solvers" in err.getvalue()

@@ -7,7 +7,7 @@ node and zero controls.  Per library: iterations, final cost, KKT, the constrain
 iteration (one thread).  The problems:
 
 * ``kinova_free``: Kinova reaching (T = 50, dt = 0.02), no constraint (SQP and CSQP);
-* ``kinova_ubound``: the same with ``|u| <= 8`` N m written as constraints on every running node;
+* ``kinova_ubound``: the same with ``|u| <= 25`` N m written as constraints on every running node;
 * ``ur5_ee_box``: UR5 end effector kept in the box ``[0.3, 1] × [-1, 0.25] × [0.1, 0.6]`` (running and
   terminal nodes) while reaching for ``(0.4, 0.4, 0.4)``, outside it;
 * ``ur5_ee_eq``: UR5 terminal end-effector position as an equality (``lb == ub``);
@@ -134,7 +134,7 @@ def build_problem(lib: ModuleType, name: str) -> object:
     if name == "kinova_free":
         return _arm(lib, "kinova", 50, 0.02, (0.4, 0.3, 0.6), _none(lib))
     if name == "kinova_ubound":
-        return _arm(lib, "kinova", 50, 0.02, (0.4, 0.3, 0.6), _control_box(lib, 8.0))
+        return _arm(lib, "kinova", 50, 0.02, (0.4, 0.3, 0.6), _control_box(lib, 25.0))
     if name == "ur5_ee_box":
         return _arm(lib, "ur5", 40, 0.02, (0.4, 0.4, 0.4), _ee_box(lib, [0.3, -1.0, 0.1], [1.0, 0.25, 0.6]))
     if name == "ur5_ee_eq":
@@ -174,14 +174,17 @@ def _node_bounds(model, terminal: bool) -> tuple[np.ndarray, np.ndarray]:
 
 
 def run(lib: ModuleType, solvers: ModuleType, name: str, solver: str = "SolverCSQP", maxiter: int = 200,
-        tolerance: float = 1e-6) -> dict:
+        tolerance: float = 1e-6, settings: dict | None = None) -> dict:
     """Solve ``name`` with ``solvers.<solver>`` (``solvers``: :mod:`crocopy` or ``mim_solvers``) on a
-    problem built with ``lib``; returns the figures of the comparison."""
+    problem built with ``lib``, with the solver's attributes ``settings``; returns the figures of the
+    comparison."""
     problem = build_problem(lib, name)
     if hasattr(problem, "nthreads"):
         problem.nthreads = 1
     s = getattr(solvers, solver)(problem)
     s.termination_tolerance = tolerance
+    for key, value in (settings or {}).items():
+        setattr(s, key, value)
     xs = [problem.x0.copy() for _ in range(problem.T + 1)]
     us = [np.zeros(m.nu) for m in problem.runningModels]
     start = time.perf_counter()
@@ -195,3 +198,53 @@ def run(lib: ModuleType, solvers: ModuleType, name: str, solver: str = "SolverCS
         "ms_per_iter": 1e3 * elapsed / max(int(s.iter), 1),
         "qp_iters": float(getattr(s, "qp_iters", 0.0)),
     }
+
+
+#: The comparison's cases: (problem, solver, termination tolerance, solver settings); see
+#: ``tests/oracle/test_mim_solvers.py`` for why the UR5 box asks the QP for more accuracy.
+MIM_CASES = (
+    ("kinova_free", "SolverSQP", 1e-6, {}),
+    ("kinova_free", "SolverCSQP", 1e-6, {}),
+    ("kinova_ubound", "SolverCSQP", 1e-6, {}),
+    ("ur5_ee_box", "SolverCSQP", 1e-5, {"eps_abs": 1e-7, "eps_rel": 0.0}),
+    ("ur5_ee_eq", "SolverCSQP", 1e-6, {}),
+    ("solo12_joint_limits", "SolverCSQP", 1e-4, {}),
+)
+
+
+def import_mim_solvers() -> tuple[ModuleType, ModuleType]:
+    """``(crocoddyl, mim_solvers)``, imported in that order; ImportError naming the bench extra if missing."""
+    try:
+        import crocoddyl
+        import mim_solvers
+    except ImportError as exc:
+        raise ImportError(f"--vs mim needs the bench extra (crocoddyl 3.2.1 and mim-solvers 0.3.0): {exc}") from exc
+    return crocoddyl, mim_solvers
+
+
+def run_vs_mim(problems: list[str] | None = None, progress=None) -> str:
+    """The markdown report of crocopy's SQP/CSQP against mim-solvers on ``problems`` (default: all cases)."""
+    import crocopy
+    import crocopy.mim_solvers as crocopy_mim
+
+    crocoddyl, mim_solvers = import_mim_solvers()
+    cases = [c for c in MIM_CASES if problems is None or c[0] in problems]
+    unknown = set(problems or ()) - set(MIM_PROBLEMS)
+    if unknown:
+        raise KeyError(f"problems must be among {MIM_PROBLEMS}, got {sorted(unknown)}")
+    run(crocopy, crocopy_mim, "kinova_free", "SolverSQP", 2)  # numba kernels loaded before any timing
+    lines = [
+        "| problem | solver | library | converged | iterations | cost | KKT | violation | QP iters (last) | ms/iter |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for name, solver, tol, settings in cases:
+        for label, lib, solvers in (("mim-solvers 0.3.0", crocoddyl, mim_solvers), ("crocopy", crocopy, crocopy_mim)):
+            if progress is not None:
+                progress(f"{name} {solver} {label}")
+            r = run(lib, solvers, name, solver, 200, tol, settings)
+            lines.append(f"| {name} | {solver} | {label} | {'yes' if r['converged'] else 'no'} | {r['iter']} | "
+                         f"{r['cost']:.10g} | {r['KKT']:.2e} | {r['violation']:.1e} | {r['qp_iters']:g} | "
+                         f"{r['ms_per_iter']:.1f} |")
+    header = ("## crocopy vs mim-solvers (SolverSQP / SolverCSQP)\n\nFrom `x0` at every node and zero controls, "
+              "one thread, at most 200 iterations; crocopy's ADMM iterations are numpy (not compiled).\n")
+    return header + "\n" + "\n".join(lines) + "\n"
