@@ -22,6 +22,8 @@ RUNS = [
                  id="compose_arm"),
     pytest.param("solver_families.py", r"SolverBoxFDDP +converged=True .*\n(.*\n){2}SolverHDDP +converged=True",
                  id="solver_families"),
+    pytest.param("constrained_reach.py", r"FDDP, box as a penalty .*\nCSQP, box as a constraint +iterations= *\d+ "
+                 r"cost=14\.58\d+ max y=0\.2500", marks=pytest.mark.slow, id="constrained_reach"),
     pytest.param("dask_cluster.py", r"10 solves in [\d.]+ s; best start .*, cost [\d.e-]+",
                  marks=pytest.mark.slow, id="dask_cluster"),
 ]

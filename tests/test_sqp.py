@@ -145,3 +145,20 @@ def test_bench_vs_mim_without_the_bench_extra():
     with contextlib.redirect_stderr(err):
         assert main(["bench", "--vs", "mim"]) == 2
     assert "mim-solvers" in err.getvalue()
+
+
+def test_compiled_nodes_give_one_answer():
+    from crocopy.problems import registry
+    from crocopy.solvers import compiled_nodes
+
+    runs = []
+    for enabled in (True, False):
+        with crocopy.use_kernels(enabled):
+            problem, xs, us = registry.get("arm").build()
+            solver = crocopy.SolverSQP(problem)
+            assert (compiled_nodes.select(solver) is not None) == enabled
+            assert solver.solve(xs, us, 100)
+            runs.append((solver.iter, solver.cost, problem.runningDatas[3].cost))
+    assert runs[0][0] == runs[1][0]
+    assert runs[0][1] == pytest.approx(runs[1][1], rel=1e-12)
+    assert runs[0][2] == pytest.approx(runs[1][2], rel=1e-12)  # the datas are left at the final iterate

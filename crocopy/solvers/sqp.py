@@ -32,6 +32,7 @@ import numpy as np
 
 from ..guards import trusted_path
 from ..shooting import ShootingProblem
+from . import compiled_nodes
 from .base import BackwardPassError, check_solve_arguments
 from .ddp import SolverDDP
 from .std_vector import StdVecAttribute
@@ -48,6 +49,7 @@ class SolverSQP(SolverDDP):
     ``lag_mul`` (T+1 vectors), ``xs_try``, ``us_try``, ``fs_try``, ``cost_try``.
     """
 
+    _nodes_compiled = True  # SQP reads only what compiled nodes write (values and derivatives, no constraints)
     dx = StdVecAttribute()
     du = StdVecAttribute()
     lag_mul = StdVecAttribute()
@@ -87,7 +89,13 @@ class SolverSQP(SolverDDP):
         maxiter, _, regInit = check_solve_arguments(self, maxiter, isFeasible, regInit)
         with trusted_path(), np.errstate(over="ignore", invalid="ignore", divide="ignore"):
             self._start_sqp(init_xs, init_us, regInit)
-            return self._iterate_sqp(maxiter)
+            self._nodes = compiled_nodes.select(self)
+            try:
+                return self._iterate_sqp(maxiter)
+            finally:
+                if self._nodes is not None:
+                    self._nodes = None
+                    self.problem.calc(self.xs, self.us)  # the datas as a solve without compiled nodes leaves them
 
     def _start_sqp(self, init_xs, init_us, regInit) -> None:
         self._check_x0()
@@ -242,7 +250,11 @@ class SolverSQP(SolverDDP):
             m.state._integrate_into(self.xs[t], steplength * self.dx[t], self.xs_try[t])
         for t, u in enumerate(self.us):
             np.add(u, steplength * self.du[t], out=self.us_try[t])
-        self.cost_try = problem.calc(self.xs_try, self.us_try)
+        nodes = self._nodes
+        if nodes is None:
+            self.cost_try = problem.calc(self.xs_try, self.us_try)
+        else:
+            self.cost_try = nodes.calc(problem, self.xs_try, self.us_try)
         fs_try = self.fs_try
         fs_try[0][:] = models[0].state.diff(self.xs_try[0], problem.x0) if problem.T else 0.0
         for t, (m, d) in enumerate(zip(problem.runningModels, problem.runningDatas)):
