@@ -162,3 +162,15 @@ def test_compiled_nodes_give_one_answer():
     assert runs[0][0] == runs[1][0]
     assert runs[0][1] == pytest.approx(runs[1][1], rel=1e-12)
     assert runs[0][2] == pytest.approx(runs[1][2], rel=1e-12)  # the datas are left at the final iterate
+
+
+def test_direction_and_trial_from_outside_solve():
+    solver = crocopy.SolverSQP(_unicycle())
+    solver.setCandidate([], [], False)
+    solver.computeDirection()
+    assert solver.gap_norm == pytest.approx(sum(np.abs(f).sum() for f in solver.fs))
+    assert max(np.abs(d).max() for d in solver.dx) > 0  # the linear rollout ran
+    merit = solver.tryStep(1.0)
+    assert merit == pytest.approx(solver.cost_try + solver.mu_dynamic * solver.gap_norm_try)
+    solver.checkKKTConditions()
+    assert solver.stoppingCriteria() == solver.KKT > 0

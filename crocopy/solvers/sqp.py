@@ -139,23 +139,29 @@ class SolverSQP(SolverDDP):
         return False
 
     def _sqp_direction(self) -> bool:
-        """Derivatives, gaps and merit at the current iterate, then the QP step; False at ``reg_max``."""
-        self.calcDiff()
-        self.gap_norm = float(sum(np.abs(f).sum() for f in self.fs))
-        self.merit = self.cost + self.mu_dynamic * self.gap_norm
+        """:meth:`computeDirection` at the current iterate, raising the regularisation while a ``Quu`` is not
+        positive definite; False once ``preg`` reaches ``reg_max``."""
+        recalc = True
         while True:
             try:
-                self.backwardPass()
+                self.computeDirection(recalc)
             except BackwardPassError:
+                recalc = False
                 self.increaseRegularization()
                 if self.preg >= self.reg_max:
                     return False
                 continue
-            break
-        self._linear_rollout()
-        return True
+            return True
 
-    computeDirection = SolverDDP.computeDirection
+    def computeDirection(self, recalc: bool = True) -> None:
+        """The QP step at the current iterate: derivatives, gaps, ``gap_norm`` and ``merit`` (if ``recalc``),
+        the backward pass, then ``dx``, ``du`` and ``lag_mul``.  Raises BackwardPassError."""
+        if recalc:
+            self.calcDiff()
+            self.gap_norm = float(sum(np.abs(f).sum() for f in self.fs))
+            self.merit = self.cost + self.mu_dynamic * self.gap_norm
+        self.backwardPass()
+        self._linear_rollout()
 
     def _linear_rollout(self) -> None:
         """``δu_t = -k_t - K_t δx_t``, ``δx_{t+1} = Fx δx_t + Fu δu_t + d_{t+1}`` and ``λ_t = p_t + P_t δx_t``."""
@@ -187,6 +193,7 @@ class SolverSQP(SolverDDP):
         gT = problem.terminalData.Lx - lam[-1] + self._constraint_force_x(problem.T)
         worst = max(worst, float(np.abs(gT).max(initial=0.0)), max(float(np.abs(f).max(initial=0.0)) for f in self.fs))
         self.KKT = max(worst, self._kkt_constraint_term())
+        self.stop = self.KKT
         return self.KKT
 
     def _constraint_force_x(self, t: int) -> np.ndarray | float:
