@@ -37,6 +37,7 @@ from .callbacks.base import CallbackAbstract, CallbackLogger, CallbackVerbose
 from .callbacks.display import CallbackDisplay, DisplayAbstract
 from .callbacks.plotting import plotConvergence, plotFeasibility, plotOCSolution
 from .callbacks.save import saveConvergence, saveLogfile, saveOCSolution
+from .callbacks.sqp import CallbackSQPLogger, CallbackSQPVerbose, plotSQPConvergence
 from .constraints.base import (
     ConstraintDataAbstract,
     ConstraintDataResidual,
@@ -81,10 +82,12 @@ from .solvers.box_ddp import SolverBoxDDP
 from .solvers.box_fddp import SolverBoxFDDP
 from .solvers.box_qp import BoxQP, BoxQPSolution
 from .solvers.clamping import SolverClampedDDP
+from .solvers.csqp import SolverCSQP
 from .solvers.hddp import CallbackHDDPLogger, CallbackHDDPVerbose, SolverHDDP
 from .solvers.intro import EqualitySolverType, SolverIntro
 from .solvers.kkt import SolverKKT
 from .solvers.projection import ConstraintRankError, SolverProjection
+from .solvers.sqp import SolverSQP
 from .solvers.std_vector import StdVec_VectorXs
 from .solvers.stopwatch import (
     disable_profiler,
@@ -151,6 +154,8 @@ Exception = _builtins.Exception  # noqa: A001
 
 #: ``from crocopy import *`` gives every public name, as ``from crocoddyl import *`` does.
 __all__ = sorted(n for n, v in globals().items() if not n.startswith("_") and not isinstance(v, _ModuleType))
+
+from . import libcrocoddyl_pywrap_float64  # noqa: E402,F401  (Crocoddyl's compiled module's name, an alias)
 
 
 def __getattr__(name: str):

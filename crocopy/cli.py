@@ -6,6 +6,8 @@
   crocopy and Crocoddyl side by side on the bundled problems (:mod:`crocopy.bench.side_by_side`) and on
   Crocoddyl's own problems built by its example scripts and gait builders (:mod:`crocopy.bench.shipped`);
   both by default, only the part named when ``--problems`` or ``--shipped`` is given
+* ``crocopy bench --vs mim [--problems ...] [--out FILE]``: SolverSQP/SolverCSQP against mim-solvers 0.3.0
+  (:mod:`crocopy.bench.mim`): iterations, cost, KKT, violation and time per iteration
 * ``crocopy bench --box-parity [--problems ...] [--maxiter N]``: Box-DDP/Box-FDDP iterations and
   final costs next to Crocoddyl's, each library's self-sensitivity to a perturbed guess, a one-step
   replay of Crocoddyl's iterations and a verdict per row, and the box-QP backward-pass overhead
@@ -139,7 +141,24 @@ def _bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _bench_vs_mim(args: argparse.Namespace) -> int:
+    from .bench.mim import run_vs_mim
+
+    try:
+        report = run_vs_mim(args.problems, progress=functools.partial(print, file=sys.stderr, flush=True))
+    except (ImportError, KeyError) as exc:
+        print(exc.args[0], file=sys.stderr)
+        return 2
+    print(report)
+    if args.out:
+        with open(args.out, "w", encoding="utf-8") as f:
+            f.write(report)
+    return 0
+
+
 def _bench_vs(args: argparse.Namespace) -> int:
+    if args.vs == "mim":
+        return _bench_vs_mim(args)
     from .bench.shipped import run_shipped
     from .bench.side_by_side import BenchDependencyError, run_vs
 
@@ -493,8 +512,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--repeats", type=_positive_int, default=None,
                        help="runs per measurement, median reported (default 20; 5 with --vs)")
     bench.add_argument("--T", type=_positive_int, default=100, help="horizon of the LQR problems")
-    bench.add_argument("--vs", choices=["crocoddyl"], default=None,
-                       help="side-by-side run on the bundled problems against Crocoddyl (needs the bench extra)")
+    bench.add_argument("--vs", choices=["crocoddyl", "mim"], default=None,
+                       help="side-by-side run on the bundled problems against Crocoddyl, or SolverSQP/SolverCSQP "
+                            "against mim-solvers (crocopy.bench.mim) (needs the bench extra)")
     bench.add_argument("--problems", nargs="+", default=None, help="with --vs: problems (default: Table I, walk, arm)")
     bench.add_argument("--shipped", nargs="*", default=None, metavar="JOB",
                        help="with --vs: Crocoddyl's own problems, built by its example scripts and utils gaits with "

@@ -22,6 +22,14 @@ from .validation import ArgumentTypeError, as_count, as_vector
 from .versioning import STRUCTURE, holds_stale_data
 
 
+class StdVec_ActionModel(list):
+    """Crocoddyl's vector of models or datas (``runningModels``, ``runningDatas``): a list with ``tolist()``."""
+
+    def tolist(self) -> list:
+        """A plain list of the same objects."""
+        return list(self)
+
+
 def _sequence(value: object, name: str) -> list:
     if value is None or isinstance(value, (str, bytes)) or not hasattr(value, "__len__"):
         raise ArgumentTypeError(f"{name} must be a list of vectors, got {type(value).__name__}")
@@ -97,7 +105,7 @@ class ShootingProblem(Guarded):
             if not isinstance(m, ActionModelAbstract):
                 raise ValueError(f"node {i} must be an ActionModelAbstract, got {type(m).__name__}")
         self._check_chain(runningModels, terminalModel)
-        self._runningModels = runningModels
+        self._runningModels = StdVec_ActionModel(runningModels)
         self._terminalModel = terminalModel
         self.x0 = x0
         self._structure_seen = STRUCTURE[0] if runningDatas is None and terminalData is None else -1
@@ -105,7 +113,7 @@ class ShootingProblem(Guarded):
             runningDatas = [m.createData() for m in runningModels]
         elif len(runningDatas) != len(runningModels):
             raise ValueError(f"runningDatas has {len(runningDatas)} items, expected {len(runningModels)}")
-        self._runningDatas = list(runningDatas)
+        self._runningDatas = StdVec_ActionModel(runningDatas)
         self._terminalData = terminalModel.createData() if terminalData is None else terminalData
         self.cost = 0.0
         self.nthreads = 1
@@ -136,7 +144,8 @@ class ShootingProblem(Guarded):
         self._x0 = as_vector(value, first.state.nx, "x0").copy()
 
     @property
-    def runningModels(self) -> list[ActionModelAbstract]:
+    def runningModels(self) -> StdVec_ActionModel:
+        """Models of nodes ``0..T-1`` (a list with Crocoddyl's ``tolist()``)."""
         return self._runningModels
 
     @property
@@ -144,7 +153,8 @@ class ShootingProblem(Guarded):
         return self._terminalModel
 
     @property
-    def runningDatas(self) -> list[ActionDataAbstract]:
+    def runningDatas(self) -> StdVec_ActionModel:
+        """Datas of nodes ``0..T-1`` (a list with Crocoddyl's ``tolist()``)."""
         return self._runningDatas
 
     @property
@@ -239,8 +249,8 @@ class ShootingProblem(Guarded):
     def circularAppend(self, model: ActionModelAbstract, data: ActionDataAbstract | None = None) -> None:
         """Drop node 0 and append ``model`` (with ``data``) as node T-1 (receding horizon)."""
         self._check_chain([*self._runningModels[1:], model], self._terminalModel)
-        self._runningModels = [*self._runningModels[1:], model]
-        self._runningDatas = [*self._runningDatas[1:], model.createData() if data is None else data]
+        self._runningModels = StdVec_ActionModel([*self._runningModels[1:], model])
+        self._runningDatas = StdVec_ActionModel([*self._runningDatas[1:], model.createData() if data is None else data])
 
     def updateNode(self, i: int, model: ActionModelAbstract, data: ActionDataAbstract) -> None:
         """Replace node ``i`` (``i == T`` is the terminal node) by ``model`` and ``data``."""
@@ -253,7 +263,7 @@ class ShootingProblem(Guarded):
             models = list(self._runningModels)
             models[i] = model
             self._check_chain(models, self._terminalModel)
-            self._runningModels = models
+            self._runningModels = StdVec_ActionModel(models)
             self._runningDatas[i] = data
 
     def updateModel(self, i: int, model: ActionModelAbstract) -> None:
@@ -268,7 +278,8 @@ class ShootingProblem(Guarded):
 
     def __setstate__(self, state: dict) -> None:
         self.__dict__.update(state)
-        self._runningDatas = [m.createData() for m in self._runningModels]
+        self._runningModels = StdVec_ActionModel(self._runningModels)
+        self._runningDatas = StdVec_ActionModel(m.createData() for m in self._runningModels)
         self._terminalData = self._terminalModel.createData()
         self._structure_seen = STRUCTURE[0]
 

@@ -23,7 +23,7 @@ def _check_rotation(R: np.ndarray) -> np.ndarray:
 
 def _check_box(box: np.ndarray, allow_inf: bool = False) -> np.ndarray:
     box = as_vector(box, 2, "box (length, width)", allow_nonfinite=allow_inf)
-    if np.any(box < 0.0):
+    if np.any(np.isnan(box)) or np.any(box < 0.0):
         raise ValueError(f"box (length, width) must be non-negative, got {box}")
     return box
 
@@ -135,6 +135,8 @@ class WrenchCone:
     """Crocoddyl's ``WrenchCone(R, mu, box, nf=4, inner_appr=True, min_nforce=0., max_nforce=inf)``.
 
     ``A (nf+13, 6)``, ``lb``, ``ub``; ``box = (length, width)`` of the contact surface.
+    ``WrenchCone()`` is Crocoddyl's default: ``R = I``, ``mu = 0.7`` and an unbounded box (the CoP and
+    yaw rows of ``A`` are then not finite, as in Crocoddyl).  Call :meth:`update` after changing a parameter.
     """
 
     def __init__(
@@ -156,7 +158,7 @@ class WrenchCone:
     def update(self) -> None:
         """Recompute ``A``, ``lb`` and ``ub``."""
         self.R = _check_rotation(self.R)
-        self.box = _check_box(self.box)
+        self.box = _check_box(self.box, allow_inf=True)  # Crocoddyl's default: unbounded
         self.min_nforce, self.max_nforce = _check_nforce(self.min_nforce, self.max_nforce)
         _check_facet_parameters(self)
         F, m = _facets(self.nf, self.mu, self.inner_appr)
@@ -176,7 +178,8 @@ class WrenchCone:
         )
         normal = [[0.0, 0.0, 1.0, 0.0, 0.0, 0.0]]
         A = np.vstack([np.hstack([F, np.zeros((self.nf, 3))]), normal, _cop_rows(self.box), yaw])
-        self.A = A @ np.kron(np.eye(2), self.R).T
+        with np.errstate(invalid="ignore"):
+            self.A = A @ np.kron(np.eye(2), self.R).T
         n = self.nf + 13
         self.lb = np.full(n, -np.inf)
         self.ub = np.zeros(n)

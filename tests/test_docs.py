@@ -21,6 +21,8 @@ RUNS = [
     pytest.param("compose_arm.py", r"\d+ iterations, cost 5\.74\d*, end effector [\d.]+ mm from the target",
                  id="compose_arm"),
     pytest.param("solver_families.py", r"^(\S.{28}converged=True .*\n){7}$", id="solver_families"),
+    pytest.param("constrained_reach.py", r"FDDP, box as a penalty .*\nCSQP, box as a constraint +iterations= *\d+ "
+                 r"cost=14\.58\d+ max y=0\.2500", marks=pytest.mark.slow, id="constrained_reach"),
     pytest.param("dask_cluster.py", r"10 solves in [\d.]+ s; best start .*, cost [\d.e-]+",
                  marks=pytest.mark.slow, id="dask_cluster"),
 ]

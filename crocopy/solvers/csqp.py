@@ -1,0 +1,355 @@
+"""Constrained SQP (mim-solvers' ``SolverCSQP``): SQP whose QP has the nodes' constraint rows.
+
+Each node contributes the rows ``g_lb - g <= Gx δx + Gu δu <= g_ub - g`` of its inequality constraints
+(``ng`` rows on running nodes, the ``ng_T`` rows active on the terminal node) and, beyond
+mim-solvers, ``-h <= Hx δx + Hu δu <= -h`` for Crocoddyl's equalities (``nh``/``nh_T``); a row with
+``|lb - ub| <= 1e-6`` is an equality (a larger ``ρ``).  The QP is solved by the stagewise ADMM of
+:mod:`.csqp_admm`; its multipliers ``y`` (> 0 when an upper bound is active) enter the KKT measure ::
+
+    KKT = max( ‖Lx_t + Fx_tᵀ λ_{t+1} - λ_t + [t >= 1] Gx_tᵀ y_t‖∞, ‖Lu_t + Fu_tᵀ λ_{t+1} + Gu_tᵀ y_t‖∞,
+               ‖Lx_T - λ_T + Gx_Tᵀ y_T‖∞, max_t ‖d_t‖∞, Ψ ),   Ψ = Σ_t ‖max(lb - g, 0)‖₁ + ‖max(g - ub, 0)‖₁
+
+(``constraint_norm`` = Ψ, ``gap_norm`` = Γ = ``Σ_t ‖d_t‖₁``).  The filter holds ``(J, Γ, Ψ)``; the merit
+is ``J + mu_dynamic Γ + mu_constraint Ψ`` (``J + lag_mul_inf_norm_coef · max(‖λ‖∞, ‖y‖∞) (Γ + Ψ)`` when
+either weight is negative).  As in mim-solvers 0.3.0: every iteration re-evaluates the nodes; ``y``
+and ``ρ̄`` persist between solves unless ``reset_y``/``reset_rho``; the regularisation goes down after
+every accepted step; the solve stops (False) when no step is accepted.  Unlike it: ``stepLength``
+reports the step actually taken, the rows are sized from ``ng_T`` on the terminal node (a constraint
+present but inactive there is fine), equalities ``nh > 0`` are accepted, and ``rho_sparse`` set by the
+user is the ``ρ̄`` each solve starts from.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..shooting import ShootingProblem
+from .base import BackwardPassError
+from .csqp_admm import NodeRows, StagewiseADMM
+from .sqp import SolverSQP
+from .std_vector import StdVec_VectorXs
+
+
+def _manager(model):
+    """The ``ConstraintModelManager`` of an action model (directly or through its differential model)."""
+    for owner in (model, getattr(model, "differential", None)):
+        manager = getattr(owner, "constraints", None)
+        if manager is not None and hasattr(manager, "constraints"):
+            return manager
+    return None
+
+
+def _bounds(model, terminal: bool) -> tuple[np.ndarray, np.ndarray]:
+    """``(lb, ub)`` of a node's rows: its inequality bounds then zeros for its equalities."""
+    ng, nh = (model.ng_T, model.nh_T) if terminal else (model.ng, model.nh)
+    if not terminal or ng == model.ng:
+        lb, ub = np.array(model.g_lb[:ng], dtype=float), np.array(model.g_ub[:ng], dtype=float)
+    else:
+        manager = _manager(model)
+        if manager is None:
+            raise ValueError(f"terminal model {type(model).__name__} has ng_T = {ng} != ng = {model.ng} "
+                             "and no constraint manager to read the terminal bounds from")
+        items = [i.constraint for i in manager.constraints.values()
+                 if i.active and i.constraint.T_constraint and i.constraint.ng]
+        lb = np.concatenate([c.lb for c in items]) if items else np.zeros(0)
+        ub = np.concatenate([c.ub for c in items]) if items else np.zeros(0)
+    return np.r_[lb, np.zeros(nh)], np.r_[ub, np.zeros(nh)]
+
+
+class _Terminal:
+    """The terminal node's LQ terms under the names the Riccati pass reads (``Lx``, ``Lxx``)."""
+
+    def __init__(self, data) -> None:
+        self.Lx, self.Lxx = data.Lx, data.Lxx
+
+
+class SolverCSQP(SolverSQP):
+    """mim-solvers' ``SolverCSQP(problem)``: SQP with inequality (and equality) rows, QP by ADMM.
+
+    Settings (mim-solvers' names and defaults): those of :class:`~crocopy.solvers.sqp.SolverSQP`
+    with ``mu_dynamic = mu_constraint = 10``, plus ``lag_mul_inf_norm_coef = 10``,
+    ``max_qp_iters = 1000``, ``eps_abs = eps_rel = 1e-4``, ``sigma = 1e-6``, ``alpha = 1.6``,
+    ``rho_sparse = 0.1``, ``rho_min = 1e-6``, ``rho_max = 1e3``, ``rho_update_interval = 25``,
+    ``adaptive_rho_tolerance = 5``, ``equality_qp_initial_guess = True``, ``reset_y = reset_rho = False``,
+    ``update_rho_with_heuristic = False``, ``remove_reg = False``, ``with_qp_callbacks = False``,
+    ``max_solve_time = inf`` (seconds).  Read-outs: ``KKT``, ``merit``, ``gap_norm``, ``constraint_norm``,
+    ``qp_iters``, ``norm_primal``, ``norm_dual``, ``norm_primal_rel``, ``norm_dual_rel``, ``dx``, ``du``,
+    ``dx_tilde``, ``du_tilde``, ``lag_mul``, ``y``, ``z``, ``rho_vec``, ``max_solve_time_reached``.
+    """
+
+    def __init__(self, problem: ShootingProblem) -> None:
+        super().__init__(problem)
+        self.mu_dynamic = 10.0
+        self.mu_constraint = 10.0
+        self.lag_mul_inf_norm_coef = 10.0
+        self.max_qp_iters = 1000
+        self.eps_abs = 1e-4
+        self.eps_rel = 1e-4
+        self.sigma = 1e-6
+        self.alpha = 1.6
+        self.rho_min = 1e-6
+        self.rho_max = 1e3
+        self.rho_update_interval = 25
+        self.adaptive_rho_tolerance = 5
+        self.equality_qp_initial_guess = True
+        self.reset_y = False
+        self.reset_rho = False
+        self.update_rho_with_heuristic = False
+        self.remove_reg = False
+        self.with_qp_callbacks = False
+        self.max_solve_time = np.inf
+        self.max_solve_time_reached = False
+        self.constraint_norm = 0.0
+        self.constraint_norm_try = 0.0
+        self.qp_iters = 0.0
+        self.norm_primal = self.norm_dual = self.norm_primal_rel = self.norm_dual_rel = 0.0
+        self._rho_base = 0.1
+        self._build_qp()
+
+    def _build_qp(self) -> None:
+        problem = self.problem
+        models = [*problem.runningModels, problem.terminalModel]
+        ndx = [m.state.ndx for m in models]
+        nu = [m.nu for m in problem.runningModels] + [0]
+        rows = [NodeRows(*_bounds(m, t == problem.T), ndx[t], nu[t]) for t, m in enumerate(models)]
+        self._qp = StagewiseADMM(ndx, nu, rows)
+        self._qp.rho_bar = self._rho_base
+        self._qp.assign_rho(self.rho_min)
+
+    def _on_problem_change(self) -> bool:
+        changed = super()._on_problem_change()
+        self._build_qp()
+        return changed
+
+    # ------------------------------------------------------------------ read-outs
+    @property
+    def rho_sparse(self) -> float:
+        """The ADMM's current base ``ρ̄``; assigning it sets the ``ρ̄`` each solve starts from too."""
+        return self._qp.rho_bar
+
+    @rho_sparse.setter
+    def rho_sparse(self, value: float) -> None:
+        value = float(value)
+        if not value > 0.0:
+            raise ValueError(f"rho_sparse must be positive, got {value}")
+        self._rho_base = self._qp.rho_bar = value
+        self._qp.assign_rho(self.rho_min)
+
+    @property
+    def y(self) -> StdVec_VectorXs:
+        """Multipliers of each node's rows (T+1 vectors)."""
+        return StdVec_VectorXs(r.y for r in self._qp.rows)
+
+    @property
+    def z(self) -> StdVec_VectorXs:
+        return StdVec_VectorXs(r.z for r in self._qp.rows)
+
+    @property
+    def rho_vec(self) -> StdVec_VectorXs:
+        return StdVec_VectorXs(r.rho for r in self._qp.rows)
+
+    @property
+    def dx_tilde(self) -> StdVec_VectorXs:
+        return StdVec_VectorXs(self._qp.dx)
+
+    @property
+    def du_tilde(self) -> StdVec_VectorXs:
+        return StdVec_VectorXs(self._qp.du)
+
+    # ------------------------------------------------------------------ solve
+    def _start_sqp(self, init_xs, init_us, regInit) -> None:
+        super()._start_sqp(init_xs, init_us, regInit)
+        if self.remove_reg:
+            self.preg = self.dreg = 0.0
+        self.max_solve_time_reached = False
+
+    def _timed_out(self) -> bool:
+        if time.perf_counter() - self._t0 >= self.max_solve_time:
+            self.max_solve_time_reached = True
+        return self.max_solve_time_reached
+
+    def _iterate_sqp(self, maxiter: int) -> bool:
+        if maxiter == 0:
+            self.calc(True)
+            self._reset_rho()
+        for self.iter in range(maxiter):
+            if self._timed_out():
+                return self._stop(f"max_solve_time = {self.max_solve_time:g} s reached")
+            self.calc(True)
+            if self.iter == 0 and not self.reset_rho:
+                self._reset_rho()
+            if not self._solve_qp():
+                return self._stop(f"regularization reached reg_max = {self.reg_max:g} in the QP")
+            if self.qp_iters == 0:
+                return self._stop(f"max_solve_time = {self.max_solve_time:g} s reached in the QP")
+            self.checkKKTConditions()
+            self._run_callbacks()
+            if self.KKT <= self.termination_tolerance:
+                return self._converged()
+            self._filter.append(self._measures())
+            self._update_merit()
+            if not self._line_search():
+                self.reason = "no step accepted by the line search"
+                return self._extra_iteration(self.reason)
+            if not self.remove_reg:
+                self.decreaseRegularization()
+        self.iter = maxiter
+        return self._extra_iteration(f"maximum number of iterations ({maxiter}) reached")
+
+    def _extra_iteration(self, reason: str) -> bool:
+        if self.extra_iteration_for_last_kkt and not self.max_solve_time_reached:
+            self.calc(True)
+            if self._solve_qp():
+                self.checkKKTConditions()
+                if self.KKT <= self.termination_tolerance:
+                    return self._converged()
+        return self._stop(reason)
+
+    def calc(self, recalc: bool = True) -> float:
+        """Evaluate and differentiate every node at the current iterate (if ``recalc``); update the gaps,
+        ``gap_norm``, the QP rows' data and ``constraint_norm``."""
+        if recalc:
+            self._synced = False
+            self.calcDiff()
+        self.gap_norm = float(sum(np.abs(f).sum() for f in self.fs))
+        self._load_rows()
+        self.constraint_norm = self._violation(self.problem)
+        return self.cost
+
+    def _load_rows(self) -> None:
+        """Copy each node's ``g, Gx, Gu`` (and ``h, Hx, Hu``) into its QP rows, with ``lo/hi = lb/ub - c``."""
+        problem = self.problem
+        datas = [*problem.runningDatas, problem.terminalData]
+        models = [*problem.runningModels, problem.terminalModel]
+        for t, r in enumerate(self._qp.rows):
+            if not r.lb.size:
+                continue
+            d, m = datas[t], models[t]
+            ng, nh = (m.ng_T, m.nh_T) if t == problem.T else (m.ng, m.nh)
+            c = np.r_[d.g[:ng], d.h[:nh]]
+            r.C[:ng], r.C[ng:] = d.Gx[:ng], d.Hx[:nh]
+            if t < problem.T:
+                r.D[:ng], r.D[ng:] = d.Gu[:ng], d.Hu[:nh]
+            np.subtract(r.lb, c, out=r.lo)
+            np.subtract(r.ub, c, out=r.hi)
+
+    def _violation(self, problem) -> float:
+        """``Ψ``: the ℓ1 norm of the rows' bound violations at the nodes' last ``calc``."""
+        datas = [*problem.runningDatas, problem.terminalData]
+        models = [*problem.runningModels, problem.terminalModel]
+        total = 0.0
+        for t, r in enumerate(self._qp.rows):
+            if not r.lb.size:
+                continue
+            d, m = datas[t], models[t]
+            ng, nh = (m.ng_T, m.nh_T) if t == problem.T else (m.ng, m.nh)
+            c = np.r_[d.g[:ng], d.h[:nh]]
+            total += float(np.maximum(r.lb - c, 0.0).sum() + np.maximum(c - r.ub, 0.0).sum())
+        return total
+
+    def _reset_rho(self) -> None:
+        self._qp.rho_bar = self._rho_base
+        self._qp.assign_rho(self.rho_min)
+
+    def computeDirection(self, recalcDiff: bool = True) -> None:
+        """Evaluate the nodes (``recalcDiff`` is ignored, as in mim-solvers: they always are) and solve the QP."""
+        self.calc(True)
+        if not self._solve_qp():
+            raise BackwardPassError(f"regularization reached reg_max = {self.reg_max:g} in the QP")
+
+    def _solve_qp(self) -> bool:
+        """Solve the QP at the current iterate (raising the regularisation on a failed factorisation);
+        False at ``reg_max``.  Leaves the step in ``dx``/``du`` and the multipliers in ``lag_mul``/``y``."""
+        while True:
+            try:
+                self._admm()
+                break
+            except BackwardPassError:
+                self.preg = self.dreg = min(max(self.preg, self.reg_min) * self.reg_incFactor, self.reg_max)
+                if self.preg >= self.reg_max:
+                    return False
+        qp = self._qp
+        for a, b in zip(self.dx, qp.dx):
+            a[:] = b
+        for a, b in zip(self.du, qp.du):
+            a[:] = b
+        for a, b in zip(self.lag_mul, qp.multipliers()):
+            a[:] = b
+        self.norm_primal, self.norm_dual = qp.r_prim, qp.r_dual
+        self.norm_primal_rel, self.norm_dual_rel = qp.s_prim, qp.s_dual
+        return True
+
+    def _admm(self) -> None:
+        qp, problem = self._qp, self.problem
+        lq = [*problem.runningDatas, _Terminal(problem.terminalData)]
+        mu = 0.0 if self.remove_reg else float(self.preg)
+        for r in qp.rows:
+            r.z[:] = 0.0
+            if self.reset_y:
+                r.y[:] = 0.0
+        if self.reset_rho:
+            self._reset_rho()
+        else:
+            qp.assign_rho(self.rho_min)
+        if self.equality_qp_initial_guess:
+            self.backwardPass_without_constraints(lq, mu)
+        interval = max(int(self.rho_update_interval), 1)
+        self.qp_iters = float(self.max_qp_iters + 1)
+        for j in range(1, int(self.max_qp_iters) + 1):
+            if self._timed_out():
+                self.qp_iters = 0.0 if j == 1 else float(j - 1)
+                return
+            qp.riccati(lq, self.fs, self.sigma, mu, True, interval == 1 or j % interval == 1)
+            qp.rollout(lq, self.fs)
+            if qp.iterate(j, self):
+                self.qp_iters = float(j)
+                return
+
+    def backwardPass_without_constraints(self, lq=None, mu: float | None = None) -> None:
+        """The QP without rows and without ``σ`` (its step becomes the ADMM's anchor ``w̄``)."""
+        problem = self.problem
+        lq = [*problem.runningDatas, _Terminal(problem.terminalData)] if lq is None else lq
+        mu = float(self.preg) if mu is None else mu
+        self._qp.riccati(lq, self.fs, 0.0, mu, False, True)
+        self._qp.rollout(lq, self.fs)
+        self._qp.set_anchor()
+
+    # ------------------------------------------------------------------ KKT, merit, line search
+    def _constraint_force_x(self, t: int) -> np.ndarray | float:
+        r = self._qp.rows[t]
+        return r.C.T @ r.y if t and r.lb.size else 0.0
+
+    def _constraint_force_u(self, t: int) -> np.ndarray | float:
+        r = self._qp.rows[t]
+        return r.D.T @ r.y if r.lb.size else 0.0
+
+    def _kkt_constraint_term(self) -> float:
+        return self.constraint_norm
+
+    def _measures(self) -> tuple:
+        return (self.cost, self.gap_norm, self.constraint_norm)
+
+    def _trial_measures(self) -> tuple:
+        return (self.cost_try, self.gap_norm_try, self.constraint_norm_try)
+
+    def _weights(self) -> tuple[float, float]:
+        if self.mu_dynamic >= 0.0 and self.mu_constraint >= 0.0:
+            return self.mu_dynamic, self.mu_constraint
+        lam = max(max(float(np.abs(v).max(initial=0.0)) for v in self.lag_mul),
+                  max(float(np.abs(r.y).max(initial=0.0)) for r in self._qp.rows))
+        w = self.lag_mul_inf_norm_coef * lam
+        return w, w
+
+    def _update_merit(self) -> None:
+        self._merit_weights = self._weights()
+        wd, wc = self._merit_weights
+        self.merit = self.cost + wd * self.gap_norm + wc * self.constraint_norm
+
+    def _trial_merit(self) -> float:
+        wd, wc = getattr(self, "_merit_weights", (self.mu_dynamic, self.mu_constraint))
+        return self.cost_try + wd * self.gap_norm_try + wc * self.constraint_norm_try
+
+    def _after_trial(self) -> None:
+        self.constraint_norm_try = self._violation(self.problem)
