@@ -312,9 +312,9 @@ def more_cases() -> Iterator[Case]:
     fid = st.pinocchio.getFrameId("FL_FOOT")
     x = mb_point(st)
     box = np.array([0.1, 0.05])
-    yield from _cases_of("WrenchCone", c.WrenchCone, {"R": np.eye(3), "mu": 0.7, "box": box, "nf": 4},
-                         {"R": [b for b in bad_rotations() if b[0] != "none"], "mu": NUMBERS + NEGATIVE,
-                          "box": [b for b in bad_vectors(2) if b[0] != "none"] + [("negative", -box)],
+    yield from _cases_of("WrenchCone", c.WrenchCone, {"R": np.eye(3), "mu": 0.7, "box": box, "nf": 4},  # inf box:
+                         {"R": [b for b in bad_rotations() if b[0] != "none"], "mu": NUMBERS + NEGATIVE,  # Crocoddyl's
+                          "box": [b for b in bad_vectors(2) if b[0] not in ("none", "inf")] + [("negative", -box)],
                           "nf": COUNTS + [("odd", 3)]})
     yield from _cases_of("CoPSupport", c.CoPSupport, {"R": np.eye(3), "box": box},  # inf: Crocoddyl's default
                          {"R": [b for b in bad_rotations() if b[0] != "none"],
