@@ -54,12 +54,20 @@ def kinematics_size(nv: int) -> int:
     return 15 + 9 * nv
 
 
-def _unpack(buffer, nv):
+def _unpack(buffer: np.ndarray, nv: int) -> NodeKinematics:
+    """The views of a kinematics buffer (Python path)."""
     return NodeKinematics(buffer[:9].reshape((3, 3)), buffer[9:12], buffer[12:15],
                           buffer[15:15 + 6 * nv].reshape((6, nv)), buffer[15 + 6 * nv:].reshape((3, nv)))
 
 
-unpack = kernels.jit(_unpack)
+def _kinematics_at(address, nv):
+    """The views of the kinematics buffer at ``address`` (in a callback: no reshape, 8 bytes per float)."""
+    matrix_at, vector_at = kernels.matrix_at, kernels.vector_at
+    return NodeKinematics(matrix_at(address, 3, 3), vector_at(address + 72, 3), vector_at(address + 96, 3),
+                          matrix_at(address + 120, 6, nv), matrix_at(address + 120 + 48 * nv, 3, nv))
+
+
+kinematics_at = kernels.jit(_kinematics_at)
 
 
 class ResidualModelNumba(ResidualModelAbstract):
@@ -200,13 +208,13 @@ def c_callbacks(compute_residual, compute_jacobians) -> tuple:
         d = carray(int64_pointer(dims), (5,))
         nq, nv, nu, nr, npar = d[0], d[1], d[2], d[3], d[4]
         compute_residual(vector_at(out, nr), vector_at(x, nq + nv), vector_at(u, nu), vector_at(p, npar),
-                         unpack(vector_at(kin, 15 + 9 * nv), nv))
+                         kinematics_at(kin, nv))
 
     def jacobians(dims, p, x, u, kin, out, out_u):
         d = carray(int64_pointer(dims), (5,))
         nq, nv, nu, nr, npar = d[0], d[1], d[2], d[3], d[4]
         compute_jacobians(matrix_at(out, nr, 2 * nv), matrix_at(out_u, nr, nu), vector_at(x, nq + nv),
-                          vector_at(u, nu), vector_at(p, npar), unpack(vector_at(kin, 15 + 9 * nv), nv))
+                          vector_at(u, nu), vector_at(p, npar), kinematics_at(kin, nv))
 
     r_address, r_keep = kernels.c_callback(residual)
     j_address, j_keep = kernels.c_callback(jacobians)
