@@ -121,13 +121,14 @@ def _wrap(raw: Callable, guard: Guard) -> Callable:
     """``raw`` with ``guard``'s checks at trust depth 0, as a function of ``raw``'s own signature."""
     params, args, namespace = _forwarding(inspect.signature(raw))
     namespace.update(_crocopy_trust=_trust, _crocopy_raw=raw, _crocopy_checked=_checked_call(raw, guard))
-    exec(  # noqa: S102 (a source built from a signature only: names, kinds and defaults held in the namespace)
+    source = (
         f"def guarded({params}):\n"
         f"    if _crocopy_trust.depth:\n"
         f"        return _crocopy_raw({args})\n"
-        f"    return _crocopy_checked({args})\n",
-        namespace,
+        f"    return _crocopy_checked({args})\n"
     )
+    # the source holds parameter names only; the defaults and the callables are in the namespace
+    exec(compile(source, f"<crocopy guard of {raw.__qualname__}>", "exec"), namespace)
     guarded = namespace["guarded"]
     names = {"co_name": raw.__name__}
     if hasattr(guarded.__code__, "co_qualname"):  # Python >= 3.11: argument errors name Class.method

@@ -359,6 +359,10 @@ class Signatures(crocopy.ActionModelUnicycle):
         data.seen = (extra, scale, options)
         super().calc(data, x, u)
 
+    def calcDiff(self, data, x, u=None, *, scale=1.0):
+        data.seen = scale
+        super().calcDiff(data, x, u)
+
 
 def test_a_wrapper_has_its_methods_signature_and_forwards_every_argument():
     m = Signatures()
@@ -374,6 +378,11 @@ def test_a_wrapper_has_its_methods_signature_and_forwards_every_argument():
     with guards.trusted_path():
         m.calc(d, np.zeros(3), np.zeros(2), scale=3.0)
     assert d.seen == ((), 3.0, {})
+    assert str(inspect.signature(Signatures.calcDiff)) == "(self, data, x, u=None, *, scale=1.0)"
+    m.calcDiff(d, x=[0.0, 1.0, 2.0], u=[[1.0], [2.0]], scale=4.0)
+    assert d.seen == 4.0
+    with pytest.raises(TypeError, match=r"calcDiff\(\) takes from 3 to 4 positional arguments but 5 were given"):
+        m.calcDiff(d, np.zeros(3), np.zeros(2), 4.0)
 
 
 class HalfControl(crocopy.ResidualModelControl):
