@@ -152,11 +152,12 @@ def _wrap(raw: Callable, guard: Guard) -> Callable:
 class Guarded:
     """Mixin: the methods named in ``_guards`` check their arguments when a user calls them.
 
-    A class that defines such a method ``name`` also gets ``_raw_<name>``: the function without the wrapper
-    (or, for a definition that is not a plain function, that definition itself).  A composite model calls
-    its parts through these names, so that guarded methods calling each other inside a solve cost no
-    wrapper.  Methods are wrapped when the class is created; a method assigned to the class later is
-    neither wrapped nor seen by ``_raw_<name>``.
+    Every class also gets, for each such method ``name`` it has, ``_raw_<name>``: the function its instances
+    call without the wrapper (the definition found first in the method resolution order, unwrapped; a
+    definition that is not a plain function, or one from a mixin that is not guarded, as it is).  A
+    composite model calls its parts through these names, so that guarded methods calling each other
+    inside a solve cost no wrapper.  Methods are wrapped when the class is created; a method assigned to
+    the class later is neither wrapped nor seen by ``_raw_<name>``.
     """
 
     _guards: ClassVar[dict[str, Guard]] = {}
@@ -164,13 +165,12 @@ class Guarded:
     def __init_subclass__(cls, **kwargs: object) -> None:
         super().__init_subclass__(**kwargs)
         for name, guard in cls._guards.items():
-            if name not in cls.__dict__:
+            f = next((k.__dict__[name] for k in cls.__mro__ if name in k.__dict__), None)
+            if f is None:
                 continue
-            f = cls.__dict__[name]
-            unwrapped = getattr(f, "_crocopy_raw", f)
-            if inspect.isfunction(f) and unwrapped is f:
+            if name in cls.__dict__ and inspect.isfunction(f) and not hasattr(f, "_crocopy_raw"):
                 setattr(cls, name, _wrap(f, guard))
-            setattr(cls, f"_raw_{name}", unwrapped)
+            setattr(cls, f"_raw_{name}", getattr(f, "_crocopy_raw", f))
 
 
 @contextmanager

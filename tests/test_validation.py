@@ -404,3 +404,23 @@ def test_composites_call_a_definition_that_is_not_a_function():
     np.testing.assert_array_equal(data.residual.r, [1.0, -2.0])
     assert data.cost == pytest.approx(0.5 * (1.0 + 4.0))
     assert HalfControl.__dict__["_raw_calc"] is HalfControl.__dict__["calc"]
+
+
+class _HalvingMixin:
+    """A mixin that is not guarded, placed before the guarded base (as ``ActionModelNumDiff`` does)."""
+
+    def calc(self, data, x, u=None):
+        data.r[:] = 0.5 * u
+
+
+class MixedControl(_HalvingMixin, crocopy.ResidualModelControl):
+    pass
+
+
+def test_composites_call_a_method_a_mixin_defines():
+    state = crocopy.StateVector(3)
+    cost = crocopy.CostModelResidual(state, MixedControl(state, 2))
+    data = cost.createData(crocopy.DataCollectorAbstract())
+    cost.calc(data, np.zeros(3), np.array([2.0, -4.0]))
+    np.testing.assert_array_equal(data.residual.r, [1.0, -2.0])
+    assert MixedControl._raw_calc is _HalvingMixin.calc
