@@ -214,9 +214,9 @@ class ShootingProblem(Guarded):
         self.refresh_datas()
         cost = 0.0
         for m, d, x, u in zip(self._runningModels, self._runningDatas, xs, us):
-            m.calc(d, x, u)
+            m._raw_calc(d, x, u)
             cost += d.cost
-        self._terminalModel.calc(self._terminalData, xs[-1])
+        self._terminalModel._raw_calc(self._terminalData, xs[-1])
         cost += self._terminalData.cost
         self.cost = cost
         return cost
@@ -226,9 +226,9 @@ class ShootingProblem(Guarded):
         self.refresh_datas()
         cost = 0.0
         for m, d, x, u in zip(self._runningModels, self._runningDatas, xs, us):
-            m.calcDiff(d, x, u)
+            m._raw_calcDiff(d, x, u)
             cost += d.cost
-        self._terminalModel.calcDiff(self._terminalData, xs[-1])
+        self._terminalModel._raw_calcDiff(self._terminalData, xs[-1])
         cost += self._terminalData.cost
         self.cost = cost
         return cost
@@ -238,7 +238,7 @@ class ShootingProblem(Guarded):
         self.refresh_datas()
         xs = [self._x0.copy()]
         for t, (m, d) in enumerate(zip(self._runningModels, self._runningDatas)):
-            m.calc(d, xs[-1], us[t])
+            m._raw_calc(d, xs[-1], us[t])
             xs.append(d.xnext.copy())
         return xs
 

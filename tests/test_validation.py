@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+import inspect
 import pickle
 import warnings
 
@@ -252,21 +254,33 @@ class CountingUnicycle(crocopy.ActionModelUnicycle):
         super().calc(data, x, u)
 
 
-def test_solve_runs_user_overrides_unchecked_and_restores_the_checks():
+def guarded_methods() -> dict:
+    """Every guarded method as its class holds it: ``(class, name) -> function``."""
+    found, todo = {}, [guards.Guarded]
+    while todo:
+        cls = todo.pop()
+        todo.extend(cls.__subclasses__())
+        found.update({(cls, n): cls.__dict__[n] for n in cls._guards if n in cls.__dict__})
+    return found
+
+
+def test_solve_runs_user_overrides_unchecked_and_leaves_the_classes_alone():
     m = CountingUnicycle()
     problem = crocopy.ShootingProblem(np.array([-1.0, -1.0, 1.0]), [m] * 10, m)
     solver = crocopy.SolverFDDP(problem)
+    before = guarded_methods()
+    assert before[CountingUnicycle, "calc"]._crocopy_raw is not None
     inside = []
 
     def callback(s):
-        inside.append((guards.checking(), type(m).calc is CountingUnicycle._guard_pairs["calc"][0]))
+        inside.append((guards.checking(), guarded_methods() == before))
 
     solver.setCallbacks([callback])
     assert solver.solve([], [], 20)
     assert m.calls > 0 and m.checked_calls == 0
-    assert inside and all(c == (False, guards.INSTALL_RAW) for c in inside)  # no checks, raw functions (< 3.13)
+    assert inside and all(c == (False, True) for c in inside)  # unchecked, and no class changed
     assert guards.checking()
-    assert type(m).calc is CountingUnicycle._guard_pairs["calc"][1]
+    assert guarded_methods() == before
     with pytest.raises(ValueError, match="x has shape"):
         m.calc(m.createData(), np.zeros(2))
 
@@ -338,20 +352,78 @@ def test_calc_diff_before_calc_evaluates_the_node_first():
         np.testing.assert_array_equal(getattr(fresh, f), getattr(ref, f), err_msg=f)
 
 
-def test_flag_only_trusted_path_leaves_the_classes_alone(monkeypatch):
-    monkeypatch.setattr(guards, "INSTALL_RAW", False)
+class Signatures(crocopy.ActionModelUnicycle):
+    """A user's ``calc`` with positional-only, keyword-only and variadic parameters, and mutable defaults."""
 
-    class Fresh(CountingUnicycle):
-        pass
+    def calc(self, data, x, /, u=None, *extra, scale=1.0, **options):
+        data.seen = (extra, scale, options)
+        super().calc(data, x, u)
 
-    m = Fresh()
-    before = Fresh.__dict__.get("calc", CountingUnicycle.calc)
-    problem = crocopy.ShootingProblem(np.array([-1.0, -1.0, 1.0]), [m] * 10, m)
-    solver = crocopy.SolverFDDP(problem)
-    solver.setCallbacks([lambda s: inside.append(type(m).calc is before)])
-    inside = []
-    assert solver.solve([], [], 20)
-    assert m.calls > 0 and m.checked_calls == 0 and inside and all(inside)
+    def calcDiff(self, data, x, u=None, *, scale=1.0):
+        data.seen = scale
+        super().calcDiff(data, x, u)
+
+
+def test_a_wrapper_has_its_methods_signature_and_forwards_every_argument():
+    m = Signatures()
+    d = m.createData()
+    m.calc(d, [1.0, 2.0, 3.0], [[0.5], [0.1]], "a", scale=2.0, flag=True)
+    assert d.seen == (("a",), 2.0, {"flag": True}) and np.isfinite(d.cost)
+    assert str(inspect.signature(Signatures.calc)) == "(self, data, x, /, u=None, *extra, scale=1.0, **options)"
+    assert Signatures.calc.__qualname__ == "Signatures.calc"
+    with pytest.raises(TypeError, match=r"calc\(\) missing 1 required positional argument: 'x'"):
+        m.calc(d, x=np.zeros(3))  # x is positional-only: here it is one of the options
+    with pytest.raises(ValueError, match="u has shape"):
+        m.calc(d, np.zeros(3), u=np.zeros(3))
+    with guards.trusted_path():
+        m.calc(d, np.zeros(3), np.zeros(2), scale=3.0)
+    assert d.seen == ((), 3.0, {})
+    assert str(inspect.signature(Signatures.calcDiff)) == "(self, data, x, u=None, *, scale=1.0)"
+    m.calcDiff(d, x=[0.0, 1.0, 2.0], u=[[1.0], [2.0]], scale=4.0)
+    assert d.seen == 4.0
+    with pytest.raises(TypeError, match=r"calcDiff\(\) takes from 3 to 4 positional arguments but 5 were given"):
+        m.calcDiff(d, np.zeros(3), np.zeros(2), 4.0)
+
+
+class HalfControl(crocopy.ResidualModelControl):
+    """A residual whose ``calc`` is not a plain function: it is not wrapped, and composites still call it."""
+
+    def _scaled(self, data, x, u=None, scale=1.0):
+        data.r[:] = scale * u
+
+    calc = functools.partialmethod(_scaled, scale=0.5)
+
+
+def test_composites_call_a_definition_that_is_not_a_function():
+    state = crocopy.StateVector(3)
+    residual = HalfControl(state, 2)
+    cost = crocopy.CostModelResidual(state, residual)
+    data = cost.createData(crocopy.DataCollectorAbstract())
+    x, u = np.zeros(3), np.array([2.0, -4.0])
+    cost.calc(data, x, u)
+    np.testing.assert_array_equal(data.residual.r, [1.0, -2.0])
+    assert data.cost == pytest.approx(0.5 * (1.0 + 4.0))
+    assert HalfControl.__dict__["_raw_calc"] is HalfControl.__dict__["calc"]
+
+
+class _HalvingMixin:
+    """A mixin that is not guarded, placed before the guarded base (as ``ActionModelNumDiff`` does)."""
+
+    def calc(self, data, x, u=None):
+        data.r[:] = 0.5 * u
+
+
+class MixedControl(_HalvingMixin, crocopy.ResidualModelControl):
+    pass
+
+
+def test_composites_call_a_method_a_mixin_defines():
+    state = crocopy.StateVector(3)
+    cost = crocopy.CostModelResidual(state, MixedControl(state, 2))
+    data = cost.createData(crocopy.DataCollectorAbstract())
+    cost.calc(data, np.zeros(3), np.array([2.0, -4.0]))
+    np.testing.assert_array_equal(data.residual.r, [1.0, -2.0])
+    assert MixedControl._raw_calc is _HalvingMixin.calc
 
 
 # ---------------------------------------------------------------- issue 27: the last unclear errors and nonsense

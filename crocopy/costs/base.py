@@ -169,8 +169,8 @@ class CostModelResidual(CostModelAbstract):
         if data.zero:
             data.residual.r[:] = 0.0
             return
-        self.residual.calc(data.residual, x, u)
-        self.activation.calc(data.activation, data.residual.r)
+        self.residual._raw_calc(data.residual, x, u)
+        self.activation._raw_calc(data.activation, data.residual.r)
 
     def calcDiff(self, data: "CostDataResidual", x: np.ndarray, u: np.ndarray | None = None) -> None:
         """Residual and activation derivatives; ``data.Lx`` ... ``data.Luu`` are formed from them when read."""
@@ -178,8 +178,8 @@ class CostModelResidual(CostModelAbstract):
         data.zero = u is None and self._terminal_zero
         if data.zero:
             return
-        self.residual.calcDiff(data.residual, x, u)
-        self.activation.calcDiff(data.activation, data.residual.r)
+        self.residual._raw_calcDiff(data.residual, x, u)
+        self.activation._raw_calcDiff(data.activation, data.residual.r)
 
 
 class CostDataResidual(CostDataAbstract):

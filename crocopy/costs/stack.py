@@ -174,14 +174,14 @@ class CostStack:
         ):
             self.refresh(u is None)
         for residual, rdata in self.active:
-            residual.calc(rdata, x, u)
+            residual._raw_calc(rdata, x, u)
         kernel = kernels.active
         values = stack_kernel.activation_values if kernel else stack_kernel.activation_values_numpy
         total = values(self.r, self.lb, self.ub, self.act_weights, self.starts, self.item_costs, self.item_weights)
         if not self.unfused:
             return total
         for activation, adata, r in self.unfused:
-            activation.calc(adata, r)
+            activation._raw_calc(adata, r)
         return float(self.item_weights @ self.item_costs)
 
     def calcDiff(self, data, x: np.ndarray, u: np.ndarray | None) -> None:
@@ -192,7 +192,7 @@ class CostStack:
         ):
             self.refresh(u is None)
         for residual, rdata in self.varying:
-            residual.calcDiff(rdata, x, u)
+            residual._raw_calcDiff(rdata, x, u)
         kernel = kernels.active
         if not self.unfused:
             fused = stack_kernel.derivatives_and_sums if kernel else stack_kernel.derivatives_and_sums_numpy
@@ -205,7 +205,7 @@ class CostStack:
         derivatives = stack_kernel.activation_derivatives if kernel else stack_kernel.activation_derivatives_numpy
         derivatives(self.r, self.lb, self.ub, self.act_weights, self.Ar, self.Arr)
         for activation, adata, r in self.unfused:
-            activation.calcDiff(adata, r)
+            activation._raw_calcDiff(adata, r)
         accumulate = stack_kernel.accumulate if kernel else stack_kernel.accumulate_numpy
         accumulate(
             self.weights, self.Ar, self.Arr, self.Jx, self.Ju, self.u_start, u is not None,

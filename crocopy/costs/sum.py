@@ -105,7 +105,7 @@ class CostModelSum(ModelItems, Guarded):
             item = self._items[name]
             if item.active:
                 cd = data.costs[name]
-                item.cost.calc(cd, x, u)
+                item.cost._raw_calc(cd, x, u)
                 total += item.weight * cd.cost
         data.cost = total
 
@@ -130,7 +130,7 @@ class CostModelSum(ModelItems, Guarded):
             if not item.active:
                 continue
             cd = data.costs[name]
-            item.cost.calcDiff(cd, x, u)
+            item.cost._raw_calcDiff(cd, x, u)
             w = item.weight
             data.Lx += w * cd.Lx
             data.Lxx += w * cd.Lxx

@@ -151,7 +151,7 @@ class IntegratedActionModelAbstract(ActionModelAbstract):
         """The differential model's control ``w(t, u)`` (``u`` itself for PolyZero)."""
         if self._identity_control:
             return u
-        self._control.calc(cdata, t, u)
+        self._control._raw_calc(cdata, t, u)
         return cdata.w
 
     def _control_derivatives(
@@ -189,7 +189,7 @@ class IntegratedActionModelAbstract(ActionModelAbstract):
                 self._control_jacobian(cdata, ddata.Hu, data.Hu)
 
     def _terminal_calc(self, data: ActionDataAbstract, ddata, x: np.ndarray) -> None:
-        self.differential.calc(ddata, x)
+        self.differential._raw_calc(ddata, x)
         data.xnext[:] = x
         data.cost = ddata.cost
         if self.withCostResidual:
@@ -197,11 +197,11 @@ class IntegratedActionModelAbstract(ActionModelAbstract):
         self._copy_constraints(data, ddata, diff=False)
 
     def _terminal_calcDiff(self, data: ActionDataAbstract, ddata, x: np.ndarray) -> None:
-        self.differential.calcDiff(ddata, x)
+        self.differential._raw_calcDiff(ddata, x)
         if self._euclidean:
             data.Fx[:] = np.eye(self.state.ndx)
         else:
-            data.Fx[:] = self.state.Jintegrate(x, np.zeros(self.state.ndx))[0]
+            data.Fx[:] = self.state._raw_Jintegrate(x, np.zeros(self.state.ndx))[0]
         data.Lx[:] = ddata.Lx
         data.Lxx[:] = ddata.Lxx
         self._copy_constraints(data, ddata, diff=True)
@@ -231,7 +231,7 @@ class ControlChainData:
         t: float, u: np.ndarray,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Fill and return ``(Fw dw_du, dw_duᵀ Lw, Lxw dw_du, dw_duᵀ Lww dw_du)`` (``calc`` ran at ``t``)."""
-        control.calcDiff(cdata, t, u)
+        control._raw_calcDiff(cdata, t, u)
         self.Fu[:] = control.multiplyByJacobian(cdata, ddata.Fu)
         self.Lu[:] = control.multiplyJacobianTransposeBy(cdata, ddata.Lu[:, None])[:, 0]
         self.Lxu[:] = control.multiplyByJacobian(cdata, ddata.Lxu)

@@ -59,7 +59,8 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
         if u is None:
             self._terminal_calc(data, ddata, x)
             return
-        self.differential.calc(ddata, x, u if self._identity_control else self._control_input(data.control, 0.0, u))
+        w = u if self._identity_control else self._control_input(data.control, 0.0, u)
+        self.differential._raw_calc(ddata, x, w)
         dt = self._dt
         dx = data.dx
         if kernels.active:
@@ -80,10 +81,10 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
             return
         cdata = data.control
         if self._identity_control:
-            self.differential.calcDiff(ddata, x, u)
+            self.differential._raw_calcDiff(ddata, x, u)
             Fu, Lu, Lxu, Luu = ddata.Fu, ddata.Lu, ddata.Lxu, ddata.Luu
         else:
-            self.differential.calcDiff(ddata, x, self._control_input(cdata, 0.0, u))
+            self.differential._raw_calcDiff(ddata, x, self._control_input(cdata, 0.0, u))
             Fu, Lu, Lxu, Luu = self._control_derivatives(cdata, ddata, 0.0, u, data.control_chain)
         euclidean = self._euclidean
         if euclidean or self._transport:
@@ -104,7 +105,7 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
         dxdx.reshape(-1)[data.qv_diagonal] += dt
         np.multiply(Fu, dt, out=dxdu[nv:])
         np.multiply(dxdu[nv:], dt, out=dxdu[:nv])
-        Jx, Jdx = self.state.Jintegrate(x, data.dx, Jcomponent.both)
+        Jx, Jdx = self.state._raw_Jintegrate(x, data.dx, Jcomponent.both)
         np.dot(Jdx, dxdx, out=data.Fx)
         data.Fx += Jx
         np.dot(Jdx, dxdu, out=data.Fu)

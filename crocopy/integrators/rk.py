@@ -69,7 +69,7 @@ class IntegratedActionModelRK(IntegratedActionModelAbstract):
                 np.multiply(data.ki[i - 1], c * dt, out=data.dyi[i])
                 state._integrate_into(x, data.dyi[i], y)
             dd = data.differential[i]
-            self.differential.calc(dd, y, self._control_input(data.control[i], c, u))
+            self.differential._raw_calc(dd, y, self._control_input(data.control[i], c, u))
             data.ki[i][:nv] = y[-nv:]
             data.ki[i][nv:] = dd.xout
             if b:
@@ -96,10 +96,10 @@ class IntegratedActionModelRK(IntegratedActionModelAbstract):
             if i == 0:
                 self._first_stage_derivatives(data, dd, cd, x, u, b * dt)
                 continue
-            Jx, Jdy = state.Jintegrate(x, data.dyi[i], Jcomponent.both)
+            Jx, Jdy = state._raw_Jintegrate(x, data.dyi[i], Jcomponent.both)
             dydx[:] = Jx + (c * dt) * (Jdy @ data.dkdx[i - 1])
             dydu[:] = (c * dt) * (Jdy @ data.dkdu[i - 1])
-            self.differential.calcDiff(dd, data.y[i], self._control_input(cd, c, u))
+            self.differential._raw_calcDiff(dd, data.y[i], self._control_input(cd, c, u))
             Fu, Lu, Lxu, Luu = self._control_derivatives(cd, dd, c, u, data.control_chain)
             dkdx[:nv] = dydx[nv:]
             dkdu[:nv] = dydu[nv:]
@@ -121,7 +121,7 @@ class IntegratedActionModelRK(IntegratedActionModelAbstract):
             data.Fx[:] = np.eye(ndx) + dkdx_sum
             data.Fu[:] = dkdu_sum
         else:
-            Jx, Jdx = state.Jintegrate(x, data.dx, Jcomponent.both)
+            Jx, Jdx = state._raw_Jintegrate(x, data.dx, Jcomponent.both)
             data.Fx[:] = Jx + Jdx @ dkdx_sum
             data.Fu[:] = Jdx @ dkdu_sum
         self._copy_constraints(data, data.differential[0], diff=True, cdata=data.control[0])
@@ -135,7 +135,7 @@ class IntegratedActionModelRK(IntegratedActionModelAbstract):
         dydx[:] = 0.0
         dydx.reshape(-1)[:: dydx.shape[0] + 1] = 1.0
         dydu[:] = 0.0
-        self.differential.calcDiff(dd, x, self._control_input(cd, 0.0, u))
+        self.differential._raw_calcDiff(dd, x, self._control_input(cd, 0.0, u))
         Fu, Lu, Lxu, Luu = self._control_derivatives(cd, dd, 0.0, u, data.control_chain)
         dkdx[:nv] = dydx[nv:]
         dkdu[:nv] = 0.0
