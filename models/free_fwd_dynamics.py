@@ -101,7 +101,7 @@ class DifferentialActionModelFreeFwdDynamics(ArmatureMixin, DifferentialActionMo
         if u is None:
             pin.computeForwardKinematicsDerivatives(model, pd, q, v, data.zero_a)
         else:
-            self.actuation.calc(data.multibody.actuation, x, u)
+            self.actuation._raw_calc(data.multibody.actuation, x, u)
             data.multibody.joint.tau[:] = u
             tau = data.multibody.actuation.tau
             if self._with_armature:
@@ -115,10 +115,10 @@ class DifferentialActionModelFreeFwdDynamics(ArmatureMixin, DifferentialActionMo
             else:
                 data.xout[:] = pin.aba(model, pd, q, v, tau, pin.Convention.LOCAL)
                 pin.updateGlobalPlacements(model, pd)
-        self.costs.calc(data.costs, x, u)
+        self.costs._raw_calc(data.costs, x, u)
         data.cost = data.costs.cost
         if self.constraints is not None:
-            self.constraints.calc(data.constraints, x, u)
+            self.constraints._raw_calc(data.constraints, x, u)
 
     def calcDiff(
         self, data: "DifferentialActionDataFreeFwdDynamics", x: np.ndarray, u: np.ndarray | None = None
@@ -129,7 +129,7 @@ class DifferentialActionModelFreeFwdDynamics(ArmatureMixin, DifferentialActionMo
             model, pd = self.pinocchio, data.pinocchio
             act = data.multibody.actuation
             if not self._act.constant:
-                self.actuation.calcDiff(act, x, u)
+                self.actuation._raw_calcDiff(act, x, u)
             if self._with_armature:
                 pin.computeRNEADerivatives(model, pd, q, v, data.xout)
                 data.Minv[:] = cho_solve(data.chol, data.eye, check_finite=False)
@@ -146,9 +146,9 @@ class DifferentialActionModelFreeFwdDynamics(ArmatureMixin, DifferentialActionMo
                 if self._act.dtau_dx_nonzero:
                     Fx += Minv @ act.dtau_dx
             self._act.times_dtau_du(data.Minv, act.dtau_du, data.Fu)
-        self.costs.calcDiff(data.costs, x, u)
+        self.costs._raw_calcDiff(data.costs, x, u)
         if self.constraints is not None:
-            self.constraints.calcDiff(data.constraints, x, u)
+            self.constraints._raw_calcDiff(data.constraints, x, u)
 
     def _compiled_euler_node(self, iam, data, terminal: bool, memo: dict) -> object | None:
         """The compiled evaluator of the Euler node ``(iam, data)`` over this model

@@ -141,7 +141,7 @@ def trial_rollout(solver, steplength: float, gaps: bool = False, bounds: tuple[l
         else:
             u = us_try[t]
         if calcs is None:
-            m.calc(d, x, u)
+            m._raw_calc(d, x, u)
         else:
             calcs[t](x, u)
         cost += d.cost

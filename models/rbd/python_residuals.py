@@ -41,6 +41,6 @@ class PythonResiduals:
         else:
             pin.forwardKinematics(model, pdata, x[:nq])
         for residual, rdata in self.items:
-            residual.calc(rdata, x, u)
+            residual._raw_calc(rdata, x, u)
             if derivatives:
-                residual.calcDiff(rdata, x, u)
+                residual._raw_calcDiff(rdata, x, u)
