@@ -78,3 +78,15 @@ def failed_solve(problem, xs, us, compiled: bool, maxiter: int) -> tuple:
     assert all(np.isfinite(x).all() for x in s.xs) and all(np.isfinite(u).all() for u in s.us)
     assert np.isfinite(s.cost)
     return solved, s.iter, s.reason
+
+
+def assert_same_solves(builds: list, maxiter: int = 30) -> None:
+    """FDDP from each ``(problem, xs, us)`` of ``builds`` takes the same iterations to the same cost (1e-9)."""
+    results = []
+    for problem, xs, us in builds:
+        solver = crocopy.SolverFDDP(problem)
+        solver.solve(xs, us, maxiter)
+        results.append((solver.iter, solver.cost))
+    for iters, cost in results[1:]:
+        assert iters == results[0][0]
+        assert cost == pytest.approx(results[0][1], rel=1e-9)

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
-from node_checks import check_finite_differences, compare_with_python_node
+from node_checks import assert_same_solves, check_finite_differences, compare_with_python_node
 
 import crocopy
 from crocopy.problems import quadruped
@@ -47,15 +47,8 @@ def test_node_with_a_python_residual_stays_compiled(kind, terminal):
 
 @pytest.mark.parametrize("kernels", [True, False], ids=["kernels", "python"])
 def test_python_residual_solves_as_the_built_in(kernels):
-    results = []
     with crocopy.use_kernels(kernels):
-        for variant in ("builtin", "python"):
-            problem, xs, us = build_user_reach(crocopy, variant, robot="kinova", nodes=20)
-            solver = crocopy.SolverFDDP(problem)
-            solver.solve(xs, us, 30)
-            results.append((solver.iter, solver.cost))
-    assert results[0][0] == results[1][0]
-    assert results[0][1] == pytest.approx(results[1][1], rel=1e-9)
+        assert_same_solves([build_user_reach(crocopy, v, robot="kinova", nodes=20) for v in ("builtin", "python")])
 
 
 def test_contact_node_with_a_python_residual_keeps_the_python_path():

@@ -11,32 +11,12 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
-from node_checks import check_finite_differences, compare_with_python_node
+from node_checks import assert_same_solves, check_finite_differences, compare_with_python_node
 
 import crocopy
 from crocopy.problems import arm, quadruped
-
-
-class Translation(crocopy.ResidualModelNumba):
-    """``r = p_f - target`` (the built-in frame translation)."""
-
-    def __init__(self, state, frame, target, nu=None):
-        super().__init__(state, 3, nu, frame=frame, kinematics=("placement", "jacobian"), v_dependent=False)
-        self.target = np.asarray(target, dtype=float)
-
-    def parameters(self):
-        return self.target
-
-    @staticmethod
-    def compute_residual(r, x, u, p, kin):
-        for i in range(3):
-            r[i] = kin.p[i] - p[i]
-
-    @staticmethod
-    def compute_jacobians(Rx, Ru, x, u, p, kin):
-        for i in range(3):
-            for j in range(kin.J.shape[1]):
-                Rx[i, j] = kin.J[i, j]
+from crocopy.problems.user_residual import NumbaFrameTranslation as Translation
+from crocopy.problems.user_residual import build_user_reach
 
 
 class UpAxis(crocopy.ResidualModelNumba):
@@ -174,29 +154,13 @@ def test_check_residual_derivatives_names_the_wrong_entry():
 
 
 def reach(user: bool):
-    problem, xs, us = arm.build_arm_reaching(crocopy, nodes=20)
-    for m in [*problem.runningModels, problem.terminalModel]:
-        dam = m.differential
-        item = dam.costs.costs["goal"]
-        if user:
-            residual = Translation(dam.state, item.cost.residual.id, item.cost.residual.reference, dam.nu)
-            weight = item.weight
-            dam.costs.removeCost("goal")
-            dam.costs.addCost("goal", crocopy.CostModelResidual(dam.state, residual), weight)
-    return crocopy.ShootingProblem(problem.x0, problem.runningModels, problem.terminalModel), xs, us
+    return build_user_reach(crocopy, "numba" if user else "builtin", robot="kinova", nodes=20)
 
 
 @pytest.mark.parametrize("kernels", [True, False], ids=["kernels", "python"])
 def test_user_residual_solves_as_the_built_in(kernels):
-    results = []
     with crocopy.use_kernels(kernels):
-        for user in (False, True):
-            problem, xs, us = reach(user)
-            solver = crocopy.SolverFDDP(problem)
-            solver.solve(xs, us, 30)
-            results.append((solver.iter, solver.cost))
-    assert results[0][0] == results[1][0]
-    assert results[0][1] == pytest.approx(results[1][1], rel=1e-9)
+        assert_same_solves([reach(False), reach(True)])
 
 
 def test_user_parameters_changed_between_solves():
@@ -205,11 +169,11 @@ def test_user_parameters_changed_between_solves():
     solver = crocopy.SolverFDDP(problem)
     solver.solve(xs, us, 5)
     for m in [*problem.runningModels, problem.terminalModel]:
-        m.differential.costs.costs["goal"].cost.residual.target = np.array([0.3, 0.1, 0.5])
+        m.differential.costs.costs["goal"].cost.residual.reference = np.array([0.3, 0.1, 0.5])
     solver.solve(xs, us, 10)
     fresh, _, _ = reach(True)
     for m in [*fresh.runningModels, fresh.terminalModel]:
-        m.differential.costs.costs["goal"].cost.residual.target = np.array([0.3, 0.1, 0.5])
+        m.differential.costs.costs["goal"].cost.residual.reference = np.array([0.3, 0.1, 0.5])
     other = crocopy.SolverFDDP(fresh)
     other.solve(xs, us, 10)
     assert solver.iter == other.iter
@@ -218,10 +182,9 @@ def test_user_parameters_changed_between_solves():
 
 def test_bad_declarations_are_refused():
     state = crocopy.StateMultibody(pin.buildSampleModelManipulator())
-    with pytest.raises(ValueError, match="kinematics"):
-        Translation.__bases__[0].__init__(Translation.__new__(Translation), state, 3, kinematics="placement")
-    with pytest.raises(ValueError, match="kinematics"):
-        Translation.__bases__[0].__init__(Translation.__new__(Translation), state, 3, kinematics=("velocity",))
+    for kinematics in ("placement", ("velocity",)):
+        with pytest.raises(ValueError, match="kinematics"):
+            crocopy.ResidualModelNumba.__init__(Translation.__new__(Translation), state, 3, kinematics=kinematics)
 
     class Incomplete(crocopy.ResidualModelNumba):
         @staticmethod

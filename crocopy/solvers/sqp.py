@@ -33,7 +33,7 @@ import numpy as np
 from ..guards import trusted_path
 from ..shooting import ShootingProblem
 from . import compiled_nodes
-from .base import BackwardPassError, check_solve_arguments
+from .base import check_solve_arguments
 from .ddp import SolverDDP
 from .std_vector import StdVecAttribute
 from .stopwatch import profiled
@@ -113,7 +113,7 @@ class SolverSQP(SolverDDP):
 
     def _iterate_sqp(self, maxiter: int) -> bool:
         for self.iter in range(maxiter):
-            if not self._sqp_direction():
+            if not self._regularised_direction():
                 return self._stop(f"regularization reached reg_max = {self.reg_max:g} in the backward pass")
             self.checkKKTConditions()
             self._run_callbacks()
@@ -124,7 +124,7 @@ class SolverSQP(SolverDDP):
             if not self._after_line_search(accepted):
                 return self._stop(f"no step accepted and regularization reached reg_max = {self.reg_max:g}")
         self.iter = maxiter
-        if self.extra_iteration_for_last_kkt and self._sqp_direction():
+        if self.extra_iteration_for_last_kkt and self._regularised_direction():
             self.checkKKTConditions()
             if self.KKT <= self.termination_tolerance:
                 return self._converged()
@@ -137,21 +137,6 @@ class SolverSQP(SolverDDP):
     def _stop(self, reason: str) -> bool:
         self.reason = reason
         return False
-
-    def _sqp_direction(self) -> bool:
-        """:meth:`computeDirection` at the current iterate, raising the regularisation while a ``Quu`` is not
-        positive definite; False once ``preg`` reaches ``reg_max``."""
-        recalc = True
-        while True:
-            try:
-                self.computeDirection(recalc)
-            except BackwardPassError:
-                recalc = False
-                self.increaseRegularization()
-                if self.preg >= self.reg_max:
-                    return False
-                continue
-            return True
 
     def computeDirection(self, recalc: bool = True) -> None:
         """The QP step at the current iterate: derivatives, gaps, ``gap_norm`` and ``merit`` (if ``recalc``),
