@@ -52,7 +52,6 @@ reported solve time excludes that warm-up.
 from __future__ import annotations
 
 import argparse
-import functools
 import os
 import sys
 import time
@@ -70,128 +69,10 @@ EXIT_STATUS_HELP = (
 )
 
 
-def _bench_batch_scaling(args: argparse.Namespace) -> int:
-    if args.batch:
-        from .bench.batch import run_batch_bench
-
-        run_batch_bench(workers=args.workers, repeats=args.runs)
-    if args.scaling:
-        from .bench.scaling import run_scaling_bench
-
-        run_scaling_bench(repeats=args.runs)
-    return 0
-
-
-def _bench_box_parity(args: argparse.Namespace) -> int:
-    from .bench.box_parity import BenchDependencyError, run_box_parity
-
-    try:
-        print(run_box_parity(args.problems, maxiter=args.maxiter or None,
-                             progress=lambda rows: print(rows, file=sys.stderr, flush=True)))
-    except (BenchDependencyError, KeyError) as exc:
-        print(exc.args[0], file=sys.stderr)
-        return 2
-    return 0
-
-
-def _bench_models(args: argparse.Namespace) -> int:
-    from .bench.node_eval import MODEL_PROBLEMS, run_model_bench
-    from .bench.side_by_side import BenchDependencyError
-
-    try:
-        print(run_model_bench(tuple(args.problems or MODEL_PROBLEMS), repeats=args.repeats or 15))
-    except (BenchDependencyError, KeyError) as exc:
-        print(exc.args[0], file=sys.stderr)
-        return 2
-    return 0
-
-
 def _bench(args: argparse.Namespace) -> int:
-    if args.compat:
-        from .bench.compat import run_compat_cli
+    from .bench.command import run_bench
 
-        return run_compat_cli(args.problems, args.out)
-    if args.models:
-        return _bench_models(args)
-    if args.latency:
-        from .bench.latency import run_latency_bench
-
-        problem = args.problems[0] if args.problems else "jump"
-        print(run_latency_bench(problem, args.solver, repeats=args.repeats or 3))
-        return 0
-    if args.user_residual:
-        from .bench.user_residual import run_user_residual_bench
-
-        print(run_user_residual_bench(repeats=args.repeats or 7))
-        return 0
-    if args.floor:
-        from .bench.floor import FLOOR_PROBLEMS, run_floor_bench
-
-        print(run_floor_bench(tuple(args.problems or FLOOR_PROBLEMS), repeats=args.repeats or 7))
-        return 0
-    if args.box_parity:
-        return _bench_box_parity(args)
-    if args.batch or args.scaling:
-        return _bench_batch_scaling(args)
-    if args.vs:
-        return _bench_vs(args)
-    from .bench.lqr import run_lqr_bench
-
-    print(run_lqr_bench(repeats=args.repeats or 20, T=args.T))
-    return 0
-
-
-def _bench_vs_mim(args: argparse.Namespace) -> int:
-    from .bench.mim import run_vs_mim
-
-    try:
-        report = run_vs_mim(args.problems, progress=functools.partial(print, file=sys.stderr, flush=True))
-    except (ImportError, KeyError) as exc:
-        print(exc.args[0], file=sys.stderr)
-        return 2
-    print(report)
-    if args.out:
-        with open(args.out, "w", encoding="utf-8") as f:
-            f.write(report)
-    return 0
-
-
-def _bench_vs(args: argparse.Namespace) -> int:
-    if args.vs == "mim":
-        return _bench_vs_mim(args)
-    from .bench.shipped import run_shipped
-    from .bench.side_by_side import BenchDependencyError, run_vs
-
-    builders = args.problems is not None or args.shipped is None
-    shipped = args.shipped is not None or args.problems is None
-    progress = functools.partial(print, file=sys.stderr, flush=True)
-    parts = []
-    try:
-        if shipped and args.shipped:
-            from .bench.compat import jobs
-
-            jobs(args.shipped)  # unknown names are refused before any work
-        if builders:
-            parts.append(run_vs(args.problems, solver_name=args.solver, repeats=args.repeats or 5,
-                                maxiter=args.maxiter or None, solve_budget=args.solve_budget,
-                                memory=not args.no_memory, progress=progress))
-        if shipped:
-            parts.append(run_shipped(args.shipped, repeats=args.repeats or 3, progress=progress))
-        if args.problems is None and args.shipped is None:
-            from .bench.user_residual import SECTION, run_user_residual_bench
-
-            progress("user residual: the Talos-arm reach, three ways")
-            parts.append(SECTION + run_user_residual_bench(repeats=args.repeats or 5, crocoddyl=True))
-    except (BenchDependencyError, KeyError) as exc:
-        print(exc.args[0], file=sys.stderr)
-        return 2
-    report = "\n".join(parts)
-    print(report)
-    if args.out:
-        with open(args.out, "w", encoding="utf-8") as f:
-            f.write(report)
-        print(f"report written to {args.out}", file=sys.stderr)
-    return 0
+    return run_bench(args)
 
 
 ROBOT_OF_MODEL = {"2dof_planar": ("double_pendulum",), "": ("talos_legs",), "talos": ("talos", "talos_arm")}

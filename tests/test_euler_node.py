@@ -173,13 +173,13 @@ def test_parameters_are_read_again_at_each_refresh():
 def test_the_kernel_rebuilds_the_lowered_model_and_workspace_from_the_table():
     """Entry by entry, the arrays the kernel views are the node's own and its model's shared workspace (same
     memory, shapes and values)."""
-    from crocopy.models.rbd import euler_node_kernel as kernel
+    from crocopy.models.rbd import node_table as table
 
     iam, state = node("anymal", ("state", "control"))
     data = iam.createData()
     evaluator = iam._compiled_node(data, False, {})
-    rb = kernel._model(evaluator.tbl, evaluator.ints)
-    ws = kernel._workspace(evaluator.tbl, evaluator.ints)
+    rb = table.entry_model(evaluator.tbl, evaluator.ints)
+    ws = table.entry_workspace(evaluator.tbl, evaluator.ints)
     reference = evaluator._lowered.rb
     assert rb[:4] == reference[:4]
     for name in rb._fields[4:]:
@@ -206,15 +206,15 @@ def test_a_changed_pinocchio_model_is_read_again_at_the_next_solve():
 
 
 def test_nodes_of_one_model_share_their_scratch_and_keep_their_own_arrays():
-    from crocopy.models.rbd import euler_node_kernel as kernel
+    from crocopy.models.rbd import node_table as table
 
     iam, state = node("kinova", ("state", "translation", "control"))
     first, second = iam.createData(), iam.createData()
     memo: dict = {}
     a, b = iam._compiled_node(first, False, memo), iam._compiled_node(second, False, memo)
-    shared = kernel.NODE + len(kernel.NODE_ARRAYS)
+    shared = table.NODE + len(table.NODE_ARRAYS)
     assert np.array_equal(a.tbl[shared:], b.tbl[shared:])
-    assert not np.intersect1d(a.tbl[kernel.NODE:shared], b.tbl[kernel.NODE:shared]).size
+    assert not np.intersect1d(a.tbl[table.NODE:shared], b.tbl[table.NODE:shared]).size
     x, u = point(state, iam.nu, 6)
     y, w = point(state, iam.nu, 7)
     a.calcDiff(x, u, False)
@@ -231,12 +231,12 @@ def test_the_registry_of_compiled_kinds_is_covered_and_documented():
     the contact-node tests for the cones) and named in docs/DEVELOPING.md; the kernel knows each kind."""
     from pathlib import Path
 
-    from crocopy.models.rbd import euler_node_kernel
+    from crocopy.models.rbd import node_table
     from crocopy.models.rbd.euler_node import compiled_residual_classes
 
     registry = compiled_residual_classes()
     factory = {kind.split("_")[0] for kind in KINDS} | {"com", "cone"}
-    assert set(registry.values()) == factory == set(euler_node_kernel.KIND)
+    assert set(registry.values()) == factory == set(node_table.KIND)
     developing = (Path(__file__).resolve().parents[1] / "docs" / "DEVELOPING.md").read_text()
     for cls in registry:
         assert f"`{cls.__name__}`" in developing, cls.__name__

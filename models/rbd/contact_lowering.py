@@ -7,7 +7,7 @@ generic configuration; such a set takes the least-squares path of the Python mod
 implement).  Its contacts
 become, in the order of the contact model (by name):
 
-* ``ints``: per contact ``(frame, rows, reference frame, first row)`` (:data:`.euler_node_kernel.CONTACT_FIELDS`;
+* ``ints``: per contact ``(frame, rows, reference frame, first row)`` (:data:`.node_table.CONTACT_FIELDS`;
   ``WORLD`` is read as ``LOCAL_WORLD_ALIGNED``, as the contacts do);
 * arrays ``gains (n, 2)`` (Baumgarte ``kp, kd``), ``ref_R (n, 3, 3)`` and ``ref_p (n, 3)`` (the reference
   placement; a 3D contact's rotation is unused and left zero), rewritten in place at each solve.

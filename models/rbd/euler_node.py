@@ -52,6 +52,7 @@ from ..actuations import (
 from ..residual_numba import ResidualModelNumba, kinematics_size
 from ..state_multibody import StateMultibody
 from . import euler_node_kernel as kernel
+from . import node_table as table
 from .contact_kernel import make_contact_workspace
 from .contact_lowering import ContactSet
 from .joint_types import NotLowerable
@@ -78,9 +79,9 @@ def residual_kind(residual) -> int | None:
     the base class's ``calc``/``calcDiff``), or None when compiled nodes cannot evaluate it."""
     name = type(residual).__dict__.get("compiled_kind")
     if name is not None:
-        return kernel.KIND[name]
+        return table.KIND[name]
     if isinstance(residual, ResidualModelNumba) and not overridden(residual, ResidualModelNumba, ("calc", "calcDiff")):
-        return kernel.USER
+        return table.USER
     return None
 
 
@@ -109,7 +110,7 @@ class Lowered:
         self._scratch: dict[tuple[int, int], tuple[dict, tuple]] = {}
 
     def scratch(self, nu: int, nc: int) -> tuple[dict, tuple[np.ndarray, np.ndarray]]:
-        """The arrays of :data:`.euler_node_kernel.SCRATCH_ARRAYS` (and a ``Minv`` for a data without one) shared by
+        """The arrays of :data:`.node_table.SCRATCH_ARRAYS` (and a ``Minv`` for a data without one) shared by
         the nodes of this model with ``nu`` controls and ``nc`` contact rows, with their table entries."""
         key = (nu, nc)
         if key not in self._scratch:
@@ -127,7 +128,7 @@ class Lowered:
                 "cJ6": cw.J6, "cY": cw.Y, "cG": cw.G, "cz": cw.z, "cw": cw.w, "cm6": cw.m6, "cJ66": cw.J66,
                 "cR3": cw.R3, "cp3": cw.p3, "Minv": np.zeros((nv, nv)),
             }
-            self._scratch[key] = arrays, table_entries([arrays[name] for name in kernel.SCRATCH_ARRAYS])
+            self._scratch[key] = arrays, table_entries([arrays[name] for name in table.SCRATCH_ARRAYS])
         return self._scratch[key]
 
     def update(self, rb: RigidBodyModel) -> bool:
@@ -271,13 +272,13 @@ class EulerNode:
                     return False
                 python.append((residual, cdata.residual))
                 continue
-            frame, reference = getattr(residual, "id", 0), int(residual.type) if kind == kernel.VELOCITY else 0
+            frame, reference = getattr(residual, "id", 0), int(residual.type) if kind == table.VELOCITY else 0
             user = [0, 0, 0, 0]
-            if kind == kernel.USER:
+            if kind == table.USER:
                 frame, reference = residual.frame, int(residual.frame_reference)
                 user = [residual.flags, *residual.callbacks(), len(self._parameters(kind, residual))]
                 rows_u = max(rows_u, rows.stop - rows.start)
-            if kind == kernel.CONE:
+            if kind == table.CONE:
                 row, nc = self.contacts.rows.get(frame, (0, 0))
                 if nc < residual.ncf:
                     return False
@@ -296,7 +297,7 @@ class EulerNode:
     def _parameters(kind: int, residual) -> list[float]:
         """The residual's parameters in the layout :mod:`.euler_node_kernel` reads (its ``compiled_parameters()``,
         a user residual's ``parameters()``)."""
-        return list(residual.checked_parameters()) if kind == kernel.USER else residual.compiled_parameters()
+        return list(residual.checked_parameters()) if kind == table.USER else residual.compiled_parameters()
 
     def _actuation_matrix(self, dam, ddata, memo: dict) -> None:
         """``S = ∂τ/∂u`` of the (linear, state-independent) actuation, once per actuation and ``memo``."""
@@ -315,7 +316,7 @@ class EulerNode:
         """The addresses and dimensions of every array the kernels read or write, and the integer program.
 
         Entries: the lowered model's arrays (the armature is this node's, model's plus dynamics'), its shared
-        workspace, then :data:`.euler_node_kernel.NODE_ARRAYS` (the node's own) and ``SCRATCH_ARRAYS`` (shared
+        workspace, then :data:`.node_table.NODE_ARRAYS` (the node's own) and ``SCRATCH_ARRAYS`` (shared
         by the model's nodes of the same sizes, :meth:`Lowered.scratch`); the data arrays' addresses are read
         again only for arrays that are not those of the last refresh."""
         fields = {
@@ -330,7 +331,7 @@ class EulerNode:
         }
         scratch, scratch_entries = low.scratch(self.model.nu, self.contacts.nc)
         fields["Minv"] = ddata.Minv if hasattr(ddata, "Minv") else scratch["Minv"]
-        arrays = [fields[name] for name in kernel.NODE_ARRAYS]
+        arrays = [fields[name] for name in table.NODE_ARRAYS]
         known = self._data_arrays
         if len(known) != len(arrays) or any(a is not b for a, b in zip(arrays, known)):
             self._data_entries = table_entries(arrays)
@@ -339,23 +340,23 @@ class EulerNode:
             return
         items = self._items
         rb = low.rb
-        armature = kernel.RB_ARMATURE
+        armature = table.RB_ARMATURE
         parts = [(low.addresses[:armature], low.shapes[:3 * armature]), self._armature_entry,
                  (low.addresses[armature + 1:], low.shapes[3 * armature + 3:]), low.workspace_entries,
                  self._data_entries, scratch_entries]
         addresses = np.concatenate([p[0] for p in parts])
         shapes = np.concatenate([p[1] for p in parts])
         n = addresses.shape[0]
-        header = np.zeros(kernel.SHAPES, dtype=np.int64)
-        header[[kernel.NQ, kernel.NV, kernel.NU, kernel.U_START]] = rb.nq, rb.nv, self.model.nu, stack.u_start
-        header[[kernel.N_ITEMS, kernel.EUCLIDEAN, kernel.NJOINTS, kernel.NFRAMES, kernel.N_STACK]] = (
-            len(items) // kernel.ITEM_FIELDS, self.model._euclidean, rb.njoints, rb.nframes, len(stack.starts))
-        header[kernel.ITEMS] = kernel.SHAPES + 3 * n
-        header[kernel.STARTS] = header[kernel.ITEMS] + len(items)
-        header[kernel.TERMINAL] = self.terminal
-        header[kernel.N_CONTACTS] = len(self.contacts.models)
-        header[kernel.CONTACTS] = header[kernel.STARTS] + len(stack.starts)
-        header[kernel.NC] = self.contacts.nc
+        header = np.zeros(table.SHAPES, dtype=np.int64)
+        header[[table.NQ, table.NV, table.NU, table.U_START]] = rb.nq, rb.nv, self.model.nu, stack.u_start
+        header[[table.N_ITEMS, table.EUCLIDEAN, table.NJOINTS, table.NFRAMES, table.N_STACK]] = (
+            len(items) // table.ITEM_FIELDS, self.model._euclidean, rb.njoints, rb.nframes, len(stack.starts))
+        header[table.ITEMS] = table.SHAPES + 3 * n
+        header[table.STARTS] = header[table.ITEMS] + len(items)
+        header[table.TERMINAL] = self.terminal
+        header[table.N_CONTACTS] = len(self.contacts.models)
+        header[table.CONTACTS] = header[table.STARTS] + len(stack.starts)
+        header[table.NC] = self.contacts.nc
         self.ints = np.concatenate([header, shapes, np.array(items, dtype=np.int64),
                                     np.asarray(stack.starts, dtype=np.int64),
                                     np.array(self.contacts.ints, dtype=np.int64)])

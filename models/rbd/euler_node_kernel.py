@@ -11,16 +11,12 @@ With rigid contacts (``ints[N_CONTACTS] > 0``, the stacked rows of the contacts 
 (``a``, the forces ``λ``, ``∂a/∂(x, u)``, ``∂λ/∂(x, u)``) are those of :mod:`.contact_kernel` with the damping
 ``par[1]``; the force residuals read ``λ`` and ``∂λ``.
 
-the residual Jacobians and the Euler chain rule of :mod:`crocopy.integrators.euler_kernel` (plus the
+then the residual Jacobians and the Euler chain rule of :mod:`crocopy.integrators.euler_kernel` (plus the
 configuration's ``∂(q ⊕ dq)/∂(q, dq)`` on a Lie group).  The terminal node (``terminal`` set) has only
 the costs of ``x``; its ``Fx`` is the identity.
 
-The arrays arrive by address: ``tbl[k]`` is the address of entry ``k`` (a C-contiguous array), its
-dimensions are ``ints[SHAPES + 3k : SHAPES + 3k + 3]``.  The entries are the fields of the lowered
-model and of its workspace (:mod:`.lowering`), then ``NODE_ARRAYS`` and ``SCRATCH_ARRAYS``.  ``ints`` also
-holds the sizes (``NQ`` .. ``NFRAMES``), the compiled residual items (``ITEM_FIELDS`` integers each, from
-``ints[ITEMS]``: kind, first stack row, rows, frame, reference frame, offset of its parameters in
-``par``) and the cost stack's item starts (from ``ints[STARTS]``); ``par[0]`` is the time step, ``par[1]``
+The arrays arrive by address, in the table of :mod:`.node_table` (its layout and accessors); ``USER`` residual
+items call their callbacks through :mod:`.user_residual_kernel`.  ``par[0]`` is the time step, ``par[1]``
 the contact dynamics' damping.
 """
 
@@ -29,12 +25,7 @@ from __future__ import annotations
 from crocopy.costs.stack_kernel import activation_values, derivatives_and_sums
 from crocopy.integrators.euler_kernel import add_integrate_jacobian, euler_chain
 from crocopy.kernels import (
-    address,
-    call_address,
-    carray,
     compiled,
-    float64_pointer,
-    int64_pointer,
     matrix_at,
     vector_at,
 )
@@ -42,7 +33,6 @@ from crocopy.solvers.riccati_kernel import feedback_control
 
 from .com_kernel import center_of_mass
 from .contact_kernel import (
-    ContactWorkspace,
     contact_calc,
     contact_calc_diff,
     contact_dynamics_derivatives,
@@ -60,122 +50,102 @@ from .dynamics_kernel import (
     mass_inverse,
 )
 from .lie_kernel import dintegrate, jlog3, jlog6, log3, log6, state_diff, state_integrate, state_jdiff
-from .lowering import RigidBodyModel, RigidBodyWorkspace
-
-STATE, CONTROL, PLACEMENT, TRANSLATION, ROTATION, VELOCITY, CONE, COM, USER = range(9)
-"""Residual kinds.  ``CONE``: ``r = A λ_c`` (friction and wrench cones; the item's frame field is the contact's first
-row, its reference field the force components ``ncf``, ``A`` row-major in ``par``); ``COM``: ``r = com - cref``;
-``USER``: a :class:`~crocopy.models.residual_numba.ResidualModelNumba`, whose two C callbacks (item fields
-``RESIDUAL_ADDRESS``, ``JACOBIANS_ADDRESS``) the node calls with its kinematics (item field ``FLAGS``: what they
-read, and ``u`` dependence; ``N_PARAMETERS``: the length of its parameters in ``par``)."""
-
-KIND = {"state": STATE, "control": CONTROL, "placement": PLACEMENT, "translation": TRANSLATION,
-        "rotation": ROTATION, "velocity": VELOCITY, "cone": CONE, "com": COM}
-"""The kinds written into this kernel, by the ``compiled_kind`` name a residual class declares beside its maths
-(with its ``compiled_parameters()``); ``USER`` residuals bring their own functions."""
-
-WORLD, LOCAL, LOCAL_WORLD_ALIGNED = 0, 1, 2
-"""Pinocchio's reference frames (``int(pinocchio.ReferenceFrame)``)."""
-
-(NQ, NV, NU, U_START, N_ITEMS, EUCLIDEAN, NJOINTS, NFRAMES, N_STACK, ITEMS, STARTS, TERMINAL, N_CONTACTS, CONTACTS,
- NC) = range(15)
-SHAPES = 15
-ITEM_FIELDS = 10
-FLAGS, RESIDUAL_ADDRESS, JACOBIANS_ADDRESS, N_PARAMETERS = range(6, 10)
-"""Fields of a ``USER`` item after the six every item has (kind, first row, rows, frame, reference, offset)."""
-CONTACT_FIELDS = 4
-
-NODE_ARRAYS = (
-    "xnext", "dx", "Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu",
-    "a", "dFx", "dFu", "Minv", "dLx", "dLu", "dLxx", "dLxu", "dLuu",
-    "r", "lb", "ub", "act_weights", "item_costs", "item_weights", "weights", "Ar", "Arr",
-    "Jx", "Ju", "Jc", "HJx", "Juc", "HJu", "S", "gains", "ref_R", "ref_p", "kin", "user_dims", "user_Ru",
+from .node_table import (
+    COM,
+    CONE,
+    CONTROL,
+    E_A,
+    E_A0,
+    E_ACT_W,
+    E_AR,
+    E_ARR,
+    E_COM,
+    E_DA0_DX,
+    E_DF_DU,
+    E_DF_DX,
+    E_DFU,
+    E_DFX,
+    E_DLU,
+    E_DLUU,
+    E_DLX,
+    E_DLXU,
+    E_DLXX,
+    E_DTAU_DQ,
+    E_DTAU_DV,
+    E_DX,
+    E_FU,
+    E_FX,
+    E_GAINS,
+    E_GAP,
+    E_HJU,
+    E_HJX,
+    E_ITEM_COSTS,
+    E_ITEM_WEIGHTS,
+    E_J6,
+    E_JC,
+    E_JCOM,
+    E_JCS,
+    E_JQ,
+    E_JU,
+    E_JUC,
+    E_JV,
+    E_JX,
+    E_K6,
+    E_LAM,
+    E_LB,
+    E_LU,
+    E_LUU,
+    E_LX,
+    E_LXU,
+    E_LXX,
+    E_M6,
+    E_MINV,
+    E_P3,
+    E_R,
+    E_R3,
+    E_REF_P,
+    E_REF_R,
+    E_ROWS,
+    E_S,
+    E_TAU,
+    E_UB,
+    E_USER_RU,
+    E_V6,
+    E_WEIGHTS,
+    E_XNEXT,
+    EUCLIDEAN,
+    FLAGS,
+    ITEM_FIELDS,
+    ITEMS,
+    LOCAL,
+    LOCAL_WORLD_ALIGNED,
+    N_CONTACTS,
+    N_ITEMS,
+    N_STACK,
+    NC,
+    NJOINTS,
+    NQ,
+    NU,
+    NV,
+    PLACEMENT,
+    RESIDUAL_ADDRESS,
+    ROTATION,
+    STARTS,
+    STATE,
+    TERMINAL,
+    TRANSLATION,
+    U_START,
+    USER,
+    VELOCITY,
+    contact_fields,
+    cube,
+    entry_contact_workspace,
+    entry_model,
+    entry_workspace,
+    mat,
+    vec,
 )
-"""The node's own arrays (its data's, its cost stack's, its actuation matrix and contacts)."""
-SCRATCH_ARRAYS = (
-    "tau", "dtau_dq", "dtau_dv", "J6", "K6", "m6", "R3", "p3", "v6", "Jq", "Jv", "rows", "gap",
-    "Jcs", "a0", "lam", "da0_dx", "df_dx", "df_du", "com", "Jcom",
-    "cJ6", "cY", "cG", "cz", "cw", "cm6", "cJ66", "cR3", "cp3",
-)
-"""Scratch of one node evaluation, shared by the nodes of one model with the same ``nu`` and contact rows (a
-kernel call leaves nothing there that a later call reads)."""
-N_RB, N_WS = len(RigidBodyModel._fields) - 4, len(RigidBodyWorkspace._fields)
-RB_ARMATURE = RigidBodyModel._fields.index("armature") - 4
-"""Entry of the armature (each node's own: the Pinocchio model's plus the dynamics model's)."""
-NODE = N_RB + N_WS
-(E_XNEXT, E_DX, E_FX, E_FU, E_LX, E_LU, E_LXX, E_LXU, E_LUU,
- E_A, E_DFX, E_DFU, E_MINV, E_DLX, E_DLU, E_DLXX, E_DLXU, E_DLUU,
- E_R, E_LB, E_UB, E_ACT_W, E_ITEM_COSTS, E_ITEM_WEIGHTS, E_WEIGHTS, E_AR, E_ARR,
- E_JX, E_JU, E_JC, E_HJX, E_JUC, E_HJU, E_S, E_GAINS, E_REF_R, E_REF_P, E_KIN, E_USER_DIMS, E_USER_RU,
- E_TAU, E_DTAU_DQ, E_DTAU_DV, E_J6, E_K6, E_M6, E_R3, E_P3, E_V6, E_JQ, E_JV, E_ROWS, E_GAP,
- E_JCS, E_A0, E_LAM, E_DA0_DX, E_DF_DX, E_DF_DU, E_COM, E_JCOM,
- E_CJ6) = range(NODE, NODE + len(NODE_ARRAYS) + len(SCRATCH_ARRAYS) - 8)
-
-
-@compiled
-def _vec(tbl, ints, k):
-    return vector_at(tbl[k], ints[SHAPES + 3 * k])
-
-
-@compiled
-def _mat(tbl, ints, k):
-    return matrix_at(tbl[k], ints[SHAPES + 3 * k], ints[SHAPES + 3 * k + 1])
-
-
-@compiled
-def _cube(tbl, ints, k):
-    s = SHAPES + 3 * k
-    return carray(float64_pointer(tbl[k]), (ints[s], ints[s + 1], ints[s + 2]))
-
-
-@compiled
-def _index(tbl, ints, k):
-    return carray(int64_pointer(tbl[k]), (ints[SHAPES + 3 * k],))
-
-
-@compiled
-def _model(tbl, ints):
-    """The lowered model, from entries ``0 .. N_RB - 1`` (its fields' order)."""
-    return RigidBodyModel(
-        ints[NQ], ints[NV], ints[NJOINTS], ints[NFRAMES],
-        _index(tbl, ints, 0), _index(tbl, ints, 1), _index(tbl, ints, 2), _index(tbl, ints, 3),
-        _mat(tbl, ints, 4), _index(tbl, ints, 5), _index(tbl, ints, 6), _index(tbl, ints, 7),
-        _index(tbl, ints, 8), _index(tbl, ints, 9), _cube(tbl, ints, 10), _mat(tbl, ints, 11),
-        _vec(tbl, ints, 12), _mat(tbl, ints, 13), _cube(tbl, ints, 14), _index(tbl, ints, 15),
-        _cube(tbl, ints, 16), _mat(tbl, ints, 17), _vec(tbl, ints, 18), _vec(tbl, ints, 19),
-    )
-
-
-@compiled
-def _workspace(tbl, ints):
-    """The workspace, from entries ``N_RB .. NODE - 1`` (its fields' order)."""
-    k = N_RB
-    return RigidBodyWorkspace(
-        _cube(tbl, ints, k), _mat(tbl, ints, k + 1), _mat(tbl, ints, k + 2), _mat(tbl, ints, k + 3),
-        _mat(tbl, ints, k + 4), _mat(tbl, ints, k + 5), _cube(tbl, ints, k + 6), _mat(tbl, ints, k + 7),
-        _mat(tbl, ints, k + 8), _mat(tbl, ints, k + 9), _cube(tbl, ints, k + 10), _cube(tbl, ints, k + 11),
-        _mat(tbl, ints, k + 12), _mat(tbl, ints, k + 13), _mat(tbl, ints, k + 14), _mat(tbl, ints, k + 15),
-        _vec(tbl, ints, k + 16), _vec(tbl, ints, k + 17), _vec(tbl, ints, k + 18), _mat(tbl, ints, k + 19),
-        _mat(tbl, ints, k + 20), _vec(tbl, ints, k + 21),
-    )
-
-
-@compiled
-def _contact_workspace(tbl, ints):
-    """The contact workspace, from entries ``E_CJ6 ..`` (its fields' order)."""
-    k = E_CJ6
-    return ContactWorkspace(
-        _mat(tbl, ints, k), _mat(tbl, ints, k + 1), _mat(tbl, ints, k + 2), _vec(tbl, ints, k + 3),
-        _vec(tbl, ints, k + 4), _vec(tbl, ints, k + 5), _mat(tbl, ints, k + 6), _mat(tbl, ints, k + 7),
-        _vec(tbl, ints, k + 8),
-    )
-
-
-@compiled
-def _contact(ints, n):
-    """``(frame, rows, reference frame, first row)`` of contact ``n``."""
-    b = ints[CONTACTS] + CONTACT_FIELDS * n
-    return ints[b], ints[b + 1], ints[b + 2], ints[b + 3]
+from .user_residual_kernel import user_call, user_jacobians, user_kinematics
 
 
 @compiled
@@ -216,7 +186,7 @@ def _relative_frame(rb, ws, fid, par, o, R3, p3):
 def _residuals(tbl, ints, par, rb, ws, x, u):
     """Every compiled item's residual rows of the stack."""
     nq, nv = ints[NQ], ints[NV]
-    r, R3, p3, v6 = _vec(tbl, ints, E_R), _mat(tbl, ints, E_R3), _vec(tbl, ints, E_P3), _vec(tbl, ints, E_V6)
+    r, R3, p3, v6 = vec(tbl, ints, E_R), mat(tbl, ints, E_R3), vec(tbl, ints, E_P3), vec(tbl, ints, E_V6)
     for n in range(ints[N_ITEMS]):
         b = ints[ITEMS] + ITEM_FIELDS * n
         kind, start, nr, fid, ref, o = ints[b], ints[b + 1], ints[b + 2], ints[b + 3], ints[b + 4], ints[b + 5]
@@ -241,20 +211,20 @@ def _residuals(tbl, ints, par, rb, ws, x, u):
             for i in range(6):
                 rows[i] = v6[i] - par[o + i]
         elif kind == CONE:
-            lam = _vec(tbl, ints, E_LAM)
+            lam = vec(tbl, ints, E_LAM)
             for i in range(nr):
                 acc = 0.0
                 for j in range(ref):
                     acc += par[o + ref * i + j] * lam[fid + j]
                 rows[i] = acc
         elif kind == COM:
-            com = _vec(tbl, ints, E_COM)
-            center_of_mass(rb, ws, com, _mat(tbl, ints, E_JCOM))
+            com = vec(tbl, ints, E_COM)
+            center_of_mass(rb, ws, com, mat(tbl, ints, E_JCOM))
             for i in range(3):
                 rows[i] = com[i] - par[o + i]
         elif kind == USER:
-            _user_kinematics(tbl, ints, rb, ws, fid, ref, ints[b + FLAGS], False)
-            _user_call(tbl, ints, par, b, x, u, ints[b + RESIDUAL_ADDRESS], rows, _vec(tbl, ints, E_USER_RU))
+            user_kinematics(tbl, ints, rb, ws, fid, ref, ints[b + FLAGS], False)
+            user_call(tbl, ints, par, b, x, u, ints[b + RESIDUAL_ADDRESS], rows, vec(tbl, ints, E_USER_RU))
         else:
             raise ValueError("compiled node: unknown residual kind")
 
@@ -263,7 +233,7 @@ def _residuals(tbl, ints, par, rb, ws, x, u):
 def _force_jacobians(tbl, ints, par, nr, row, ncf, o, Jx_rows, start):
     """``A ∂λ/∂x`` into ``Jx_rows`` and, at a running node, ``A ∂λ/∂u`` into the stacked ``Ju`` rows of stack row
     ``start`` (``A (nr, ncf)`` row-major at ``par[o]``, ``λ`` from stacked row ``row``)."""
-    df_dx, nv = _mat(tbl, ints, E_DF_DX), ints[NV]
+    df_dx, nv = mat(tbl, ints, E_DF_DX), ints[NV]
     for i in range(nr):
         for c in range(2 * nv):
             acc = 0.0
@@ -272,7 +242,7 @@ def _force_jacobians(tbl, ints, par, nr, row, ncf, o, Jx_rows, start):
             Jx_rows[i, c] = acc
     if ints[TERMINAL]:
         return
-    df_du, Ju, nu, u0 = _mat(tbl, ints, E_DF_DU), _mat(tbl, ints, E_JU), ints[NU], start - ints[U_START]
+    df_du, Ju, nu, u0 = mat(tbl, ints, E_DF_DU), mat(tbl, ints, E_JU), ints[NU], start - ints[U_START]
     for i in range(nr):
         for c in range(nu):
             acc = 0.0
@@ -282,72 +252,12 @@ def _force_jacobians(tbl, ints, par, nr, row, ncf, o, Jx_rows, start):
 
 
 @compiled
-def _user_kinematics(tbl, ints, rb, ws, fid, ref, flags, derivatives):
-    """The kinematics buffer of a ``USER`` item (:mod:`crocopy.models.residual_numba`): placement (flag 1), frame
-    Jacobian in ``ref`` (flag 2, ``derivatives``), centre of mass (flag 4) and its Jacobian (``derivatives``)."""
-    nv = ints[NV]
-    kin = _vec(tbl, ints, E_KIN)
-    if flags & 1:
-        if derivatives and flags & 2:
-            J6 = _mat(tbl, ints, E_J6)
-            frame_jacobian(rb, ws, fid, ref, J6)  # leaves the frame's placement in ws.Rf, ws.pf
-            for i in range(6):
-                for j in range(nv):
-                    kin[15 + nv * i + j] = J6[i, j]
-        else:
-            frame_placement(rb, ws, fid, ws.Rf, ws.pf)
-        for i in range(3):
-            for j in range(3):
-                kin[3 * i + j] = ws.Rf[i, j]
-            kin[9 + i] = ws.pf[i]
-    if flags & 4:
-        com, Jcom = _vec(tbl, ints, E_COM), _mat(tbl, ints, E_JCOM)
-        center_of_mass(rb, ws, com, Jcom)
-        for i in range(3):
-            kin[12 + i] = com[i]
-        if derivatives:
-            for i in range(3):
-                for j in range(nv):
-                    kin[15 + 6 * nv + nv * i + j] = Jcom[i, j]
-
-
-@compiled
-def _user_call(tbl, ints, par, b, x, u, function, out, out_u):
-    """Call a ``USER`` item's C callback ``function`` (:func:`crocopy.kernels.call_address`) on ``out``/``out_u``."""
-    dims = _index(tbl, ints, E_USER_DIMS)
-    o, npar = ints[b + 5], ints[b + N_PARAMETERS]
-    dims[0], dims[1], dims[2], dims[3], dims[4] = ints[NQ], ints[NV], u.shape[0], ints[b + 2], npar
-    call_address(function, address(dims), address(par[o: o + npar]), address(x), address(u),
-                 address(_vec(tbl, ints, E_KIN)), address(out), address(out_u))
-
-
-@compiled
-def _user_jacobians(tbl, ints, par, rb, ws, b, x, u, rows):
-    """A ``USER`` item's rows of ``Jx`` and, when it depends on ``u`` at a running node, of ``Ju`` (zeroed, then
-    written by its callback)."""
-    start, nr, flags = ints[b + 1], ints[b + 2], ints[b + FLAGS]
-    for i in range(nr):
-        for j in range(rows.shape[1]):
-            rows[i, j] = 0.0
-    if flags & 8 and not ints[TERMINAL]:
-        Ju, u0 = _mat(tbl, ints, E_JU), start - ints[U_START]
-        out_u = Ju[u0: u0 + nr]
-    else:
-        out_u = _mat(tbl, ints, E_USER_RU)[:nr]
-    for i in range(out_u.shape[0]):
-        for j in range(out_u.shape[1]):
-            out_u[i, j] = 0.0
-    _user_kinematics(tbl, ints, rb, ws, ints[b + 3], ints[b + 4], flags, True)
-    _user_call(tbl, ints, par, b, x, u, ints[b + JACOBIANS_ADDRESS], rows, out_u)
-
-
-@compiled
 def _jacobians(tbl, ints, par, rb, ws, x, u):
     """Every compiled item's rows of the stacked ``Jx`` (a control residual's are zero and stay so) and the force
     residuals' rows of ``Ju`` (after :func:`_dynamics_jacobians` at a running node)."""
     nq, nv = ints[NQ], ints[NV]
-    Jx, J6, K6, m6 = _mat(tbl, ints, E_JX), _mat(tbl, ints, E_J6), _mat(tbl, ints, E_K6), _mat(tbl, ints, E_M6)
-    R3, p3, v6 = _mat(tbl, ints, E_R3), _vec(tbl, ints, E_P3), _vec(tbl, ints, E_V6)
+    Jx, J6, K6, m6 = mat(tbl, ints, E_JX), mat(tbl, ints, E_J6), mat(tbl, ints, E_K6), mat(tbl, ints, E_M6)
+    R3, p3, v6 = mat(tbl, ints, E_R3), vec(tbl, ints, E_P3), vec(tbl, ints, E_V6)
     ndx = 2 * nv
     for n in range(ints[N_ITEMS]):
         b = ints[ITEMS] + ITEM_FIELDS * n
@@ -365,7 +275,7 @@ def _jacobians(tbl, ints, par, rb, ws, x, u):
             _force_jacobians(tbl, ints, par, nr, fid, ref, o, rows, start)
             continue
         if kind == USER:
-            _user_jacobians(tbl, ints, par, rb, ws, b, x, u, rows)
+            user_jacobians(tbl, ints, par, rb, ws, b, x, u, rows)
             continue
         for i in range(nr):
             for j in range(nv, ndx):
@@ -381,8 +291,8 @@ def _jacobians(tbl, ints, par, rb, ws, x, u):
             jlog6(R3, p3, m6)
             _matmul(m6, J6, rows, 6, nv, 6)
         elif kind == COM:
-            Jcom = _mat(tbl, ints, E_JCOM)
-            center_of_mass(rb, ws, _vec(tbl, ints, E_COM), Jcom)
+            Jcom = mat(tbl, ints, E_JCOM)
+            center_of_mass(rb, ws, vec(tbl, ints, E_COM), Jcom)
             for i in range(3):
                 for j in range(nv):
                     rows[i, j] = Jcom[i, j]
@@ -432,11 +342,11 @@ def _values(tbl, ints, par, x, u, rb, ws):
     q, v = x[:nq], x[nq:]
     if ints[TERMINAL]:
         forward_kinematics(rb, ws, q, v)
-        lam = _vec(tbl, ints, E_LAM)
+        lam = vec(tbl, ints, E_LAM)
         for i in range(ints[NC]):
             lam[i] = 0.0
     else:
-        Sm, tau, a = _mat(tbl, ints, E_S), _vec(tbl, ints, E_TAU), _vec(tbl, ints, E_A)
+        Sm, tau, a = mat(tbl, ints, E_S), vec(tbl, ints, E_TAU), vec(tbl, ints, E_A)
         for i in range(nv):
             acc = 0.0
             for j in range(nu):
@@ -448,8 +358,8 @@ def _values(tbl, ints, par, x, u, rb, ws):
     _residuals(tbl, ints, par, rb, ws, x, u)
     starts = ints[ints[STARTS]: ints[STARTS] + ints[N_STACK]]
     return activation_values(
-        _vec(tbl, ints, E_R), _vec(tbl, ints, E_LB), _vec(tbl, ints, E_UB), _vec(tbl, ints, E_ACT_W), starts,
-        _vec(tbl, ints, E_ITEM_COSTS), _vec(tbl, ints, E_ITEM_WEIGHTS),
+        vec(tbl, ints, E_R), vec(tbl, ints, E_LB), vec(tbl, ints, E_UB), vec(tbl, ints, E_ACT_W), starts,
+        vec(tbl, ints, E_ITEM_COSTS), vec(tbl, ints, E_ITEM_WEIGHTS),
     )
 
 
@@ -457,24 +367,24 @@ def _values(tbl, ints, par, x, u, rb, ws):
 def _contact_dynamics(tbl, ints, par, rb, ws, tau, a):
     """The contacts' stacked ``Jc`` and drift, then ``a`` and ``λ`` of the contact dynamics (after the free
     :func:`~.dynamics_kernel.forward_dynamics` at the same state)."""
-    cw, Jcs, a0 = _contact_workspace(tbl, ints), _mat(tbl, ints, E_JCS), _vec(tbl, ints, E_A0)
-    gains, ref_R, ref_p = _mat(tbl, ints, E_GAINS), _cube(tbl, ints, E_REF_R), _mat(tbl, ints, E_REF_P)
+    cw, Jcs, a0 = entry_contact_workspace(tbl, ints), mat(tbl, ints, E_JCS), vec(tbl, ints, E_A0)
+    gains, ref_R, ref_p = mat(tbl, ints, E_GAINS), cube(tbl, ints, E_REF_R), mat(tbl, ints, E_REF_P)
     for n in range(ints[N_CONTACTS]):
-        fid, nc, ref, row = _contact(ints, n)
+        fid, nc, ref, row = contact_fields(ints, n)
         contact_calc(rb, ws, cw, fid, nc, ref, gains[n, 0], gains[n, 1], ref_R[n], ref_p[n], row, Jcs, a0)
-    contact_forward_dynamics(rb, ws, cw, tau, Jcs, a0, ints[NC], par[1], a, _vec(tbl, ints, E_LAM))
+    contact_forward_dynamics(rb, ws, cw, tau, Jcs, a0, ints[NC], par[1], a, vec(tbl, ints, E_LAM))
 
 
 @compiled
 def _step(tbl, ints, par, x, rb):
     """``dx`` and ``xnext`` of the Euler step (``xnext = x`` at the terminal node)."""
     nq, nv = ints[NQ], ints[NV]
-    xnext = _vec(tbl, ints, E_XNEXT)
+    xnext = vec(tbl, ints, E_XNEXT)
     if ints[TERMINAL]:
         for i in range(nq + nv):
             xnext[i] = x[i]
         return
-    dt, a, dx = par[0], _vec(tbl, ints, E_A), _vec(tbl, ints, E_DX)
+    dt, a, dx = par[0], vec(tbl, ints, E_A), vec(tbl, ints, E_DX)
     for i in range(nv):
         dv = a[i] * dt
         dx[nv + i] = dv
@@ -485,7 +395,7 @@ def _step(tbl, ints, par, x, rb):
 @compiled
 def node_calc(tbl, ints, par, x, u):
     """``xnext`` of the node at ``(x, u)``; returns its cost (``dt`` times the stack's for a running node)."""
-    rb, ws = _model(tbl, ints), _workspace(tbl, ints)
+    rb, ws = entry_model(tbl, ints), entry_workspace(tbl, ints)
     cost = _values(tbl, ints, par, x, u, rb, ws)
     _step(tbl, ints, par, x, rb)
     return cost if ints[TERMINAL] else par[0] * cost
@@ -496,14 +406,14 @@ def node_rollout_step(tbl, ints, par, x_ref, x, u_ref, k, K, alpha, lb, ub, u, d
     """One node of the DDP family's rollout (the node step of ``_trial_rollout``): ``dx = x ⊖ x_ref``,
     ``u = clamp(u_ref - α k - K dx, lb, ub)``, the node at ``(x, u)``, and ``x_next = xnext``, or
     ``xnext ⊕ ((α - 1) f)`` if ``gap``; returns the node's cost."""
-    rb = _model(tbl, ints)
+    rb = entry_model(tbl, ints)
     nq, nv = ints[NQ], ints[NV]
     state_diff(rb.jtype, rb.idx_q, rb.idx_v, nq, nv, x_ref, x, dx)
     feedback_control(u_ref, k, K, dx, alpha, lb, ub, u)
     cost = node_calc(tbl, ints, par, x, u)
-    xnext = _vec(tbl, ints, E_XNEXT)
+    xnext = vec(tbl, ints, E_XNEXT)
     if gap:
-        step = _vec(tbl, ints, E_GAP)
+        step = vec(tbl, ints, E_GAP)
         for i in range(2 * nv):
             step[i] = (alpha - 1.0) * f[i]
         state_integrate(rb.jtype, rb.idx_q, rb.idx_v, nq, nv, xnext, step, x_next)
@@ -548,9 +458,9 @@ def horizon_recost(tbls, ints, ioff, par, poff, nodes, costs):
         tbl, node_ints = tbls[t], ints[ioff[t]: ioff[t + 1]]
         starts = node_ints[node_ints[STARTS]: node_ints[STARTS] + node_ints[N_STACK]]
         value = activation_values(
-            _vec(tbl, node_ints, E_R), _vec(tbl, node_ints, E_LB), _vec(tbl, node_ints, E_UB),
-            _vec(tbl, node_ints, E_ACT_W), starts, _vec(tbl, node_ints, E_ITEM_COSTS),
-            _vec(tbl, node_ints, E_ITEM_WEIGHTS),
+            vec(tbl, node_ints, E_R), vec(tbl, node_ints, E_LB), vec(tbl, node_ints, E_UB),
+            vec(tbl, node_ints, E_ACT_W), starts, vec(tbl, node_ints, E_ITEM_COSTS),
+            vec(tbl, node_ints, E_ITEM_WEIGHTS),
         )
         cost = par[poff[t]] * value
         change += cost - costs[t]
@@ -571,10 +481,10 @@ def horizon_calc_diff(tbls, ints, ioff, par, poff, xs, us, nus, nx, ndx, gaps, f
         costs[t] = cost
         total += cost
         if gaps:
-            rb = _model(tbl, node_ints)
+            rb = entry_model(tbl, node_ints)
             x_next = vector_at(xs[t + 1], nx)
             state_diff(rb.jtype, rb.idx_q, rb.idx_v, node_ints[NQ], node_ints[NV], x_next,
-                       _vec(tbl, node_ints, E_XNEXT), vector_at(fs[t + 1], ndx))
+                       vec(tbl, node_ints, E_XNEXT), vector_at(fs[t + 1], ndx))
     return total
 
 
@@ -582,19 +492,19 @@ def horizon_calc_diff(tbls, ints, ioff, par, poff, xs, us, nus, nx, ndx, gaps, f
 def _dynamics_jacobians(tbl, ints, x, rb, ws):
     """``dFx = -(M + diag ε)⁻¹ ∂RNEA/∂(q, v)`` and ``dFu = (M + diag ε)⁻¹ S`` at the last ``calc`` point."""
     nq, nv, nu = ints[NQ], ints[NV], ints[NU]
-    Minv, dq, dv = _mat(tbl, ints, E_MINV), _mat(tbl, ints, E_DTAU_DQ), _mat(tbl, ints, E_DTAU_DV)
-    dFx, dFu, Sm, a = _mat(tbl, ints, E_DFX), _mat(tbl, ints, E_DFU), _mat(tbl, ints, E_S), _vec(tbl, ints, E_A)
+    Minv, dq, dv = mat(tbl, ints, E_MINV), mat(tbl, ints, E_DTAU_DQ), mat(tbl, ints, E_DTAU_DV)
+    dFx, dFu, Sm, a = mat(tbl, ints, E_DFX), mat(tbl, ints, E_DFU), mat(tbl, ints, E_S), vec(tbl, ints, E_A)
     dynamics_derivatives(rb, ws, x[:nq], x[nq:], a, dq, dv)
     if ints[N_CONTACTS]:
-        cw, Jcs, lam, da0_dx = (_contact_workspace(tbl, ints), _mat(tbl, ints, E_JCS), _vec(tbl, ints, E_LAM),
-                                _mat(tbl, ints, E_DA0_DX))
-        gains, ref_R, ref_p = _mat(tbl, ints, E_GAINS), _cube(tbl, ints, E_REF_R), _mat(tbl, ints, E_REF_P)
+        cw, Jcs, lam, da0_dx = (entry_contact_workspace(tbl, ints), mat(tbl, ints, E_JCS), vec(tbl, ints, E_LAM),
+                                mat(tbl, ints, E_DA0_DX))
+        gains, ref_R, ref_p = mat(tbl, ints, E_GAINS), cube(tbl, ints, E_REF_R), mat(tbl, ints, E_REF_P)
         for n in range(ints[N_CONTACTS]):
-            fid, nc, ref, row = _contact(ints, n)
+            fid, nc, ref, row = contact_fields(ints, n)
             contact_force_derivatives(rb, ws, fid, nc, ref, lam, row, dq)
             contact_calc_diff(rb, ws, cw, fid, nc, ref, gains[n, 0], gains[n, 1], ref_R[n], ref_p[n], row, da0_dx)
         contact_dynamics_derivatives(rb, ws, cw, Jcs, ints[NC], dq, dv, da0_dx, Sm, dFx, dFu,
-                                     _mat(tbl, ints, E_DF_DX), _mat(tbl, ints, E_DF_DU))
+                                     mat(tbl, ints, E_DF_DX), mat(tbl, ints, E_DF_DU))
         return
     mass_inverse(rb, ws, Minv)
     for i in range(nv):
@@ -615,8 +525,8 @@ def _integrate_chain(tbl, ints, x, rb):
     :func:`~crocopy.integrators.euler_kernel.add_integrate_jacobian` with ``Jq``.  ``Jv`` is block diagonal, one
     block per joint, so each row sums over its joint's block only (the terms a dense product adds are zeros)."""
     nq, nv, nu = ints[NQ], ints[NV], ints[NU]
-    Fx, Fu, dx = _mat(tbl, ints, E_FX), _mat(tbl, ints, E_FU), _vec(tbl, ints, E_DX)
-    Jq, Jv, rows = _mat(tbl, ints, E_JQ), _mat(tbl, ints, E_JV), _mat(tbl, ints, E_ROWS)
+    Fx, Fu, dx = mat(tbl, ints, E_FX), mat(tbl, ints, E_FU), vec(tbl, ints, E_DX)
+    Jq, Jv, rows = mat(tbl, ints, E_JQ), mat(tbl, ints, E_JV), mat(tbl, ints, E_ROWS)
     q = x[:nq]
     dintegrate(rb.jtype, rb.idx_q, rb.idx_v, q, dx[:nv], 0, Jq)
     dintegrate(rb.jtype, rb.idx_q, rb.idx_v, q, dx[:nv], 1, Jv)
@@ -636,41 +546,41 @@ def _integrate_chain(tbl, ints, x, rb):
 @compiled
 def node_calc_diff(tbl, ints, par, x, u):
     """Values and derivatives of the node at ``(x, u)`` (self-contained); returns its cost."""
-    rb, ws = _model(tbl, ints), _workspace(tbl, ints)
+    rb, ws = entry_model(tbl, ints), entry_workspace(tbl, ints)
     cost = _values(tbl, ints, par, x, u, rb, ws)
     _step(tbl, ints, par, x, rb)
     terminal = ints[TERMINAL] != 0
     if not terminal:
         _dynamics_jacobians(tbl, ints, x, rb, ws)
     elif ints[NC]:
-        df_dx = _mat(tbl, ints, E_DF_DX)
+        df_dx = mat(tbl, ints, E_DF_DX)
         for i in range(ints[NC]):
             for j in range(df_dx.shape[1]):
                 df_dx[i, j] = 0.0
     _jacobians(tbl, ints, par, rb, ws, x, u)
-    Lx, Lu, Lxx = _vec(tbl, ints, E_LX), _vec(tbl, ints, E_LU), _mat(tbl, ints, E_LXX)
-    Lxu, Luu = _mat(tbl, ints, E_LXU), _mat(tbl, ints, E_LUU)
-    r, lb, ub, act_w = _vec(tbl, ints, E_R), _vec(tbl, ints, E_LB), _vec(tbl, ints, E_UB), _vec(tbl, ints, E_ACT_W)
-    weights, Ar, Arr = _vec(tbl, ints, E_WEIGHTS), _vec(tbl, ints, E_AR), _vec(tbl, ints, E_ARR)
-    Jx, Ju, u_start = _mat(tbl, ints, E_JX), _mat(tbl, ints, E_JU), ints[U_START]
-    Jc, HJx, Juc, HJu = _mat(tbl, ints, E_JC), _mat(tbl, ints, E_HJX), _mat(tbl, ints, E_JUC), _mat(tbl, ints, E_HJU)
+    Lx, Lu, Lxx = vec(tbl, ints, E_LX), vec(tbl, ints, E_LU), mat(tbl, ints, E_LXX)
+    Lxu, Luu = mat(tbl, ints, E_LXU), mat(tbl, ints, E_LUU)
+    r, lb, ub, act_w = vec(tbl, ints, E_R), vec(tbl, ints, E_LB), vec(tbl, ints, E_UB), vec(tbl, ints, E_ACT_W)
+    weights, Ar, Arr = vec(tbl, ints, E_WEIGHTS), vec(tbl, ints, E_AR), vec(tbl, ints, E_ARR)
+    Jx, Ju, u_start = mat(tbl, ints, E_JX), mat(tbl, ints, E_JU), ints[U_START]
+    Jc, HJx, Juc, HJu = mat(tbl, ints, E_JC), mat(tbl, ints, E_HJX), mat(tbl, ints, E_JUC), mat(tbl, ints, E_HJU)
     if terminal:
         derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, False, Jc, HJx, Juc, HJu,
                              Lx, Lu, Lxx, Lxu, Luu)
-        Fx = _mat(tbl, ints, E_FX)
+        Fx = mat(tbl, ints, E_FX)
         n = Fx.shape[0]
         for i in range(n):
             for j in range(n):
                 Fx[i, j] = 1.0 if i == j else 0.0
         return cost
-    dLx, dLu, dLxx, dLxu, dLuu = (_vec(tbl, ints, E_DLX), _vec(tbl, ints, E_DLU), _mat(tbl, ints, E_DLXX),
-                                  _mat(tbl, ints, E_DLXU), _mat(tbl, ints, E_DLUU))
+    dLx, dLu, dLxx, dLxu, dLuu = (vec(tbl, ints, E_DLX), vec(tbl, ints, E_DLU), mat(tbl, ints, E_DLXX),
+                                  mat(tbl, ints, E_DLXU), mat(tbl, ints, E_DLUU))
     derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, True, Jc, HJx, Juc, HJu,
                          dLx, dLu, dLxx, dLxu, dLuu)
     euclidean = ints[EUCLIDEAN] != 0
     euler_chain(
-        _mat(tbl, ints, E_DFX), _mat(tbl, ints, E_DFU), dLx, dLu, dLxx, dLxu, dLuu, par[0], euclidean,
-        _mat(tbl, ints, E_FX), _mat(tbl, ints, E_FU), Lx, Lu, Lxx, Lxu, Luu,
+        mat(tbl, ints, E_DFX), mat(tbl, ints, E_DFU), dLx, dLu, dLxx, dLxu, dLuu, par[0], euclidean,
+        mat(tbl, ints, E_FX), mat(tbl, ints, E_FU), Lx, Lu, Lxx, Lxu, Luu,
     )
     if not euclidean:
         _integrate_chain(tbl, ints, x, rb)
