@@ -116,10 +116,10 @@ class ContactModelMultiple(ForceModelMultiple):
         placement was changed in place.
         """
         if data.rigid_seen.stale(self._rigid_sources) or any(
-            not np.array_equal(placement.homogeneous, seen) for placement, seen in data.rigid_placements
+            placement != seen for placement, seen in data.rigid_placements
         ):
             data.rigid = self._build_rigid(pinocchio)
-            data.rigid_placements = [(c._pref, c._pref.homogeneous) for _, c in self._active if hasattr(c, "_pref")]
+            data.rigid_placements = [(c._pref, c._pref.copy()) for _, c in self._active if hasattr(c, "_pref")]
             data.rigid_seen.filled()
         return data.rigid
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import functools
 
 import example_robot_data
+import numpy as np
 import pinocchio as pin
 
 #: Robots the multibody tests run on: legged (free flyer), humanoid legs, quadruped, arms.
@@ -53,3 +54,21 @@ BIPED_SOLES = {
     **dict.fromkeys(("simple_humanoid", "simple_humanoid_classical"), ("l_ankle", "r_ankle")),
 }
 """Soles of the example-robot-data humanoids (6D contacts)."""
+
+
+def reaching_node(state, tip: int, target, tip_weight: float, terminal: bool, armature: float = 0.0):
+    """An Euler node (dt 0.01) of a fully actuated reach: posture (1e-2), control (1e-3, running nodes) and the
+    frame ``tip`` to ``target`` (``tip_weight``), with ``armature`` on every joint."""
+    import crocopy
+
+    act = crocopy.ActuationModelFull(state)
+    costs = crocopy.CostModelSum(state, act.nu)
+    costs.addCost("x", crocopy.CostModelResidual(state, crocopy.ResidualModelState(state, state.zero(), act.nu)), 1e-2)
+    if not terminal:
+        costs.addCost("u", crocopy.CostModelResidual(state, crocopy.ResidualModelControl(state, act.nu)), 1e-3)
+    goal = crocopy.ResidualModelFrameTranslation(state, tip, np.asarray(target, dtype=float), act.nu)
+    costs.addCost("tip", crocopy.CostModelResidual(state, goal), tip_weight)
+    dam = crocopy.DifferentialActionModelFreeFwdDynamics(state, act, costs)
+    if armature:
+        dam.armature = armature * np.ones(state.nv)
+    return crocopy.IntegratedActionModelEuler(dam, 0.0 if terminal else 0.01)

@@ -8,6 +8,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from node_checks import compare_with_python_node, make_solver
+from robots import reaching_node
 
 import crocopy
 from crocopy.models.rbd.joint_types import NQ, NV, NotLowerable, joint_arrays
@@ -90,25 +91,12 @@ def chain(kinds: list[str], seed: int = 0, mimic: bool = False) -> pin.Model:
 def problem(model: pin.Model, T: int = 6) -> tuple:
     """A short free-dynamics problem on ``model``: reach a point with the tip, fully actuated."""
     state = crocopy.StateMultibody(model)
-    act = crocopy.ActuationModelFull(state)
-    fid = model.getFrameId("tip")
-
-    def node(terminal: bool) -> crocopy.IntegratedActionModelEuler:
-        costs = crocopy.CostModelSum(state, act.nu)
-        costs.addCost("x", crocopy.CostModelResidual(state, crocopy.ResidualModelState(state, state.zero(), act.nu)),
-                      1e-2)
-        if not terminal:
-            costs.addCost("u", crocopy.CostModelResidual(state, crocopy.ResidualModelControl(state, act.nu)), 1e-3)
-        goal = crocopy.ResidualModelFrameTranslation(state, fid, np.array([0.2, 0.1, 0.3]), act.nu)
-        costs.addCost("tip", crocopy.CostModelResidual(state, goal), 10.0)
-        return crocopy.IntegratedActionModelEuler(crocopy.DifferentialActionModelFreeFwdDynamics(state, act, costs),
-                                                  0.0 if terminal else 0.01)
-
-    running = node(False)
+    fid, target = model.getFrameId("tip"), (0.2, 0.1, 0.3)
+    running, terminal = (reaching_node(state, fid, target, 10.0, end) for end in (False, True))
     np.random.seed(7)
     x0 = state.rand()
     x0[state.nq:] *= 0.1
-    return crocopy.ShootingProblem(x0, [running] * T, node(True)), running, state
+    return crocopy.ShootingProblem(x0, [running] * T, terminal), running, state
 
 
 def check_chain(model: pin.Model, compiles: bool) -> None:

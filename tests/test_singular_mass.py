@@ -8,7 +8,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from node_checks import failed_solve, make_solver
-from robots import load
+from robots import load, reaching_node
 
 import crocopy
 from crocopy.models.dynamics_options import massless_joints
@@ -29,22 +29,9 @@ def weightless_arm() -> pin.Model:
 def reaching(model: pin.Model, armature: float = 0.0, T: int = 5) -> crocopy.ShootingProblem:
     """A fully actuated reaching problem on ``model`` (the tip frame to a point), from the neutral posture."""
     state = crocopy.StateMultibody(model)
-    act = crocopy.ActuationModelFull(state)
-    tip = model.nframes - 1
-
-    def node(terminal: bool) -> crocopy.IntegratedActionModelEuler:
-        costs = crocopy.CostModelSum(state, act.nu)
-        costs.addCost("x", crocopy.CostModelResidual(state, crocopy.ResidualModelState(state, state.zero(), act.nu)),
-                      1e-2)
-        if not terminal:
-            costs.addCost("u", crocopy.CostModelResidual(state, crocopy.ResidualModelControl(state, act.nu)), 1e-3)
-        goal = crocopy.ResidualModelFrameTranslation(state, tip, np.array([0.2, 0.2, 0.4]), act.nu)
-        costs.addCost("tip", crocopy.CostModelResidual(state, goal), 1.0)
-        dam = crocopy.DifferentialActionModelFreeFwdDynamics(state, act, costs)
-        dam.armature = armature * np.ones(state.nv)
-        return crocopy.IntegratedActionModelEuler(dam, 0.0 if terminal else 0.01)
-
-    return crocopy.ShootingProblem(state.zero(), [node(False)] * T, node(True))
+    tip, target = model.nframes - 1, (0.2, 0.2, 0.4)
+    running, terminal = (reaching_node(state, tip, target, 1.0, end, armature) for end in (False, True))
+    return crocopy.ShootingProblem(state.zero(), [running] * T, terminal)
 
 
 def test_massless_joints_are_named():

@@ -22,6 +22,7 @@ user is the ``ρ̄`` each solve starts from.
 from __future__ import annotations
 
 import time
+from collections.abc import Iterator
 
 import numpy as np
 
@@ -218,9 +219,8 @@ class SolverCSQP(SolverSQP):
         self.constraint_norm = self._violation(self.problem)
         return self.cost
 
-    def _load_rows(self) -> None:
-        """Copy each node's ``g, Gx, Gu`` (and ``h, Hx, Hu``) into its QP rows, with ``lo/hi = lb/ub - c``."""
-        problem = self.problem
+    def _node_rows(self, problem) -> Iterator[tuple]:
+        """``(t, rows, data, ng, nh, c)`` of every node with QP rows, ``c = (g, h)`` at the node's last ``calc``."""
         datas = [*problem.runningDatas, problem.terminalData]
         models = [*problem.runningModels, problem.terminalModel]
         for t, r in enumerate(self._qp.rows):
@@ -228,7 +228,12 @@ class SolverCSQP(SolverSQP):
                 continue
             d, m = datas[t], models[t]
             ng, nh = (m.ng_T, m.nh_T) if t == problem.T else (m.ng, m.nh)
-            c = np.r_[d.g[:ng], d.h[:nh]]
+            yield t, r, d, ng, nh, np.r_[d.g[:ng], d.h[:nh]]
+
+    def _load_rows(self) -> None:
+        """Copy each node's ``g, Gx, Gu`` (and ``h, Hx, Hu``) into its QP rows, with ``lo/hi = lb/ub - c``."""
+        problem = self.problem
+        for t, r, d, ng, nh, c in self._node_rows(problem):
             r.C[:ng], r.C[ng:] = d.Gx[:ng], d.Hx[:nh]
             if t < problem.T:
                 r.D[:ng], r.D[ng:] = d.Gu[:ng], d.Hu[:nh]
@@ -237,17 +242,8 @@ class SolverCSQP(SolverSQP):
 
     def _violation(self, problem) -> float:
         """``Ψ``: the ℓ1 norm of the rows' bound violations at the nodes' last ``calc``."""
-        datas = [*problem.runningDatas, problem.terminalData]
-        models = [*problem.runningModels, problem.terminalModel]
-        total = 0.0
-        for t, r in enumerate(self._qp.rows):
-            if not r.lb.size:
-                continue
-            d, m = datas[t], models[t]
-            ng, nh = (m.ng_T, m.nh_T) if t == problem.T else (m.ng, m.nh)
-            c = np.r_[d.g[:ng], d.h[:nh]]
-            total += float(np.maximum(r.lb - c, 0.0).sum() + np.maximum(c - r.ub, 0.0).sum())
-        return total
+        return sum(float(np.maximum(r.lb - c, 0.0).sum() + np.maximum(c - r.ub, 0.0).sum())
+                   for _, r, _, _, _, c in self._node_rows(problem))
 
     def _reset_rho(self) -> None:
         self._qp.rho_bar = self._rho_base

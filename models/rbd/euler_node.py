@@ -431,6 +431,7 @@ class EulerHorizon:
         """The nodes with Python residuals (:mod:`.python_residuals`): their rows are evaluated before a compiled
         ``calc_diff`` and their costs again after a compiled rollout."""
         self._trials: tuple = ()
+        self._python_ranges: dict[tuple[int, int], np.ndarray] = {}
         self.no_gaps = np.zeros(len(nodes) + 1, dtype=np.int64)
         self.fixed = [AddressCache() for _ in range(6)]
         self.trajectories: dict[int, AddressCache] = {}
@@ -470,11 +471,16 @@ class EulerHorizon:
         )
         if self.python:
             xs_try, us_try = self._trials
-            inside = []
             for t, node in self.python:
                 if t0 <= t < t1:
                     node.python.evaluate(xs_try[t], us_try[t])
-                    inside.append(t)
             total += kernel.horizon_recost(self.tbls, self.ints, self.ioff, self.par, self.poff,
-                                           np.array(inside, dtype=np.int64), self.costs)
+                                           self._python_in(t0, t1), self.costs)
         return total
+
+    def _python_in(self, t0: int, t1: int) -> np.ndarray:
+        """The nodes ``t0 <= t < t1`` with Python residuals (made once per range)."""
+        key = (t0, t1)
+        if key not in self._python_ranges:
+            self._python_ranges[key] = np.array([t for t, _ in self.python if t0 <= t < t1], dtype=np.int64)
+        return self._python_ranges[key]
