@@ -89,7 +89,7 @@ def ivec(tbl, ints, k):
 
 @compiled
 def entry_model(tbl, ints):
-    """The lowered model, from entries ``0 .. N_RB - 1`` (its fields' order)."""
+    """The lowered model, from the entries ``0`` to ``N_RB - 1`` (its fields' order)."""
     return RigidBodyModel(
         ints[NQ], ints[NV], ints[NJOINTS], ints[NFRAMES],
         ivec(tbl, ints, 0), ivec(tbl, ints, 1), ivec(tbl, ints, 2), ivec(tbl, ints, 3),
@@ -102,7 +102,7 @@ def entry_model(tbl, ints):
 
 @compiled
 def entry_workspace(tbl, ints):
-    """The workspace, from entries ``N_RB .. NODE - 1`` (its fields' order)."""
+    """The workspace, from the entries ``N_RB`` to ``NODE - 1`` (its fields' order)."""
     k = N_RB
     return RigidBodyWorkspace(
         cube(tbl, ints, k), mat(tbl, ints, k + 1), mat(tbl, ints, k + 2), mat(tbl, ints, k + 3),
@@ -116,7 +116,7 @@ def entry_workspace(tbl, ints):
 
 @compiled
 def entry_contact_workspace(tbl, ints):
-    """The contact workspace, from entries ``E_CJ6 ..`` (its fields' order)."""
+    """The contact workspace, from the entry ``E_CJ6`` on (its fields' order)."""
     k = E_CJ6
     return ContactWorkspace(
         mat(tbl, ints, k), mat(tbl, ints, k + 1), mat(tbl, ints, k + 2), vec(tbl, ints, k + 3),
