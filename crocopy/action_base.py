@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from .action_common import ActionDataBase, ActionModelBase
+from .stored import Stored
 
 
 class ActionModelAbstract(ActionModelBase):
@@ -49,6 +50,8 @@ class ActionModelAbstract(ActionModelBase):
 class ActionDataAbstract(ActionDataBase):
     """Data of an action model: cost, next state ``xnext (nx,)``, residual, derivatives (``Fx (ndx, ndx)``,
     ``Fu (ndx, nu)``) and constraints."""
+
+    xnext = Stored()
 
     def __init__(self, model: ActionModelAbstract) -> None:
         super().__init__(model, model.state.ndx)

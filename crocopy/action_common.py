@@ -18,9 +18,9 @@ import numpy as np
 
 from .guards import Guard, Guarded, unchecked
 from .state import StateAbstract
+from .stored import Stored
 from .validation import as_bound, as_count, as_vector, control_arg, data_arg, state_arg, warn_nonfinite
 from .versioning import Parametrized
-from .watched import Watched
 
 
 def check_state_and_nu(state: StateAbstract, nu: int) -> int:
@@ -259,10 +259,10 @@ class ActionDataBase:
     derivatives ``Lx, Lu, Lxx, Lxu, Luu`` and constraints ``g, Gx, Gu`` (``max(ng, ng_T)`` rows),
     ``h, Hx, Hu`` (``max(nh, nh_T)`` rows).
 
-    Rebinding a derivative (``data.Fx = M``) is counted (:mod:`crocopy.watched`): the solvers' compiled
-    backward pass holds these arrays and looks at them again after one."""
+    Assigning an array field (``data.Fx = M``) copies into the array made here (:mod:`crocopy.stored`), as
+    Crocoddyl's bindings do: the solvers' compiled passes and nodes hold these arrays."""
 
-    Fx, Fu, Lx, Lu, Lxx, Lxu, Luu = (Watched() for _ in range(7))
+    r, Fx, Fu, Lx, Lu, Lxx, Lxu, Luu, g, Gx, Gu, h, Hx, Hu = (Stored() for _ in range(14))
 
     def __init__(self, model: ActionModelBase, nf: int) -> None:
         ndx, nu = model.state.ndx, model.nu

@@ -16,6 +16,8 @@ from typing import Any
 
 import numpy as np
 
+from .stored import bind
+
 
 def share_arrays(holder: Any, data: Any, names: Iterable[str]) -> None:
     """Replace ``holder``'s arrays ``names`` by ``data``'s (same shapes), so ``holder`` writes into ``data``.
@@ -122,4 +124,4 @@ def tolerate_python_model(model: Any, data: Any, names: Iterable[str]) -> None:
     if type(model).__module__.partition(".")[0] == "crocopy":
         return
     for name in names:
-        setattr(data, name, getattr(data, name).view(ShapeTolerantArray))
+        bind(data, name, getattr(data, name).view(ShapeTolerantArray))

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from .action_common import ActionDataBase, ActionModelBase
+from .stored import Stored
 
 
 class DifferentialActionModelAbstract(ActionModelBase):
@@ -44,6 +45,8 @@ class DifferentialActionModelAbstract(ActionModelBase):
 class DifferentialActionDataAbstract(ActionDataBase):
     """Data of a differential action model: cost, acceleration ``xout (nv,)``, residual, derivatives
     (``Fx (nv, ndx)``, ``Fu (nv, nu)``) and constraints."""
+
+    xout = Stored()
 
     def __init__(self, model: DifferentialActionModelAbstract) -> None:
         super().__init__(model, model.state.nv)

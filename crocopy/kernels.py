@@ -55,7 +55,6 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
-import weakref
 from collections.abc import Callable, Iterable, Iterator
 
 import numpy as np
@@ -271,29 +270,6 @@ def checked_address(array: np.ndarray) -> int:
     if not array.flags.c_contiguous or array.dtype not in (np.float64, np.int64):
         raise TypeError(f"compiled kernel: an array of dtype {array.dtype} that is not C-contiguous")
     return address(array)
-
-
-class AddressCache:
-    """Addresses (:func:`checked_address`) of the arrays of a list, read again only for entries that are not the
-    arrays seen last time (weak references: the cache never keeps an array alive, nor changes its reference
-    count); ``None`` entries get address 0 (never read by a kernel)."""
-
-    def __init__(self) -> None:
-        self.refs: list = []
-        self.values = np.zeros(0, dtype=np.int64)
-
-    def __call__(self, arrays: list[np.ndarray | None]) -> np.ndarray:
-        refs = self.refs
-        if len(refs) != len(arrays):
-            self.refs = refs = [None] * len(arrays)
-            self.values = np.zeros(len(arrays), dtype=np.int64)
-        values = self.values
-        for t, a in enumerate(arrays):
-            ref = refs[t]
-            if ref is None or ref() is not a:
-                values[t] = 0 if a is None else checked_address(a)
-                refs[t] = None if a is None else weakref.ref(a)
-        return values
 
 
 def _matrix_at(address, n, m):

@@ -30,6 +30,22 @@ class StdVec_ActionModel(list):
         return list(self)
 
 
+class NodeList(StdVec_ActionModel):
+    """A problem's ``runningModels``/``runningDatas``: read-only (change a node with ``updateModel``,
+    ``updateNode`` or ``circularAppend``, which keep the models, the datas and the solvers in step)."""
+
+    def _read_only(self, *args, **kwargs):
+        raise TypeError("problem.runningModels and problem.runningDatas are read-only: change a node with "
+                        "problem.updateModel(t, model), problem.updateNode(t, model, data) or "
+                        "problem.circularAppend(model); copy the list first (.tolist()) to edit a list of your own")
+
+    __setitem__ = __delitem__ = __iadd__ = __imul__ = _read_only
+    append = extend = insert = pop = remove = clear = sort = reverse = _read_only
+
+    def __reduce__(self) -> tuple:
+        return NodeList, (list(self),)
+
+
 def _sequence(value: object, name: str) -> list:
     if value is None or isinstance(value, (str, bytes)) or not hasattr(value, "__len__"):
         raise ArgumentTypeError(f"{name} must be a list of vectors, got {type(value).__name__}")
@@ -105,7 +121,7 @@ class ShootingProblem(Guarded):
             if not isinstance(m, ActionModelAbstract):
                 raise ValueError(f"node {i} must be an ActionModelAbstract, got {type(m).__name__}")
         self._check_chain(runningModels, terminalModel)
-        self._runningModels = StdVec_ActionModel(runningModels)
+        self._runningModels = NodeList(runningModels)
         self._terminalModel = terminalModel
         self.x0 = x0
         self._structure_seen = STRUCTURE[0] if runningDatas is None and terminalData is None else -1
@@ -113,7 +129,8 @@ class ShootingProblem(Guarded):
             runningDatas = [m.createData() for m in runningModels]
         elif len(runningDatas) != len(runningModels):
             raise ValueError(f"runningDatas has {len(runningDatas)} items, expected {len(runningModels)}")
-        self._runningDatas = StdVec_ActionModel(runningDatas)
+        self._runningDatas = NodeList(runningDatas)
+        self._nodes_version = 0
         self._terminalData = terminalModel.createData() if terminalData is None else terminalData
         self.cost = 0.0
         self.nthreads = 1
@@ -201,12 +218,14 @@ class ShootingProblem(Guarded):
         replaced = []
         for t, (m, d) in enumerate(zip(self._runningModels, self._runningDatas)):
             if holds_stale_data(d):
-                self._runningDatas[t] = m.createData()
+                list.__setitem__(self._runningDatas, t, m.createData())
                 replaced.append(t)
         if holds_stale_data(self._terminalData):
             self._terminalData = self._terminalModel.createData()
             replaced.append(self.T)
         self._structure_seen = STRUCTURE[0]
+        if replaced:
+            self._nodes_version += 1
         return replaced
 
     def calc(self, xs: Sequence[np.ndarray], us: Sequence[np.ndarray]) -> float:
@@ -249,8 +268,9 @@ class ShootingProblem(Guarded):
     def circularAppend(self, model: ActionModelAbstract, data: ActionDataAbstract | None = None) -> None:
         """Drop node 0 and append ``model`` (with ``data``) as node T-1 (receding horizon)."""
         self._check_chain([*self._runningModels[1:], model], self._terminalModel)
-        self._runningModels = StdVec_ActionModel([*self._runningModels[1:], model])
-        self._runningDatas = StdVec_ActionModel([*self._runningDatas[1:], model.createData() if data is None else data])
+        self._runningModels = NodeList([*self._runningModels[1:], model])
+        self._runningDatas = NodeList([*self._runningDatas[1:], model.createData() if data is None else data])
+        self._nodes_version += 1
 
     def updateNode(self, i: int, model: ActionModelAbstract, data: ActionDataAbstract) -> None:
         """Replace node ``i`` (``i == T`` is the terminal node) by ``model`` and ``data``."""
@@ -263,8 +283,9 @@ class ShootingProblem(Guarded):
             models = list(self._runningModels)
             models[i] = model
             self._check_chain(models, self._terminalModel)
-            self._runningModels = StdVec_ActionModel(models)
-            self._runningDatas[i] = data
+            self._runningModels = NodeList(models)
+            list.__setitem__(self._runningDatas, i, data)
+        self._nodes_version += 1
 
     def updateModel(self, i: int, model: ActionModelAbstract) -> None:
         """Replace node ``i`` by ``model`` with fresh data."""
@@ -278,8 +299,8 @@ class ShootingProblem(Guarded):
 
     def __setstate__(self, state: dict) -> None:
         self.__dict__.update(state)
-        self._runningModels = StdVec_ActionModel(self._runningModels)
-        self._runningDatas = StdVec_ActionModel(m.createData() for m in self._runningModels)
+        self._runningModels = NodeList(self._runningModels)
+        self._runningDatas = NodeList(m.createData() for m in self._runningModels)
         self._terminalData = self._terminalModel.createData()
         self._structure_seen = STRUCTURE[0]
 

@@ -64,6 +64,10 @@ class ActuationModelFull(ActuationModelAbstract):
     def calcDiff(self, data: ActuationDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
         """``dtau_du = I`` and ``dtau_dx = 0`` are constant (set in :meth:`createData`)."""
 
+    def compiled_matrix(self) -> np.ndarray:
+        """``S = ∂τ/∂u = I``, ``(nv, nu)``: this actuation's lowering (compiled nodes read ``τ = S u``)."""
+        return np.eye(self.state.nv, self.nu)
+
     def commands(self, data: ActuationDataAbstract, x: np.ndarray, tau: np.ndarray) -> None:
         data.u[:] = tau
 
@@ -96,6 +100,12 @@ class ActuationModelFloatingBase(ActuationModelAbstract):
 
     def calcDiff(self, data: ActuationDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
         """``dtau_du = (0; I)`` and ``dtau_dx = 0`` are constant (set in :meth:`createData`)."""
+
+    def compiled_matrix(self) -> np.ndarray:
+        """``S = ∂τ/∂u = (0; I)``, ``(nv, nu)``: this actuation's lowering (compiled nodes read ``τ = S u``)."""
+        S = np.zeros((self.state.nv, self.nu))
+        np.fill_diagonal(S[self._nfb:], 1.0)
+        return S
 
     def commands(self, data: ActuationDataAbstract, x: np.ndarray, tau: np.ndarray) -> None:
         data.u[:] = tau[self._nfb :]
@@ -149,6 +159,10 @@ class ActuationModelLinear(ActuationModelAbstract):
 
     def calcDiff(self, data: ActuationDataAbstract, x: np.ndarray, u: np.ndarray | None = None) -> None:
         """``dtau_du = S`` and ``dtau_dx = 0`` are constant (set in :meth:`createData`)."""
+
+    def compiled_matrix(self) -> np.ndarray:
+        """``S``, ``(nv, nu)``: this actuation's lowering (compiled nodes read ``τ = S u``)."""
+        return self._S
 
     def commands(self, data: ActuationDataAbstract, x: np.ndarray, tau: np.ndarray) -> None:
         np.dot(self._Mtau, tau, out=data.u)
@@ -297,6 +311,10 @@ class ActuationModelFloatingBaseThrusters(ActuationModelAbstract):
         if data._W_source is not self._W:
             data.dtau_du[:] = self._W
             data._W_source = self._W
+
+    def compiled_matrix(self) -> np.ndarray:
+        """``Wthrust``, ``(nv, nu)``: this actuation's lowering (compiled nodes read ``τ = S u``)."""
+        return self._W
 
     def commands(self, data: ActuationDataAbstract, x: np.ndarray, tau: np.ndarray) -> None:
         np.dot(self._Mtau, tau, out=data.u)

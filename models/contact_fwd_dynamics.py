@@ -51,6 +51,7 @@ from crocopy.actuation_base import ActuationModelAbstract, JointDataAbstract
 from crocopy.constraints.manager import ConstraintModelManager
 from crocopy.costs.sum import CostModelSum
 from crocopy.diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
+from crocopy.stored import bind
 from crocopy.validation import as_bool
 
 from .contact_multiple import ContactModelMultiple
@@ -78,7 +79,7 @@ def all_finite(values: np.ndarray) -> bool:
 def link_cost_data(data: object, costs_data: object) -> None:
     """Make the action data's cost derivatives the cost-sum data's arrays (no copies per call)."""
     for name in ("Lx", "Lu", "Lxx", "Lxu", "Luu"):
-        setattr(data, name, getattr(costs_data, name))
+        bind(data, name, getattr(costs_data, name))
 
 
 def turning_forces(model: pin.Model, pd: pin.Data, q: np.ndarray, active: list, Jc: np.ndarray,

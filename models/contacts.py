@@ -128,6 +128,10 @@ class ContactModel3D(_FrameContact):
     def _reference_placement(self) -> pin.SE3:
         return pin.SE3(np.eye(3), self._xref)
 
+    def compiled_reference(self, R: np.ndarray, p: np.ndarray) -> None:
+        """This contact's lowering: its reference position into ``p (3,)`` (``R (3, 3)`` unused)."""
+        p[:] = self._xref
+
     def createData(self, data: pin.Data) -> "ContactData3D":
         return ContactData3D(self, data)
 
@@ -258,6 +262,11 @@ class ContactModel6D(_FrameContact):
         as_rotation(value.rotation, "pref.rotation")
         self._pref = value.copy()
         touch(self)
+
+    def compiled_reference(self, R: np.ndarray, p: np.ndarray) -> None:
+        """This contact's lowering: its reference placement into ``R (3, 3)`` and ``p (3,)``."""
+        R[:] = self._pref.rotation
+        p[:] = self._pref.translation
 
     def _reference_placement(self) -> pin.SE3:
         return self._pref

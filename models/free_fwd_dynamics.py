@@ -29,6 +29,7 @@ from scipy.linalg import cho_factor, cho_solve
 from crocopy.actuation_base import ActuationModelAbstract, JointDataAbstract
 from crocopy.costs.sum import CostModelSum
 from crocopy.diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
+from crocopy.stored import Stored
 from crocopy.validation import as_vector
 
 from .data_collectors import DataCollectorJointActMultibody
@@ -176,6 +177,8 @@ class DifferentialActionDataFreeFwdDynamics(DifferentialActionDataAbstract):
     ``multibody`` (``DataCollectorJointActMultibody``), ``costs``, ``constraints``, ``Minv (nv, nv)``
     and ``u_drift = τ - b (nv,)`` (armature case).
     """
+
+    Minv = Stored()
 
     def __init__(self, model: DifferentialActionModelFreeFwdDynamics) -> None:
         super().__init__(model)

@@ -240,3 +240,35 @@ def test_the_registry_of_compiled_kinds_is_covered_and_documented():
     developing = (Path(__file__).resolve().parents[1] / "docs" / "DEVELOPING.md").read_text()
     for cls in registry:
         assert f"`{cls.__name__}`" in developing, cls.__name__
+
+
+def test_the_actuations_and_contacts_that_lower_themselves_are_covered_and_documented():
+    """The registries built from the models' own lowerings (``compiled_matrix``, ``compiled_reference``) are the
+    classes this file's factory (actuations) and the contact-node tests (3D and 6D contacts) build, each named in the
+    compiled node's docstring, and each lowering agrees with the model's own maths."""
+    from crocopy.models.rbd import contact_lowering, euler_node
+
+    states = {robot: crocopy.StateMultibody(load(robot) if robot not in ("iris", "double_pendulum") else _extra(robot))
+              for robot in ROBOTS}
+    built = {robot: actuation(robot, state) for robot, state in states.items()}
+    assert set(euler_node.ACTUATIONS) == {type(a) for a in built.values()}
+    assert set(contact_lowering.CONTACTS) == {crocopy.ContactModel3D, crocopy.ContactModel6D}
+    for cls in (*euler_node.ACTUATIONS, *contact_lowering.CONTACTS):
+        assert f"``{cls.__name__}``" in euler_node.__doc__, cls.__name__
+    for robot, act in built.items():
+        data = act.createData()
+        x, u = point(states[robot], act.nu, 3)
+        act.calc(data, x, u)
+        act.calcDiff(data, x, u)
+        np.testing.assert_allclose(act.compiled_matrix(), data.dtau_du, atol=1e-15, err_msg=robot)
+        np.testing.assert_allclose(act.compiled_matrix() @ u, data.tau, atol=1e-12, err_msg=robot)
+    state = states["anymal"]
+    placement = pin.SE3.Random()
+    for contact, R, p in ((crocopy.ContactModel6D(state, 5, placement, pin.LOCAL), placement.rotation,
+                           placement.translation),
+                          (crocopy.ContactModel3D(state, 5, placement.translation, pin.LOCAL), np.zeros((3, 3)),
+                           placement.translation)):
+        R_out, p_out = np.zeros((3, 3)), np.zeros(3)
+        contact.compiled_reference(R_out, p_out)
+        np.testing.assert_array_equal(R_out, R)
+        np.testing.assert_array_equal(p_out, p)

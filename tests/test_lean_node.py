@@ -1,10 +1,11 @@
-"""The rollout writes its trial trajectory in place, and never into an array someone else holds.
+"""The solver's trajectories are its own arrays, which never move: the rollout writes its trial in place.
 
-:meth:`crocopy.SolverDDP._trial_rollout` reuses the arrays of ``xs_try``/``us_try`` (swapped with
-``xs``/``us`` on acceptance) when only the solver's list refers to them.  These tests check that the
-reuse happens, that states and controls kept by a user never change, that holding references (the
-allocating branch) gives the same iterates bit for bit, and that ``setCandidate``/``updateModel``
-keep the rollout right.  Also the in-place ``diff``/``integrate`` of :class:`crocopy.StateVector`.
+:meth:`crocopy.SolverDDP._trial_rollout` writes ``xs_try``/``us_try`` in place, and an accepted trial is
+copied into ``xs``/``us`` (:mod:`crocopy.solvers.trajectories`).  As in Crocoddyl, ``solver.xs`` is the
+solver's storage (live), and assigning to it copies (:class:`crocopy.solvers.std_vector.Trajectory`).  These
+tests check that the arrays never move, that a callback's copies are what it saw, that holding references
+gives the same iterates bit for bit, and that ``setCandidate``/``updateModel`` keep the rollout right.  Also
+the in-place ``diff``/``integrate`` of :class:`crocopy.StateVector`.
 """
 
 from __future__ import annotations
@@ -34,21 +35,27 @@ def infeasible_guess(problem: crocopy.ShootingProblem) -> tuple[list, list]:
 
 
 @pytest.mark.parametrize("Solver", SOLVERS)
-def test_kept_states_and_controls_never_change(Solver):
+def test_the_solver_arrays_never_move_and_are_live(Solver):
     problem = unicycle_problem(bounded=Solver in (crocopy.SolverBoxDDP, crocopy.SolverBoxFDDP))
     solver = Solver(problem)
-    kept = []
+    names = ("xs", "us", "xs_try", "us_try", "fs", "k", "K")
+    ids = {name: [id(a) for a in getattr(solver, name)] for name in names}
+    lists = {name: getattr(solver, name) for name in names if name in ("xs", "us", "fs")}
+    seen, copies = [], []
 
     class Keep(crocopy.CallbackAbstract):
         def __call__(self, s):
-            kept.append((s.xs[5], s.xs[5].copy(), s.us[3], s.us[3].copy(), s.xs_try[7], s.xs_try[7].copy()))
+            seen.append({name: [id(a) for a in getattr(s, name)] for name in names})
+            copies.append(s.xs.tolist())
 
     solver.setCallbacks([Keep()])
     solver.solve(*infeasible_guess(problem), 30)
-    assert solver.iter > 3
-    moved = [i for i, (x, x_then, u, u_then, xt, xt_then) in enumerate(kept)
-             if not (np.array_equal(x, x_then) and np.array_equal(u, u_then) and np.array_equal(xt, xt_then))]
-    assert moved == []
+    solver.solve(solver.xs[1:] + [solver.xs[-1]], solver.us[1:] + [solver.us[-1]], 5)  # MPC-style shift
+    assert solver.iter > 0 and len(seen) > 5
+    assert all(s == ids for s in seen)
+    assert all(getattr(solver, name) is held for name, held in lists.items())
+    assert any(not np.array_equal(a[5], b[5]) for a, b in zip(copies, copies[1:]))  # copies kept what they saw
+    np.testing.assert_array_equal(copies[-1][5], solver.xs[5])
 
 
 @pytest.mark.parametrize("Solver", SOLVERS)
@@ -70,7 +77,7 @@ def test_holding_every_array_gives_the_same_iterates(Solver):
         np.testing.assert_array_equal(a, b)
 
 
-def test_rollout_reuses_its_arrays_when_nobody_holds_them():
+def test_rollout_writes_its_arrays_in_place():
     problem = unicycle_problem()
     solver = crocopy.SolverFDDP(problem)
     solver.solve(*infeasible_guess(problem), 3)
@@ -78,14 +85,11 @@ def test_rollout_reuses_its_arrays_when_nobody_holds_them():
         solver.computeDirection()
         solver._trial_rollout(0.5, gaps=True)
         ids = [id(a) for a in solver.xs_try + solver.us_try + solver._dx_try[:-1]]
-        solver._trial_rollout(0.25, gaps=True)
-        assert [id(a) for a in solver.xs_try + solver.us_try + solver._dx_try[:-1]] == ids
         held = solver.xs_try[4]
         value = held.copy()
-        solver._trial_rollout(1.0)
-        assert solver.xs_try[4] is not held
-        np.testing.assert_array_equal(held, value)
-        assert not np.array_equal(solver.xs_try[4], value)
+        solver._trial_rollout(0.25, gaps=True)
+        assert [id(a) for a in solver.xs_try + solver.us_try + solver._dx_try[:-1]] == ids
+        assert solver.xs_try[4] is held and not np.array_equal(held, value)
 
 
 @pytest.mark.parametrize("gaps", [False, True])

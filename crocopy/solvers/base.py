@@ -17,7 +17,7 @@ from ..enums import FeasibilityNorm
 from ..guards import trusted_path
 from ..shooting import ShootingProblem
 from ..validation import as_bool, as_count, as_number, check_bounds
-from .std_vector import StdVecAttribute
+from .std_vector import StdVecAttribute, allocate
 from .stopwatch import profiled
 
 
@@ -91,6 +91,10 @@ class Setting:
         obj.__dict__[self.name] = as_number(value, self.name, self.minimum, self.strict, allow_inf=self.allow_inf)
 
 
+def _same_shape(a: np.ndarray, b: np.ndarray) -> bool:
+    return a.shape == b.shape
+
+
 class SolverAbstract:
     """Base class of the shooting-problem solvers (Crocoddyl's ``SolverAbstract``).
 
@@ -100,11 +104,14 @@ class SolverAbstract:
         Problem to solve.
     """
 
-    #: State trajectory (T+1 arrays), controls (T arrays) and gaps (T+1 arrays), each a
-    #: :class:`~crocopy.solvers.std_vector.StdVec_VectorXs` (a list with Crocoddyl's ``tolist()``).
+    #: State trajectory (T+1 arrays), controls (T arrays), gaps (T+1 arrays) and a trial step's states and
+    #: controls, each a :class:`~crocopy.solvers.std_vector.Trajectory`: the solver's own arrays (live, as in
+    #: Crocoddyl: copy what you keep), into which an assignment copies.
     xs = StdVecAttribute()
     us = StdVecAttribute()
     fs = StdVecAttribute()
+    xs_try = StdVecAttribute()
+    us_try = StdVecAttribute()
 
     #: Methods timed by the profiler (:mod:`crocopy.solvers.stopwatch`) as ``"ClassName::method"``.
     _profiled = ("solve", "computeDirection", "calcDiff", "backwardPass", "tryStep", "forwardPass")
@@ -201,9 +208,18 @@ class SolverAbstract:
             else:
                 xs = [m.state.zero() for m in models]
         xs, us = problem.check_trajectories(xs, us, "init_xs", "init_us")
-        self.xs = [x.copy() for x in xs]
-        self.us = [u.copy() for u in us]
+        self._store("xs", xs)
+        self._store("us", us)
         self.isFeasible = bool(isFeasible)
+
+    def _store(self, name: str, arrays: list[np.ndarray]) -> None:
+        """Copy ``arrays`` (checked against the problem) into the trajectory ``name``, or give the solver new
+        arrays for it if the problem's dimensions changed since it made them."""
+        held = self.__dict__.get(name)
+        if held is not None and len(held) == len(arrays) and all(map(_same_shape, held, arrays)):
+            held.assign(arrays)
+        else:
+            allocate(self, name, [np.array(a, dtype=float) for a in arrays])
 
     def computeDynamicFeasibility(self) -> float:
         """Update the gaps ``fs`` from the nodes' ``xnext`` (after ``problem.calc``) and return their norm."""

@@ -128,6 +128,7 @@ class BoxSolverMixin:
                                         or [np.zeros(0)])
         self._us_stack = np.zeros(self._uoff[-1])
         self._bounds_for = self._horizon
+        self._bound_addresses = None
 
     def _start(self, init_xs, init_us, is_feasible: bool, init_reg) -> None:
         self._read_bounds()

@@ -14,11 +14,11 @@ that has re-read the model's parameters (references, weights, time step) and has
   returned cost in ``data.cost``;
 * optionally, on its class, ``horizon(evaluators, nus) -> horizon`` (``evaluators`` of the running nodes, ``None``
   where a node has none of that class; ``nus`` their control sizes): when every running node with a rollout step
-  has an evaluator of that class and all share one state size, ``horizon.addresses(xs, us, xs_try, us_try, dxs,
-  ks, Ks, fs, lbs, ubs)`` reads a rollout's arrays once, ``horizon.rollout(addresses, alpha, gaps, gap_at, t0,
-  t1) -> total`` runs the rollout steps of the nodes ``t0 <= t < t1`` in one call (``gap_at``: the one node
-  whose gap stays open besides ``gaps``, -1 for none), and ``horizon.calc_diff(xs, us, fs, gaps, t0, t1) ->
-  total`` their ``calcDiff`` (and their gaps ``fs[t+1]`` when ``gaps``); each node's cost is in
+  has an evaluator of that class and all share one state size, ``horizon.rollout(addresses, xs_try, us_try, alpha,
+  gaps, gap_at, t0, t1) -> total`` runs the rollout steps of the nodes ``t0 <= t < t1`` in one call (``addresses``:
+  of the solver's arrays, :func:`.rollout.horizon_addresses`; ``gap_at``: the one node whose gap stays open
+  besides ``gaps``, -1 for none), and ``horizon.calc_diff(xs, us, xs_at, us_at, fs_at, t0, t1) -> total`` their
+  ``calcDiff`` (and their gaps ``fs[t+1]`` when ``fs_at``, the gaps' addresses); each node's cost is in
   ``horizon.costs[t]``, which the caller stores in the datas.  The calls cover each maximal range of such
   nodes (:attr:`CompiledNodes.segments`); the other nodes keep their Python step in between;
 
@@ -45,9 +45,11 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from itertools import groupby, islice
-from operator import is_
+
+import numpy as np
 
 from .. import kernels
+from .trajectories import TrajectoryAddresses, addresses
 
 
 def _python_calc(model, data) -> Callable:
@@ -80,8 +82,6 @@ class CompiledNodes:
         self.nu = [m.nu for m in models]
         self.nx = [m.state.nx for m in models]
         self.ndx = [m.state.ndx for m in models]
-        self._bounds: tuple = ((), (), [], [])
-        self.dx_addresses = kernels.AddressCache()
         in_horizon = [horizon is not None and step is not None for step in steps]
         self.segments: dict[int, int] = {}
         """First node → one past the last node of each maximal range of nodes the horizon runs."""
@@ -92,25 +92,20 @@ class CompiledNodes:
                 self.segments[t] = end
             t = end
         self.in_horizon = in_horizon
+        self.inside = np.array(in_horizon + [False], dtype=np.int64)
+        """1 at the running nodes inside the horizon's ranges, 0 elsewhere and at the terminal node."""
         self.python_nodes = [t for t, inside in enumerate(in_horizon) if not inside]
         """The running nodes outside the horizon's ranges."""
 
     def bounds(self, lbs: list | None, ubs: list | None, unbounded: dict) -> tuple[list, list]:
         """Per running node, the control bounds of the rollout: ``lbs[t]``/``ubs[t]``, or ``unbounded[nu]`` where
-        ``lbs`` is None or its entry is None; the lists are kept while ``lbs``/``ubs`` hold the same arrays."""
-        held_lbs, held_ubs, lb_list, ub_list = self._bounds
-        lbs_now = () if lbs is None else lbs
-        ubs_now = () if ubs is None else ubs
-        if (len(lbs_now) == len(held_lbs) and len(ubs_now) == len(held_ubs) and len(lb_list) == len(self.nu)
-                and all(map(is_, lbs_now, held_lbs)) and all(map(is_, ubs_now, held_ubs))):
-            return lb_list, ub_list
+        ``lbs`` is None or its entry is None."""
         lb_list, ub_list = [], []
         for t, nu in enumerate(self.nu):
             lb = None if lbs is None else lbs[t]
             lb, ub = unbounded[nu] if lb is None else (lb, ubs[t])
             lb_list.append(lb)
             ub_list.append(ub)
-        self._bounds = (tuple(lbs_now), tuple(ubs_now), lb_list, ub_list)
         return lb_list, ub_list
 
     def calc(self, problem, xs, us) -> float:
@@ -124,15 +119,21 @@ class CompiledNodes:
         problem.cost = cost
         return cost
 
-    def calcDiff(self, problem, xs, us, synced: bool, fs: list | None = None) -> float:
+    def calcDiff(self, problem, xs, us, synced: bool, fs: list | None = None,
+                 at: TrajectoryAddresses | None = None) -> float:
         """Derivatives (and values, unless ``synced``) of every node; returns the total cost.  With ``fs``
         (only with a :attr:`horizon`, which computes its nodes' in the same call), also the gaps
-        ``fs[t+1] = xnext_t ⊖ xs[t+1]`` (``fs[0]`` is the caller's)."""
+        ``fs[t+1] = xnext_t ⊖ xs[t+1]`` (``fs[0]`` is the caller's).  ``at``: where ``xs``, ``us`` and ``fs`` are,
+        when they are a solver's trajectories (else they are read here)."""
         if self.horizon is not None:
             cost = 0.0
             datas, horizon = problem.runningDatas, self.horizon
+            if at is None:
+                xa, ua, fa = addresses(xs), addresses(us), None if fs is None else addresses(fs)
+            else:
+                xa, ua, fa = at.xs, at.us, at.fs
             for t0, t1 in self.segments.items():
-                cost += horizon.calc_diff(xs, us, fs, fs is not None, t0, t1)
+                cost += horizon.calc_diff(xs, us, xa, ua, fa, t0, t1)
                 for d, c in zip(islice(datas, t0, t1), horizon.costs[t0:t1].tolist()):
                     d.cost = c
             for t in self.python_nodes:

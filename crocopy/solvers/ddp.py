@@ -50,6 +50,8 @@ from .nonfinite import (
     locate_in_rollout,
     trajectory_finite,
 )
+from .std_vector import allocate
+from .trajectories import TrajectoryAddresses, accept_trial
 
 
 class SolverDDP(SolverAbstract):
@@ -70,6 +72,7 @@ class SolverDDP(SolverAbstract):
         self.alphas = [2.0 ** (-n) for n in range(10)]
         self.cost_try = 0.0
         self._models = (*problem.runningModels, problem.terminalModel)
+        self._nodes_seen = problem._nodes_version
         self._layout = self._shapes()
         self._best: tuple | None = None
         self._allocate()
@@ -78,12 +81,14 @@ class SolverDDP(SolverAbstract):
         return tuple((m.state.nx, m.state.ndx, m.nu) for m in self._models)
 
     def _sync_problem(self) -> None:
-        """Follow ``updateModel``/``circularAppend``: re-allocate when a node's dimensions changed."""
+        """Follow ``updateModel``/``circularAppend`` (the problem's node version moved): re-allocate when a node's
+        dimensions changed."""
         problem = self.problem
-        models = (*problem.runningModels, problem.terminalModel)
-        if len(models) == len(self._models) and all(a is b for a, b in zip(models, self._models)):
+        if self._nodes_seen == problem._nodes_version:
             return
-        self._models = models
+        self._nodes_seen = problem._nodes_version
+        self._models = (*problem.runningModels, problem.terminalModel)
+        self._derivatives = NodeDerivatives()
         self._on_problem_change()
 
     def _on_problem_change(self) -> bool:
@@ -95,8 +100,8 @@ class SolverDDP(SolverAbstract):
             return False
         self._layout = layout
         models = self._models
-        self.xs = [m.state.zero() for m in models]
-        self.us = [np.zeros(m.nu) for m in models[:-1]]
+        allocate(self, "xs", [m.state.zero() for m in models])
+        allocate(self, "us", [np.zeros(m.nu) for m in models[:-1]])
         self._allocate()
         return True
 
@@ -106,23 +111,26 @@ class SolverDDP(SolverAbstract):
         models = [*problem.runningModels, problem.terminalModel]
         self._horizon = Horizon([m.state.ndx for m in models], [m.nu for m in problem.runningModels])
         self._node_dims = [(m.state.ndx, m.nu) for m in problem.runningModels]
-        self._derivatives = NodeDerivatives(problem.runningDatas)
+        self._derivatives = NodeDerivatives()
         self._bind_views()
-        self._dx_try: list = [None] * (problem.T + 1)  # x_try ⊖ x of the last rollout, where it computed it
-        self.xs_try = [m.state.zero() for m in models]
-        self.us_try = [np.zeros(m.nu) for m in problem.runningModels]
+        self._dx_try = [np.zeros(m.state.ndx) if m.nu else None for m in problem.runningModels] + [None]
+        """``x̂_t ⊖ x_t`` of the last rollout at the nodes with controls (None elsewhere: not computed)."""
+        allocate(self, "xs_try", [m.state.zero() for m in models])
+        allocate(self, "us_try", [np.zeros(m.nu) for m in problem.runningModels])
         self._rhs = [np.zeros((m.nu, 1 + m.state.ndx)) for m in problem.runningModels]
         self._unbounded = {m.nu: (np.full(m.nu, -np.inf), np.full(m.nu, np.inf)) for m in problem.runningModels}
+        self._bound_addresses = None
+        self._trajectory_addresses = None
         self._synced = False
 
-    _views = ("Vxx", "Vx", "fs", "_fs_views", "Qxx", "Qxu", "Quu", "Qx", "Qu", "K", "k")
+    _views = ("Vxx", "Vx", "fs", "Qxx", "Qxu", "Quu", "Qx", "Qu", "K", "k")
     """Attributes holding views of the horizon's buffer: not pickled, bound again to the copy's buffer."""
 
     def _bind_views(self) -> None:
         """Point the per-node lists at the views of :attr:`_horizon` (after allocating or unpickling)."""
         h = self._horizon
-        self.Vxx, self.Vx, self.fs = h.views(horizon.VXX), h.views(horizon.VX), h.views(horizon.FS)
-        self._fs_views = self.fs
+        self.Vxx, self.Vx = h.views(horizon.VXX), h.views(horizon.VX)
+        allocate(self, "fs", h.views(horizon.FS))
         self.Qxx, self.Qxu, self.Quu, self.Qx, self.Qu, self.K, self.k = (
             h.views(j, running=True)
             for j in (horizon.QXX, horizon.QXU, horizon.QUU, horizon.QX, horizon.QU, horizon.KM, horizon.KV)
@@ -130,12 +138,13 @@ class SolverDDP(SolverAbstract):
 
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
-        for name in (*self._views, "_nodes"):
+        for name in (*self._views, "_nodes", "_trajectory_addresses", "_bound_addresses"):
             state.pop(name, None)
         return state
 
     def __setstate__(self, state: dict) -> None:
         self.__dict__.update(state)
+        self._bound_addresses = None
         self._bind_views()
 
     # ------------------------------------------------------------------ regularisation
@@ -313,6 +322,13 @@ class SolverDDP(SolverAbstract):
         self.ffeas = 0.0
         self._synced = False
 
+    def _addresses(self) -> TrajectoryAddresses:
+        """Where the solver's trajectories are (read once per allocation)."""
+        a = self._trajectory_addresses
+        if a is None:
+            a = self._trajectory_addresses = TrajectoryAddresses(self)
+        return a
+
     def _accept(self, alpha: float) -> bool:
         if self.dVexp >= 0:
             return abs(self.d[0]) < self.th_grad or not self.isFeasible or self.dV > self.th_acceptStep * self.dVexp
@@ -320,8 +336,7 @@ class SolverDDP(SolverAbstract):
 
     def _accept_trial(self, alpha: float) -> None:
         self._track_best()
-        self.xs, self.xs_try = self.xs_try, self.xs
-        self.us, self.us_try = self.us_try, self.us
+        accept_trial(self)
         self.isFeasible = True
         self.cost = self.cost_try
         self._synced = True
@@ -341,7 +356,8 @@ class SolverDDP(SolverAbstract):
         reported = feasible and self._reports_feasible_gaps()
         gaps_compiled = nodes is not None and nodes.horizon is not None and (not feasible or reported)
         if nodes is not None:
-            self.cost = nodes.calcDiff(problem, self.xs, self.us, self._synced, self.fs if gaps_compiled else None)
+            self.cost = nodes.calcDiff(problem, self.xs, self.us, self._synced, self.fs if gaps_compiled else None,
+                                       self._addresses())
         else:
             if not self._synced:
                 problem.calc(self.xs, self.us)
@@ -414,11 +430,8 @@ class SolverDDP(SolverAbstract):
         """The whole recursion in one compiled call (:meth:`_compiled_pass`) over the stacked arrays of
         :mod:`.horizon`; the first node whose ``Quu`` is not positive definite or not finite raises."""
         datas = self.problem.runningDatas
-        if not self._derivatives.same_datas(datas):
-            self._sync_problem()  # updateModel/circularAppend since the last solve
+        self._sync_problem()  # updateModel/circularAppend since the last solve
         gaps = self._terminal_value_function()
-        if self.fs is not self._fs_views:
-            self._horizon.load(self.fs, horizon.FS)
         t = self._compiled_pass(self._derivatives.update(datas, self._node_dims), float(self.preg), gaps)
         if t >= 0:
             raise self._node_failure(t)

@@ -55,8 +55,6 @@ class SolverFDDP(SolverDDP):
         gaps = not self.isFeasible
         if kernels.active:
             h = self._horizon
-            if self.fs is not self._fs_views:
-                h.load(self.fs, horizon.FS)
             self._dg, self._dq = riccati_kernel.expected_terms(h.addr, h.dims, gaps)
             self._Vxx_f = self._Vxx_f_views if gaps else []
             return
@@ -84,9 +82,8 @@ class SolverFDDP(SolverDDP):
             nodes = self._nodes
             if kernels.active and self._Vxx_f is self._Vxx_f_views and nodes is not None \
                     and nodes.horizon is not None:  # the compiled ranges of the rollout wrote their nodes' dx
-                h, dxs = self._horizon, self._dx_try
-                inside = [dx if inside else None for dx, inside in zip(dxs, nodes.in_horizon)]
-                dv = riccati_kernel.gap_step_term(h.addr, h.dims, nodes.dx_addresses(inside))
+                h = self._horizon
+                dv = riccati_kernel.gap_step_term(h.addr, h.dims, self._addresses().dx_try * nodes.inside)
                 rest = [*nodes.python_nodes, problem.T]
             for t in rest:
                 m, Vxx_f = models[t], Vxx_fs[t]

@@ -13,22 +13,19 @@ which costs nothing per node, where a numba typed list cost ~45 ns per item and 
   buffer :attr:`Horizon.buf` with per-node offsets :attr:`Horizon.off` (``(T+1, NQ)``, columns
   :data:`VXX` ... :data:`FS`) and addresses :attr:`Horizon.addr`.  The solver's lists (Crocoddyl's
   API) hold C-contiguous reshaped views of their slices, so what the kernel writes is what
-  ``solver.K[t]`` shows.  The solvers write these arrays in place and never rebind an entry; a
-  rebound ``solver.fs`` list is copied into the buffer before the pass.
+  ``solver.K[t]`` shows.  The solvers write these arrays in place and never rebind an entry; assigning
+  ``solver.fs`` copies into them (:class:`~crocopy.solvers.std_vector.Trajectory`).
 * **The nodes' derivatives** (``Fx, Fu, Lxx, Lxu, Luu, Lx, Lu`` of ``problem.runningDatas``):
   :attr:`NodeDerivatives.addr` ``(T, 7)`` lists where the datas' *own* arrays are.  They are not
   moved into a stack owned by the problem or the solver: a model's ``calcDiff`` keeps writing where
   it always did, so every writer (integrators, action models, a cost sum sharing its memory with the
   data, squashing, control parametrizations, a user's Python model) stays correct without relying on
-  an audit of all of them.  What the table must follow is a *rebinding*, ``data.Fx = M``
-  (Crocoddyl's bindings copy ``M`` into the existing matrix; in Python the attribute is rebound).
-  :class:`crocopy.watched.Watched` counts those on the data classes, so the check before each pass
-  is one list comparison (the same data objects?) and one integer comparison (any rebinding since?);
-  only when one fails are the arrays compared one by one and the changed rows rewritten.  A data
-  class that does not watch an attribute (a subclass turning it into a property or a slot) has its
-  node compared at every pass; an array the kernel cannot read in place (not float64 or not
-  C-contiguous) is copied into a staging array at every pass; shapes are checked when an array is
-  taken (a wrong size raises ValueError): the compiled pass trusts them.
+  an audit of all of them.  Assigning one (``data.Fx = M``) copies into the data's array
+  (:mod:`crocopy.stored`, Crocoddyl's semantics), so the addresses taken once per list of datas stay valid.
+  A data class that makes one of these a property or a slot of its own has its node compared at
+  every pass; an array the kernel cannot read in place (not float64 or not C-contiguous) is copied
+  into a staging array at every pass; shapes are checked when an array is taken (a wrong size raises
+  ValueError): the compiled pass trusts them.
 * A changed list of datas (``problem.updateModel``, ``circularAppend``) makes the solver follow the
   problem first (``_sync_problem``: re-allocation when a node's dimensions changed).
 
@@ -42,7 +39,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .. import watched
+from ..stored import Stored
 
 VXX, VX, QXX, QXU, QUU, QX, QU, KM, KV, QUU_INV, VXX_F, FS = range(12)
 """Columns of :attr:`Horizon.off`: where each per-node array of the solver starts in :attr:`Horizon.buf`."""
@@ -98,11 +95,6 @@ class Horizon:
         """A new list of the views of column ``j`` (the T running nodes only if ``running``)."""
         return list(self._views[j][: self.T if running else self.T + 1])
 
-    def load(self, arrays: Sequence[np.ndarray], j: int) -> None:
-        """Copy ``arrays`` into column ``j`` (for a list the solver's user rebound)."""
-        for dst, src in zip(self._views[j], arrays):
-            dst[...] = src
-
 
 def address(a: np.ndarray) -> int:
     """Where the first element of ``a`` is in memory."""
@@ -110,15 +102,14 @@ def address(a: np.ndarray) -> int:
 
 
 class NodeDerivatives:
-    """The addresses of the running datas' own derivative arrays, kept in step with rebindings.
+    """The addresses of the running datas' own derivative arrays, taken at the first :meth:`update` (a solver makes
+    a new one when the problem's nodes change: ``updateModel``, ``circularAppend``, datas rebuilt).
 
     :attr:`addr` ``(T, 7)``: row t holds where ``Fx, Fu, Lxx, Lxu, Luu, Lx, Lu`` (:data:`NAMES`) of
     ``datas[t]`` are.  The arrays are referenced here as long as their address is listed.
     """
 
-    def __init__(self, datas: list) -> None:
-        self._datas = list(datas)
-        self._generation = -1
+    def __init__(self) -> None:
         self._seen: list[list] = []
         self._shapes: list[list[tuple]] = []
         self._stale: list[int] = []
@@ -128,11 +119,7 @@ class NodeDerivatives:
 
     def __reduce__(self) -> tuple:
         """A copy lists nothing yet (addresses are not valid in another process or object)."""
-        return NodeDerivatives, ([],)
-
-    def same_datas(self, datas: list) -> bool:
-        """True when ``datas`` are the data objects given last (at construction or to :meth:`update`)."""
-        return datas == self._datas
+        return NodeDerivatives, ()
 
     def update(self, datas: list, dims: Sequence[tuple[int, int]]) -> np.ndarray:
         """:attr:`addr` for the current arrays of ``datas`` (``dims[t] = (ndx, nu)`` of node t).
@@ -142,7 +129,7 @@ class NodeDerivatives:
         ValueError
             If a derivative array does not have the size of its node's ``(ndx, nu)``.
         """
-        if len(self.addr) != len(datas) or datas != self._datas or watched.generation[0] != self._generation:
+        if len(self.addr) != len(datas):
             self._sync(datas, dims)
         elif self._stale:
             self._refresh(self._stale, datas)
@@ -157,9 +144,7 @@ class NodeDerivatives:
             self._seen = [[None] * len(NAMES) for _ in datas]
             self._kept = [[None] * len(NAMES) for _ in datas]
             self.addr = np.zeros((len(datas), len(NAMES)), dtype=np.int64)
-        self._datas = list(datas)
-        self._generation = watched.generation[0]
-        self._stale = [t for t, d in enumerate(datas) if not all(watched.watches(type(d), name) for name in NAMES)]
+        self._stale = [t for t, d in enumerate(datas) if not all(stores(type(d), name) for name in NAMES)]
         self._refresh(range(len(datas)), datas)
 
     def _refresh(self, nodes, datas: list) -> None:
@@ -181,6 +166,15 @@ class NodeDerivatives:
                     self._staged.append((t, name, entry))
                 self._kept[t][i] = entry
                 self.addr[t, i] = address(entry)
+
+
+def stores(cls: type, name: str) -> bool:
+    """True when ``cls.name`` is a :class:`~crocopy.stored.Stored` field (a subclass may replace it, e.g. by a
+    property)."""
+    for klass in cls.__mro__:
+        if name in klass.__dict__:
+            return isinstance(klass.__dict__[name], Stored)
+    return False
 
 
 def _readable(a: object, shape: tuple) -> bool:

@@ -96,13 +96,16 @@ class ContactWorkspace(NamedTuple):
     p3: np.ndarray
 
 
+CONTACT_WORKSPACE = {"J6": (6, "nv"), "Y": ("ncm", "nv"), "G": ("ncm", "ncm"), "z": ("nv",), "w": ("ncm",),
+                     "m6": (6,), "J66": (6, 6), "R3": (3, 3), "p3": (3,)}
+"""The shapes of :class:`ContactWorkspace`'s fields (in their order; ``ncm = max(nc_max, 1)``)."""
+
+
 def make_contact_workspace(rb: RigidBodyModel, nc_max: int) -> ContactWorkspace:
     """A zeroed :class:`ContactWorkspace` for ``rb`` and up to ``nc_max`` stacked contact rows."""
-    nv, n = rb.nv, max(int(nc_max), 1)
-    return ContactWorkspace(
-        J6=np.zeros((6, nv)), Y=np.zeros((n, nv)), G=np.zeros((n, n)), z=np.zeros(nv), w=np.zeros(n),
-        m6=np.zeros(6), J66=np.zeros((6, 6)), R3=np.zeros((3, 3)), p3=np.zeros(3),
-    )
+    sizes = {"nv": rb.nv, "ncm": max(int(nc_max), 1)}
+    return ContactWorkspace(*(np.zeros(tuple(d if isinstance(d, int) else sizes[d] for d in shape))
+                              for shape in CONTACT_WORKSPACE.values()))
 
 
 @compiled

@@ -21,9 +21,11 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from ..contacts import ContactModel3D, ContactModel6D
+from .. import contacts
+from .lowering import declaring
 
-CONTACTS = (ContactModel3D, ContactModel6D)
+CONTACTS = declaring(contacts.ContactModelAbstract, "compiled_reference")
+"""The contacts compiled nodes take: those that lower their reference themselves (``compiled_reference(R, p)``)."""
 
 
 def active_contacts(dam) -> list | None:
@@ -56,11 +58,7 @@ class ContactSet:
         """Read the gains and references again (into the same arrays)."""
         for k, m in enumerate(self.models):
             self.gains[k] = m.gains
-            if m.nc == 3:
-                self.ref_p[k] = m.reference
-            else:
-                self.ref_R[k] = m.reference.rotation
-                self.ref_p[k] = m.reference.translation
+            m.compiled_reference(self.ref_R[k], self.ref_p[k])
 
     def same(self, models: list) -> bool:
         """Whether ``models`` are this set's contacts (same objects, frames, sizes and reference frames)."""

@@ -39,27 +39,22 @@ import pinocchio as pin
 
 from crocopy.costs.base import CostModelResidual
 from crocopy.costs.stack_kernel import activation_values
-from crocopy.kernels import AddressCache, checked_address, overridden
+from crocopy.kernels import checked_address, overridden
 from crocopy.residuals.base import ResidualModelAbstract
 from crocopy.versioning import ParametersVersion
 
-from ..actuations import (
-    ActuationModelFloatingBase,
-    ActuationModelFloatingBaseThrusters,
-    ActuationModelFull,
-    ActuationModelLinear,
-)
+from ..actuations import ActuationModelAbstract
 from ..residual_numba import ResidualModelNumba, kinematics_size
 from ..state_multibody import StateMultibody
 from . import euler_node_kernel as kernel
 from . import node_table as table
-from .contact_kernel import make_contact_workspace
 from .contact_lowering import ContactSet
 from .joint_types import NotLowerable
-from .lowering import RigidBodyModel, lower_model, make_workspace
+from .lowering import RigidBodyModel, declaring, lower_model, make_workspace
 from .python_residuals import PythonResiduals
 
-ACTUATIONS = (ActuationModelFull, ActuationModelFloatingBase, ActuationModelFloatingBaseThrusters, ActuationModelLinear)
+ACTUATIONS = declaring(ActuationModelAbstract, "compiled_matrix")
+"""The actuations compiled nodes take: those that declare their constant ``S = ∂τ/∂u`` (``compiled_matrix()``)."""
 def compiled_residual_classes() -> dict[type, str]:
     """Every residual class that declares a ``compiled_kind`` of its own (beside its maths, with its
     ``compiled_parameters()``), with that kind: the registry of the kinds compiled nodes evaluate (a subclass
@@ -115,20 +110,9 @@ class Lowered:
         key = (nu, nc)
         if key not in self._scratch:
             nv = self.rb.nv
-            ndx = 2 * nv
-            cw = make_contact_workspace(self.rb, nc)
-            arrays = {
-                "tau": np.zeros(nv), "dtau_dq": np.zeros((nv, nv)), "dtau_dv": np.zeros((nv, nv)),
-                "J6": np.zeros((6, nv)), "K6": np.zeros((6, nv)), "m6": np.zeros((6, 6)), "R3": np.zeros((3, 3)),
-                "p3": np.zeros(3), "v6": np.zeros(6), "Jq": np.zeros((nv, nv)), "Jv": np.zeros((nv, nv)),
-                "rows": np.zeros((nv, ndx + nu)), "gap": np.zeros(ndx),
-                "Jcs": np.zeros((nc, nv)), "a0": np.zeros(nc), "lam": np.zeros(nc), "da0_dx": np.zeros((nc, ndx)),
-                "df_dx": np.zeros((nc, ndx)), "df_du": np.zeros((nc, nu)), "com": np.zeros(3),
-                "Jcom": np.zeros((3, nv)),
-                "cJ6": cw.J6, "cY": cw.Y, "cG": cw.G, "cz": cw.z, "cw": cw.w, "cm6": cw.m6, "cJ66": cw.J66,
-                "cR3": cw.R3, "cp3": cw.p3, "Minv": np.zeros((nv, nv)),
-            }
-            self._scratch[key] = arrays, table_entries([arrays[name] for name in table.SCRATCH_ARRAYS])
+            arrays = table.make_arrays(table.SCRATCH_ARRAYS, {"nv": nv, "ndx": 2 * nv, "nu": nu, "nc": nc})
+            arrays["Minv"] = np.zeros((nv, nv))
+            self._scratch[key] = arrays, table_entries([arrays[e.name] for e in table.SCRATCH_ARRAYS])
         return self._scratch[key]
 
     def update(self, rb: RigidBodyModel) -> bool:
@@ -250,7 +234,7 @@ class EulerNode:
             return self.refresh(low, memo)
         self.par = np.array(par)
         np.add(low.rb.armature, dam.armature, out=self.armature)
-        self._actuation_matrix(dam, ddata, memo)
+        self._actuation_matrix(dam)
         self._table(low, data, ddata, stack, changed)
         return True
 
@@ -299,18 +283,10 @@ class EulerNode:
         a user residual's ``parameters()``)."""
         return list(residual.checked_parameters()) if kind == table.USER else residual.compiled_parameters()
 
-    def _actuation_matrix(self, dam, ddata, memo: dict) -> None:
-        """``S = ∂τ/∂u`` of the (linear, state-independent) actuation, once per actuation and ``memo``."""
-        if self.terminal:
-            return
-        key = ("S", id(dam.actuation))
-        if key not in memo:
-            act = ddata.multibody.actuation
-            x, u = dam.state.zero(), np.zeros(dam.nu)
-            dam.actuation.calc(act, x, u)
-            dam.actuation.calcDiff(act, x, u)
-            memo[key] = act.dtau_du.copy()
-        self.parameters["S"][:] = memo[key]
+    def _actuation_matrix(self, dam) -> None:
+        """``S = ∂τ/∂u`` of the (linear, state-independent) actuation, as it declares it."""
+        if not self.terminal:
+            self.parameters["S"][:] = dam.actuation.compiled_matrix()
 
     def _table(self, low: Lowered, data, ddata, stack, changed: bool) -> None:
         """The addresses and dimensions of every array the kernels read or write, and the integer program.
@@ -331,9 +307,15 @@ class EulerNode:
         }
         scratch, scratch_entries = low.scratch(self.model.nu, self.contacts.nc)
         fields["Minv"] = ddata.Minv if hasattr(ddata, "Minv") else scratch["Minv"]
-        arrays = [fields[name] for name in table.NODE_ARRAYS]
+        arrays = [fields[e.name] for e in table.NODE_ARRAYS]
         known = self._data_arrays
         if len(known) != len(arrays) or any(a is not b for a, b in zip(arrays, known)):
+            state = self.model.state
+            sizes = {"nx": state.nx, "ndx": state.ndx, "nv": state.nv, "nu": self.model.nu, "nr": stack.r.shape[0],
+                     "nr_u": stack.r.shape[0] - stack.u_start, "n_stack": stack.item_costs.shape[0],
+                     "n_contacts": len(self.contacts.models), "n_kin": kinematics_size(state.nv),
+                     "nr_user": self.parameters["user_Ru"].shape[0]}
+            table.check_arrays(table.NODE_ARRAYS, arrays, sizes)
             self._data_entries = table_entries(arrays)
             self._data_arrays = arrays
         elif not changed and low is self._lowered:
@@ -412,9 +394,10 @@ class EulerHorizon:
     their derivatives with the gaps (:func:`.euler_node_kernel.horizon_calc_diff`), a range ``t0 <= t < t1`` of
     compiled nodes per call; the other nodes' entries are never read.
 
-    ``addresses(xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs)`` reads the trajectories' addresses once per
-    rollout; ``rollout(addresses, alpha, gaps, gap_at, t0, t1)`` and ``calc_diff(xs, us, fs, gaps, t0, t1)`` return
-    the total cost of the range, each node's in :attr:`costs`."""
+    ``rollout(addresses, xs_try, us_try, alpha, gaps, gap_at, t0, t1)`` (``addresses``: of ``xs, us, xs_try, us_try,
+    dxs, ks, Ks, fs, lbs, ubs``, :func:`crocopy.solvers.rollout.horizon_addresses`) and ``calc_diff(xs, us, xs_at,
+    us_at, fs_at, t0, t1)`` (the addresses of ``xs``, ``us`` and of the gaps ``fs`` it writes, or None) return the
+    total cost of the range, each node's in :attr:`costs`."""
 
     def __init__(self, nodes: list[EulerNode | None], nus: list[int]) -> None:
         first = next(n for n in nodes if n is not None)
@@ -430,47 +413,28 @@ class EulerHorizon:
         self.python = [(t, n) for t, n in enumerate(nodes) if n is not None and n.python.items]
         """The nodes with Python residuals (:mod:`.python_residuals`): their rows are evaluated before a compiled
         ``calc_diff`` and their costs again after a compiled rollout."""
-        self._trials: tuple = ()
         self._python_ranges: dict[tuple[int, int], np.ndarray] = {}
         self.no_gaps = np.zeros(len(nodes) + 1, dtype=np.int64)
-        self.fixed = [AddressCache() for _ in range(6)]
-        self.trajectories: dict[int, AddressCache] = {}
 
-    def _trajectory(self, arrays: list) -> np.ndarray:
-        """Addresses of a trajectory list, cached per list object (a solver swaps ``xs`` and ``xs_try`` whole)."""
-        cache = self.trajectories.get(id(arrays))
-        if cache is None:
-            if len(self.trajectories) > 8:
-                self.trajectories.clear()
-            cache = self.trajectories[id(arrays)] = AddressCache()
-        return cache(arrays)
-
-    def calc_diff(self, xs, us, fs, gaps: bool, t0: int, t1: int) -> float:
-        """Values and derivatives of the nodes ``t0 <= t < t1`` (and their gaps ``fs[t+1]`` when ``gaps``)."""
-        trajectory = self._trajectory
+    def calc_diff(self, xs, us, xs_at: np.ndarray, us_at: np.ndarray, fs_at: np.ndarray | None, t0: int,
+                  t1: int) -> float:
+        """Values and derivatives of the nodes ``t0 <= t < t1`` (and their gaps ``fs[t+1]`` when ``fs_at``)."""
         for t, node in self.python:
             if t0 <= t < t1:
                 node.python.evaluate(xs[t], us[t], True)
         return kernel.horizon_calc_diff(
-            self.tbls, self.ints, self.ioff, self.par, self.poff, trajectory(xs), trajectory(us), self.nus, self.nx,
-            self.ndx, gaps, self.fixed[3](fs) if gaps else self.no_gaps, t0, t1, self.costs,
+            self.tbls, self.ints, self.ioff, self.par, self.poff, xs_at, us_at, self.nus, self.nx,
+            self.ndx, fs_at is not None, self.no_gaps if fs_at is None else fs_at, t0, t1, self.costs,
         )
 
-    def addresses(self, xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs) -> tuple:
-        """The addresses of a rollout's arrays (valid while no entry of those lists is replaced)."""
-        f, trajectory = self.fixed, self._trajectory
-        self._trials = (xs_try, us_try)
-        return (trajectory(xs), trajectory(us), trajectory(xs_try), trajectory(us_try), f[0](dxs), f[1](ks),
-                f[2](Ks), f[3](fs), f[4](lbs), f[5](ubs))
-
-    def rollout(self, addresses: tuple, alpha: float, gaps: bool, gap_at: int, t0: int, t1: int) -> float:
+    def rollout(self, addresses: tuple, xs_try: list, us_try: list, alpha: float, gaps: bool, gap_at: int, t0: int,
+                t1: int) -> float:
         """The rollout steps of the nodes ``t0 <= t < t1`` (the Python residuals' rows and costs after them)."""
         total = kernel.horizon_rollout(
             self.tbls, self.ints, self.ioff, self.par, self.poff, *addresses, self.nus, self.nx, self.ndx, alpha,
             gaps, gap_at, t0, t1, self.costs,
         )
         if self.python:
-            xs_try, us_try = self._trials
             for t, node in self.python:
                 if t0 <= t < t1:
                     node.python.evaluate(xs_try[t], us_try[t])

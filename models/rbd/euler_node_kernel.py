@@ -56,7 +56,7 @@ from .node_table import (
     CONTROL,
     E_A,
     E_A0,
-    E_ACT_W,
+    E_ACT_WEIGHTS,
     E_AR,
     E_ARR,
     E_COM,
@@ -224,7 +224,7 @@ def _residuals(tbl, ints, par, rb, ws, x, u):
                 rows[i] = com[i] - par[o + i]
         elif kind == USER:
             user_kinematics(tbl, ints, rb, ws, fid, ref, ints[b + FLAGS], False)
-            user_call(tbl, ints, par, b, x, u, ints[b + RESIDUAL_ADDRESS], rows, vec(tbl, ints, E_USER_RU))
+            user_call(tbl, ints, par, b, x, u, ints[b + RESIDUAL_ADDRESS], rows, mat(tbl, ints, E_USER_RU))
         else:
             raise ValueError("compiled node: unknown residual kind")
 
@@ -358,7 +358,7 @@ def _values(tbl, ints, par, x, u, rb, ws):
     _residuals(tbl, ints, par, rb, ws, x, u)
     starts = ints[ints[STARTS]: ints[STARTS] + ints[N_STACK]]
     return activation_values(
-        vec(tbl, ints, E_R), vec(tbl, ints, E_LB), vec(tbl, ints, E_UB), vec(tbl, ints, E_ACT_W), starts,
+        vec(tbl, ints, E_R), vec(tbl, ints, E_LB), vec(tbl, ints, E_UB), vec(tbl, ints, E_ACT_WEIGHTS), starts,
         vec(tbl, ints, E_ITEM_COSTS), vec(tbl, ints, E_ITEM_WEIGHTS),
     )
 
@@ -459,7 +459,7 @@ def horizon_recost(tbls, ints, ioff, par, poff, nodes, costs):
         starts = node_ints[node_ints[STARTS]: node_ints[STARTS] + node_ints[N_STACK]]
         value = activation_values(
             vec(tbl, node_ints, E_R), vec(tbl, node_ints, E_LB), vec(tbl, node_ints, E_UB),
-            vec(tbl, node_ints, E_ACT_W), starts, vec(tbl, node_ints, E_ITEM_COSTS),
+            vec(tbl, node_ints, E_ACT_WEIGHTS), starts, vec(tbl, node_ints, E_ITEM_COSTS),
             vec(tbl, node_ints, E_ITEM_WEIGHTS),
         )
         cost = par[poff[t]] * value
@@ -560,7 +560,7 @@ def node_calc_diff(tbl, ints, par, x, u):
     _jacobians(tbl, ints, par, rb, ws, x, u)
     Lx, Lu, Lxx = vec(tbl, ints, E_LX), vec(tbl, ints, E_LU), mat(tbl, ints, E_LXX)
     Lxu, Luu = mat(tbl, ints, E_LXU), mat(tbl, ints, E_LUU)
-    r, lb, ub, act_w = vec(tbl, ints, E_R), vec(tbl, ints, E_LB), vec(tbl, ints, E_UB), vec(tbl, ints, E_ACT_W)
+    r, lb, ub, act_w = vec(tbl, ints, E_R), vec(tbl, ints, E_LB), vec(tbl, ints, E_UB), vec(tbl, ints, E_ACT_WEIGHTS)
     weights, Ar, Arr = vec(tbl, ints, E_WEIGHTS), vec(tbl, ints, E_AR), vec(tbl, ints, E_ARR)
     Jx, Ju, u_start = mat(tbl, ints, E_JX), mat(tbl, ints, E_JU), ints[U_START]
     Jc, HJx, Juc, HJu = mat(tbl, ints, E_JC), mat(tbl, ints, E_HJX), mat(tbl, ints, E_JUC), mat(tbl, ints, E_HJU)

@@ -206,3 +206,15 @@ def make_workspace(rb: RigidBodyModel) -> RigidBodyWorkspace:
         Rf=np.zeros((3, 3)),
         pf=np.zeros(3),
     )
+
+
+def declaring(base: type, name: str) -> tuple[type, ...]:
+    """The classes derived from ``base`` in crocopy that define ``name`` themselves: the models that carry their own
+    lowering (a subclass inherits none: it may override the maths)."""
+    found, stack = [], [base]
+    while stack:
+        cls = stack.pop()
+        stack.extend(cls.__subclasses__())
+        if name in cls.__dict__ and cls.__module__.startswith("crocopy."):
+            found.append(cls)
+    return tuple(found)

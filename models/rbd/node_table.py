@@ -3,17 +3,25 @@ accessors that view its entries.
 
 A node's arrays arrive by address: ``tbl[k]`` is the address of entry ``k`` (a C-contiguous array), its
 dimensions are ``ints[SHAPES + 3k : SHAPES + 3k + 3]``.  The entries are the fields of the lowered model and of its
-workspace (:mod:`.lowering`), then :data:`NODE_ARRAYS` and :data:`SCRATCH_ARRAYS`; ``E_<NAME>`` is the entry of
-each.  ``ints`` also holds the sizes (``NQ`` .. ``NC``), the residual items (``ITEM_FIELDS`` integers each, from
-``ints[ITEMS]``), the cost stack's item starts (from ``ints[STARTS]``) and the contacts (``CONTACT_FIELDS`` each,
-from ``ints[CONTACTS]``).
+workspace (:mod:`.lowering`), then the node arrays and the scratch, each declared once here as an :class:`Entry`
+(name, shape over the node's sizes, owner, dtype) in :data:`NODE_ARRAYS` and :data:`SCRATCH_ARRAYS`.  From that
+declaration come the entries' indices (:data:`ENTRIES`, and the kernels' constants ``E_<NAME>``), the scratch
+(:func:`make_arrays`) and the check of every array a node lists (:func:`check_arrays`: a wrong shape or dtype
+raises, naming the entry, before any kernel reads it); ``tests/test_node_table.py`` checks that every accessor a
+kernel applies to an ``E_<NAME>`` has that entry's dimension and dtype.  ``ints`` also holds the sizes (``NQ`` ..
+``NC``), the residual items (``ITEM_FIELDS`` integers each, from ``ints[ITEMS]``), the cost stack's item starts (from
+``ints[STARTS]``) and the contacts (``CONTACT_FIELDS`` each, from ``ints[CONTACTS]``).
 """
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
+import numpy as np
+
 from crocopy.kernels import carray, compiled, float64_pointer, int64_pointer, matrix_at, vector_at
 
-from .contact_kernel import ContactWorkspace
+from .contact_kernel import CONTACT_WORKSPACE, ContactWorkspace
 from .lowering import RigidBodyModel, RigidBodyWorkspace
 
 STATE, CONTROL, PLACEMENT, TRANSLATION, ROTATION, VELOCITY, CONE, COM, USER = range(9)
@@ -39,31 +47,92 @@ FLAGS, RESIDUAL_ADDRESS, JACOBIANS_ADDRESS, N_PARAMETERS = range(6, 10)
 """Fields of a ``USER`` item after the six every item has (kind, first row, rows, frame, reference, offset)."""
 CONTACT_FIELDS = 4
 
+class Entry(NamedTuple):
+    """A node array of the table: its ``name``, its ``shape`` (sizes or expressions over the node's sizes, see
+    :func:`entry_shapes`), the owner that makes it, and its ``dtype``."""
+
+    name: str
+    shape: tuple
+    owner: str
+    dtype: type = np.float64
+
+
+_DATA, _DIFF, _STACK, _NODE, _CONTACTS = "action data", "differential data", "cost stack", "node", "contact set"
+_SCRATCH, _CW = "scratch", "contact workspace"
+
 NODE_ARRAYS = (
-    "xnext", "dx", "Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu",
-    "a", "dFx", "dFu", "Minv", "dLx", "dLu", "dLxx", "dLxu", "dLuu",
-    "r", "lb", "ub", "act_weights", "item_costs", "item_weights", "weights", "Ar", "Arr",
-    "Jx", "Ju", "Jc", "HJx", "Juc", "HJu", "S", "gains", "ref_R", "ref_p", "kin", "user_dims", "user_Ru",
+    Entry("xnext", ("nx",), _DATA), Entry("dx", ("ndx",), _DATA), Entry("Fx", ("ndx", "ndx"), _DATA),
+    Entry("Fu", ("ndx", "nu"), _DATA), Entry("Lx", ("ndx",), _DATA), Entry("Lu", ("nu",), _DATA),
+    Entry("Lxx", ("ndx", "ndx"), _DATA), Entry("Lxu", ("ndx", "nu"), _DATA), Entry("Luu", ("nu", "nu"), _DATA),
+    Entry("a", ("nv",), _DIFF), Entry("dFx", ("nv", "ndx"), _DIFF), Entry("dFu", ("nv", "nu"), _DIFF),
+    Entry("Minv", ("nv", "nv"), _DIFF), Entry("dLx", ("ndx",), _DIFF), Entry("dLu", ("nu",), _DIFF),
+    Entry("dLxx", ("ndx", "ndx"), _DIFF), Entry("dLxu", ("ndx", "nu"), _DIFF), Entry("dLuu", ("nu", "nu"), _DIFF),
+    Entry("r", ("nr",), _STACK), Entry("lb", ("nr",), _STACK), Entry("ub", ("nr",), _STACK),
+    Entry("act_weights", ("nr",), _STACK), Entry("item_costs", ("n_stack",), _STACK),
+    Entry("item_weights", ("n_stack",), _STACK), Entry("weights", ("nr",), _STACK), Entry("Ar", ("nr",), _STACK),
+    Entry("Arr", ("nr",), _STACK), Entry("Jx", ("nr", "ndx"), _STACK), Entry("Ju", ("nr_u", "nu"), _STACK),
+    Entry("Jc", ("nr", "ndx"), _STACK), Entry("HJx", ("nr", "ndx"), _STACK), Entry("Juc", ("nr_u", "nu"), _STACK),
+    Entry("HJu", ("nr_u", "nu"), _STACK),
+    Entry("S", ("nv", "nu"), _NODE), Entry("gains", ("n_contacts", 2), _CONTACTS),
+    Entry("ref_R", ("n_contacts", 3, 3), _CONTACTS), Entry("ref_p", ("n_contacts", 3), _CONTACTS),
+    Entry("kin", ("n_kin",), _NODE), Entry("user_dims", (5,), _NODE, np.int64),
+    Entry("user_Ru", ("nr_user", "nu"), _NODE),
 )
-"""The node's own arrays (its data's, its cost stack's, its actuation matrix and contacts)."""
+"""The node's own arrays (its data's, its differential data's, its cost stack's, its actuation matrix ``S`` and
+contacts, the kinematics its users' residuals read), in table order."""
 SCRATCH_ARRAYS = (
-    "tau", "dtau_dq", "dtau_dv", "J6", "K6", "m6", "R3", "p3", "v6", "Jq", "Jv", "rows", "gap",
-    "Jcs", "a0", "lam", "da0_dx", "df_dx", "df_du", "com", "Jcom",
-    "cJ6", "cY", "cG", "cz", "cw", "cm6", "cJ66", "cR3", "cp3",
+    Entry("tau", ("nv",), _SCRATCH), Entry("dtau_dq", ("nv", "nv"), _SCRATCH),
+    Entry("dtau_dv", ("nv", "nv"), _SCRATCH), Entry("J6", (6, "nv"), _SCRATCH), Entry("K6", (6, "nv"), _SCRATCH),
+    Entry("m6", (6, 6), _SCRATCH), Entry("R3", (3, 3), _SCRATCH), Entry("p3", (3,), _SCRATCH),
+    Entry("v6", (6,), _SCRATCH), Entry("Jq", ("nv", "nv"), _SCRATCH), Entry("Jv", ("nv", "nv"), _SCRATCH),
+    Entry("rows", ("nv", "ndx + nu"), _SCRATCH), Entry("gap", ("ndx",), _SCRATCH),
+    Entry("Jcs", ("nc", "nv"), _SCRATCH), Entry("a0", ("nc",), _SCRATCH), Entry("lam", ("nc",), _SCRATCH),
+    Entry("da0_dx", ("nc", "ndx"), _SCRATCH), Entry("df_dx", ("nc", "ndx"), _SCRATCH),
+    Entry("df_du", ("nc", "nu"), _SCRATCH), Entry("com", (3,), _SCRATCH), Entry("Jcom", (3, "nv"), _SCRATCH),
+    *(Entry("c" + name, shape, _CW) for name, shape in CONTACT_WORKSPACE.items()),
 )
 """Scratch of one node evaluation, shared by the nodes of one model with the same ``nu`` and contact rows (a
-kernel call leaves nothing there that a later call reads)."""
+kernel call leaves nothing there that a later call reads); the last ones are the contact kernels' workspace
+(:class:`~.contact_kernel.ContactWorkspace`, its fields prefixed with ``c``)."""
 N_RB, N_WS = len(RigidBodyModel._fields) - 4, len(RigidBodyWorkspace._fields)
 RB_ARMATURE = RigidBodyModel._fields.index("armature") - 4
 """Entry of the armature (each node's own: the Pinocchio model's plus the dynamics model's)."""
 NODE = N_RB + N_WS
-(E_XNEXT, E_DX, E_FX, E_FU, E_LX, E_LU, E_LXX, E_LXU, E_LUU,
- E_A, E_DFX, E_DFU, E_MINV, E_DLX, E_DLU, E_DLXX, E_DLXU, E_DLUU,
- E_R, E_LB, E_UB, E_ACT_W, E_ITEM_COSTS, E_ITEM_WEIGHTS, E_WEIGHTS, E_AR, E_ARR,
- E_JX, E_JU, E_JC, E_HJX, E_JUC, E_HJU, E_S, E_GAINS, E_REF_R, E_REF_P, E_KIN, E_USER_DIMS, E_USER_RU,
- E_TAU, E_DTAU_DQ, E_DTAU_DV, E_J6, E_K6, E_M6, E_R3, E_P3, E_V6, E_JQ, E_JV, E_ROWS, E_GAP,
- E_JCS, E_A0, E_LAM, E_DA0_DX, E_DF_DX, E_DF_DU, E_COM, E_JCOM,
- E_CJ6) = range(NODE, NODE + len(NODE_ARRAYS) + len(SCRATCH_ARRAYS) - 8)
+ENTRIES = {e.name: NODE + k for k, e in enumerate(NODE_ARRAYS + SCRATCH_ARRAYS)}
+"""Entry ``k`` of each node and scratch array, by name; each is also the module constant ``E_<NAME>`` (the
+kernels' name for it), made here from the declaration."""
+globals().update({"E_" + name.upper(): k for name, k in ENTRIES.items()})
+
+
+def entry_shapes(entries: tuple, sizes: dict[str, int]) -> list[tuple[int, ...]]:
+    """The shapes of ``entries`` for a node of ``sizes`` (``nv, nx, ndx, nu``; the cost stack's rows ``nr``, rows
+    that depend on ``u`` ``nr_u``, items ``n_stack``; contact rows ``nc`` and contacts ``n_contacts``; the users'
+    kinematics ``n_kin`` and their largest ``u`` rows ``nr_user``, at least 1; ``ncm = max(nc, 1)`` is added): an
+    expression is evaluated over those names."""
+    names = {**sizes, "ncm": max(sizes.get("nc", 0), 1)}
+    return [tuple(d if isinstance(d, int) else int(eval(d, {"__builtins__": {}}, names)) for d in e.shape)
+            for e in entries]
+
+
+def make_arrays(entries: tuple, sizes: dict[str, int]) -> dict[str, np.ndarray]:
+    """Zeroed arrays of ``entries`` for a node of ``sizes``, by name."""
+    return {e.name: np.zeros(shape, dtype=e.dtype) for e, shape in zip(entries, entry_shapes(entries, sizes))}
+
+
+def check_arrays(entries: tuple, arrays: list, sizes: dict[str, int]) -> None:
+    """Check ``arrays`` against the declaration of ``entries``: C-contiguous, of the declared dtype and shape.
+
+    Raises
+    ------
+    ValueError
+        Naming the entry, its owner, what is declared and what was given.
+    """
+    for e, shape, a in zip(entries, entry_shapes(entries, sizes), arrays, strict=True):
+        if not isinstance(a, np.ndarray) or a.dtype != e.dtype or a.shape != shape or not a.flags.c_contiguous:
+            given = (f"{type(a).__name__}" if not isinstance(a, np.ndarray)
+                     else f"{a.dtype} array of shape {a.shape}{'' if a.flags.c_contiguous else ', not C-contiguous'}")
+            raise ValueError(f"compiled node: entry {e.name!r} ({e.owner}) must be a C-contiguous "
+                             f"{np.dtype(e.dtype)} array of shape {shape}, got a {given}")
 
 
 @compiled
@@ -114,10 +183,14 @@ def entry_workspace(tbl, ints):
     )
 
 
+CONTACT_WORKSPACE_ENTRY = ENTRIES["cJ6"]
+"""The first entry of the contact workspace."""
+
+
 @compiled
 def entry_contact_workspace(tbl, ints):
-    """The contact workspace, from the entry ``E_CJ6`` on (its fields' order)."""
-    k = E_CJ6
+    """The contact workspace, from the entry ``CONTACT_WORKSPACE_ENTRY`` on (its fields' order)."""
+    k = CONTACT_WORKSPACE_ENTRY
     return ContactWorkspace(
         mat(tbl, ints, k), mat(tbl, ints, k + 1), mat(tbl, ints, k + 2), vec(tbl, ints, k + 3),
         vec(tbl, ints, k + 4), vec(tbl, ints, k + 5), mat(tbl, ints, k + 6), mat(tbl, ints, k + 7),
