@@ -180,14 +180,15 @@ if available:
                 return None
 
 
-def compiled(function: Callable) -> Callable:
+def compiled(function: Callable, nogil: bool = False) -> Callable:
     """``numba.njit(cache=True)(function)`` cached in :data:`cache_dir` and registered in :data:`KERNELS`;
     ``function`` itself without numba.  Where no folder can be written at all, the kernel is compiled
     in every process (uncached) and a warning is logged.  A cache entry that cannot be read back
-    (truncated, garbage, another function's) is set aside with a one-line warning and compiled again."""
+    (truncated, garbage, another function's) is set aside with a one-line warning and compiled again.
+    ``nogil``: the kernel releases the GIL while it runs (several threads may run it at once)."""
     if not available:
         return function
-    kernel = numba.njit(function)
+    kernel = numba.njit(function, nogil=nogil)
     previous = numba.config.CACHE_DIR
     numba.config.CACHE_DIR = cache_dir  # read by numba when the cache picks its folder
     try:

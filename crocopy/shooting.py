@@ -133,7 +133,18 @@ class ShootingProblem(Guarded):
         self._nodes_version = 0
         self._terminalData = terminalModel.createData() if terminalData is None else terminalData
         self.cost = 0.0
-        self.nthreads = 1
+        self._nthreads = 1
+
+    @property
+    def nthreads(self) -> int:
+        """Threads that evaluate the nodes (default 1, as Crocoddyl's).  With ``k > 1``, the compiled nodes'
+        values and derivatives in a solve run on ``k`` threads, bit-identical to one thread's
+        (:mod:`crocopy.models.rbd.node_threads`); the other nodes and the rollouts stay on the calling thread."""
+        return self._nthreads
+
+    @nthreads.setter
+    def nthreads(self, value: int) -> None:
+        self._nthreads = as_count(value, "nthreads", minimum=1)
 
     @staticmethod
     def _check_chain(runningModels: list, terminalModel: ActionModelAbstract) -> None:

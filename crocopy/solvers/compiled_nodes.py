@@ -108,12 +108,25 @@ class CompiledNodes:
             ub_list.append(ub)
         return lb_list, ub_list
 
-    def calc(self, problem, xs, us) -> float:
-        """Every node's value at ``(xs, us)``; returns the total cost."""
+    def calc(self, problem, xs, us, at: TrajectoryAddresses | None = None) -> float:
+        """Every node's value at ``(xs, us)`` (``at``: where they are, when they are a solver's trajectories);
+        returns the total cost."""
         cost = 0.0
-        for calc, d, x, u in zip(self.calcs, problem.runningDatas, xs, us):
-            calc(x, u)
-            cost += d.cost
+        datas = problem.runningDatas
+        if self.horizon is not None:
+            horizon = self.horizon
+            xa, ua = (addresses(xs), addresses(us)) if at is None else (at.xs, at.us)
+            for t0, t1 in self.segments.items():
+                cost += horizon.calc(xs, us, xa, ua, t0, t1)
+                for d, c in zip(islice(datas, t0, t1), horizon.costs[t0:t1].tolist()):
+                    d.cost = c
+            for t in self.python_nodes:
+                self.calcs[t](xs[t], us[t])
+                cost += datas[t].cost
+        else:
+            for calc, d, x, u in zip(self.calcs, datas, xs, us):
+                calc(x, u)
+                cost += d.cost
         self.calcs[-1](xs[-1], None)
         cost += problem.terminalData.cost
         problem.cost = cost
@@ -188,7 +201,7 @@ def select(solver) -> CompiledNodes | None:
         make_horizon = getattr(kind, "horizon", None)
         if make_horizon is not None:
             horizon = make_horizon([e if step is not None else None for e, step in zip(running, steps)],
-                                   [m.nu for m in problem.runningModels])
+                                   [m.nu for m in problem.runningModels], problem.nthreads)
     return CompiledNodes(calcs, calc_diffs, steps[:-1], horizon, problem)
 
 

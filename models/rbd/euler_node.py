@@ -51,6 +51,7 @@ from . import node_table as table
 from .contact_lowering import ContactSet
 from .joint_types import NotLowerable
 from .lowering import RigidBodyModel, declaring, lower_model, make_workspace
+from .node_threads import ThreadTables
 from .python_residuals import PythonResiduals
 
 ACTUATIONS = declaring(ActuationModelAbstract, "compiled_matrix")
@@ -103,6 +104,7 @@ class Lowered:
         self.workspace = make_workspace(rb)
         self.workspace_entries = table_entries(list(self.workspace))
         self._scratch: dict[tuple[int, int], tuple[dict, tuple]] = {}
+        self._threads: dict[tuple[int, int, int], tuple] = {}
 
     def scratch(self, nu: int, nc: int) -> tuple[dict, tuple[np.ndarray, np.ndarray]]:
         """The arrays of :data:`.node_table.SCRATCH_ARRAYS` (and a ``Minv`` for a data without one) shared by
@@ -114,6 +116,19 @@ class Lowered:
             arrays["Minv"] = np.zeros((nv, nv))
             self._scratch[key] = arrays, table_entries([arrays[e.name] for e in table.SCRATCH_ARRAYS])
         return self._scratch[key]
+
+    def thread_entries(self, c: int, nu: int, nc: int) -> tuple[np.ndarray, np.ndarray]:
+        """The addresses of the workspace and of the scratch (with ``Minv`` last) of extra thread ``c >= 1`` for the
+        nodes with ``nu`` controls and ``nc`` contact rows (their own copies, kept here)."""
+        key = (c, nu, nc)
+        if key not in self._threads:
+            nv = self.rb.nv
+            workspace = make_workspace(self.rb)
+            arrays = table.make_arrays(table.SCRATCH_ARRAYS, {"nv": nv, "ndx": 2 * nv, "nu": nu, "nc": nc})
+            arrays["Minv"] = np.zeros((nv, nv))
+            listed = [arrays[e.name] for e in table.SCRATCH_ARRAYS] + [arrays["Minv"]]
+            self._threads[key] = (table_entries(list(workspace))[0], table_entries(listed)[0], workspace, arrays)
+        return self._threads[key][:2]
 
     def update(self, rb: RigidBodyModel) -> bool:
         """Copy ``rb``'s values into this model's arrays (their addresses stay); False if a size differs."""
@@ -207,6 +222,7 @@ class EulerNode:
         self._lowered: Lowered | None = None
         self._seen = -1
         self._n_parameters = 0
+        self.shared_minv = False
 
     def refresh(self, low: Lowered, memo: dict) -> bool:
         """Re-read the models' parameters and the data arrays' addresses; False if the node no longer qualifies.
@@ -306,7 +322,8 @@ class EulerNode:
             "Juc": stack.Juc, "HJu": stack.HJu, **self.parameters,
         }
         scratch, scratch_entries = low.scratch(self.model.nu, self.contacts.nc)
-        fields["Minv"] = ddata.Minv if hasattr(ddata, "Minv") else scratch["Minv"]
+        self.shared_minv = not hasattr(ddata, "Minv")
+        fields["Minv"] = scratch["Minv"] if self.shared_minv else ddata.Minv
         arrays = [fields[e.name] for e in table.NODE_ARRAYS]
         known = self._data_arrays
         if len(known) != len(arrays) or any(a is not b for a, b in zip(arrays, known)):
@@ -383,10 +400,10 @@ class EulerNode:
         )
 
     @staticmethod
-    def horizon(nodes: list[EulerNode | None], nus: list[int]) -> EulerHorizon:
+    def horizon(nodes: list[EulerNode | None], nus: list[int], nthreads: int = 1) -> EulerHorizon:
         """The rollout of the running nodes (``None`` where a node is not of this class; ``nus`` their controls) in
-        one compiled call per range of nodes of this class."""
-        return EulerHorizon(nodes, nus)
+        one compiled call per range of nodes of this class, their evaluations on ``nthreads`` threads."""
+        return EulerHorizon(nodes, nus, nthreads)
 
 
 class EulerHorizon:
@@ -399,7 +416,7 @@ class EulerHorizon:
     us_at, fs_at, t0, t1)`` (the addresses of ``xs``, ``us`` and of the gaps ``fs`` it writes, or None) return the
     total cost of the range, each node's in :attr:`costs`."""
 
-    def __init__(self, nodes: list[EulerNode | None], nus: list[int]) -> None:
+    def __init__(self, nodes: list[EulerNode | None], nus: list[int], nthreads: int = 1) -> None:
         first = next(n for n in nodes if n is not None)
         empty = np.zeros_like(first.tbl)
         self.tbls = np.stack([empty if n is None else n.tbl for n in nodes])
@@ -415,6 +432,8 @@ class EulerHorizon:
         ``calc_diff`` and their costs again after a compiled rollout."""
         self._python_ranges: dict[tuple[int, int], np.ndarray] = {}
         self.no_gaps = np.zeros(len(nodes) + 1, dtype=np.int64)
+        self.threads = ThreadTables(nodes, self.tbls, nthreads) if nthreads > 1 else None
+        """The extra threads' tables (:mod:`.node_threads`), or None on one thread."""
 
     def calc_diff(self, xs, us, xs_at: np.ndarray, us_at: np.ndarray, fs_at: np.ndarray | None, t0: int,
                   t1: int) -> float:
@@ -422,10 +441,34 @@ class EulerHorizon:
         for t, node in self.python:
             if t0 <= t < t1:
                 node.python.evaluate(xs[t], us[t], True)
-        return kernel.horizon_calc_diff(
-            self.tbls, self.ints, self.ioff, self.par, self.poff, xs_at, us_at, self.nus, self.nx,
-            self.ndx, fs_at is not None, self.no_gaps if fs_at is None else fs_at, t0, t1, self.costs,
-        )
+        ints, ioff, par, poff, nus, costs = self.ints, self.ioff, self.par, self.poff, self.nus, self.costs
+        nx, ndx, gaps, fs = self.nx, self.ndx, fs_at is not None, self.no_gaps if fs_at is None else fs_at
+
+        def call(tbls, a, b):
+            return kernel.horizon_calc_diff(tbls, ints, ioff, par, poff, xs_at, us_at, nus, nx, ndx, gaps, fs, a, b,
+                                            costs)
+
+        return self._run(call, t0, t1)
+
+    def calc(self, xs, us, xs_at: np.ndarray, us_at: np.ndarray, t0: int, t1: int) -> float:
+        """Values of the nodes ``t0 <= t < t1``."""
+        for t, node in self.python:
+            if t0 <= t < t1:
+                node.python.evaluate(xs[t], us[t], False)
+        ints, ioff, par, poff, nus, nx, costs = self.ints, self.ioff, self.par, self.poff, self.nus, self.nx, self.costs
+
+        def call(tbls, a, b):
+            return kernel.horizon_calc(tbls, ints, ioff, par, poff, xs_at, us_at, nus, nx, a, b, costs)
+
+        return self._run(call, t0, t1)
+
+    def _run(self, call: Callable, t0: int, t1: int) -> float:
+        """``call(tbls, a, b)`` over ``[t0, t1)``, on the extra threads too (then the costs added in node order, as
+        one call adds them)."""
+        if self.threads is None or t1 - t0 < 2:
+            return call(self.tbls, t0, t1)
+        self.threads.run(call, self.tbls, t0, t1)
+        return kernel.fold(self.costs, t0, t1)
 
     def rollout(self, addresses: tuple, xs_try: list, us_try: list, alpha: float, gaps: bool, gap_at: int, t0: int,
                 t1: int) -> float:

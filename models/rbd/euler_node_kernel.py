@@ -468,8 +468,7 @@ def horizon_recost(tbls, ints, ioff, par, poff, nodes, costs):
     return change
 
 
-@compiled
-def horizon_calc_diff(tbls, ints, ioff, par, poff, xs, us, nus, nx, ndx, gaps, fs, t0, t1, costs):
+def _horizon_calc_diff(tbls, ints, ioff, par, poff, xs, us, nus, nx, ndx, gaps, fs, t0, t1, costs):
     """:func:`node_calc_diff` over the running nodes ``t0 <= t < t1`` in one call (tables as in
     :func:`horizon_rollout`); returns the sum of their costs (each into ``costs[t]``).  With ``gaps``, also
     the gaps ``fs[t+1] = xnext_t ⊖ xs[t+1]``."""
@@ -485,6 +484,33 @@ def horizon_calc_diff(tbls, ints, ioff, par, poff, xs, us, nus, nx, ndx, gaps, f
             x_next = vector_at(xs[t + 1], nx)
             state_diff(rb.jtype, rb.idx_q, rb.idx_v, node_ints[NQ], node_ints[NV], x_next,
                        vec(tbl, node_ints, E_XNEXT), vector_at(fs[t + 1], ndx))
+    return total
+
+
+horizon_calc_diff = compiled(_horizon_calc_diff, nogil=True)
+
+
+def _horizon_calc(tbls, ints, ioff, par, poff, xs, us, nus, nx, t0, t1, costs):
+    """:func:`node_calc` over the running nodes ``t0 <= t < t1`` in one call (tables as in :func:`horizon_rollout`,
+    ``xs``/``us`` addresses); returns the sum of their costs (each into ``costs[t]``)."""
+    total = 0.0
+    for t in range(t0, t1):
+        cost = node_calc(tbls[t], ints[ioff[t]: ioff[t + 1]], par[poff[t]: poff[t + 1]], vector_at(xs[t], nx),
+                         vector_at(us[t], nus[t]))
+        costs[t] = cost
+        total += cost
+    return total
+
+
+horizon_calc = compiled(_horizon_calc, nogil=True)
+
+
+@compiled
+def fold(costs, t0, t1):
+    """``costs[t0] + ... + costs[t1 - 1]`` added in order (the sum :func:`horizon_calc_diff` returns)."""
+    total = 0.0
+    for t in range(t0, t1):
+        total += costs[t]
     return total
 
 
