@@ -21,6 +21,8 @@
   :mod:`crocopy.bench.scaling`)
 * ``crocopy bench --latency [--problems P] [--solver S] [--repeats N]``: seconds from launching
   ``crocopy solve`` to its first iteration line, fresh (empty caches) and warm (:mod:`crocopy.bench.latency`)
+* ``crocopy bench --threads [--problems ...]``: node evaluation with ``problem.nthreads`` 1 and 2
+  (:mod:`crocopy.bench.threads`)
 * ``crocopy bench --user-residual [--repeats N]``: the Talos-arm reach with its goal as the built-in residual, a
   ``ResidualModelNumba`` and a Python subclass, next to Crocoddyl's when installed (:mod:`crocopy.bench.user_residual`)
 * ``crocopy list``: the bundled problems
@@ -427,6 +429,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--user-residual", action="store_true",
                        help="the Talos-arm reach with its goal as the built-in residual, a ResidualModelNumba and a "
                             "Python subclass, ms per iteration and ratios (crocopy.bench.user_residual)")
+    bench.add_argument("--threads", action="store_true",
+                       help="the compiled nodes' calc+calcDiff with problem.nthreads = 1 and 2, and solves checked "
+                            "bit-identical (crocopy.bench.threads; --problems selects)")
     bench.add_argument("--workers", type=_positive_int, default=2, help="with --batch: worker processes")
     bench.add_argument("--runs", type=_positive_int, default=3,
                        help="with --batch/--scaling: repetitions (median reported)")

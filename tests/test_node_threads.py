@@ -57,3 +57,14 @@ def test_nthreads_takes_a_positive_count(bad):
     with pytest.raises((ValueError, TypeError), match="nthreads"):
         problem.nthreads = bad
     assert problem.nthreads == 1
+
+
+def test_the_bench_reports_both_thread_counts_and_identical_solves(monkeypatch):
+    from crocopy.bench import threads
+
+    monkeypatch.setattr(threads, "_solve", lambda name, k: (3, 1.5, [np.ones(2)]))
+    report = threads.run_threads_bench(("pend",), repeats=2)
+    row = next(line for line in report.splitlines() if line.startswith("| pend |"))
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    assert float(cells[1]) > 0 and float(cells[2]) > 0 and cells[3].endswith("×")
+    assert cells[5] == "yes (3 iterations)"

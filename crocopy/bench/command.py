@@ -58,6 +58,11 @@ def run_bench(args: argparse.Namespace) -> int:
         problem = args.problems[0] if args.problems else "jump"
         print(run_latency_bench(problem, args.solver, repeats=args.repeats or 3))
         return 0
+    if args.threads:
+        from .threads import PROBLEMS, run_threads_bench
+
+        print(run_threads_bench(tuple(args.problems or PROBLEMS), repeats=args.repeats or 15))
+        return 0
     if args.user_residual:
         from .user_residual import run_user_residual_bench
 
@@ -118,6 +123,11 @@ def _bench_vs(args: argparse.Namespace) -> int:
 
             progress("user residual: the Talos-arm reach, three ways")
             parts.append(SECTION + run_user_residual_bench(repeats=args.repeats or 5, crocoddyl=True))
+            from .threads import SECTION as THREADS
+            from .threads import run_threads_bench
+
+            progress("two threads: taichi and walk")
+            parts.append(THREADS + run_threads_bench())
     except (BenchDependencyError, KeyError) as exc:
         print(exc.args[0], file=sys.stderr)
         return 2
