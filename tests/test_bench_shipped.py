@@ -101,7 +101,7 @@ def test_the_command_runs_the_parts_asked_for(monkeypatch, capsys, argv, parts):
     monkeypatch.setattr("crocopy.bench.coverage.run_coverage", lambda *a, **k: ran.append("coverage") or "C\n")
     assert main(["bench", "--vs", "crocoddyl", *argv]) == 0
     assert ran == parts
-    expected = {"builders": "B\n", "shipped": "S\n", "user": "U\n", "coverage": "C\n"}
+    expected = {"builders": "B\n", "shipped": "S\n", "user": "U\n\n", "coverage": "C\n"}  # the user part ends a line
     assert capsys.readouterr().out == "\n".join(expected[p] for p in parts) + "\n"
 
 

@@ -135,7 +135,10 @@ def test_a_failed_job_keeps_its_coverage_so_far():
 
 
 @pytest.mark.skipif(not HAS_CROCODDYL, reason="needs the bench extra (Crocoddyl 3.2.1)")
-def test_a_shipped_script_with_a_constraint_manager():
-    row = coverage.job_row("arm_manipulation_invdyn")
-    assert row.error is None and row.problems >= 1 and len(row.reasons) > 0
-    assert row.source == "Crocoddyl example" and row.solvers
+def test_shipped_scripts_run_with_crocopy_and_report_their_nodes():
+    forward = coverage.job_row("quadrotor_fwddyn")
+    assert forward.error is None and forward.solvers == ["SolverFDDP"] and forward.problems == 1
+    assert len(forward.reasons) > 1 and forward.compiled == len(forward.reasons)
+    inverse = coverage.job_row("arm_manipulation_invdyn")
+    assert inverse.error is None and inverse.solvers == ["SolverIntro"] and len(inverse.reasons) > 1
+    assert set(inverse.reasons) == {"differential model DifferentialActionModelFreeInvDynamics"}

@@ -121,7 +121,7 @@ def _bench_vs(args: argparse.Namespace) -> int:
             from .user_residual import SECTION, run_user_residual_bench
 
             progress("user residual: the Talos-arm reach, three ways")
-            parts.append(SECTION + run_user_residual_bench(repeats=args.repeats or 5, crocoddyl=True))
+            parts.append(SECTION + run_user_residual_bench(repeats=args.repeats or 5, crocoddyl=True) + "\n")
             from .coverage import run_coverage
 
             progress("compiled nodes: every builder, script and gait")

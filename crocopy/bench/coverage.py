@@ -165,7 +165,9 @@ def format_section(rows: Sequence[Row]) -> str:
              "The nodes a solve of the DDP family (DDP, FDDP, Box-DDP, Box-FDDP, with kernels on) evaluates as one "
              "compiled call, per problem, and why the others keep the Python path (`crocopy.compiled_coverage`: "
              "the solver's own decision, node by node). Crocoddyl's jobs run with `crocoddyl` bound to crocopy; "
-             "each problem one of their solves was called on counts once, whichever solver it used.", "",
+             "each problem one of their solves was called on counts once, whichever solver it used (the other "
+             "solvers, such as SolverIntro, evaluate every node in Python). A reason is the first test a node "
+             "fails.", "",
              header, "|---" * header.count(" | ") + "|---|", *(format_row(r) for r in rows), ""]
     by_source: dict[str, list[Row]] = {}
     for row in rows:
@@ -176,10 +178,13 @@ def format_section(rows: Sequence[Row]) -> str:
         others = sum(r is not None and not r.startswith(USER) for r in reasons)
         lines.append(f"| {source} ({len(group)}) | {reasons.count(None)}/{len(reasons)} | {others} |")
     total = Counter(r for row in rows for r in row.reasons if r is not None)
-    lines += ["", "| why not compiled | nodes | problems |", "|---|---|---|"]
-    for reason, n in total.most_common():
-        where = [row.name for row in rows if reason in row.reasons]
-        lines.append(f"| {reason} | {n} | {', '.join(where)} |")
+    if total:
+        names = Counter(row.name for row in rows)
+        lines += ["", "| why not compiled | nodes | problems |", "|---|---|---|"]
+        for reason, n in total.most_common():
+            where = [row.name if names[row.name] == 1 else f"{row.name} ({row.source})"
+                     for row in rows if reason in row.reasons]
+            lines.append(f"| {reason} | {n} | {', '.join(where)} |")
     return "\n".join(lines) + "\n"
 
 
