@@ -115,6 +115,11 @@ def test_the_report_is_what_the_solver_compiles(build):
     assert any(reported)
 
 
+def test_a_problem_is_required():
+    with pytest.raises(TypeError, match="problem must be a ShootingProblem, got list"):
+        crocopy.compiled_coverage([])
+
+
 def test_the_table_counts_nodes_and_reasons(capsys):
     assert main(["bench", "--coverage", "--problems", "trot-short", "pend"]) == 0
     out = capsys.readouterr().out

@@ -16,6 +16,7 @@ from __future__ import annotations
 from typing import NamedTuple
 
 from ..not_compiled import REASON, class_reason, user_class
+from ..shooting import ShootingProblem
 
 OFFERS_NONE = {"ActionModelImpulseFwdDynamics": "impulse dynamics"}
 """Short names of the library's action models that offer no compiled evaluator (others: ``"action <class>"``)."""
@@ -42,7 +43,14 @@ def compiled_coverage(problem) -> list[NodeCoverage]:
     -------
     list of NodeCoverage
         ``problem.T + 1`` entries ``(compiled, reason)``; ``reason`` is None for a compiled node.
+
+    Raises
+    ------
+    TypeError
+        If ``problem`` is not a ``ShootingProblem``.
     """
+    if not isinstance(problem, ShootingProblem):
+        raise TypeError(f"problem must be a ShootingProblem, got {type(problem).__name__}")
     memo: dict = {}
     nodes = [*zip(problem.runningModels, problem.runningDatas), (problem.terminalModel, problem.terminalData)]
     out = []
