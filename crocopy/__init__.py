@@ -82,6 +82,7 @@ from .solvers.box_ddp import SolverBoxDDP
 from .solvers.box_fddp import SolverBoxFDDP
 from .solvers.box_qp import BoxQP, BoxQPSolution
 from .solvers.clamping import SolverClampedDDP
+from .solvers.coverage import NodeCoverage, compiled_coverage
 from .solvers.csqp import SolverCSQP
 from .solvers.hddp import CallbackHDDPLogger, CallbackHDDPVerbose, SolverHDDP
 from .solvers.intro import EqualitySolverType, SolverIntro

@@ -14,6 +14,8 @@
   (:mod:`crocopy.bench.box_parity`)
 * ``crocopy bench --compat [--problems ...] [--out FILE]``: Crocoddyl's shipped example scripts and gait
   builders run with ``crocoddyl`` bound to crocopy, next to Crocoddyl's own runs (:mod:`crocopy.bench.compat`)
+* ``crocopy bench --coverage [--problems ...] [--shipped [JOB ...]] [--out FILE]``: nodes compiled / nodes per
+  bundled problem and per Crocoddyl script and gait, with why the others are not (:mod:`crocopy.bench.coverage`)
 * ``crocopy bench --models [--problems ...]``: calc + calcDiff time and per-model-kind differences of
   every node against Crocoddyl (:mod:`crocopy.bench.node_eval`)
 * ``crocopy bench --batch`` / ``--scaling``: :func:`crocopy.solve_many` speed-up on the quadrotor
@@ -409,7 +411,8 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--solve-budget", type=_positive_float, default=30.0,
                        help="with --vs: no further full-solve round starts after this many seconds per problem")
     bench.add_argument("--no-memory", action="store_true", help="with --vs: skip the peak-memory subprocesses")
-    bench.add_argument("--out", default=None, help="with --vs: also write the markdown report to this file")
+    bench.add_argument("--out", default=None,
+                       help="with --vs or --coverage: also write the markdown report to this file")
     bench.add_argument("--batch", action="store_true",
                        help="10 quadrotor solves serially and with crocopy.solve_many (crocopy.bench.batch)")
     bench.add_argument("--scaling", action="store_true",
@@ -423,6 +426,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--compat", action="store_true",
                        help="Crocoddyl's shipped example scripts and gait builders run with crocopy as crocoddyl, "
                             "next to Crocoddyl's own runs (crocopy.bench.compat; bench extra; --problems selects)")
+    bench.add_argument("--coverage", action="store_true",
+                       help="nodes compiled / nodes per builder (--problems) and per Crocoddyl script and gait "
+                            "(--shipped; bench extra), and why the others are not (crocopy.bench.coverage)")
     bench.add_argument("--latency", action="store_true",
                        help="seconds from launching `crocopy solve` to its first iteration line, with empty and "
                             "with filled caches, and of `import crocopy` (crocopy.bench.latency; first --problems)")

@@ -51,6 +51,7 @@ from crocopy.actuation_base import ActuationModelAbstract, JointDataAbstract
 from crocopy.constraints.manager import ConstraintModelManager
 from crocopy.costs.sum import CostModelSum
 from crocopy.diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
+from crocopy.not_compiled import class_reason, decline
 from crocopy.stored import bind
 from crocopy.validation import as_bool
 
@@ -246,11 +247,11 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         """The compiled evaluator of the Euler node ``(iam, data)`` over this model (:func:`.rbd.euler_node.euler_node`
         with its active contacts, :mod:`.rbd.contact_lowering`), or None for a subclass or a node it cannot compile."""
         if type(self) is not DifferentialActionModelContactFwdDynamics:
-            return None
+            return decline(memo, class_reason(self, "differential model"))
         from .rbd.contact_lowering import active_contacts
         from .rbd.euler_node import euler_node
 
-        contacts = active_contacts(self)
+        contacts = active_contacts(self, memo)
         return None if contacts is None else euler_node(iam, data, terminal, memo, contacts)
 
     def _kinematics(self, data: "DifferentialActionDataContactFwdDynamics", q: np.ndarray, v: np.ndarray) -> None:

@@ -29,6 +29,7 @@ from scipy.linalg import cho_factor, cho_solve
 from crocopy.actuation_base import ActuationModelAbstract, JointDataAbstract
 from crocopy.costs.sum import CostModelSum
 from crocopy.diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
+from crocopy.not_compiled import class_reason, decline
 from crocopy.stored import Stored
 from crocopy.validation import as_vector
 
@@ -155,7 +156,7 @@ class DifferentialActionModelFreeFwdDynamics(ArmatureMixin, DifferentialActionMo
         """The compiled evaluator of the Euler node ``(iam, data)`` over this model
         (:func:`.rbd.euler_node.euler_node`), or None for a subclass or a node it cannot compile."""
         if type(self) is not DifferentialActionModelFreeFwdDynamics:
-            return None
+            return decline(memo, class_reason(self, "differential model"))
         return euler_node(iam, data, terminal, memo)
 
     def quasiStatic(

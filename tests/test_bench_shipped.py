@@ -85,7 +85,7 @@ def test_recorder_keeps_copies_of_the_arguments():
 
 
 @pytest.mark.parametrize(("argv", "parts"), [
-    ([], ["builders", "shipped", "user", "threads"]),
+    ([], ["builders", "shipped", "user", "threads", "coverage"]),
     (["--problems", "pend"], ["builders"]),
     (["--shipped"], ["shipped"]),
     (["--shipped", "arm_manipulation_fwddyn", "--problems", "pend"], ["builders", "shipped"]),
@@ -100,9 +100,10 @@ def test_the_command_runs_the_parts_asked_for(monkeypatch, capsys, argv, parts):
     monkeypatch.setattr("crocopy.bench.user_residual.SECTION", "")
     monkeypatch.setattr("crocopy.bench.threads.run_threads_bench", lambda *a, **k: ran.append("threads") or "T\n")
     monkeypatch.setattr("crocopy.bench.threads.SECTION", "")
+    monkeypatch.setattr("crocopy.bench.coverage.run_coverage", lambda *a, **k: ran.append("coverage") or "C\n")
     assert main(["bench", "--vs", "crocoddyl", *argv]) == 0
     assert ran == parts
-    expected = {"builders": "B\n", "shipped": "S\n", "user": "U\n", "threads": "T\n"}
+    expected = {"builders": "B\n", "shipped": "S\n", "user": "U\n\n", "threads": "T\n", "coverage": "C\n"}
     assert capsys.readouterr().out == "\n".join(expected[p] for p in parts) + "\n"
 
 

@@ -50,6 +50,10 @@ def run_bench(args: argparse.Namespace) -> int:
         from .compat import run_compat_cli
 
         return run_compat_cli(args.problems, args.out)
+    if args.coverage:
+        from .coverage import run_coverage_cli
+
+        return run_coverage_cli(args)
     if args.models:
         return _bench_models(args)
     if args.latency:
@@ -122,12 +126,16 @@ def _bench_vs(args: argparse.Namespace) -> int:
             from .user_residual import SECTION, run_user_residual_bench
 
             progress("user residual: the Talos-arm reach, three ways")
-            parts.append(SECTION + run_user_residual_bench(repeats=args.repeats or 5, crocoddyl=True))
+            parts.append(SECTION + run_user_residual_bench(repeats=args.repeats or 5, crocoddyl=True) + "\n")
             from .threads import SECTION as THREADS
             from .threads import run_threads_bench
 
             progress("two threads: taichi and walk")
             parts.append(THREADS + run_threads_bench())
+            from .coverage import run_coverage
+
+            progress("compiled nodes: every builder, script and gait")
+            parts.append(run_coverage([], [], progress))
     except (BenchDependencyError, KeyError) as exc:
         print(exc.args[0], file=sys.stderr)
         return 2

@@ -19,6 +19,7 @@ import numpy as np
 from .. import kernels
 from ..enums import Jcomponent
 from ..kernels import log_fallback
+from ..not_compiled import class_reason, decline
 from ..state import StateAbstract
 from . import euler_kernel as integrator_kernel
 from .base import ControlChainData, IntegratedActionDataAbstract, IntegratedActionModelAbstract
@@ -46,10 +47,14 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
         """This node's compiled evaluator for a solve (:mod:`crocopy.solvers.compiled_nodes`), offered by the
         differential model (``_compiled_euler_node``) when it has one; None for a subclass (its overrides
         run) or another control parametrization."""
-        if type(self) is not IntegratedActionModelEuler or not self._identity_control:
-            return None
+        if type(self) is not IntegratedActionModelEuler:
+            return decline(memo, class_reason(self, "integrator"))
+        if not self._identity_control:
+            return decline(memo, f"control parametrization {type(self.control).__name__}")
         make = getattr(self.differential, "_compiled_euler_node", None)
-        return None if make is None else make(self, data, terminal, memo)
+        if make is None:
+            return decline(memo, class_reason(self.differential, "differential model"))
+        return make(self, data, terminal, memo)
 
     def createData(self) -> "IntegratedActionDataEuler":
         return IntegratedActionDataEuler(self)

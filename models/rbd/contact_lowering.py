@@ -21,6 +21,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from crocopy.not_compiled import class_reason, decline
+
 from .. import contacts
 from .lowering import declaring
 
@@ -28,12 +30,15 @@ CONTACTS = declaring(contacts.ContactModelAbstract, "compiled_reference")
 """The contacts compiled nodes take: those that lower their reference themselves (``compiled_reference(R, p)``)."""
 
 
-def active_contacts(dam) -> list | None:
+def active_contacts(dam, memo: dict) -> list | None:
     """The active contact models of ``dam`` (a ``DifferentialActionModelContactFwdDynamics``), or None if the node
-    cannot compile (see the module docstring)."""
+    cannot compile (see the module docstring; the reason is recorded in ``memo``, :mod:`crocopy.not_compiled`)."""
     models = [m for _, m in dam.contacts._active]
-    if any(type(m) not in CONTACTS for m in models) or dam._redundant_contacts():
-        return None
+    other = next((m for m in models if type(m) not in CONTACTS), None)
+    if other is not None:
+        return decline(memo, class_reason(other, "contact"))
+    if dam._redundant_contacts():
+        return decline(memo, "redundant contacts")
     return models
 
 

@@ -40,6 +40,7 @@ import pinocchio as pin
 from crocopy.costs.base import CostModelResidual
 from crocopy.costs.stack_kernel import activation_values
 from crocopy.kernels import checked_address, overridden
+from crocopy.not_compiled import class_reason, decline
 from crocopy.residuals.base import ResidualModelAbstract
 from crocopy.versioning import ParametersVersion
 
@@ -88,6 +89,16 @@ def python_residual(residual) -> bool:
     return isinstance(residual, ResidualModelAbstract) and not type(residual).__module__.startswith(
         ("crocopy.models.", "crocopy.residuals.")
     )
+
+
+def generic_reason(cost) -> str:
+    """Why a cost the cost stack does not hold (a cost sum's ``generic`` item, :mod:`crocopy.costs.sum`) keeps its
+    node off the compiled path."""
+    if not isinstance(cost, CostModelResidual):
+        return class_reason(cost, "cost")
+    if not cost.activation.diagonal:
+        return class_reason(cost.activation, "activation")
+    return class_reason(cost.residual, "residual with no rows")
 
 
 _NODES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -152,8 +163,9 @@ def lowered(model: pin.Model, memo: dict) -> Lowered | None:
         return memo[key]
     try:
         rb = lower_model(model)
-    except NotLowerable:
+    except NotLowerable as exc:
         memo[key] = None
+        memo[key, NotLowerable] = exc.reason
         return None
     cached = _LOWERED.get(key)
     if cached is not None and cached[0] is model and cached[1].update(rb):
@@ -177,14 +189,18 @@ def table_entries(arrays: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
 
 def euler_node(iam, data, terminal: bool, memo: dict, contacts: list = ()) -> EulerNode | None:
     """The refreshed evaluator of node ``(iam, data)`` with the active rigid ``contacts`` (3D/6D contact models), or
-    None if the node does not qualify (the caller, the free or contact dynamics model, has checked its own class,
-    the integrator's and the contacts')."""
+    None if the node does not qualify (the reason recorded in ``memo``, :mod:`crocopy.not_compiled`; the caller,
+    the free or contact dynamics model, has checked its own class, the integrator's and the contacts')."""
     dam = iam.differential
-    if dam.constraints is not None or type(dam.state) is not StateMultibody or type(dam.actuation) not in ACTUATIONS:
-        return None
+    if dam.constraints is not None:
+        return decline(memo, "constraint manager")
+    if type(dam.state) is not StateMultibody:
+        return decline(memo, class_reason(dam.state, "state"))
+    if type(dam.actuation) not in ACTUATIONS:
+        return decline(memo, class_reason(dam.actuation, "actuation"))
     low = lowered(dam.state.pinocchio, memo)
     if low is None:
-        return None
+        return decline(memo, memo[id(dam.state.pinocchio), NotLowerable])
     node = _NODES.get(data)
     if node is None or node.model is not iam or node.terminal != terminal or node.nv != low.rb.nv \
             or not node.contacts.same(contacts):
@@ -225,7 +241,8 @@ class EulerNode:
         self.shared_minv = False
 
     def refresh(self, low: Lowered, memo: dict) -> bool:
-        """Re-read the models' parameters and the data arrays' addresses; False if the node no longer qualifies.
+        """Re-read the models' parameters and the data arrays' addresses; False if the node no longer qualifies (the
+        reason recorded in ``memo``).
 
         The cost stack's items (kinds, frames, reference frames) are read again when any parameter anywhere was
         touched since this node last read them (:mod:`crocopy.versioning`: every public assignment to a model
@@ -238,7 +255,9 @@ class EulerNode:
         changed = stack.refresh_if_stale(self.terminal)
         changed = changed or self._residuals is None or self._seen != ParametersVersion.value
         if changed:
-            if not self._read_items(stack, ddata):
+            why = self._read_items(stack, ddata)
+            if why is not None:
+                decline(memo, why)
                 return False
             self._seen = ParametersVersion.value
         self.contacts.refresh()
@@ -254,22 +273,27 @@ class EulerNode:
         self._table(low, data, ddata, stack, changed)
         return True
 
-    def _read_items(self, stack, ddata) -> bool:
-        """The compiled items of the cost stack (kind, rows, frame, reference frame, parameter offset)."""
+    def _read_items(self, stack, ddata) -> str | None:
+        """Read the compiled items of the cost stack (kind, rows, frame, reference frame, parameter offset); returns
+        None, or why the node cannot compile (:mod:`crocopy.not_compiled`)."""
         self._residuals = None
-        if stack.unfused or ddata.costs.generic:
-            return False
+        if stack.unfused:
+            return class_reason(stack.unfused[0][0], "activation")
+        if ddata.costs.generic:
+            return generic_reason(self.model.differential.costs.costs[ddata.costs.generic[0]].cost)
         items, residuals, offset, rows_u, python = [], [], 2, 1, []
         for (_, item, cdata), rows in zip(stack.items, stack.slices):
             if type(item.cost) is not CostModelResidual:
-                return False
+                return class_reason(item.cost, "cost")
             if not item.active or cdata.zero:
                 continue
             residual = item.cost.residual
             kind = residual_kind(residual)
             if kind is None:
-                if not python_residual(residual) or self.contacts.models:
-                    return False
+                if not python_residual(residual):
+                    return class_reason(residual, "residual")
+                if self.contacts.models:
+                    return class_reason(residual, "residual") + " in a contact node"
                 python.append((residual, cdata.residual))
                 continue
             frame, reference = getattr(residual, "id", 0), int(residual.type) if kind == table.VELOCITY else 0
@@ -281,7 +305,7 @@ class EulerNode:
             if kind == table.CONE:
                 row, nc = self.contacts.rows.get(frame, (0, 0))
                 if nc < residual.ncf:
-                    return False
+                    return "cone without its active contact"
                 frame, reference = row, residual.ncf
             items += [kind, rows.start, rows.stop - rows.start, frame, reference, offset, *user]
             residuals.append((kind, residual))
@@ -291,7 +315,7 @@ class EulerNode:
         self.python = PythonResiduals(self.model.state.pinocchio, ddata.pinocchio, python)
         if self.parameters["user_Ru"].shape[0] < rows_u:
             self.parameters["user_Ru"] = np.zeros((rows_u, self.model.nu))
-        return True
+        return None
 
     @staticmethod
     def _parameters(kind: int, residual) -> list[float]:

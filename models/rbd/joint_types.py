@@ -51,7 +51,12 @@ _UNALIGNED = {
 
 
 class NotLowerable(ValueError):
-    """A Pinocchio model the compiled kernels cannot represent (the message names the joint and its type)."""
+    """A Pinocchio model the compiled kernels cannot represent (the message names the joint and its type;
+    ``reason``, a short category such as ``"joint type JointModelSpherical"``)."""
+
+    def __init__(self, message: str, reason: str = "joint tree order") -> None:
+        super().__init__(message)
+        self.reason = reason
 
 
 def joint_arrays(model: object) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -76,7 +81,8 @@ def joint_arrays(model: object) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.
             jtype[i] = _UNALIGNED[kind]
             axis[i] = _unaligned_axis(model, joint, jtype[i] == PRISMATIC)
         else:
-            raise NotLowerable(f"joint {model.names[i]!r} is a {kind}, which the compiled kernels do not support")
+            raise NotLowerable(f"joint {model.names[i]!r} is a {kind}, which the compiled kernels do not support",
+                               f"joint type {kind}")
         idx_q[i], idx_v[i] = joint.idx_q, joint.idx_v
     return jtype, idx_q, idx_v, axis
 
