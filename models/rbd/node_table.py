@@ -110,8 +110,21 @@ def entry_shapes(entries: tuple, sizes: dict[str, int]) -> list[tuple[int, ...]]
     kinematics ``n_kin`` and their largest ``u`` rows ``nr_user``, at least 1; ``ncm = max(nc, 1)`` is added): an
     expression is evaluated over those names."""
     names = {**sizes, "ncm": max(sizes.get("nc", 0), 1)}
-    return [tuple(d if isinstance(d, int) else int(eval(d, {"__builtins__": {}}, names)) for d in e.shape)
-            for e in entries]
+    return [tuple(_size(d, names) for d in e.shape) for e in entries]
+
+
+_EXPRESSIONS: dict[str, object] = {}
+"""Each size expression compiled once."""
+
+
+def _size(d: int | str, names: dict[str, int]) -> int:
+    if isinstance(d, int):
+        return d
+    if d in names:
+        return names[d]
+    if d not in _EXPRESSIONS:
+        _EXPRESSIONS[d] = compile(d, "<size>", "eval")
+    return int(eval(_EXPRESSIONS[d], {"__builtins__": {}}, names))
 
 
 def make_arrays(entries: tuple, sizes: dict[str, int]) -> dict[str, np.ndarray]:
