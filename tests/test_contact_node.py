@@ -9,6 +9,8 @@ uses Pinocchio's ``dDifference``, whose ``Jlog6`` loses up to 1e-7 for small ang
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -204,11 +206,15 @@ def test_solves_with_compiled_contact_nodes_match_the_python_nodes(solver):
 
 def test_a_diverging_contact_solve_stops_as_without_compiled_nodes():
     """Ten times the time step (the standing problem's nodes share one model): every trial rollout overflows; both
-    paths stop the same way, with a finite iterate."""
+    paths stop the same way, with a finite iterate.  Where a rollout overflows, the node a kernel's acceleration
+    first stops being finite is evaluated on the Python path, whose overflow may come one node later: the reasons
+    agree but for that node's index."""
     outcomes = []
     for compiled in (True, False):
         problem, xs, us = _standing_problem()
         problem.runningModels[0].dt = 0.1
         outcomes.append(failed_solve(problem, xs, us, compiled, 15))
-    assert outcomes[0] == outcomes[1]
-    assert outcomes[0][0] is False and "non-finite" in outcomes[0][2]
+    assert outcomes[0][:2] == outcomes[1][:2]
+    assert [re.sub(r"node \d+", "node t", o[2]) for o in outcomes] == [
+        "no step accepted and regularization reached reg_max = 1e+09 (last trial: non-finite cost at node t in the "
+        "rollout)"] * 2

@@ -171,3 +171,28 @@ def test_every_robot(name):
 def test_the_unloadable_robots_still_fail_to_load(name):
     with pytest.raises(UNLOADABLE[name]):
         example_robot_data.load(name)
+
+
+@pytest.mark.parametrize("at_neutral", [False, True], ids=["guess-neutral", "x0-neutral"])
+def test_a_contact_set_singular_at_some_states_solves_as_without_compiled_nodes(at_neutral):
+    """centauro's four wheels lose rank at its neutral posture: there the KKT system is singular, the Python path
+    takes least squares, and the compiled nodes evaluate those nodes on their Python path (values, derivatives and
+    rollout steps), so the solve equals the one without compiled nodes.  From the standing posture with the neutral
+    guess (the derivatives at the guess), or from the neutral posture itself (every rollout starts there).  Near that
+    posture the KKT system is ill-conditioned, and Pinocchio's factorisation stays finite at states where the
+    kernel's pivot vanishes (those nodes then take the Python path): the iterates agree to the conditioning (1e-4)
+    there, to 1e-8 from the standing posture.  Without the per-node fallback the compiled solve stopped on NaN."""
+    model, q0 = robot("centauro")
+    start = pin.neutral(model) if at_neutral else q0
+    results = []
+    for compiled in (True, False):
+        problem = contact_problem(model, start, QUADRUPED_FEET["centauro"], False)
+        solver = make_solver("SolverFDDP", problem, compiled)
+        solver.solve([], [], MAXITER)
+        assert np.isfinite(solver.cost) and all(np.isfinite(x).all() for x in solver.xs)
+        results.append((solver.iter, solver.reason, solver.cost, [x.copy() for x in solver.xs]))
+    assert results[0][:2] == results[1][:2] and results[0][0] == MAXITER
+    tolerance = 1e-4 if at_neutral else 1e-8
+    assert results[0][2] == pytest.approx(results[1][2], rel=tolerance)
+    for a, b in zip(results[0][3], results[1][3], strict=True):
+        np.testing.assert_allclose(a, b, rtol=tolerance, atol=tolerance)

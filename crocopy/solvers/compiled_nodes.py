@@ -17,8 +17,10 @@ that has re-read the model's parameters (references, weights, time step) and has
   has an evaluator of that class and all share one state size, ``horizon.rollout(addresses, xs_try, us_try, alpha,
   gaps, gap_at, t0, t1) -> total`` runs the rollout steps of the nodes ``t0 <= t < t1`` in one call (``addresses``:
   of the solver's arrays, :func:`.rollout.horizon_addresses`; ``gap_at``: the one node whose gap stays open
-  besides ``gaps``, -1 for none), and ``horizon.calc_diff(xs, us, xs_at, us_at, fs_at, t0, t1) -> total`` their
-  ``calcDiff`` (and their gaps ``fs[t+1]`` when ``fs_at``, the gaps' addresses); each node's cost is in
+  besides ``gaps``, -1 for none; a non-finite total: ``horizon.costs`` says from which node on, and
+  ``horizon.fold(t0, t) -> total`` adds the costs before it), and ``horizon.calc_diff(xs, us, fs, xs_at, us_at,
+  fs_at, t0, t1) -> total`` their ``calcDiff`` (and their gaps ``fs[t+1]`` when ``fs_at``, the gaps' addresses);
+  each node's cost is in
   ``horizon.costs[t]``, which the caller stores in the datas.  The calls cover each maximal range of such
   nodes (:attr:`CompiledNodes.segments`); the other nodes keep their Python step in between;
 
@@ -146,7 +148,7 @@ class CompiledNodes:
             else:
                 xa, ua, fa = at.xs, at.us, at.fs
             for t0, t1 in self.segments.items():
-                cost += horizon.calc_diff(xs, us, xa, ua, fa, t0, t1)
+                cost += horizon.calc_diff(xs, us, fs, xa, ua, fa, t0, t1)
                 for d, c in zip(islice(datas, t0, t1), horizon.costs[t0:t1].tolist()):
                     d.cost = c
             for t in self.python_nodes:

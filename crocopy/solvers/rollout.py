@@ -8,6 +8,7 @@
 
 from __future__ import annotations
 
+import math
 from itertools import islice
 
 import numpy as np
@@ -57,11 +58,18 @@ def trial_rollout(solver, steplength: float, gaps: bool = False, bounds: tuple[l
     cost = 0.0
     t = 0
     T = problem.T
+    by_node = -1  # a node the compiled step left non-finite: evaluated again without it (its Python path)
     while t < T:
-        if t in segments:
-            end = segments[t]
-            cost += nodes.horizon.rollout(addresses, xs_try, us_try, steplength, gaps, gap_at, t, end)
-            for d, c in zip(islice(datas, t, end), nodes.horizon.costs[t:end].tolist()):
+        if t in segments and t != by_node:
+            end, horizon = segments[t], nodes.horizon
+            c = horizon.rollout(addresses, xs_try, us_try, steplength, gaps, gap_at, t, end)
+            if not math.isfinite(c):
+                bad = next((s for s in range(t, end) if not math.isfinite(horizon.costs[s])), None)
+                if bad is not None:
+                    end = by_node = bad
+                    c = horizon.fold(t, end)
+            cost += c
+            for d, c in zip(islice(datas, t, end), horizon.costs[t:end].tolist()):
                 d.cost = c
             t = end
             x = xs_try[t]
@@ -76,11 +84,14 @@ def trial_rollout(solver, steplength: float, gaps: bool = False, bounds: tuple[l
                 lb, ub = unbounded[m.nu]
             else:
                 ub = ubs[t]
-            step = None if steps is None else steps[t]
+            step = None if steps is None or t == by_node else steps[t]
             if step is not None:
                 x_next = xs_try[t + 1]
                 d.cost = c = step(xs[t], x, us[t], k[t], K[t], steplength, lb, ub, u, dx, x_next, fs[t + 1],
                                   gaps or t + 1 == gap_at)
+                if not math.isfinite(c):
+                    by_node = t
+                    continue
                 cost += c
                 x = x_next
                 t += 1

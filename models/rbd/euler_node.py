@@ -30,6 +30,7 @@ stack's arrays).  Evaluators are cached per node data
 
 from __future__ import annotations
 
+import math
 import weakref
 from collections.abc import Callable
 from functools import partial
@@ -389,7 +390,20 @@ class EulerNode:
     def calc(self, x: np.ndarray, u: np.ndarray | None) -> None:
         if self.python.items:
             self.python.evaluate(x, u, False)
-        self._data().cost = kernel.node_calc(self.tbl, self.ints, self.par, x, self.no_control if u is None else u)
+        cost = kernel.node_calc(self.tbl, self.ints, self.par, x, self.no_control if u is None else u)
+        if math.isfinite(cost):
+            self._data().cost = cost
+        else:
+            self.python_path(x, u, False)
+
+    def python_path(self, x: np.ndarray, u: np.ndarray | None, derivatives: bool) -> float:
+        """Evaluate the node on its Python path (where the kernel's acceleration is not finite: a contact set whose
+        KKT system is singular at this state takes least squares there, as with kernels off); returns its cost."""
+        model, data = self.model, self._data()
+        model._raw_calc(data, x, u)
+        if derivatives:
+            model._raw_calcDiff(data, x, u)
+        return data.cost
 
     @property
     def rollout_step(self) -> Callable:
@@ -419,9 +433,11 @@ class EulerNode:
     def calcDiff(self, x: np.ndarray, u: np.ndarray | None, synced: bool) -> None:
         if self.python.items:
             self.python.evaluate(x, u, True)
-        self._data().cost = kernel.node_calc_diff(
-            self.tbl, self.ints, self.par, x, self.no_control if u is None else u
-        )
+        cost = kernel.node_calc_diff(self.tbl, self.ints, self.par, x, self.no_control if u is None else u)
+        if math.isfinite(cost):
+            self._data().cost = cost
+        else:
+            self.python_path(x, u, True)
 
     @staticmethod
     def horizon(nodes: list[EulerNode | None], nus: list[int], nthreads: int = 1) -> EulerHorizon:
@@ -436,9 +452,11 @@ class EulerHorizon:
     compiled nodes per call; the other nodes' entries are never read.
 
     ``rollout(addresses, xs_try, us_try, alpha, gaps, gap_at, t0, t1)`` (``addresses``: of ``xs, us, xs_try, us_try,
-    dxs, ks, Ks, fs, lbs, ubs``, :func:`crocopy.solvers.rollout.horizon_addresses`) and ``calc_diff(xs, us, xs_at,
-    us_at, fs_at, t0, t1)`` (the addresses of ``xs``, ``us`` and of the gaps ``fs`` it writes, or None) return the
-    total cost of the range, each node's in :attr:`costs`."""
+    dxs, ks, Ks, fs, lbs, ubs``, :func:`crocopy.solvers.rollout.horizon_addresses`) and ``calc_diff(xs, us, fs, xs_at,
+    us_at, fs_at, t0, t1)`` (with the addresses of ``xs``, ``us`` and of the gaps ``fs`` it writes, or None) return
+    the total cost of the range, each node's in :attr:`costs`.  A node whose acceleration is not finite (a contact
+    set singular at that state) is evaluated again on its Python path by ``calc``/``calc_diff``; a rollout stops
+    there (its cost NaN) and the caller goes on node by node (:func:`crocopy.solvers.rollout.trial_rollout`)."""
 
     def __init__(self, nodes: list[EulerNode | None], nus: list[int], nthreads: int = 1) -> None:
         first = next(n for n in nodes if n is not None)
@@ -456,23 +474,26 @@ class EulerHorizon:
         ``calc_diff`` and their costs again after a compiled rollout."""
         self._python_ranges: dict[tuple[int, int], np.ndarray] = {}
         self.no_gaps = np.zeros(len(nodes) + 1, dtype=np.int64)
+        self.nodes = nodes
         self.threads = ThreadTables(nodes, self.tbls, nthreads) if nthreads > 1 else None
         """The extra threads' tables (:mod:`.node_threads`), or None on one thread."""
 
-    def calc_diff(self, xs, us, xs_at: np.ndarray, us_at: np.ndarray, fs_at: np.ndarray | None, t0: int,
+    def calc_diff(self, xs, us, fs, xs_at: np.ndarray, us_at: np.ndarray, fs_at: np.ndarray | None, t0: int,
                   t1: int) -> float:
-        """Values and derivatives of the nodes ``t0 <= t < t1`` (and their gaps ``fs[t+1]`` when ``fs_at``)."""
+        """Values and derivatives of the nodes ``t0 <= t < t1`` (and their gaps ``fs[t+1]`` when ``fs_at``, the
+        addresses of the list ``fs``)."""
         for t, node in self.python:
             if t0 <= t < t1:
                 node.python.evaluate(xs[t], us[t], True)
         ints, ioff, par, poff, nus, costs = self.ints, self.ioff, self.par, self.poff, self.nus, self.costs
-        nx, ndx, gaps, fs = self.nx, self.ndx, fs_at is not None, self.no_gaps if fs_at is None else fs_at
+        nx, ndx, gaps, gap_at = self.nx, self.ndx, fs_at is not None, self.no_gaps if fs_at is None else fs_at
 
         def call(tbls, a, b):
-            return kernel.horizon_calc_diff(tbls, ints, ioff, par, poff, xs_at, us_at, nus, nx, ndx, gaps, fs, a, b,
-                                            costs)
+            return kernel.horizon_calc_diff(tbls, ints, ioff, par, poff, xs_at, us_at, nus, nx, ndx, gaps, gap_at, a,
+                                            b, costs)
 
-        return self._run(call, t0, t1)
+        total = self._run(call, t0, t1)
+        return total if math.isfinite(total) else self._python_path(xs, us, fs if gaps else None, t0, t1, True)
 
     def calc(self, xs, us, xs_at: np.ndarray, us_at: np.ndarray, t0: int, t1: int) -> float:
         """Values of the nodes ``t0 <= t < t1``."""
@@ -484,7 +505,23 @@ class EulerHorizon:
         def call(tbls, a, b):
             return kernel.horizon_calc(tbls, ints, ioff, par, poff, xs_at, us_at, nus, nx, a, b, costs)
 
-        return self._run(call, t0, t1)
+        total = self._run(call, t0, t1)
+        return total if math.isfinite(total) else self._python_path(xs, us, None, t0, t1, False)
+
+    def fold(self, t0: int, t1: int) -> float:
+        """The sum of :attr:`costs` ``[t0:t1]`` in node order."""
+        return kernel.fold(self.costs, t0, t1)
+
+    def _python_path(self, xs, us, fs, t0: int, t1: int, derivatives: bool) -> float:
+        """After a range whose total is not finite: the nodes whose cost is not finite again on their Python path
+        (:meth:`EulerNode.python_path`), with their gaps when ``fs``; returns the range's total."""
+        for t in range(t0, t1):
+            if not math.isfinite(self.costs[t]):
+                node = self.nodes[t]
+                self.costs[t] = node.python_path(xs[t], us[t], derivatives)
+                if fs is not None:
+                    node.model.state._diff_into(xs[t + 1], node._data().xnext, fs[t + 1])
+        return kernel.fold(self.costs, t0, t1)
 
     def _run(self, call: Callable, t0: int, t1: int) -> float:
         """``call(tbls, a, b)`` over ``[t0, t1)``, on the extra threads too (then the costs added in node order, as

@@ -22,6 +22,8 @@ the contact dynamics' damping.
 
 from __future__ import annotations
 
+import math
+
 from crocopy.costs.stack_kernel import activation_values, derivatives_and_sums
 from crocopy.integrators.euler_kernel import add_integrate_jacobian, euler_chain
 from crocopy.kernels import (
@@ -393,11 +395,27 @@ def _step(tbl, ints, par, x, rb):
 
 
 @compiled
+def _singular(tbl, ints):
+    """Whether the running node's acceleration is not finite: a contact set whose KKT system is singular at this
+    state (the Python path then takes least squares), or a diverged state."""
+    if ints[TERMINAL]:
+        return False
+    a = vec(tbl, ints, E_A)
+    for i in range(a.shape[0]):
+        if not math.isfinite(a[i]):
+            return True
+    return False
+
+
+@compiled
 def node_calc(tbl, ints, par, x, u):
-    """``xnext`` of the node at ``(x, u)``; returns its cost (``dt`` times the stack's for a running node)."""
+    """``xnext`` of the node at ``(x, u)``; returns its cost (``dt`` times the stack's for a running node), NaN when
+    the acceleration is not finite (:func:`_singular`: the caller evaluates the node on the Python path)."""
     rb, ws = entry_model(tbl, ints), entry_workspace(tbl, ints)
     cost = _values(tbl, ints, par, x, u, rb, ws)
     _step(tbl, ints, par, x, rb)
+    if _singular(tbl, ints):
+        return math.nan
     return cost if ints[TERMINAL] else par[0] * cost
 
 
@@ -571,10 +589,13 @@ def _integrate_chain(tbl, ints, x, rb):
 
 @compiled
 def node_calc_diff(tbl, ints, par, x, u):
-    """Values and derivatives of the node at ``(x, u)`` (self-contained); returns its cost."""
+    """Values and derivatives of the node at ``(x, u)`` (self-contained); returns its cost, NaN when the acceleration
+    is not finite (as :func:`node_calc`)."""
     rb, ws = entry_model(tbl, ints), entry_workspace(tbl, ints)
     cost = _values(tbl, ints, par, x, u, rb, ws)
     _step(tbl, ints, par, x, rb)
+    if _singular(tbl, ints):
+        return math.nan
     terminal = ints[TERMINAL] != 0
     if not terminal:
         _dynamics_jacobians(tbl, ints, x, rb, ws)
