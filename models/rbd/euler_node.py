@@ -270,7 +270,7 @@ class EulerNode:
             return self.refresh(low, memo)
         self.par = np.array(par)
         np.add(low.rb.armature, dam.armature, out=self.armature)
-        self._actuation_matrix(dam)
+        self._actuation_matrix(dam, memo)
         self._table(low, data, ddata, stack, changed)
         return True
 
@@ -324,18 +324,25 @@ class EulerNode:
         a user residual's ``parameters()``)."""
         return list(residual.checked_parameters()) if kind == table.USER else residual.compiled_parameters()
 
-    def _actuation_matrix(self, dam) -> None:
-        """``S = ∂τ/∂u`` of the (linear, state-independent) actuation, as it declares it."""
+    def _actuation_matrix(self, dam, memo: dict) -> None:
+        """``S = ∂τ/∂u`` of the (linear, state-independent) actuation, as it declares it (once per actuation and
+        ``memo``, one solve)."""
         if not self.terminal:
-            self.parameters["S"][:] = dam.actuation.compiled_matrix()
+            key = ("S", id(dam.actuation))
+            if key not in memo:
+                memo[key] = dam.actuation.compiled_matrix()
+            self.parameters["S"][:] = memo[key]
 
     def _table(self, low: Lowered, data, ddata, stack, changed: bool) -> None:
         """The addresses and dimensions of every array the kernels read or write, and the integer program.
 
         Entries: the lowered model's arrays (the armature is this node's, model's plus dynamics'), its shared
         workspace, then :data:`.node_table.NODE_ARRAYS` (the node's own) and ``SCRATCH_ARRAYS`` (shared
-        by the model's nodes of the same sizes, :meth:`Lowered.scratch`); the data arrays' addresses are read
-        again only for arrays that are not those of the last refresh."""
+        by the model's nodes of the same sizes, :meth:`Lowered.scratch`).  Made again only when the items changed
+        (``changed``) or the lowered model is another one: the arrays a data or a stack owns never move
+        (:mod:`crocopy.stored`), and a new data gets a new node."""
+        if not changed and low is self._lowered and self._data_arrays:
+            return
         fields = {
             "xnext": data.xnext, "dx": data.dx, "Fx": data.Fx, "Fu": data.Fu, "Lx": data.Lx, "Lu": data.Lu,
             "Lxx": data.Lxx, "Lxu": data.Lxu, "Luu": data.Luu,
