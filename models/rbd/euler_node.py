@@ -49,6 +49,7 @@ from ..actuations import ActuationModelAbstract
 from ..residual_numba import ResidualModelNumba, kinematics_size
 from ..state_multibody import StateMultibody
 from . import euler_node_kernel as kernel
+from . import horizon_kernel as horizons
 from . import node_table as table
 from .contact_lowering import ContactSet
 from .joint_types import NotLowerable
@@ -454,8 +455,8 @@ class EulerNode:
 
 
 class EulerHorizon:
-    """The rollout of the DDP family over the running Euler nodes (:func:`.euler_node_kernel.horizon_rollout`) and
-    their derivatives with the gaps (:func:`.euler_node_kernel.horizon_calc_diff`), a range ``t0 <= t < t1`` of
+    """The rollout of the DDP family over the running Euler nodes (:func:`.horizon_kernel.horizon_rollout`) and
+    their derivatives with the gaps (:func:`.horizon_kernel.horizon_calc_diff`), a range ``t0 <= t < t1`` of
     compiled nodes per call; the other nodes' entries are never read.
 
     ``rollout(addresses, xs_try, us_try, alpha, gaps, gap_at, t0, t1)`` (``addresses``: of ``xs, us, xs_try, us_try,
@@ -496,7 +497,7 @@ class EulerHorizon:
         nx, ndx, gaps, gap_at = self.nx, self.ndx, fs_at is not None, self.no_gaps if fs_at is None else fs_at
 
         def call(tbls, a, b):
-            return kernel.horizon_calc_diff(tbls, ints, ioff, par, poff, xs_at, us_at, nus, nx, ndx, gaps, gap_at, a,
+            return horizons.horizon_calc_diff(tbls, ints, ioff, par, poff, xs_at, us_at, nus, nx, ndx, gaps, gap_at, a,
                                             b, costs)
 
         total = self._run(call, t0, t1)
@@ -510,14 +511,14 @@ class EulerHorizon:
         ints, ioff, par, poff, nus, nx, costs = self.ints, self.ioff, self.par, self.poff, self.nus, self.nx, self.costs
 
         def call(tbls, a, b):
-            return kernel.horizon_calc(tbls, ints, ioff, par, poff, xs_at, us_at, nus, nx, a, b, costs)
+            return horizons.horizon_calc(tbls, ints, ioff, par, poff, xs_at, us_at, nus, nx, a, b, costs)
 
         total = self._run(call, t0, t1)
         return total if math.isfinite(total) else self._python_path(xs, us, None, t0, t1, False)
 
     def fold(self, t0: int, t1: int) -> float:
         """The sum of :attr:`costs` ``[t0:t1]`` in node order."""
-        return kernel.fold(self.costs, t0, t1)
+        return horizons.fold(self.costs, t0, t1)
 
     def _python_path(self, xs, us, fs, t0: int, t1: int, derivatives: bool) -> float:
         """After a range whose total is not finite: the nodes whose cost is not finite again on their Python path
@@ -528,7 +529,7 @@ class EulerHorizon:
                 self.costs[t] = node.python_path(xs[t], us[t], derivatives)
                 if fs is not None:
                     node.model.state._diff_into(xs[t + 1], node._data().xnext, fs[t + 1])
-        return kernel.fold(self.costs, t0, t1)
+        return horizons.fold(self.costs, t0, t1)
 
     def _run(self, call: Callable, t0: int, t1: int) -> float:
         """``call(tbls, a, b)`` over ``[t0, t1)``, on the extra threads too (then the costs added in node order, as
@@ -536,12 +537,12 @@ class EulerHorizon:
         if self.threads is None or t1 - t0 < 2:
             return call(self.tbls, t0, t1)
         self.threads.run(call, self.tbls, t0, t1)
-        return kernel.fold(self.costs, t0, t1)
+        return horizons.fold(self.costs, t0, t1)
 
     def rollout(self, addresses: tuple, xs_try: list, us_try: list, alpha: float, gaps: bool, gap_at: int, t0: int,
                 t1: int) -> float:
         """The rollout steps of the nodes ``t0 <= t < t1`` (the Python residuals' rows and costs after them)."""
-        total = kernel.horizon_rollout(
+        total = horizons.horizon_rollout(
             self.tbls, self.ints, self.ioff, self.par, self.poff, *addresses, self.nus, self.nx, self.ndx, alpha,
             gaps, gap_at, t0, t1, self.costs,
         )
@@ -549,7 +550,7 @@ class EulerHorizon:
             for t, node in self.python:
                 if t0 <= t < t1:
                     node.python.evaluate(xs_try[t], us_try[t])
-            total += kernel.horizon_recost(self.tbls, self.ints, self.ioff, self.par, self.poff,
+            total += horizons.horizon_recost(self.tbls, self.ints, self.ioff, self.par, self.poff,
                                            self._python_in(t0, t1), self.costs)
         return total
 

@@ -1,14 +1,14 @@
 """The running nodes' values and derivatives on several threads (``problem.nthreads``).
 
 A horizon of compiled nodes (:class:`.euler_node.EulerHorizon`) evaluates the nodes ``t0 <= t < t1`` of a range in
-one compiled call, which releases the GIL (:func:`.euler_node_kernel.horizon_calc_diff`, ``horizon_calc``).  With
+one compiled call, which releases the GIL (:func:`.horizon_kernel.horizon_calc_diff`, ``horizon_calc``).  With
 ``k`` threads the range is cut into ``k`` contiguous chunks of nearly equal length; the calling thread runs the first
 and a pool of ``k - 1`` threads the others, at once.  The nodes of one Pinocchio model share a workspace and a
 scratch (:meth:`.euler_node.Lowered.scratch`), so each extra thread ``c`` reads tables of its own
 (:class:`ThreadTables`): every node's table with the addresses of the workspace and scratch replaced by those of
 thread ``c``'s copies (:meth:`.euler_node.Lowered.thread_entries`).  A node's result does not depend on which thread
 evaluated it (a kernel call reads nothing a previous call left in the scratch), each writes only its own arrays and
-``costs[t]``, and the total is then added in node order (:func:`.euler_node_kernel.fold`): the results are
+``costs[t]``, and the total is then added in node order (:func:`.horizon_kernel.fold`): the results are
 bit-identical to one thread's.  Rollouts stay on one thread (each node starts where the previous one ended).
 """
 
