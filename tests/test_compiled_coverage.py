@@ -9,6 +9,7 @@ import importlib.util
 import numpy as np
 import pinocchio as pin
 import pytest
+from node_checks import make_solver
 
 import crocopy
 from crocopy.bench import coverage
@@ -147,3 +148,29 @@ def test_shipped_scripts_run_with_crocopy_and_report_their_nodes():
     inverse = coverage.job_row("arm_manipulation_invdyn")
     assert inverse.error is None and inverse.solvers == ["SolverIntro"] and len(inverse.reasons) > 1
     assert set(inverse.reasons) == {"differential model DifferentialActionModelFreeInvDynamics"}
+
+
+def test_a_node_whose_constraint_manager_has_no_rows_compiles_and_solves_as_without():
+    """An empty (or all inactive) constraint manager adds no rows: the node compiles, with the same solve; a manager
+    with an active row is declined."""
+    outcomes = []
+    for compiled in (True, False):
+        problem, xs, us = build_user_reach(crocopy, "builtin", robot="kinova", nodes=20)
+        models = list(problem.runningModels)
+        dam = models[0].differential
+        manager = crocopy.ConstraintModelManager(dam.state, dam.nu)
+        bounds = crocopy.ConstraintModelResidual(dam.state, crocopy.ResidualModelControl(dam.state, dam.nu),
+                                                 -np.ones(dam.nu), np.ones(dam.nu))
+        manager.addConstraint("u", bounds, False)
+        node = crocopy.IntegratedActionModelEuler(
+            crocopy.DifferentialActionModelFreeFwdDynamics(dam.state, dam.actuation, dam.costs, manager), models[0].dt)
+        problem = crocopy.ShootingProblem(problem.x0, [node] * len(models), problem.terminalModel)
+        if compiled:
+            assert all(c.compiled for c in crocopy.compiled_coverage(problem))
+        solver = make_solver("SolverFDDP", problem, compiled)
+        solver.solve(xs, us, 30)
+        outcomes.append((solver.iter, solver.cost))
+        if compiled:
+            manager.changeConstraintStatus("u", True)
+            assert [c.reason for c in crocopy.compiled_coverage(problem)][:1] == ["constraint manager"]
+    assert outcomes[0][0] == outcomes[1][0] and outcomes[0][1] == pytest.approx(outcomes[1][1], rel=1e-9)

@@ -6,7 +6,7 @@ exact classes (a subclass may override a step, so it keeps the Python path):
 
 * ``IntegratedActionModelEuler`` with the identity control parametrization, over a
   ``DifferentialActionModelFreeFwdDynamics`` or a ``DifferentialActionModelContactFwdDynamics`` without
-  constraints, whose active contacts are ``ContactModel3D``/``ContactModel6D`` on distinct joints (or with a
+  constraint rows (no manager, or one with no active constraint), whose active contacts are ``ContactModel3D``/``ContactModel6D`` on distinct joints (or with a
   positive ``JMinvJt_damping``; see :mod:`.contact_lowering`);
 * its ``StateMultibody``'s Pinocchio model lowers (:func:`.lowering.lower_model`);
 * its actuation is ``ActuationModelFull``, ``ActuationModelFloatingBase``,
@@ -194,7 +194,7 @@ def euler_node(iam, data, terminal: bool, memo: dict, contacts: list = ()) -> Eu
     None if the node does not qualify (the reason recorded in ``memo``, :mod:`crocopy.not_compiled`; the caller,
     the free or contact dynamics model, has checked its own class, the integrator's and the contacts')."""
     dam = iam.differential
-    if dam.constraints is not None:
+    if dam.constraints is not None and (dam.constraints.ng or dam.constraints.nh):
         return decline(memo, "constraint manager")
     if type(dam.state) is not StateMultibody:
         return decline(memo, class_reason(dam.state, "state"))
