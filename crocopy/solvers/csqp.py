@@ -26,9 +26,11 @@ from collections.abc import Iterator
 
 import numpy as np
 
+from .. import kernels
 from ..shooting import ShootingProblem
+from . import horizon
 from .base import BackwardPassError
-from .csqp_admm import NodeRows, StagewiseADMM
+from .csqp_admm import StagewiseADMM
 from .sqp import SolverSQP
 from .std_vector import StdVec_VectorXs
 
@@ -114,10 +116,15 @@ class SolverCSQP(SolverSQP):
         models = [*problem.runningModels, problem.terminalModel]
         ndx = [m.state.ndx for m in models]
         nu = [m.nu for m in problem.runningModels] + [0]
-        rows = [NodeRows(*_bounds(m, t == problem.T), ndx[t], nu[t]) for t, m in enumerate(models)]
-        self._qp = StagewiseADMM(ndx, nu, rows)
-        self._qp.rho_bar = self._rho_base
-        self._qp.assign_rho(self.rho_min)
+        self._qp = qp = StagewiseADMM(ndx, nu, [_bounds(m, t == problem.T) for t, m in enumerate(models)])
+        qp.rho_bar = self._rho_base
+        qp.assign_rho(self.rho_min)
+        self._steps = tuple(np.zeros_like(a) for a in (qp.dx_s, qp.du_s, qp.dx_s))
+        dx, du, lam = self._steps
+        self.dx = [dx[t, :n] for t, n in enumerate(ndx)]
+        self.du = [du[t, :m] for t, m in enumerate(nu[:-1])]
+        self.lag_mul = [lam[t, :n] for t, n in enumerate(ndx)]
+        self._step_views = (self.dx, self.du, self.lag_mul)
 
     def _on_problem_change(self) -> bool:
         changed = super()._on_problem_change()
@@ -267,28 +274,33 @@ class SolverCSQP(SolverSQP):
                 if self.preg >= self.reg_max:
                     return False
         qp = self._qp
-        for a, b in zip(self.dx, qp.dx):
-            a[:] = b
-        for a, b in zip(self.du, qp.du):
-            a[:] = b
-        for a, b in zip(self.lag_mul, qp.multipliers()):
-            a[:] = b
+        dx, du, lam = self._steps
+        self.dx, self.du, self.lag_mul = self._step_views  # the views of the step stacks (a rebound list is dropped)
+        np.copyto(dx, qp.dx_s)
+        np.copyto(du, qp.du_s)
+        if kernels.active:
+            qp.multipliers_into(lam)
+        else:
+            for a, b in zip(self.lag_mul, qp.multipliers()):
+                a[:] = b
         self.norm_primal, self.norm_dual = qp.r_prim, qp.r_dual
         self.norm_primal_rel, self.norm_dual_rel = qp.s_prim, qp.s_dual
         return True
 
     def _admm(self) -> None:
         qp, problem = self._qp, self.problem
-        lq = [*problem.runningDatas, _Terminal(problem.terminalData)]
         mu = 0.0 if self.remove_reg else float(self.preg)
-        for r in qp.rows:
-            r.z[:] = 0.0
-            if self.reset_y:
-                r.y[:] = 0.0
+        qp.z[:] = 0.0
+        if self.reset_y:
+            qp.y[:] = 0.0
         if self.reset_rho:
             self._reset_rho()
         else:
             qp.assign_rho(self.rho_min)
+        if kernels.active:
+            self._admm_compiled(mu)
+            return
+        lq = [*problem.runningDatas, _Terminal(problem.terminalData)]
         if self.equality_qp_initial_guess:
             self.backwardPass_without_constraints(lq, mu)
         interval = max(int(self.rho_update_interval), 1)
@@ -300,6 +312,37 @@ class SolverCSQP(SolverSQP):
             qp.riccati(lq, self.fs, self.sigma, mu, True, interval == 1 or j % interval == 1)
             qp.rollout(lq, self.fs)
             if qp.iterate(j, self):
+                self.qp_iters = float(j)
+                return
+
+    def _admm_compiled(self, mu: float) -> None:
+        """The ADMM iterations in one compiled call (:meth:`.StagewiseADMM.run`), or one call per iteration when
+        the QP prints its iterations or the solve has a time limit (checked before each iteration)."""
+        qp, problem = self._qp, self.problem
+        datas = problem.runningDatas
+        if not self._derivatives.same_datas(datas):
+            self._sync_problem()  # updateModel/circularAppend since the last solve
+        if self.fs is not self._fs_views:
+            self._horizon.load(self.fs, horizon.FS)
+        args = (self._derivatives.update(datas, self._node_dims), self._horizon.addr, problem.terminalData, self, mu)
+        last = int(self.max_qp_iters)
+        self.qp_iters = float(last + 1)
+        if not self.with_qp_callbacks and self.max_solve_time == np.inf:
+            j = qp.run(*args, 1, last + 1, self.equality_qp_initial_guess)
+            if j:
+                self.qp_iters = float(j)
+            return
+        if self.equality_qp_initial_guess:
+            qp.run(*args, 1, 1, True)
+        interval = max(int(self.rho_update_interval), 1)
+        for j in range(1, last + 1):
+            if self._timed_out():
+                self.qp_iters = 0.0 if j == 1 else float(j - 1)
+                return
+            done = qp.run(*args, j, j + 1, False)
+            if j % interval == 0 and self.with_qp_callbacks:
+                qp.stopping_test(j, self)  # prints the iteration
+            if done:
                 self.qp_iters = float(j)
                 return
 

@@ -1,0 +1,380 @@
+"""Compiled stagewise ADMM of :class:`~crocopy.solvers.csqp.SolverCSQP` (numba), twin of :mod:`.csqp_admm`.
+
+:func:`admm_run` runs ADMM iterations ``j0 <= j < j1`` of one QP (:mod:`.csqp_admm` states the maths:
+the Riccati x-update with ``σ``, ``μ`` and the rows' ``ρ``, ``η = y - ρ z``; the rollout; the
+over-relaxed projection and dual ascent; every ``rho_update_interval`` iterations the residuals, the
+``ρ̄`` update and the stopping test) in one call, and, when asked, first the equality-QP pass that sets
+the anchor ``w̄``.  It works on the stacked arrays of :class:`~crocopy.solvers.csqp_admm.StagewiseADMM`
+(node ``t`` in row ``t``, padded to the largest node: ``C (N+1, c, n)``, ``P (N+1, n, n)`` ...; ``dims``
+``(N+1, 3)`` gives each node's ``(ndx, nu, nc)``) and reads the running nodes' derivatives ``Fx, Fu,
+Lxx, Lxu, Luu, Lx, Lu`` where the datas keep them (``daddr (N, 7)``, :class:`.horizon.NodeDerivatives`)
+and the gaps in the solver's horizon buffer (``haddr[:, FS]``, :class:`.horizon.Horizon`).
+
+Settings ``par``: ``(σ, μ, α, rho_min, rho_max, adaptive_rho_tolerance, eps_abs, eps_rel, ρ̄)``;
+``ipar``: ``(j0, j1, rho_update_interval, update_rho_with_heuristic, equality pass first)``.  It writes
+the residuals of its last check and ``ρ̄`` into ``out = (r_p, r_d, s_p, s_d, ρ̄)`` and returns the
+iteration whose stopping test passed, 0 when none did before ``j1``, or ``-(t + 1)`` when ``Quu`` of
+node ``t`` is not positive definite (nor finite).  :func:`multipliers` gives ``λ_t = p_t + P_t δx_t``.
+Row kinds (``kind``): :data:`INEQUALITY`, :data:`EQUALITY`, :data:`FREE`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..kernels import compiled, matrix_at, vector_at
+from .riccati_kernel import cholesky_lower, cholesky_solve, triangular_solve
+
+INEQUALITY, EQUALITY, FREE = 0, 1, 2
+
+
+def _assign_rho(dims, kind, rho, rho_bar, rho_min):
+    """Per-row ``ρ``: ``rho_min`` (free), ``1e3 ρ̄`` (equality), ``ρ̄`` (the others)."""
+    for t in range(dims.shape[0]):
+        for i in range(dims[t, 2]):
+            rho[t, i] = rho_min if kind[t, i] == FREE else (1e3 * rho_bar if kind[t, i] == EQUALITY else rho_bar)
+
+
+assign_rho = compiled(_assign_rho)
+
+
+def _factorise(t, Fx, Fu, Lxx, Lxu, Luu, C, D, rho, with_rows, sigma, mu, P, K, L, Qxx, Qxu, Quu, W, Wu, idx):
+    """``Quu`` factor ``L[t]``, ``K[t]`` and ``P[t]`` of node ``t`` (from ``P[t + 1]``); False when ``Quu`` is
+    not positive definite or not finite."""
+    n1, n = Fx.shape
+    m = Fu.shape[1]
+    c = C.shape[0]
+    W[:n, :n1] = 0.0
+    Wu[:m, :n1] = 0.0
+    for q in range(n1):
+        for i in range(n):
+            a = Fx[q, i]
+            for j in range(n1):
+                W[i, j] += a * P[t + 1, q, j]
+        for i in range(m):
+            a = Fu[q, i]
+            for j in range(n1):
+                Wu[i, j] += a * P[t + 1, q, j]
+    for i in range(n):
+        for j in range(n):
+            Qxx[i, j] = 0.0
+        for j in range(m):
+            Qxu[i, j] = 0.0
+        for q in range(n1):
+            a = W[i, q]
+            for j in range(n):
+                Qxx[i, j] += a * Fx[q, j]
+            for j in range(m):
+                Qxu[i, j] += a * Fu[q, j]
+        for j in range(n):
+            Qxx[i, j] = Lxx[i, j] + Qxx[i, j]
+        for j in range(m):
+            Qxu[i, j] = Lxu[i, j] + Qxu[i, j]
+        Qxx[i, i] += sigma
+    if with_rows and t > 0:
+        for r in range(c):
+            for i in range(n):
+                a = rho[r] * C[r, i]
+                for j in range(n):
+                    Qxx[i, j] += a * C[r, j]
+    if m > 0:
+        for i in range(m):
+            for j in range(m):
+                acc = 0.0
+                for q in range(n1):
+                    acc += Wu[i, q] * Fu[q, j]
+                Quu[i, j] = Luu[i, j] + acc
+            Quu[i, i] += sigma + mu
+        if with_rows:
+            for r in range(c):
+                for i in range(m):
+                    a = rho[r] * D[r, i]
+                    for j in range(m):
+                        Quu[i, j] += a * D[r, j]
+                if t > 0:
+                    for i in range(n):
+                        a = rho[r] * C[r, i]
+                        for j in range(m):
+                            Qxu[i, j] += a * D[r, j]
+        Lt, Kt = L[t, :m, :m], K[t, :m, :n]
+        if not cholesky_lower(Quu, idx, m, Lt):
+            return False
+        for i in range(m):
+            for j in range(n):
+                Kt[i, j] = Qxu[j, i]
+        triangular_solve(Lt, Kt, False)
+        triangular_solve(Lt, Kt, True)
+        for i in range(n):
+            for q in range(m):
+                a = Qxu[i, q]
+                for j in range(n):
+                    Qxx[i, j] -= a * Kt[q, j]
+    for i in range(n):
+        for j in range(n):
+            P[t, i, j] = 0.5 * (Qxx[i, j] + Qxx[j, i])
+        P[t, i, i] += mu
+    return True
+
+
+factorise = compiled(_factorise)
+
+
+def _riccati(dims, daddr, haddr, fs_col, LxT, LxxT, sigma, mu, rows, full, C, D, rho, eta, dx_bar, du_bar, P, p, Pd,
+             K, k, L, S, Sv, idx):
+    """The backward pass of :meth:`.csqp_admm.StagewiseADMM.riccati`; -1, or the node whose ``Quu`` failed."""
+    N = dims.shape[0] - 1
+    nmax, mmax = P.shape[1], K.shape[1]
+    Qxx, Qxu, Quu = S[0][:nmax, :nmax], S[1][:nmax, :mmax], S[2][:mmax, :mmax]
+    W, Wu = S[3][:nmax, :nmax], S[4][:mmax, :nmax]
+    Qx, Qu, g = Sv[0, :nmax], Sv[1, :mmax], Sv[2, :nmax]
+    n, c = dims[N, 0], dims[N, 2]
+    with_rows = rows and c > 0
+    for i in range(n):
+        p[N, i] = LxT[i]
+        if sigma != 0.0:
+            p[N, i] -= sigma * dx_bar[N, i]
+        if with_rows:
+            acc = 0.0
+            for r in range(c):
+                acc += C[N, r, i] * eta[N, r]
+            p[N, i] += acc
+    if full:
+        for i in range(n):
+            for j in range(n):
+                P[N, i, j] = LxxT[i, j]
+        if with_rows:
+            for r in range(c):
+                for i in range(n):
+                    a = rho[N, r] * C[N, r, i]
+                    for j in range(n):
+                        P[N, i, j] += C[N, r, j] * a
+        for i in range(n):
+            P[N, i, i] += sigma + mu
+    for t in range(N - 1, -1, -1):
+        n, m, c, n1 = dims[t, 0], dims[t, 1], dims[t, 2], dims[t + 1, 0]
+        a = daddr[t]
+        Fx, Fu = matrix_at(a[0], n1, n), matrix_at(a[1], n1, m)
+        Lxx, Lxu, Luu, Lx, Lu = matrix_at(a[2], n, n), matrix_at(a[3], n, m), matrix_at(a[4], m, m), vector_at(
+            a[5], n), vector_at(a[6], m)
+        d1 = vector_at(haddr[t + 1, fs_col], n1)
+        with_rows = rows and c > 0
+        if full:
+            for i in range(n1):
+                acc = 0.0
+                for j in range(n1):
+                    acc += P[t + 1, i, j] * d1[j]
+                Pd[t + 1, i] = acc
+        for i in range(n1):
+            g[i] = p[t + 1, i] + Pd[t + 1, i]
+        for i in range(n):
+            acc = 0.0
+            for q in range(n1):
+                acc += Fx[q, i] * g[q]
+            Qx[i] = Lx[i] + acc
+            if sigma != 0.0:
+                Qx[i] -= sigma * dx_bar[t, i]
+        for i in range(m):
+            acc = 0.0
+            for q in range(n1):
+                acc += Fu[q, i] * g[q]
+            Qu[i] = Lu[i] + acc
+            if sigma != 0.0:
+                Qu[i] -= sigma * du_bar[t, i]
+        if with_rows:
+            if t > 0:
+                for i in range(n):
+                    acc = 0.0
+                    for r in range(c):
+                        acc += C[t, r, i] * eta[t, r]
+                    Qx[i] += acc
+            for i in range(m):
+                acc = 0.0
+                for r in range(c):
+                    acc += D[t, r, i] * eta[t, r]
+                Qu[i] += acc
+        if full and not factorise(t, Fx, Fu, Lxx, Lxu, Luu, C[t, :c, :n], D[t, :c, :m], rho[t, :c], with_rows, sigma,
+                                  mu, P, K, L, Qxx[:n, :n], Qxu[:n, :m], Quu[:m, :m], W, Wu, idx):
+            return t
+        if m > 0:
+            for i in range(m):
+                k[t, i] = Qu[i]
+            cholesky_solve(L[t, :m, :m], m, k[t, :m])
+            for i in range(n):
+                acc = 0.0
+                for q in range(m):
+                    acc += K[t, q, i] * Qu[q]
+                Qx[i] -= acc
+        for i in range(n):
+            p[t, i] = Qx[i]
+    return -1
+
+
+riccati = compiled(_riccati)
+
+
+def _rollout(dims, daddr, haddr, fs_col, K, k, dx, du):
+    """``δx_0 = d_0``, ``δu_t = -k_t - K_t δx_t``, ``δx_{t+1} = Fu δu_t + Fx δx_t + d_{t+1}``."""
+    N = dims.shape[0] - 1
+    d0 = vector_at(haddr[0, fs_col], dims[0, 0])
+    for i in range(dims[0, 0]):
+        dx[0, i] = d0[i]
+    for t in range(N):
+        n, m, n1 = dims[t, 0], dims[t, 1], dims[t + 1, 0]
+        Fx, Fu = matrix_at(daddr[t, 0], n1, n), matrix_at(daddr[t, 1], n1, m)
+        d1 = vector_at(haddr[t + 1, fs_col], n1)
+        for i in range(m):
+            acc = -k[t, i]
+            for j in range(n):
+                acc -= K[t, i, j] * dx[t, j]
+            du[t, i] = acc
+        for i in range(n1):
+            acc = 0.0
+            for j in range(m):
+                acc += Fu[i, j] * du[t, j]
+            acc2 = 0.0
+            for j in range(n):
+                acc2 += Fx[i, j] * dx[t, j]
+            dx[t + 1, i] = acc + acc2 + d1[i]
+
+
+rollout = compiled(_rollout)
+
+
+def _transpose_max(M, v, best):
+    """``max(best, ‖Mᵀ v‖∞)``."""
+    for i in range(M.shape[1]):
+        acc = 0.0
+        for r in range(M.shape[0]):
+            acc += M[r, i] * v[r]
+        if abs(acc) > best:
+            best = abs(acc)
+    return best
+
+
+transpose_max = compiled(_transpose_max)
+
+
+def _update(dims, C, D, lo, hi, z, y, rho, dx, du, alpha, check, heuristic, v, out):
+    """Projection and dual ascent of every row (``z``, ``y``); if ``check``, ``out[:4] = (r_p, r_d, s_p, s_d)``."""
+    N = dims.shape[0] - 1
+    r_p = r_d = s_p = s_d = -np.inf
+    for t in range(N + 1):
+        n, m, c = dims[t, 0], dims[t, 1], dims[t, 2]
+        if c == 0:
+            continue
+        for r in range(c):
+            acc = 0.0
+            for j in range(n):
+                acc += C[t, r, j] * dx[t, j]
+            if t < N:
+                for j in range(m):
+                    acc += D[t, r, j] * du[t, j]
+            v[r] = acc
+        for r in range(c):
+            z_hat = alpha * v[r] + (1.0 - alpha) * z[t, r]
+            z_new = min(max(z_hat + y[t, r] / rho[t, r], lo[t, r]), hi[t, r])
+            y[t, r] += rho[t, r] * (z_hat - z_new)
+            dz = rho[t, r] * (z_new - z[t, r])
+            z[t, r] = z_new
+            if check:
+                r_p = max(r_p, abs(v[r] - z_new))
+                s_p = max(s_p, abs(v[r]), abs(z_new))
+                if heuristic:
+                    r_d = max(r_d, abs(dz))
+                    s_d = max(s_d, abs(y[t, r]))
+            v[r] = dz
+        if check and not heuristic:
+            r_d = transpose_max(C[t, :c, :n], v[:c], r_d)
+            s_d = transpose_max(C[t, :c, :n], y[t, :c], s_d)
+            if t < N:
+                r_d = transpose_max(D[t, :c, :m], v[:c], r_d)
+                s_d = transpose_max(D[t, :c, :m], y[t, :c], s_d)
+    if check:
+        out[0], out[1], out[2], out[3] = r_p, r_d, s_p, s_d
+
+
+update = compiled(_update)
+
+
+def _rho_estimate(rho_bar, r_p, r_d, s_p, s_d):
+    """``ρ̄ √(r_p s_d / (r_d s_p))`` with numpy's rules for a zero divisor (NaN when undefined)."""
+    num, den = r_p * s_d, r_d * s_p
+    if den == 0.0:
+        q = np.nan if num == 0.0 or num != num else (np.inf if num > 0.0 else -np.inf)
+    else:
+        q = num / den
+    if q != q or q < 0.0:
+        return np.nan
+    return rho_bar * np.sqrt(q)
+
+
+rho_estimate = compiled(_rho_estimate)
+
+
+def _admm_run(dims, daddr, haddr, fs_col, LxT, LxxT, kind, C, D, lo, hi, z, y, rho, eta, dx, du, dx_bar, du_bar, P, p,
+              Pd, K, k, L, par, ipar, out):
+    sigma, mu, alpha, rho_min, rho_max, tol, eps_abs, eps_rel, rho_bar = (par[0], par[1], par[2], par[3], par[4],
+                                                                        par[5], par[6], par[7], par[8])
+    j0, j1, interval, heuristic, anchor = ipar[0], ipar[1], ipar[2], ipar[3] != 0, ipar[4] != 0
+    nmax, mmax, cmax = P.shape[1], K.shape[1], C.shape[1]
+    w = max(nmax, mmax, 1)
+    S = np.zeros((5, w, w))
+    Sv = np.zeros((3, w))
+    v = np.zeros(max(cmax, 1))
+    idx = np.arange(max(mmax, 1))
+    N = dims.shape[0] - 1
+    if anchor:
+        t = riccati(dims, daddr, haddr, fs_col, LxT, LxxT, 0.0, mu, False, True, C, D, rho, eta, dx_bar, du_bar, P, p,
+                    Pd, K, k, L, S, Sv, idx)
+        if t >= 0:
+            return -(t + 1)
+        rollout(dims, daddr, haddr, fs_col, K, k, dx, du)
+        dx_bar[:, :] = dx
+        du_bar[:, :] = du
+    for j in range(j0, j1):
+        for t in range(N + 1):
+            for r in range(dims[t, 2]):
+                eta[t, r] = y[t, r] - rho[t, r] * z[t, r]
+        full = interval == 1 or j % interval == 1
+        t = riccati(dims, daddr, haddr, fs_col, LxT, LxxT, sigma, mu, True, full, C, D, rho, eta, dx_bar, du_bar, P,
+                    p, Pd, K, k, L, S, Sv, idx)
+        if t >= 0:
+            return -(t + 1)
+        rollout(dims, daddr, haddr, fs_col, K, k, dx, du)
+        check = j % interval == 0
+        update(dims, C, D, lo, hi, z, y, rho, dx, du, alpha, check, heuristic, v, out)
+        dx_bar[:, :] = dx
+        du_bar[:, :] = du
+        if not check:
+            continue
+        estimate = rho_estimate(rho_bar, out[0], out[1], out[2], out[3])
+        if estimate == estimate:
+            estimate = min(max(estimate, rho_min), rho_max)
+            if estimate > tol * rho_bar or estimate < rho_bar / tol:
+                rho_bar = estimate
+                out[4] = rho_bar
+                assign_rho(dims, kind, rho, rho_bar, rho_min)
+        if abs(eps_rel) <= np.finfo(np.float64).eps:
+            eps_p = eps_d = eps_abs
+        else:
+            eps_p, eps_d = eps_abs + eps_rel * out[2], eps_abs + eps_rel * out[3]
+        if out[0] <= eps_p and out[1] <= eps_d:
+            return j
+    return 0
+
+
+admm_run = compiled(_admm_run)
+
+
+def _multipliers(dims, P, p, dx, lam):
+    """``λ_t = p_t + P_t δx_t`` into ``lam (N+1, n)``."""
+    for t in range(dims.shape[0]):
+        n = dims[t, 0]
+        for i in range(n):
+            acc = 0.0
+            for j in range(n):
+                acc += P[t, i, j] * dx[t, j]
+            lam[t, i] = p[t, i] + acc
+
+
+multipliers = compiled(_multipliers)
