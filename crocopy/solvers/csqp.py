@@ -119,12 +119,6 @@ class SolverCSQP(SolverSQP):
         self._qp = qp = StagewiseADMM(ndx, nu, [_bounds(m, t == problem.T) for t, m in enumerate(models)])
         qp.rho_bar = self._rho_base
         qp.assign_rho(self.rho_min)
-        self._steps = tuple(np.zeros_like(a) for a in (qp.dx_s, qp.du_s, qp.dx_s))
-        dx, du, lam = self._steps
-        self.dx = [dx[t, :n] for t, n in enumerate(ndx)]
-        self.du = [du[t, :m] for t, m in enumerate(nu[:-1])]
-        self.lag_mul = [lam[t, :n] for t, n in enumerate(ndx)]
-        self._step_views = (self.dx, self.du, self.lag_mul)
 
     def _on_problem_change(self) -> bool:
         changed = super()._on_problem_change()
@@ -221,7 +215,7 @@ class SolverCSQP(SolverSQP):
         if recalc:
             self._synced = False
             self.calcDiff()
-        self.gap_norm = float(sum(np.abs(f).sum() for f in self.fs))
+        self.gap_norm = self._gap_norm()
         self._load_rows()
         self.constraint_norm = self._violation(self.problem)
         return self.cost
@@ -356,6 +350,10 @@ class SolverCSQP(SolverSQP):
         self._qp.set_anchor()
 
     # ------------------------------------------------------------------ KKT, merit, line search
+    def _kkt_rows(self) -> tuple:
+        qp = self._qp
+        return qp.dims, qp.C, qp.D, qp.y
+
     def _constraint_force_x(self, t: int) -> np.ndarray | float:
         r = self._qp.rows[t]
         return r.C.T @ r.y if t and r.lb.size else 0.0

@@ -29,6 +29,7 @@ from scipy.linalg.lapack import dpotrf, dpotrs
 from . import csqp_kernel, horizon
 from .base import BackwardPassError
 from .csqp_kernel import EQUALITY, FREE, INEQUALITY
+from .sqp_kernel import readable
 
 EQUALITY_TOL = 1e-6
 
@@ -58,6 +59,7 @@ class StagewiseADMM:
     """
 
     def __init__(self, ndx: list[int], nu: list[int], bounds: list[tuple[np.ndarray, np.ndarray]]) -> None:
+        self._args = (ndx, nu, bounds)
         self.N = N = len(ndx) - 1
         self.ndx, self.nu = ndx, nu
         nc = [lb.size for lb, _ in bounds]
@@ -83,6 +85,19 @@ class StagewiseADMM:
         self._chol: list = [None] * self.N
         self.rho_bar = 0.1
         self.r_prim = self.r_dual = self.s_prim = self.s_dual = 0.0
+
+    _STATE = ("z", "y", "rho", "dx_s", "du_s", "dx_bar_s", "du_bar_s", "P_s", "p_s", "Pd_s", "K_s", "k_s", "L_s")
+
+    def __getstate__(self) -> dict:
+        """The constructor's arguments, the ADMM state and the read-outs (the views are rebuilt on unpickling)."""
+        return {"args": self._args, "arrays": {a: getattr(self, a) for a in self._STATE},
+                "scalars": (self.rho_bar, self.r_prim, self.r_dual, self.s_prim, self.s_dual)}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__init__(*state["args"])
+        for name, a in state["arrays"].items():
+            getattr(self, name)[...] = a
+        self.rho_bar, self.r_prim, self.r_dual, self.s_prim, self.s_dual = state["scalars"]
 
     # ------------------------------------------------------------------ Riccati x-update
     def riccati(self, lq, d: list, sigma: float, mu: float, rows: bool, full: bool) -> None:
@@ -251,7 +266,7 @@ class StagewiseADMM:
                         dtype=np.int64)
         out = np.array([self.r_prim, self.r_dual, self.s_prim, self.s_dual, self.rho_bar])
         status = csqp_kernel.admm_run(
-            self.dims, daddr, haddr, horizon.FS, _readable(terminal.Lx), _readable(terminal.Lxx), self.kind, self.C,
+            self.dims, daddr, haddr, horizon.FS, readable(terminal.Lx), readable(terminal.Lxx), self.kind, self.C,
             self.D, self.lo, self.hi, self.z, self.y, self.rho, self.eta, self.dx_s, self.du_s, self.dx_bar_s,
             self.du_bar_s, self.P_s, self.p_s, self.Pd_s, self.K_s, self.k_s, self.L_s, par, ipar, out)
         self.r_prim, self.r_dual, self.s_prim, self.s_dual = (float(v) for v in out[:4])
@@ -274,11 +289,6 @@ class StagewiseADMM:
         if estimate > tol * self.rho_bar or estimate < self.rho_bar / tol:
             self.rho_bar = float(estimate)
             self.assign_rho(s.rho_min)
-
-
-def _readable(a: np.ndarray) -> np.ndarray:
-    """``a`` as a C-contiguous float64 array (a copy only when it is not one)."""
-    return a if a.dtype == np.float64 and a.flags.c_contiguous else np.ascontiguousarray(a, dtype=np.float64)
 
 
 def _tmax(M: np.ndarray, v: np.ndarray) -> float:

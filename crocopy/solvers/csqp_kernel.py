@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..kernels import compiled, matrix_at, vector_at
-from .riccati_kernel import cholesky_lower, cholesky_solve, triangular_solve
+from .riccati_kernel import cholesky_lower, cholesky_solve
 
 INEQUALITY, EQUALITY, FREE = 0, 1, 2
 
@@ -38,23 +38,26 @@ def _assign_rho(dims, kind, rho, rho_bar, rho_min):
 assign_rho = compiled(_assign_rho)
 
 
-def _factorise(t, Fx, Fu, Lxx, Lxu, Luu, C, D, rho, with_rows, sigma, mu, P, K, L, Qxx, Qxu, Quu, W, Wu, idx):
-    """``Quu`` factor ``L[t]``, ``K[t]`` and ``P[t]`` of node ``t`` (from ``P[t + 1]``); False when ``Quu`` is
-    not positive definite or not finite."""
-    n1, n = Fx.shape
-    m = Fu.shape[1]
-    c = C.shape[0]
-    W[:n, :n1] = 0.0
-    Wu[:m, :n1] = 0.0
+def _factorise(n, m, c, n1, Fx, Fu, Lxx, Lxu, Luu, C, D, rho, with_rows, sigma, mu, P1, P, K, L, Qxx, Qxu, Quu, W,
+               Wu, idx):
+    """``Quu`` factor ``L``, gains ``K`` and ``P`` of a node from the next ``P1`` (node rows ``C, D, rho``, which
+    enter ``Qxx``/``Qxu`` only when ``with_rows == 2``, i.e. not on node 0); False when ``Quu`` is not positive
+    definite or not finite.  Stack rows (padded) and loops whose inner index is contiguous (vectorised)."""
+    for i in range(n):
+        for j in range(n1):
+            W[i, j] = 0.0
+    for i in range(m):
+        for j in range(n1):
+            Wu[i, j] = 0.0
     for q in range(n1):
         for i in range(n):
             a = Fx[q, i]
             for j in range(n1):
-                W[i, j] += a * P[t + 1, q, j]
+                W[i, j] += a * P1[q, j]
         for i in range(m):
             a = Fu[q, i]
             for j in range(n1):
-                Wu[i, j] += a * P[t + 1, q, j]
+                Wu[i, j] += a * P1[q, j]
     for i in range(n):
         for j in range(n):
             Qxx[i, j] = 0.0
@@ -71,141 +74,164 @@ def _factorise(t, Fx, Fu, Lxx, Lxu, Luu, C, D, rho, with_rows, sigma, mu, P, K, 
         for j in range(m):
             Qxu[i, j] = Lxu[i, j] + Qxu[i, j]
         Qxx[i, i] += sigma
-    if with_rows and t > 0:
+    if with_rows == 2:
         for r in range(c):
             for i in range(n):
                 a = rho[r] * C[r, i]
                 for j in range(n):
                     Qxx[i, j] += a * C[r, j]
-    if m > 0:
-        for i in range(m):
+    if m == 0:
+        symmetrise(n, Qxx, P, mu)
+        return True
+    for i in range(m):
+        for j in range(m):
+            Quu[i, j] = 0.0
+        for q in range(n1):
+            a = Wu[i, q]
             for j in range(m):
-                acc = 0.0
-                for q in range(n1):
-                    acc += Wu[i, q] * Fu[q, j]
-                Quu[i, j] = Luu[i, j] + acc
-            Quu[i, i] += sigma + mu
-        if with_rows:
-            for r in range(c):
-                for i in range(m):
-                    a = rho[r] * D[r, i]
+                Quu[i, j] += a * Fu[q, j]
+        for j in range(m):
+            Quu[i, j] = Luu[i, j] + Quu[i, j]
+        Quu[i, i] += sigma + mu
+    if with_rows:
+        for r in range(c):
+            for i in range(m):
+                a = rho[r] * D[r, i]
+                for j in range(m):
+                    Quu[i, j] += a * D[r, j]
+            if with_rows == 2:
+                for i in range(n):
+                    a = rho[r] * C[r, i]
                     for j in range(m):
-                        Quu[i, j] += a * D[r, j]
-                if t > 0:
-                    for i in range(n):
-                        a = rho[r] * C[r, i]
-                        for j in range(m):
-                            Qxu[i, j] += a * D[r, j]
-        Lt, Kt = L[t, :m, :m], K[t, :m, :n]
-        if not cholesky_lower(Quu, idx, m, Lt):
-            return False
-        for i in range(m):
-            for j in range(n):
-                Kt[i, j] = Qxu[j, i]
-        triangular_solve(Lt, Kt, False)
-        triangular_solve(Lt, Kt, True)
-        for i in range(n):
-            for q in range(m):
-                a = Qxu[i, q]
-                for j in range(n):
-                    Qxx[i, j] -= a * Kt[q, j]
-    for i in range(n):
+                        Qxu[i, j] += a * D[r, j]
+    if not cholesky_lower(Quu, idx, m, L):
+        return False
+    for i in range(m):  # K = Quu⁻¹ Qxuᵀ: L⁻¹ then L⁻ᵀ, row by row
         for j in range(n):
-            P[t, i, j] = 0.5 * (Qxx[i, j] + Qxx[j, i])
-        P[t, i, i] += mu
+            K[i, j] = Qxu[j, i]
+        for q in range(i):
+            a = L[i, q]
+            for j in range(n):
+                K[i, j] -= a * K[q, j]
+        d = L[i, i]
+        for j in range(n):
+            K[i, j] /= d
+    for i in range(m - 1, -1, -1):
+        for q in range(i + 1, m):
+            a = L[q, i]
+            for j in range(n):
+                K[i, j] -= a * K[q, j]
+        d = L[i, i]
+        for j in range(n):
+            K[i, j] /= d
+    for i in range(n):
+        for q in range(m):
+            a = Qxu[i, q]
+            for j in range(n):
+                Qxx[i, j] -= a * K[q, j]
+    symmetrise(n, Qxx, P, mu)
     return True
 
 
+def _symmetrise(n, Q, P, mu):
+    """``P = (Q + Qᵀ)/2 + mu I`` on the leading ``n × n`` block."""
+    for i in range(n):
+        for j in range(n):
+            P[i, j] = 0.5 * (Q[i, j] + Q[j, i])
+        P[i, i] += mu
+
+
+symmetrise = compiled(_symmetrise)
 factorise = compiled(_factorise)
+
+
+def _add_transpose(M, rows, cols, v, out):
+    """``out[:cols] += M[:rows, :cols]ᵀ v`` (contiguous inner loop)."""
+    for r in range(rows):
+        a = v[r]
+        for i in range(cols):
+            out[i] += M[r, i] * a
+
+
+add_transpose = compiled(_add_transpose)
 
 
 def _riccati(dims, daddr, haddr, fs_col, LxT, LxxT, sigma, mu, rows, full, C, D, rho, eta, dx_bar, du_bar, P, p, Pd,
              K, k, L, S, Sv, idx):
     """The backward pass of :meth:`.csqp_admm.StagewiseADMM.riccati`; -1, or the node whose ``Quu`` failed."""
     N = dims.shape[0] - 1
-    nmax, mmax = P.shape[1], K.shape[1]
-    Qxx, Qxu, Quu = S[0][:nmax, :nmax], S[1][:nmax, :mmax], S[2][:mmax, :mmax]
-    W, Wu = S[3][:nmax, :nmax], S[4][:mmax, :nmax]
-    Qx, Qu, g = Sv[0, :nmax], Sv[1, :mmax], Sv[2, :nmax]
+    Qxx, Qxu, Quu, W, Wu = S[0], S[1], S[2], S[3], S[4]
+    Qx, Qu, g = Sv[0], Sv[1], Sv[2]
     n, c = dims[N, 0], dims[N, 2]
-    with_rows = rows and c > 0
+    terminal_rows = rows and c > 0
+    pN = p[N]
     for i in range(n):
-        p[N, i] = LxT[i]
+        pN[i] = LxT[i]
         if sigma != 0.0:
-            p[N, i] -= sigma * dx_bar[N, i]
-        if with_rows:
-            acc = 0.0
-            for r in range(c):
-                acc += C[N, r, i] * eta[N, r]
-            p[N, i] += acc
+            pN[i] -= sigma * dx_bar[N, i]
+    if terminal_rows:
+        add_transpose(C[N], c, n, eta[N], pN)
     if full:
+        PN = P[N]
         for i in range(n):
             for j in range(n):
-                P[N, i, j] = LxxT[i, j]
-        if with_rows:
+                PN[i, j] = LxxT[i, j]
+        if terminal_rows:
             for r in range(c):
                 for i in range(n):
                     a = rho[N, r] * C[N, r, i]
                     for j in range(n):
-                        P[N, i, j] += C[N, r, j] * a
+                        PN[i, j] += C[N, r, j] * a
         for i in range(n):
-            P[N, i, i] += sigma + mu
+            PN[i, i] += sigma + mu
     for t in range(N - 1, -1, -1):
         n, m, c, n1 = dims[t, 0], dims[t, 1], dims[t, 2], dims[t + 1, 0]
         a = daddr[t]
         Fx, Fu = matrix_at(a[0], n1, n), matrix_at(a[1], n1, m)
-        Lxx, Lxu, Luu, Lx, Lu = matrix_at(a[2], n, n), matrix_at(a[3], n, m), matrix_at(a[4], m, m), vector_at(
-            a[5], n), vector_at(a[6], m)
+        Lx, Lu = vector_at(a[5], n), vector_at(a[6], m)
         d1 = vector_at(haddr[t + 1, fs_col], n1)
-        with_rows = rows and c > 0
+        with_rows = 0 if not rows or c == 0 else (1 if t == 0 else 2)
+        P1, Pd1, p1 = P[t + 1], Pd[t + 1], p[t + 1]
         if full:
             for i in range(n1):
                 acc = 0.0
                 for j in range(n1):
-                    acc += P[t + 1, i, j] * d1[j]
-                Pd[t + 1, i] = acc
+                    acc += P1[i, j] * d1[j]
+                Pd1[i] = acc
         for i in range(n1):
-            g[i] = p[t + 1, i] + Pd[t + 1, i]
+            g[i] = p1[i] + Pd1[i]
         for i in range(n):
-            acc = 0.0
-            for q in range(n1):
-                acc += Fx[q, i] * g[q]
-            Qx[i] = Lx[i] + acc
-            if sigma != 0.0:
-                Qx[i] -= sigma * dx_bar[t, i]
+            Qx[i] = Lx[i]
         for i in range(m):
-            acc = 0.0
-            for q in range(n1):
-                acc += Fu[q, i] * g[q]
-            Qu[i] = Lu[i] + acc
-            if sigma != 0.0:
+            Qu[i] = Lu[i]
+        add_transpose(Fx, n1, n, g, Qx)
+        add_transpose(Fu, n1, m, g, Qu)
+        if sigma != 0.0:
+            for i in range(n):
+                Qx[i] -= sigma * dx_bar[t, i]
+            for i in range(m):
                 Qu[i] -= sigma * du_bar[t, i]
         if with_rows:
-            if t > 0:
-                for i in range(n):
-                    acc = 0.0
-                    for r in range(c):
-                        acc += C[t, r, i] * eta[t, r]
-                    Qx[i] += acc
-            for i in range(m):
-                acc = 0.0
-                for r in range(c):
-                    acc += D[t, r, i] * eta[t, r]
-                Qu[i] += acc
-        if full and not factorise(t, Fx, Fu, Lxx, Lxu, Luu, C[t, :c, :n], D[t, :c, :m], rho[t, :c], with_rows, sigma,
-                                  mu, P, K, L, Qxx[:n, :n], Qxu[:n, :m], Quu[:m, :m], W, Wu, idx):
+            if with_rows == 2:
+                add_transpose(C[t], c, n, eta[t], Qx)
+            add_transpose(D[t], c, m, eta[t], Qu)
+        if full and not factorise(n, m, c, n1, Fx, Fu, matrix_at(a[2], n, n), matrix_at(a[3], n, m),
+                                  matrix_at(a[4], m, m), C[t], D[t], rho[t], with_rows, sigma, mu, P1, P[t], K[t],
+                                  L[t], Qxx, Qxu, Quu, W, Wu, idx):
             return t
         if m > 0:
+            kt = k[t]
             for i in range(m):
-                k[t, i] = Qu[i]
-            cholesky_solve(L[t, :m, :m], m, k[t, :m])
-            for i in range(n):
-                acc = 0.0
-                for q in range(m):
-                    acc += K[t, q, i] * Qu[q]
-                Qx[i] -= acc
+                kt[i] = Qu[i]
+            cholesky_solve(L[t], m, kt)
+            Kt = K[t]
+            for q in range(m):
+                a_ = -Qu[q]
+                for i in range(n):
+                    Qx[i] += Kt[q, i] * a_
+        pt = p[t]
         for i in range(n):
-            p[t, i] = Qx[i]
+            pt[i] = Qx[i]
     return -1
 
 
@@ -222,73 +248,76 @@ def _rollout(dims, daddr, haddr, fs_col, K, k, dx, du):
         n, m, n1 = dims[t, 0], dims[t, 1], dims[t + 1, 0]
         Fx, Fu = matrix_at(daddr[t, 0], n1, n), matrix_at(daddr[t, 1], n1, m)
         d1 = vector_at(haddr[t + 1, fs_col], n1)
+        x, u, x1, Kt, kt = dx[t], du[t], dx[t + 1], K[t], k[t]
         for i in range(m):
-            acc = -k[t, i]
+            acc = -kt[i]
             for j in range(n):
-                acc -= K[t, i, j] * dx[t, j]
-            du[t, i] = acc
+                acc -= Kt[i, j] * x[j]
+            u[i] = acc
         for i in range(n1):
             acc = 0.0
             for j in range(m):
-                acc += Fu[i, j] * du[t, j]
+                acc += Fu[i, j] * u[j]
             acc2 = 0.0
             for j in range(n):
-                acc2 += Fx[i, j] * dx[t, j]
-            dx[t + 1, i] = acc + acc2 + d1[i]
+                acc2 += Fx[i, j] * x[j]
+            x1[i] = acc + acc2 + d1[i]
 
 
 rollout = compiled(_rollout)
 
 
-def _transpose_max(M, v, best):
-    """``max(best, ‖Mᵀ v‖∞)``."""
-    for i in range(M.shape[1]):
-        acc = 0.0
-        for r in range(M.shape[0]):
-            acc += M[r, i] * v[r]
-        if abs(acc) > best:
-            best = abs(acc)
+def _transpose_max(M, rows, cols, v, w, best):
+    """``max(best, ‖M[:rows, :cols]ᵀ v‖∞)`` (``w``: scratch of ``cols``)."""
+    for i in range(cols):
+        w[i] = 0.0
+    add_transpose(M, rows, cols, v, w)
+    for i in range(cols):
+        if abs(w[i]) > best:
+            best = abs(w[i])
     return best
 
 
 transpose_max = compiled(_transpose_max)
 
 
-def _update(dims, C, D, lo, hi, z, y, rho, dx, du, alpha, check, heuristic, v, out):
-    """Projection and dual ascent of every row (``z``, ``y``); if ``check``, ``out[:4] = (r_p, r_d, s_p, s_d)``."""
+def _update(dims, C, D, lo, hi, z, y, rho, dx, du, alpha, check, heuristic, v, w, out):
+    """Projection and dual ascent of every row (``z``, ``y``); if ``check``, ``out[:4] = (r_p, r_d, s_p, s_d)``
+    (``v``, ``w``: scratch)."""
     N = dims.shape[0] - 1
     r_p = r_d = s_p = s_d = -np.inf
     for t in range(N + 1):
         n, m, c = dims[t, 0], dims[t, 1], dims[t, 2]
         if c == 0:
             continue
+        Ct, Dt, x, u, zt, yt, rt = C[t], D[t], dx[t], du[t], z[t], y[t], rho[t]
         for r in range(c):
             acc = 0.0
             for j in range(n):
-                acc += C[t, r, j] * dx[t, j]
+                acc += Ct[r, j] * x[j]
             if t < N:
                 for j in range(m):
-                    acc += D[t, r, j] * du[t, j]
+                    acc += Dt[r, j] * u[j]
             v[r] = acc
         for r in range(c):
-            z_hat = alpha * v[r] + (1.0 - alpha) * z[t, r]
-            z_new = min(max(z_hat + y[t, r] / rho[t, r], lo[t, r]), hi[t, r])
-            y[t, r] += rho[t, r] * (z_hat - z_new)
-            dz = rho[t, r] * (z_new - z[t, r])
-            z[t, r] = z_new
+            z_hat = alpha * v[r] + (1.0 - alpha) * zt[r]
+            z_new = min(max(z_hat + yt[r] / rt[r], lo[t, r]), hi[t, r])
+            yt[r] += rt[r] * (z_hat - z_new)
+            dz = rt[r] * (z_new - zt[r])
+            zt[r] = z_new
             if check:
                 r_p = max(r_p, abs(v[r] - z_new))
                 s_p = max(s_p, abs(v[r]), abs(z_new))
                 if heuristic:
                     r_d = max(r_d, abs(dz))
-                    s_d = max(s_d, abs(y[t, r]))
+                    s_d = max(s_d, abs(yt[r]))
             v[r] = dz
         if check and not heuristic:
-            r_d = transpose_max(C[t, :c, :n], v[:c], r_d)
-            s_d = transpose_max(C[t, :c, :n], y[t, :c], s_d)
+            r_d = transpose_max(Ct, c, n, v, w, r_d)
+            s_d = transpose_max(Ct, c, n, yt, w, s_d)
             if t < N:
-                r_d = transpose_max(D[t, :c, :m], v[:c], r_d)
-                s_d = transpose_max(D[t, :c, :m], y[t, :c], s_d)
+                r_d = transpose_max(Dt, c, m, v, w, r_d)
+                s_d = transpose_max(Dt, c, m, yt, w, s_d)
     if check:
         out[0], out[1], out[2], out[3] = r_p, r_d, s_p, s_d
 
@@ -321,6 +350,7 @@ def _admm_run(dims, daddr, haddr, fs_col, LxT, LxxT, kind, C, D, lo, hi, z, y, r
     S = np.zeros((5, w, w))
     Sv = np.zeros((3, w))
     v = np.zeros(max(cmax, 1))
+    wv = np.zeros(w)
     idx = np.arange(max(mmax, 1))
     N = dims.shape[0] - 1
     if anchor:
@@ -342,7 +372,7 @@ def _admm_run(dims, daddr, haddr, fs_col, LxT, LxxT, kind, C, D, lo, hi, z, y, r
             return -(t + 1)
         rollout(dims, daddr, haddr, fs_col, K, k, dx, du)
         check = j % interval == 0
-        update(dims, C, D, lo, hi, z, y, rho, dx, du, alpha, check, heuristic, v, out)
+        update(dims, C, D, lo, hi, z, y, rho, dx, du, alpha, check, heuristic, v, wv, out)
         dx_bar[:, :] = dx
         du_bar[:, :] = du
         if not check:
