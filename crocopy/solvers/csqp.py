@@ -23,12 +23,14 @@ from __future__ import annotations
 
 import time
 from collections.abc import Iterator
+from operator import is_
 
 import numpy as np
 
 from .. import kernels
+from ..enums import FeasibilityNorm
 from ..shooting import ShootingProblem
-from . import horizon
+from . import csqp_kernel, horizon
 from .base import BackwardPassError
 from .csqp_admm import StagewiseADMM
 from .sqp import SolverSQP
@@ -59,6 +61,10 @@ def _bounds(model, terminal: bool) -> tuple[np.ndarray, np.ndarray]:
         lb = np.concatenate([c.lb for c in items]) if items else np.zeros(0)
         ub = np.concatenate([c.ub for c in items]) if items else np.zeros(0)
     return np.r_[lb, np.zeros(nh)], np.r_[ub, np.zeros(nh)]
+
+
+_ROW_NAMES = ("g", "h", "Gx", "Gu", "Hx", "Hu")
+"""The data arrays a node's QP rows are read from (:func:`.csqp_kernel.node_rows`)."""
 
 
 class _Terminal:
@@ -117,6 +123,11 @@ class SolverCSQP(SolverSQP):
         ndx = [m.state.ndx for m in models]
         nu = [m.nu for m in problem.runningModels] + [0]
         self._qp = qp = StagewiseADMM(ndx, nu, [_bounds(m, t == problem.T) for t, m in enumerate(models)])
+        self._ngh = np.array([(m.ng_T, m.nh_T) if t == problem.T else (m.ng, m.nh) for t, m in enumerate(models)],
+                             dtype=np.int64)
+        self._row_addr = np.zeros((len(models), len(_ROW_NAMES)), dtype=np.int64)
+        self._row_seen: list = []
+        self._row_out = np.zeros(3)
         qp.rho_bar = self._rho_base
         qp.assign_rho(self.rho_min)
 
@@ -211,40 +222,71 @@ class SolverCSQP(SolverSQP):
 
     def calc(self, recalc: bool = True) -> float:
         """Evaluate and differentiate every node at the current iterate (if ``recalc``); update the gaps,
-        ``gap_norm``, the QP rows' data and ``constraint_norm``."""
+        ``gap_norm``, the QP rows' data, ``constraint_norm`` and ``gfeas``."""
         if recalc:
             self._synced = False
             self.calcDiff()
         self.gap_norm = self._gap_norm()
-        self._load_rows()
-        self.constraint_norm = self._violation(self.problem)
+        self.constraint_norm = self._row_values(True)
         return self.cost
+
+    def computeInequalityFeasibility(self) -> float:
+        """``gfeas``: the norm (``feasNorm``) of ``max(lb - g, 0, g - ub)`` over the QP's inequality rows (the
+        terminal node's ``ng_T`` rows with their own bounds)."""
+        self._row_values(False)
+        return self.gfeas
+
+    def _row_values(self, load: bool) -> float:
+        """``Ψ`` (returned) and ``gfeas`` at the nodes' last ``calc``; if ``load``, the QP rows too (``C``, ``D``
+        from ``Gx, Gu`` and ``Hx, Hu``, ``lo/hi = lb/ub - (g, h)``)."""
+        qp = self._qp
+        saddr = self._row_addresses() if kernels.active else None
+        if saddr is None:
+            psi, vinf, v1 = self._row_values_numpy(load)
+        else:
+            out = self._row_out
+            csqp_kernel.node_rows(qp.dims, self._ngh, saddr, qp.lb, qp.ub, load, qp.C, qp.D, qp.lo, qp.hi, out)
+            psi, vinf, v1 = float(out[0]), float(out[1]), float(out[2])
+        self.gfeas = vinf if self.feasNorm == FeasibilityNorm.LInf else v1
+        return psi
+
+    def _row_addresses(self) -> np.ndarray | None:
+        """Where each node's ``g, h, Gx, Gu, Hx, Hu`` are (rows of the nodes with QP rows), re-read only when one
+        was rebound; None when one cannot be read in place (not C-contiguous float64)."""
+        datas = [*self.problem.runningDatas, self.problem.terminalData]
+        arrays = [getattr(datas[t], name) for t in self._qp.active for name in _ROW_NAMES]
+        if len(arrays) != len(self._row_seen) or not all(map(is_, arrays, self._row_seen)):
+            if not all(isinstance(a, np.ndarray) and a.dtype == np.float64 and a.flags.c_contiguous for a in arrays):
+                return None
+            self._row_seen = arrays
+            self._row_addr[:] = 0
+            for i, t in enumerate(self._qp.active):
+                self._row_addr[t] = [a.__array_interface__["data"][0] for a in arrays[6 * i:6 * i + 6]]
+        return self._row_addr
 
     def _node_rows(self, problem) -> Iterator[tuple]:
         """``(t, rows, data, ng, nh, c)`` of every node with QP rows, ``c = (g, h)`` at the node's last ``calc``."""
         datas = [*problem.runningDatas, problem.terminalData]
-        models = [*problem.runningModels, problem.terminalModel]
-        for t, r in enumerate(self._qp.rows):
-            if not r.lb.size:
-                continue
-            d, m = datas[t], models[t]
-            ng, nh = (m.ng_T, m.nh_T) if t == problem.T else (m.ng, m.nh)
-            yield t, r, d, ng, nh, np.r_[d.g[:ng], d.h[:nh]]
+        for t in self._qp.active:
+            d = datas[t]
+            ng, nh = self._ngh[t]
+            yield t, self._qp.rows[t], d, ng, nh, np.r_[d.g[:ng], d.h[:nh]]
 
-    def _load_rows(self) -> None:
-        """Copy each node's ``g, Gx, Gu`` (and ``h, Hx, Hu``) into its QP rows, with ``lo/hi = lb/ub - c``."""
+    def _row_values_numpy(self, load: bool) -> tuple[float, float, float]:
+        """Numpy twin of :func:`.csqp_kernel.node_rows`: ``(Ψ, ‖v‖∞, ‖v‖₁)``."""
         problem = self.problem
+        psi = vinf = v1 = 0.0
         for t, r, d, ng, nh, c in self._node_rows(problem):
-            r.C[:ng], r.C[ng:] = d.Gx[:ng], d.Hx[:nh]
-            if t < problem.T:
-                r.D[:ng], r.D[ng:] = d.Gu[:ng], d.Hu[:nh]
-            np.subtract(r.lb, c, out=r.lo)
-            np.subtract(r.ub, c, out=r.hi)
-
-    def _violation(self, problem) -> float:
-        """``Ψ``: the ℓ1 norm of the rows' bound violations at the nodes' last ``calc``."""
-        return sum(float(np.maximum(r.lb - c, 0.0).sum() + np.maximum(c - r.ub, 0.0).sum())
-                   for _, r, _, _, _, c in self._node_rows(problem))
+            if load:
+                r.C[:ng], r.C[ng:] = d.Gx[:ng], d.Hx[:nh]
+                if t < problem.T:
+                    r.D[:ng], r.D[ng:] = d.Gu[:ng], d.Hu[:nh]
+                np.subtract(r.lb, c, out=r.lo)
+                np.subtract(r.ub, c, out=r.hi)
+            psi += float(np.maximum(r.lb - c, 0.0).sum() + np.maximum(c - r.ub, 0.0).sum())
+            v = np.abs(np.maximum(np.maximum(r.lb[:ng] - c[:ng], 0.0), c[:ng] - r.ub[:ng]))
+            vinf, v1 = max(vinf, float(v.max(initial=0.0))), v1 + float(v.sum())
+        return psi, vinf, v1
 
     def _reset_rho(self) -> None:
         self._qp.rho_bar = self._rho_base
@@ -389,4 +431,4 @@ class SolverCSQP(SolverSQP):
         return self.cost_try + wd * self.gap_norm_try + wc * self.constraint_norm_try
 
     def _after_trial(self) -> None:
-        self.constraint_norm_try = self._violation(self.problem)
+        self.constraint_norm_try = self._row_values(False)

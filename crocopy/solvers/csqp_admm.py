@@ -40,7 +40,8 @@ class NodeRows:
 
     def __init__(self, qp: StagewiseADMM, t: int, lb: np.ndarray, ub: np.ndarray) -> None:
         n, nx, nu = lb.size, qp.ndx[t], qp.nu[t]
-        self.lb, self.ub = lb, ub
+        self.lb, self.ub = qp.lb[t, :n], qp.ub[t, :n]
+        self.lb[:], self.ub[:] = lb, ub
         self.C, self.D = qp.C[t, :n, :nx], qp.D[t, :n, :nu]
         self.lo, self.hi = qp.lo[t, :n], qp.hi[t, :n]
         self.z, self.y, self.rho = qp.z[t, :n], qp.y[t, :n], qp.rho[t, :n]
@@ -67,7 +68,8 @@ class StagewiseADMM:
         self.dims = np.array([ndx, nu, nc], dtype=np.int64).T.copy()
         self.kind = np.zeros((N + 1, c), dtype=np.int64)
         self.C, self.D = np.zeros((N + 1, c, n)), np.zeros((N + 1, c, m))
-        self.lo, self.hi, self.z, self.y, self.rho, self.eta = (np.zeros((N + 1, c)) for _ in range(6))
+        self.lb, self.ub, self.lo, self.hi = (np.zeros((N + 1, c)) for _ in range(4))
+        self.z, self.y, self.rho, self.eta = (np.zeros((N + 1, c)) for _ in range(4))
         self.dx_s, self.dx_bar_s, self.p_s, self.Pd_s = (np.zeros((N + 1, n)) for _ in range(4))
         self.du_s, self.du_bar_s, self.k_s = (np.zeros((N + 1, m)) for _ in range(3))
         self.P_s, self.K_s, self.L_s = np.zeros((N + 1, n, n)), np.zeros((N + 1, m, n)), np.zeros((N + 1, m, m))

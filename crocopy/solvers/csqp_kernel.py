@@ -408,3 +408,44 @@ def _multipliers(dims, P, p, dx, lam):
 
 
 multipliers = compiled(_multipliers)
+
+
+def _node_rows(dims, ngh, saddr, lb, ub, load, C, D, lo, hi, out):
+    """Each node's rows from its constraint arrays at ``saddr[t] = (g, h, Gx, Gu, Hx, Hu)`` (``ngh[t] = (ng, nh)``
+    rows of each), ``c = (g, h)``: if ``load``, ``lo = lb - c``, ``hi = ub - c``, ``C = (Gx; Hx)``,
+    ``D = (Gu; Hu)``.  ``out = (Ψ, ‖v‖∞, ‖v‖₁)`` with ``Ψ = Σ max(lb - c, 0) + max(c - ub, 0)`` over all rows and
+    ``v = max(lb - g, 0, g - ub)`` over the inequality rows."""
+    N = dims.shape[0] - 1
+    psi = 0.0
+    vinf = 0.0
+    v1 = 0.0
+    for t in range(N + 1):
+        n, m, nc = dims[t, 0], dims[t, 1], dims[t, 2]
+        if nc == 0:
+            continue
+        ng, nh = ngh[t, 0], ngh[t, 1]
+        a = saddr[t]
+        g, h = vector_at(a[0], ng), vector_at(a[1], nh)
+        for r in range(nc):
+            c = g[r] if r < ng else h[r - ng]
+            below, above = lb[t, r] - c, c - ub[t, r]
+            if load:
+                lo[t, r], hi[t, r] = below, -above
+            worst = max(max(below, 0.0), above)
+            psi += max(below, 0.0) + max(above, 0.0)
+            if r < ng:
+                vinf = max(vinf, abs(worst))
+                v1 += abs(worst)
+        if load:
+            if ng:
+                C[t, :ng, :n] = matrix_at(a[2], ng, n)
+                if t < N:
+                    D[t, :ng, :m] = matrix_at(a[3], ng, m)
+            if nh:
+                C[t, ng:nc, :n] = matrix_at(a[4], nh, n)
+                if t < N:
+                    D[t, ng:nc, :m] = matrix_at(a[5], nh, m)
+    out[0], out[1], out[2] = psi, vinf, v1
+
+
+node_rows = compiled(_node_rows)
