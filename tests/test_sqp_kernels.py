@@ -1,0 +1,141 @@
+"""The compiled SQP/CSQP paths (:mod:`crocopy.solvers.csqp_kernel`, :mod:`crocopy.solvers.sqp_kernel`) against
+their numpy twins: kernels on or off give the same iterations, cost (1e-9), KKT and QP read-outs, on free and
+constrained problems, with the ADMM's variants; one compiled call per QP against one call per iteration
+(time limit, QP print-out); rebound or unreadable constraint arrays; pickled solvers."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import pickle
+
+import numpy as np
+import pytest
+from sqp_problems import random_lq
+
+import crocopy
+
+
+def _unicycle() -> crocopy.ShootingProblem:
+    m = crocopy.ActionModelUnicycle()
+    return crocopy.ShootingProblem(np.array([-1.0, -1.0, 1.0]), [m] * 20, m)
+
+
+def _boxed(seed: int = 2) -> crocopy.ShootingProblem:
+    """Random LQ whose first state (after ``x0``) and both controls are boxed, with a terminal equality (``nh``)."""
+    rows = lambda t: (np.r_[np.eye(3)[:1] * (t > 0), np.zeros((2, 3))], np.r_[np.zeros((1, 2)), np.eye(2)],  # noqa: E731
+                      np.array([-0.3, -0.4, -np.inf]), np.array([0.3, 0.4, 0.5]))
+    return random_lq(seed, T=10, rows=rows, terminal_eqs=(np.eye(3)[:2], np.zeros((2, 2)), np.array([0.1, -0.2])))
+
+
+def _solve(build, cls, kernels: bool, settings: dict | None = None, maxiter: int = 100):
+    with crocopy.use_kernels(kernels):
+        solver = cls(build())
+        for name, value in (settings or {}).items():
+            setattr(solver, name, value)
+        out = io.StringIO()
+        with contextlib.redirect_stdout(out):
+            converged = solver.solve([], [], maxiter)
+        return solver, converged, out.getvalue()
+
+
+def _assert_same(a, b) -> None:
+    (sa, ca, _), (sb, cb, _) = a, b
+    assert ca == cb and sa.iter == sb.iter
+    assert sa.cost == pytest.approx(sb.cost, rel=1e-9)
+    assert sa.KKT == pytest.approx(sb.KKT, rel=1e-6, abs=1e-12)
+    assert sa.gap_norm == pytest.approx(sb.gap_norm, rel=1e-6, abs=1e-12)
+    for x, y in zip(sa.xs, sb.xs):
+        np.testing.assert_allclose(x, y, rtol=1e-8, atol=1e-10)
+    for x, y in zip(sa.lag_mul, sb.lag_mul):
+        np.testing.assert_allclose(x, y, rtol=1e-6, atol=1e-9)
+
+
+@pytest.mark.parametrize("cls", [crocopy.SolverSQP, crocopy.SolverCSQP])
+def test_free_problem_kernels_on_or_off(cls):
+    # Gauss-Newton converges linearly here; from a KKT of ~1e-8 on, the filter compares costs equal to the last
+    # bit (round-off picks the step), so stop before that
+    runs = [_solve(_unicycle, cls, k, {"termination_tolerance": 1e-7}) for k in (True, False)]
+    assert runs[0][1]
+    _assert_same(*runs)
+
+
+VARIANTS = [{}, {"update_rho_with_heuristic": True}, {"rho_update_interval": 1}, {"equality_qp_initial_guess": False},
+            {"reset_rho": True, "reset_y": True}, {"mu_dynamic": -1.0}, {"rho_sparse": 1.0}]
+
+
+@pytest.mark.parametrize("settings", VARIANTS, ids=lambda s: ",".join(s) or "defaults")
+def test_constrained_problem_kernels_on_or_off(settings):
+    # an accurate QP: with eps_abs = 1e-4 the KKT measure stalls above the tolerance and the line search ends
+    # the solve on round-off (as in mim-solvers)
+    settings = {"termination_tolerance": 1e-5, "eps_abs": 1e-8, "eps_rel": 0.0, **settings}
+    runs = [_solve(_boxed, crocopy.SolverCSQP, k, settings) for k in (True, False)]
+    assert runs[0][1], runs[0][0].reason
+    _assert_same(*runs)
+    (on, _, _), (off, _, _) = runs
+    assert on.qp_iters == off.qp_iters > 0
+    assert on.constraint_norm == pytest.approx(off.constraint_norm, rel=1e-6, abs=1e-12)
+    assert on.gfeas == pytest.approx(off.gfeas, rel=1e-6, abs=1e-12)
+    assert on.rho_sparse == pytest.approx(off.rho_sparse, rel=1e-9)
+    for a, b in zip(on.y, off.y):
+        np.testing.assert_allclose(a, b, rtol=1e-6, atol=1e-9)
+    assert max(np.abs(y).max(initial=0.0) for y in on.y) > 1e-3  # some rows are active
+
+
+def test_nonlinear_constrained_problem_kernels_on_or_off():
+    pytest.importorskip("pinocchio")
+    from crocopy.bench.mim import build_problem
+
+    def build():
+        return build_problem(crocopy, "ur5_ee_eq")
+
+    runs = [_solve(build, crocopy.SolverCSQP, k, {"termination_tolerance": 1e-6}, 50) for k in (True, False)]
+    assert runs[0][1]
+    _assert_same(*runs)
+    assert runs[0][0].qp_iters == runs[1][0].qp_iters
+
+
+def test_one_call_per_qp_or_per_iteration():
+    """A time limit or the QP print-out runs the compiled ADMM one iteration per call: same answer, and the print-out
+    is the numpy twin's."""
+    one = _solve(_boxed, crocopy.SolverCSQP, True)
+    stepwise = _solve(_boxed, crocopy.SolverCSQP, True, {"max_solve_time": 1e6})
+    _assert_same(one, stepwise)
+    assert one[0].qp_iters == stepwise[0].qp_iters
+    printed = [_solve(_boxed, crocopy.SolverCSQP, k, {"with_qp_callbacks": True}, 3)[2] for k in (True, False)]
+    assert printed[0].count("QP iter") == printed[1].count("QP iter") > 0
+    assert [line.split()[2] for line in printed[0].splitlines() if "QP iter" in line] == [
+        line.split()[2] for line in printed[1].splitlines() if "QP iter" in line]
+
+
+def test_rebound_or_unreadable_constraint_arrays():
+    """A data's ``Gx`` rebound to another array is read there; one the kernel cannot read in place (Fortran order)
+    goes through the numpy twin: the same solves either way."""
+    results = []
+    for make in (None, np.array, np.asfortranarray):
+        solver = crocopy.SolverCSQP(_boxed())
+        solver.eps_abs, solver.eps_rel, solver.termination_tolerance = 1e-8, 0.0, 1e-5
+        solver.solve([], [], 2)
+        for d in solver.problem.runningDatas if make else []:
+            old = d.Gx
+            d.Gx = make(old)
+            old[:] = 1e3  # what a kernel still reading the old array would see
+        assert solver.solve([], [], 100)
+        results.append((solver.iter, solver.cost))
+    assert results[1][0] == results[2][0] == results[0][0]
+    assert results[1][1] == pytest.approx(results[0][1], rel=1e-9)
+    assert results[2][1] == pytest.approx(results[0][1], rel=1e-9)
+
+
+@pytest.mark.parametrize("cls", [crocopy.SolverSQP, crocopy.SolverCSQP])
+def test_pickled_solver_keeps_its_stacks(cls):
+    solver = cls(_boxed())
+    solver.solve([], [], 2)
+    copy = pickle.loads(pickle.dumps(solver))
+    for s in (solver, copy):
+        s.solve([], [], 100)
+    assert copy.iter == solver.iter and copy.cost == pytest.approx(solver.cost, rel=1e-12)
+    for a, b in zip(copy.dx, solver.dx):
+        np.testing.assert_array_equal(a, b)
+    copy.dx[1][0] = 123.0
+    assert copy._steps[0][1, 0] == 123.0  # the read-outs are still views of the stacks the kernels write
