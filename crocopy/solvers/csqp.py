@@ -17,6 +17,11 @@ every accepted step; the solve stops (False) when no step is accepted.  Unlike i
 reports the step actually taken, the rows are sized from ``ng_T`` on the terminal node (a constraint
 present but inactive there is fine), equalities ``nh > 0`` are accepted, and ``rho_sparse`` set by the
 user is the ``ρ̄`` each solve starts from.
+
+With kernels on, the rows are read from the nodes' ``g, Gx, Gu, h, Hx, Hu`` in one compiled pass (which also
+gives ``Ψ`` and ``gfeas``, the norm of the inequality rows' violation) and each QP's ADMM iterations run in
+one compiled call (:mod:`.csqp_kernel`; one call per iteration when ``max_solve_time`` is finite or
+``with_qp_callbacks`` prints them).
 """
 
 from __future__ import annotations

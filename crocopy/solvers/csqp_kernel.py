@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..kernels import compiled, matrix_at, vector_at
-from .riccati_kernel import cholesky_lower, cholesky_solve
+from .riccati_kernel import cholesky_lower
 
 INEQUALITY, EQUALITY, FREE = 0, 1, 2
 
@@ -42,7 +42,8 @@ def _factorise(n, m, c, n1, Fx, Fu, Lxx, Lxu, Luu, C, D, rho, with_rows, sigma, 
                Wu, idx):
     """``Quu`` factor ``L``, gains ``K`` and ``P`` of a node from the next ``P1`` (node rows ``C, D, rho``, which
     enter ``Qxx``/``Qxu`` only when ``with_rows == 2``, i.e. not on node 0); False when ``Quu`` is not positive
-    definite or not finite.  Stack rows (padded) and loops whose inner index is contiguous (vectorised)."""
+    definite or not finite.  Stack rows (padded) and loops whose inner index is contiguous (vectorised); the
+    products skip zero entries (selection rows, the identity blocks of ``Fx``)."""
     for i in range(n):
         for j in range(n1):
             W[i, j] = 0.0
@@ -52,10 +53,14 @@ def _factorise(n, m, c, n1, Fx, Fu, Lxx, Lxu, Luu, C, D, rho, with_rows, sigma, 
     for q in range(n1):
         for i in range(n):
             a = Fx[q, i]
+            if a == 0.0:
+                continue
             for j in range(n1):
                 W[i, j] += a * P1[q, j]
         for i in range(m):
             a = Fu[q, i]
+            if a == 0.0:
+                continue
             for j in range(n1):
                 Wu[i, j] += a * P1[q, j]
     for i in range(n):
@@ -65,6 +70,8 @@ def _factorise(n, m, c, n1, Fx, Fu, Lxx, Lxu, Luu, C, D, rho, with_rows, sigma, 
             Qxu[i, j] = 0.0
         for q in range(n1):
             a = W[i, q]
+            if a == 0.0:
+                continue
             for j in range(n):
                 Qxx[i, j] += a * Fx[q, j]
             for j in range(m):
@@ -78,6 +85,8 @@ def _factorise(n, m, c, n1, Fx, Fu, Lxx, Lxu, Luu, C, D, rho, with_rows, sigma, 
         for r in range(c):
             for i in range(n):
                 a = rho[r] * C[r, i]
+                if a == 0.0:
+                    continue
                 for j in range(n):
                     Qxx[i, j] += a * C[r, j]
     if m == 0:
@@ -88,6 +97,8 @@ def _factorise(n, m, c, n1, Fx, Fu, Lxx, Lxu, Luu, C, D, rho, with_rows, sigma, 
             Quu[i, j] = 0.0
         for q in range(n1):
             a = Wu[i, q]
+            if a == 0.0:
+                continue
             for j in range(m):
                 Quu[i, j] += a * Fu[q, j]
         for j in range(m):
@@ -97,11 +108,15 @@ def _factorise(n, m, c, n1, Fx, Fu, Lxx, Lxu, Luu, C, D, rho, with_rows, sigma, 
         for r in range(c):
             for i in range(m):
                 a = rho[r] * D[r, i]
+                if a == 0.0:
+                    continue
                 for j in range(m):
                     Quu[i, j] += a * D[r, j]
             if with_rows == 2:
                 for i in range(n):
                     a = rho[r] * C[r, i]
+                    if a == 0.0:
+                        continue
                     for j in range(m):
                         Qxu[i, j] += a * D[r, j]
     if not cholesky_lower(Quu, idx, m, L):
@@ -111,6 +126,8 @@ def _factorise(n, m, c, n1, Fx, Fu, Lxx, Lxu, Luu, C, D, rho, with_rows, sigma, 
             K[i, j] = Qxu[j, i]
         for q in range(i):
             a = L[i, q]
+            if a == 0.0:
+                continue
             for j in range(n):
                 K[i, j] -= a * K[q, j]
         d = L[i, i]
@@ -119,6 +136,8 @@ def _factorise(n, m, c, n1, Fx, Fu, Lxx, Lxu, Luu, C, D, rho, with_rows, sigma, 
     for i in range(m - 1, -1, -1):
         for q in range(i + 1, m):
             a = L[q, i]
+            if a == 0.0:
+                continue
             for j in range(n):
                 K[i, j] -= a * K[q, j]
         d = L[i, i]
@@ -127,6 +146,8 @@ def _factorise(n, m, c, n1, Fx, Fu, Lxx, Lxu, Luu, C, D, rho, with_rows, sigma, 
     for i in range(n):
         for q in range(m):
             a = Qxu[i, q]
+            if a == 0.0:
+                continue
             for j in range(n):
                 Qxx[i, j] -= a * K[q, j]
     symmetrise(n, Qxx, P, mu)
@@ -145,93 +166,96 @@ symmetrise = compiled(_symmetrise)
 factorise = compiled(_factorise)
 
 
-def _add_transpose(M, rows, cols, v, out):
-    """``out[:cols] += M[:rows, :cols]ᵀ v`` (contiguous inner loop)."""
-    for r in range(rows):
-        a = v[r]
-        for i in range(cols):
-            out[i] += M[r, i] * a
-
-
-add_transpose = compiled(_add_transpose)
 
 
 def _riccati(dims, daddr, haddr, fs_col, LxT, LxxT, sigma, mu, rows, full, C, D, rho, eta, dx_bar, du_bar, P, p, Pd,
              K, k, L, S, Sv, idx):
-    """The backward pass of :meth:`.csqp_admm.StagewiseADMM.riccati`; -1, or the node whose ``Quu`` failed."""
+    """The backward pass of :meth:`.csqp_admm.StagewiseADMM.riccati`; -1, or the node whose ``Quu`` failed.
+    The stacks are indexed in place (a row view per node costs a reference count)."""
     N = dims.shape[0] - 1
     Qxx, Qxu, Quu, W, Wu = S[0], S[1], S[2], S[3], S[4]
     Qx, Qu, g = Sv[0], Sv[1], Sv[2]
     n, c = dims[N, 0], dims[N, 2]
     terminal_rows = rows and c > 0
-    pN = p[N]
     for i in range(n):
-        pN[i] = LxT[i]
+        p[N, i] = LxT[i]
         if sigma != 0.0:
-            pN[i] -= sigma * dx_bar[N, i]
+            p[N, i] -= sigma * dx_bar[N, i]
     if terminal_rows:
-        add_transpose(C[N], c, n, eta[N], pN)
+        for r in range(c):
+            a_ = eta[N, r]
+            for i in range(n):
+                p[N, i] += C[N, r, i] * a_
     if full:
-        PN = P[N]
         for i in range(n):
             for j in range(n):
-                PN[i, j] = LxxT[i, j]
+                P[N, i, j] = LxxT[i, j]
         if terminal_rows:
             for r in range(c):
                 for i in range(n):
-                    a = rho[N, r] * C[N, r, i]
+                    a_ = rho[N, r] * C[N, r, i]
                     for j in range(n):
-                        PN[i, j] += C[N, r, j] * a
+                        P[N, i, j] += C[N, r, j] * a_
         for i in range(n):
-            PN[i, i] += sigma + mu
+            P[N, i, i] += sigma + mu
     for t in range(N - 1, -1, -1):
         n, m, c, n1 = dims[t, 0], dims[t, 1], dims[t, 2], dims[t + 1, 0]
         a = daddr[t]
         Fx, Fu = matrix_at(a[0], n1, n), matrix_at(a[1], n1, m)
         Lx, Lu = vector_at(a[5], n), vector_at(a[6], m)
-        d1 = vector_at(haddr[t + 1, fs_col], n1)
         with_rows = 0 if not rows or c == 0 else (1 if t == 0 else 2)
-        P1, Pd1, p1 = P[t + 1], Pd[t + 1], p[t + 1]
         if full:
+            d1 = vector_at(haddr[t + 1, fs_col], n1)
             for i in range(n1):
                 acc = 0.0
                 for j in range(n1):
-                    acc += P1[i, j] * d1[j]
-                Pd1[i] = acc
+                    acc += P[t + 1, i, j] * d1[j]
+                Pd[t + 1, i] = acc
         for i in range(n1):
-            g[i] = p1[i] + Pd1[i]
+            g[i] = p[t + 1, i] + Pd[t + 1, i]
         for i in range(n):
             Qx[i] = Lx[i]
         for i in range(m):
             Qu[i] = Lu[i]
-        add_transpose(Fx, n1, n, g, Qx)
-        add_transpose(Fu, n1, m, g, Qu)
+        for q in range(n1):
+            a_ = g[q]
+            for i in range(n):
+                Qx[i] += Fx[q, i] * a_
+            for i in range(m):
+                Qu[i] += Fu[q, i] * a_
         if sigma != 0.0:
             for i in range(n):
                 Qx[i] -= sigma * dx_bar[t, i]
             for i in range(m):
                 Qu[i] -= sigma * du_bar[t, i]
-        if with_rows:
+        for r in range(c if with_rows else 0):
+            a_ = eta[t, r]
             if with_rows == 2:
-                add_transpose(C[t], c, n, eta[t], Qx)
-            add_transpose(D[t], c, m, eta[t], Qu)
+                for i in range(n):
+                    Qx[i] += C[t, r, i] * a_
+            for i in range(m):
+                Qu[i] += D[t, r, i] * a_
         if full and not factorise(n, m, c, n1, Fx, Fu, matrix_at(a[2], n, n), matrix_at(a[3], n, m),
-                                  matrix_at(a[4], m, m), C[t], D[t], rho[t], with_rows, sigma, mu, P1, P[t], K[t],
-                                  L[t], Qxx, Qxu, Quu, W, Wu, idx):
+                                  matrix_at(a[4], m, m), C[t], D[t], rho[t], with_rows, sigma, mu, P[t + 1], P[t],
+                                  K[t], L[t], Qxx, Qxu, Quu, W, Wu, idx):
             return t
         if m > 0:
-            kt = k[t]
-            for i in range(m):
-                kt[i] = Qu[i]
-            cholesky_solve(L[t], m, kt)
-            Kt = K[t]
+            for i in range(m):  # k = Quu⁻¹ Qu with the factor L (L then Lᵀ)
+                acc = Qu[i]
+                for q in range(i):
+                    acc -= L[t, i, q] * k[t, q]
+                k[t, i] = acc / L[t, i, i]
+            for i in range(m - 1, -1, -1):
+                acc = k[t, i]
+                for q in range(i + 1, m):
+                    acc -= L[t, q, i] * k[t, q]
+                k[t, i] = acc / L[t, i, i]
             for q in range(m):
                 a_ = -Qu[q]
                 for i in range(n):
-                    Qx[i] += Kt[q, i] * a_
-        pt = p[t]
+                    Qx[i] += K[t, q, i] * a_
         for i in range(n):
-            pt[i] = Qx[i]
+            p[t, i] = Qx[i]
     return -1
 
 
@@ -248,33 +272,43 @@ def _rollout(dims, daddr, haddr, fs_col, K, k, dx, du):
         n, m, n1 = dims[t, 0], dims[t, 1], dims[t + 1, 0]
         Fx, Fu = matrix_at(daddr[t, 0], n1, n), matrix_at(daddr[t, 1], n1, m)
         d1 = vector_at(haddr[t + 1, fs_col], n1)
-        x, u, x1, Kt, kt = dx[t], du[t], dx[t + 1], K[t], k[t]
         for i in range(m):
-            acc = -kt[i]
+            acc = -k[t, i]
             for j in range(n):
-                acc -= Kt[i, j] * x[j]
-            u[i] = acc
+                acc -= K[t, i, j] * dx[t, j]
+            du[t, i] = acc
         for i in range(n1):
             acc = 0.0
             for j in range(m):
-                acc += Fu[i, j] * u[j]
+                acc += Fu[i, j] * du[t, j]
             acc2 = 0.0
             for j in range(n):
-                acc2 += Fx[i, j] * x[j]
-            x1[i] = acc + acc2 + d1[i]
+                acc2 += Fx[i, j] * dx[t, j]
+            dx[t + 1, i] = acc + acc2 + d1[i]
 
 
 rollout = compiled(_rollout)
 
 
-def _transpose_max(M, rows, cols, v, w, best):
-    """``max(best, ‖M[:rows, :cols]ᵀ v‖∞)`` (``w``: scratch of ``cols``)."""
-    for i in range(cols):
+def _transpose_max(C, D, t, rows, n, m, v, w, best):
+    """``max(best, ‖C_tᵀ v‖∞, ‖D_tᵀ v‖∞)`` over ``rows`` rows (``D`` skipped when ``m = 0``; ``w``: scratch)."""
+    for i in range(n):
         w[i] = 0.0
-    add_transpose(M, rows, cols, v, w)
-    for i in range(cols):
-        if abs(w[i]) > best:
-            best = abs(w[i])
+    for r in range(rows):
+        a = v[r]
+        for i in range(n):
+            w[i] += C[t, r, i] * a
+    for i in range(n):
+        best = max(best, abs(w[i]))
+    if m > 0:
+        for i in range(m):
+            w[i] = 0.0
+        for r in range(rows):
+            a = v[r]
+            for i in range(m):
+                w[i] += D[t, r, i] * a
+        for i in range(m):
+            best = max(best, abs(w[i]))
     return best
 
 
@@ -290,34 +324,30 @@ def _update(dims, C, D, lo, hi, z, y, rho, dx, du, alpha, check, heuristic, v, w
         n, m, c = dims[t, 0], dims[t, 1], dims[t, 2]
         if c == 0:
             continue
-        Ct, Dt, x, u, zt, yt, rt = C[t], D[t], dx[t], du[t], z[t], y[t], rho[t]
         for r in range(c):
             acc = 0.0
             for j in range(n):
-                acc += Ct[r, j] * x[j]
+                acc += C[t, r, j] * dx[t, j]
             if t < N:
                 for j in range(m):
-                    acc += Dt[r, j] * u[j]
+                    acc += D[t, r, j] * du[t, j]
             v[r] = acc
         for r in range(c):
-            z_hat = alpha * v[r] + (1.0 - alpha) * zt[r]
-            z_new = min(max(z_hat + yt[r] / rt[r], lo[t, r]), hi[t, r])
-            yt[r] += rt[r] * (z_hat - z_new)
-            dz = rt[r] * (z_new - zt[r])
-            zt[r] = z_new
+            z_hat = alpha * v[r] + (1.0 - alpha) * z[t, r]
+            z_new = min(max(z_hat + y[t, r] / rho[t, r], lo[t, r]), hi[t, r])
+            y[t, r] += rho[t, r] * (z_hat - z_new)
+            dz = rho[t, r] * (z_new - z[t, r])
+            z[t, r] = z_new
             if check:
                 r_p = max(r_p, abs(v[r] - z_new))
                 s_p = max(s_p, abs(v[r]), abs(z_new))
                 if heuristic:
                     r_d = max(r_d, abs(dz))
-                    s_d = max(s_d, abs(yt[r]))
+                    s_d = max(s_d, abs(y[t, r]))
             v[r] = dz
         if check and not heuristic:
-            r_d = transpose_max(Ct, c, n, v, w, r_d)
-            s_d = transpose_max(Ct, c, n, yt, w, s_d)
-            if t < N:
-                r_d = transpose_max(Dt, c, m, v, w, r_d)
-                s_d = transpose_max(Dt, c, m, yt, w, s_d)
+            r_d = transpose_max(C, D, t, c, n, m if t < N else 0, v, w, r_d)
+            s_d = transpose_max(C, D, t, c, n, m if t < N else 0, y[t], w, s_d)
     if check:
         out[0], out[1], out[2], out[3] = r_p, r_d, s_p, s_d
 

@@ -22,6 +22,10 @@ and ``solve`` returns True once ``KKT <= termination_tolerance``.  Regularisatio
 start at ``regInit`` (``reg_min`` when None), go down after a step longer than ``th_stepDec``, up after
 one of at most ``th_stepInc`` (False at ``reg_max``).  The constraints of the nodes are ignored, as in
 mim-solvers (:class:`~crocopy.solvers.csqp.SolverCSQP` enforces them).
+
+``dx``, ``du``, ``lag_mul`` and ``fs_try`` are views of padded stacks ``(T+1, max ndx)``/``(T+1, max nu)``; with
+kernels on, the linear rollout, the KKT measure and the gap norms run compiled on them
+(:mod:`.sqp_kernel`), the backward pass is the DDP family's compiled Riccati pass.
 """
 
 from __future__ import annotations
