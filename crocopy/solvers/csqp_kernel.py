@@ -200,9 +200,8 @@ def _riccati(dims, daddr, haddr, fs_col, LxT, LxxT, sigma, mu, rows, full, C, D,
             P[N, i, i] += sigma + mu
     for t in range(N - 1, -1, -1):
         n, m, c, n1 = dims[t, 0], dims[t, 1], dims[t, 2], dims[t + 1, 0]
-        a = daddr[t]
-        Fx, Fu = matrix_at(a[0], n1, n), matrix_at(a[1], n1, m)
-        Lx, Lu = vector_at(a[5], n), vector_at(a[6], m)
+        Fx, Fu = matrix_at(daddr[t, 0], n1, n), matrix_at(daddr[t, 1], n1, m)
+        Lx, Lu = vector_at(daddr[t, 5], n), vector_at(daddr[t, 6], m)
         with_rows = 0 if not rows or c == 0 else (1 if t == 0 else 2)
         if full:
             d1 = vector_at(haddr[t + 1, fs_col], n1)
@@ -235,9 +234,9 @@ def _riccati(dims, daddr, haddr, fs_col, LxT, LxxT, sigma, mu, rows, full, C, D,
                     Qx[i] += C[t, r, i] * a_
             for i in range(m):
                 Qu[i] += D[t, r, i] * a_
-        if full and not factorise(n, m, c, n1, Fx, Fu, matrix_at(a[2], n, n), matrix_at(a[3], n, m),
-                                  matrix_at(a[4], m, m), C[t], D[t], rho[t], with_rows, sigma, mu, P[t + 1], P[t],
-                                  K[t], L[t], Qxx, Qxu, Quu, W, Wu, idx):
+        if full and not factorise(n, m, c, n1, Fx, Fu, matrix_at(daddr[t, 2], n, n), matrix_at(daddr[t, 3], n, m),
+                                  matrix_at(daddr[t, 4], m, m), C[t], D[t], rho[t], with_rows, sigma, mu,
+                                  P[t + 1], P[t], K[t], L[t], Qxx, Qxu, Quu, W, Wu, idx):
             return t
         if m > 0:
             for i in range(m):  # k = Quu⁻¹ Qu with the factor L (L then Lᵀ)

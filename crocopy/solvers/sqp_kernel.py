@@ -36,27 +36,24 @@ def _linear_rollout(dims, daddr, haddr, dx, du, lam):
         dx[0, i] = f0[i]
     for t in range(T):
         n, m, n1 = dims[t, 0], dims[t, 1], dims[t + 1, 0]
-        h = haddr[t]
         Fx, Fu = matrix_at(daddr[t, 0], n1, n), matrix_at(daddr[t, 1], n1, m)
-        k, K, f1 = vector_at(h[KV], m), matrix_at(h[KM], m, n), vector_at(haddr[t + 1, FS], n1)
-        x, u, x1 = dx[t], du[t], dx[t + 1]
+        k, K, f1 = vector_at(haddr[t, KV], m), matrix_at(haddr[t, KM], m, n), vector_at(haddr[t + 1, FS], n1)
         for i in range(m):
             acc = 0.0
             for j in range(n):
-                acc += K[i, j] * x[j]
-            u[i] = -k[i] - acc
+                acc += K[i, j] * dx[t, j]
+            du[t, i] = -k[i] - acc
         for i in range(n1):
             acc = 0.0
             for j in range(n):
-                acc += Fx[i, j] * x[j]
+                acc += Fx[i, j] * dx[t, j]
             acc2 = 0.0
             for j in range(m):
-                acc2 += Fu[i, j] * u[j]
-            x1[i] = acc + acc2 + f1[i]
+                acc2 += Fu[i, j] * du[t, j]
+            dx[t + 1, i] = acc + acc2 + f1[i]
     for t in range(T + 1):
         n = dims[t, 0]
-        h = haddr[t]
-        Vxx, Vx, f = matrix_at(h[VXX], n, n), vector_at(h[VX], n), vector_at(h[FS], n)
+        Vxx, Vx, f = matrix_at(haddr[t, VXX], n, n), vector_at(haddr[t, VX], n), vector_at(haddr[t, FS], n)
         for i in range(n):
             acc = 0.0
             for j in range(n):
@@ -85,27 +82,26 @@ def _kkt(dims, daddr, haddr, LxT, lam, C, D, y, g):
         n, m, c, n1 = dims[t, 0], dims[t, 1], dims[t, 2], dims[t + 1, 0]
         Fx, Fu = matrix_at(daddr[t, 0], n1, n), matrix_at(daddr[t, 1], n1, m)
         Lx, Lu = vector_at(daddr[t, 5], n), vector_at(daddr[t, 6], m)
-        l1, yt = lam[t + 1], y[t]
         for i in range(n):
             g[i] = Lx[i] - lam[t, i]
         for q in range(n1):
-            a = l1[q]
+            a = lam[t + 1, q]
             for i in range(n):
                 g[i] += Fx[q, i] * a
         if t > 0:
             for r in range(c):
-                a = yt[r]
+                a = y[t, r]
                 for i in range(n):
                     g[i] += C[t, r, i] * a
         worst = worst_abs(worst, g, n)
         for i in range(m):
             g[i] = Lu[i]
         for q in range(n1):
-            a = l1[q]
+            a = lam[t + 1, q]
             for i in range(m):
                 g[i] += Fu[q, i] * a
         for r in range(c):
-            a = yt[r]
+            a = y[t, r]
             for i in range(m):
                 g[i] += D[t, r, i] * a
         worst = worst_abs(worst, g, m)
