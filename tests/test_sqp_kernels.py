@@ -139,3 +139,44 @@ def test_pickled_solver_keeps_its_stacks(cls):
         np.testing.assert_array_equal(a, b)
     copy.dx[1][0] = 123.0
     assert copy._steps[0][1, 0] == 123.0  # the read-outs are still views of the stacks the kernels write
+
+
+def _ur5_terminal_equality() -> crocopy.ShootingProblem:
+    """UR5 reaching a point held by a terminal equality; the running nodes have no constraint manager."""
+    from crocopy.problems.common import load_model
+
+    model = load_model("ur5")
+    x0 = np.r_[0.0, -1.0, 1.5, -0.5, 1.0, 0.0, np.zeros(6)]
+    state = crocopy.StateMultibody(model)
+    actuation = crocopy.ActuationModelFull(state)
+    target = np.array([0.4, 0.2, 0.5])
+
+    def node(terminal: bool):
+        costs = crocopy.CostModelSum(state, 6)
+        costs.addCost("x", crocopy.CostModelResidual(state, crocopy.ResidualModelState(state, x0, 6)), 0.1)
+        manager = None
+        if terminal:
+            manager = crocopy.ConstraintModelManager(state, 6)
+            ee = crocopy.ResidualModelFrameTranslation(state, model.getFrameId("tool0"), target, 6)
+            manager.addConstraint("ee", crocopy.ConstraintModelResidual(state, ee, np.zeros(3), np.zeros(3)))
+        else:
+            costs.addCost("u", crocopy.CostModelResidual(state, crocopy.ResidualModelControl(state, 6)), 1e-3)
+        dam = crocopy.DifferentialActionModelFreeFwdDynamics(state, actuation, costs, manager)
+        return crocopy.IntegratedActionModelEuler(dam, 0.0 if terminal else 0.02)
+
+    return crocopy.ShootingProblem(x0, [node(False) for _ in range(20)], node(True))
+
+
+def test_csqp_with_compiled_nodes():
+    """Nodes without constraints run compiled inside CSQP (the node with rows keeps its Python path)."""
+    pytest.importorskip("pinocchio")
+    from crocopy.solvers import compiled_nodes
+
+    runs = []
+    for enabled in (True, False):
+        solver, converged, _ = _solve(_ur5_terminal_equality, crocopy.SolverCSQP, enabled)
+        with crocopy.use_kernels(enabled):
+            assert (compiled_nodes.select(solver) is not None) == enabled
+        assert converged and solver.constraint_norm < 1e-8
+        runs.append((solver, converged, ""))
+    _assert_same(*runs)

@@ -93,6 +93,10 @@ class SolverCSQP(SolverSQP):
     ``dx_tilde``, ``du_tilde``, ``lag_mul``, ``y``, ``z``, ``rho_vec``, ``max_solve_time_reached``.
     """
 
+    # Compiled nodes evaluate only nodes without constraints (a node with a constraint manager keeps its Python
+    # path), so the rows CSQP reads are always written by the models themselves.
+    _nodes_compiled = True
+
     def __init__(self, problem: ShootingProblem) -> None:
         super().__init__(problem)
         self.mu_dynamic = 10.0
