@@ -35,9 +35,10 @@ import numpy as np
 from .. import kernels
 from ..enums import FeasibilityNorm
 from ..shooting import ShootingProblem
-from . import csqp_kernel, horizon
+from . import csqp_kernel
 from .base import BackwardPassError
 from .csqp_admm import StagewiseADMM
+from .horizon import stores
 from .sqp import SolverSQP
 from .std_vector import StdVec_VectorXs
 
@@ -136,6 +137,8 @@ class SolverCSQP(SolverSQP):
                              dtype=np.int64)
         self._row_addr = np.zeros((len(models), len(_ROW_NAMES)), dtype=np.int64)
         self._row_seen: list = []
+        self._row_datas: list = []
+        self._row_watch = True
         self._row_out = np.zeros(3)
         qp.rho_bar = self._rho_base
         qp.assign_rho(self.rho_min)
@@ -144,6 +147,10 @@ class SolverCSQP(SolverSQP):
         changed = super()._on_problem_change()
         self._build_qp()
         return changed
+
+    def __setstate__(self, state: dict) -> None:
+        super().__setstate__(state)
+        self._row_datas, self._row_seen, self._row_watch = [], [], True  # addresses are not valid in a copy
 
     # ------------------------------------------------------------------ read-outs
     @property
@@ -260,17 +267,25 @@ class SolverCSQP(SolverSQP):
         return psi
 
     def _row_addresses(self) -> np.ndarray | None:
-        """Where each node's ``g, h, Gx, Gu, Hx, Hu`` are (rows of the nodes with QP rows), re-read only when one
-        was rebound; None when one cannot be read in place (not C-contiguous float64)."""
+        """Where each node's ``g, h, Gx, Gu, Hx, Hu`` are (rows of the nodes with QP rows), or None when one cannot
+        be read in place (not C-contiguous float64: the numpy twin reads it).  Data fields own their arrays
+        (:mod:`crocopy.stored`), so the addresses are read once per list of datas; a data class that makes one of
+        them a property of its own has its arrays compared at every call."""
         datas = [*self.problem.runningDatas, self.problem.terminalData]
-        arrays = [getattr(datas[t], name) for t in self._qp.active for name in _ROW_NAMES]
-        if len(arrays) != len(self._row_seen) or not all(map(is_, arrays, self._row_seen)):
-            if not all(isinstance(a, np.ndarray) and a.dtype == np.float64 and a.flags.c_contiguous for a in arrays):
-                return None
-            self._row_seen = arrays
-            self._row_addr[:] = 0
-            for i, t in enumerate(self._qp.active):
-                self._row_addr[t] = [a.__array_interface__["data"][0] for a in arrays[6 * i:6 * i + 6]]
+        active = [datas[t] for t in self._qp.active]
+        same = len(active) == len(self._row_datas) and all(map(is_, active, self._row_datas))
+        if same and not self._row_watch:
+            return self._row_addr
+        arrays = [getattr(d, name) for d in active for name in _ROW_NAMES]
+        if same and all(map(is_, arrays, self._row_seen)):
+            return self._row_addr
+        if not all(isinstance(a, np.ndarray) and a.dtype == np.float64 and a.flags.c_contiguous for a in arrays):
+            return None
+        self._row_datas, self._row_seen = active, arrays
+        self._row_watch = not all(stores(type(d), name) for d in active for name in _ROW_NAMES)
+        self._row_addr[:] = 0
+        for i, t in enumerate(self._qp.active):
+            self._row_addr[t] = [a.__array_interface__["data"][0] for a in arrays[6 * i:6 * i + 6]]
         return self._row_addr
 
     def _node_rows(self, problem) -> Iterator[tuple]:
@@ -320,7 +335,6 @@ class SolverCSQP(SolverSQP):
                     return False
         qp = self._qp
         dx, du, lam = self._steps
-        self.dx, self.du, self.lag_mul = self._step_views  # the views of the step stacks (a rebound list is dropped)
         np.copyto(dx, qp.dx_s)
         np.copyto(du, qp.du_s)
         if kernels.active:
@@ -364,12 +378,7 @@ class SolverCSQP(SolverSQP):
         """The ADMM iterations in one compiled call (:meth:`.StagewiseADMM.run`), or one call per iteration when
         the QP prints its iterations or the solve has a time limit (checked before each iteration)."""
         qp, problem = self._qp, self.problem
-        datas = problem.runningDatas
-        if not self._derivatives.same_datas(datas):
-            self._sync_problem()  # updateModel/circularAppend since the last solve
-        if self.fs is not self._fs_views:
-            self._horizon.load(self.fs, horizon.FS)
-        args = (self._derivatives.update(datas, self._node_dims), self._horizon.addr, problem.terminalData, self, mu)
+        args = (self._derivative_addresses(), self._horizon.addr, problem.terminalData, self, mu)
         last = int(self.max_qp_iters)
         self.qp_iters = float(last + 1)
         if not self.with_qp_callbacks and self.max_solve_time == np.inf:

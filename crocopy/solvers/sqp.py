@@ -37,11 +37,12 @@ import numpy as np
 from .. import kernels
 from ..guards import trusted_path
 from ..shooting import ShootingProblem
-from . import compiled_nodes, horizon, sqp_kernel
+from . import compiled_nodes, sqp_kernel
 from .base import check_solve_arguments
 from .ddp import SolverDDP
-from .std_vector import StdVecAttribute
+from .std_vector import StdVecAttribute, allocate
 from .stopwatch import profiled
+from .trajectories import accept_trial
 
 
 class SolverSQP(SolverDDP):
@@ -86,14 +87,13 @@ class SolverSQP(SolverDDP):
         self._bind_sqp_views()
 
     def _bind_sqp_views(self) -> None:
-        """Point ``dx``, ``du``, ``lag_mul``, ``fs_try`` at their stacks (after allocating or unpickling)."""
+        """Make ``dx``, ``du``, ``lag_mul``, ``fs_try`` the views of their stacks (after allocating or unpickling;
+        assigning them later copies into these views, :class:`~.std_vector.Trajectory`)."""
         (dx, du, lam), dims = self._steps, self._sqp_dims
-        self.dx = [dx[t, :k] for t, k in enumerate(dims[:, 0])]
-        self.du = [du[t, :k] for t, k in enumerate(dims[:-1, 1])]
-        self.lag_mul = [lam[t, :k] for t, k in enumerate(dims[:, 0])]
-        self.fs_try = [self._fs_try[t, :k] for t, k in enumerate(dims[:, 0])]
-        self._fs_try_views = self.fs_try
-        self._step_views = (self.dx, self.du, self.lag_mul)
+        allocate(self, "dx", [dx[t, :k] for t, k in enumerate(dims[:, 0])])
+        allocate(self, "du", [du[t, :k] for t, k in enumerate(dims[:-1, 1])])
+        allocate(self, "lag_mul", [lam[t, :k] for t, k in enumerate(dims[:, 0])])
+        allocate(self, "fs_try", [self._fs_try[t, :k] for t, k in enumerate(dims[:, 0])])
 
     def __setstate__(self, state: dict) -> None:
         super().__setstate__(state)
@@ -173,30 +173,22 @@ class SolverSQP(SolverDDP):
         self.backwardPass()
         self._linear_rollout()
 
-    def _horizon_addresses(self) -> np.ndarray:
-        """The horizon buffer's addresses (:mod:`.horizon`), with ``fs`` copied in if the list was rebound."""
-        if self.fs is not self._fs_views:
-            self._horizon.load(self.fs, horizon.FS)
-        return self._horizon.addr
-
     def _derivative_addresses(self) -> np.ndarray:
-        datas = self.problem.runningDatas
-        if not self._derivatives.same_datas(datas):
-            self._sync_problem()  # updateModel/circularAppend since the last solve
-        return self._derivatives.update(datas, self._node_dims)
+        """Where the running nodes' ``Fx, Fu, Lxx, Lxu, Luu, Lx, Lu`` are (:class:`.horizon.NodeDerivatives`)."""
+        self._sync_problem()  # updateModel/circularAppend since the last solve
+        return self._derivatives.update(self.problem.runningDatas, self._node_dims)
 
     def _gap_norm(self) -> float:
         """``Γ = Σ_t ‖f_t‖₁``."""
         if kernels.active:
-            return sqp_kernel.gap_l1(self._horizon.dims, self._horizon_addresses())
+            return sqp_kernel.gap_l1(self._horizon.dims, self._horizon.addr)
         return float(sum(np.abs(f).sum() for f in self.fs))
 
     def _linear_rollout(self) -> None:
         """``δu_t = -k_t - K_t δx_t``, ``δx_{t+1} = Fx δx_t + Fu δu_t + d_{t+1}`` and ``λ_t = p_t + P_t δx_t``."""
         problem = self.problem
         if kernels.active:
-            self.dx, self.du, self.lag_mul = self._step_views  # a rebound list is replaced by the solver's own
-            sqp_kernel.linear_rollout(self._sqp_dims, self._derivative_addresses(), self._horizon_addresses(),
+            sqp_kernel.linear_rollout(self._sqp_dims, self._derivative_addresses(), self._horizon.addr,
                                       *self._steps)
             return
         dx, du, fs = self.dx, self.du, self.fs
@@ -215,9 +207,9 @@ class SolverSQP(SolverDDP):
         """``KKT``: the ∞-norm of the Lagrangian's gradient at the current iterate (with ``lag_mul``) and
         of the gaps (mim-solvers' definition, see the module docstring)."""
         problem = self.problem
-        if kernels.active and self.lag_mul is self._step_views[2]:
+        if kernels.active:
             dims, C, D, y = self._kkt_rows()
-            worst = sqp_kernel.kkt(dims, self._derivative_addresses(), self._horizon_addresses(),
+            worst = sqp_kernel.kkt(dims, self._derivative_addresses(), self._horizon.addr,
                                    sqp_kernel.readable(problem.terminalData.Lx), self._steps[2], C, D, y, self._scratch)
             self.KKT = max(worst, self._kkt_constraint_term())
             self.stop = self.KKT
@@ -274,8 +266,7 @@ class SolverSQP(SolverDDP):
             else:
                 ok = merit_try < self.merit
             if ok and all(np.isfinite(x).all() for x in self.xs_try) and all(np.isfinite(u).all() for u in self.us_try):
-                self.xs, self.xs_try = self.xs_try, self.xs
-                self.us, self.us_try = self.us_try, self.us
+                accept_trial(self)  # xs ← xs_try, us ← us_try (copies: the solver's arrays never move)
                 self.cost = self.cost_try
                 self._synced = True
                 return True
@@ -310,7 +301,7 @@ class SolverSQP(SolverDDP):
         fs_try[0][:] = models[0].state.diff(self.xs_try[0], problem.x0) if problem.T else 0.0
         for t, (m, d) in enumerate(zip(problem.runningModels, problem.runningDatas)):
             m.state._diff_into(self.xs_try[t + 1], d.xnext, fs_try[t + 1])
-        if kernels.active and fs_try is self._fs_try_views:
+        if kernels.active:
             self.gap_norm_try = sqp_kernel.stack_l1(self._sqp_dims, self._fs_try)
         else:
             self.gap_norm_try = float(sum(np.abs(f).sum() for f in fs_try))
