@@ -40,6 +40,7 @@ from ..shooting import ShootingProblem
 from . import compiled_nodes, sqp_kernel
 from .base import check_solve_arguments
 from .ddp import SolverDDP
+from .nonfinite import trajectory_finite
 from .std_vector import StdVecAttribute, allocate
 from .stopwatch import profiled
 from .trajectories import accept_trial
@@ -265,7 +266,7 @@ class SolverSQP(SolverDDP):
                 ok = not any(all(e <= v for e, v in zip(entry, trial)) for entry in recent)
             else:
                 ok = merit_try < self.merit
-            if ok and all(np.isfinite(x).all() for x in self.xs_try) and all(np.isfinite(u).all() for u in self.us_try):
+            if ok and trajectory_finite(self.xs_try, self.us_try):
                 accept_trial(self)  # xs ← xs_try, us ← us_try (copies: the solver's arrays never move)
                 self.cost = self.cost_try
                 self._synced = True
