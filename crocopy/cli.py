@@ -213,6 +213,7 @@ def _compile(args: argparse.Namespace) -> int:
     from .problems import registry
 
     runs = [(registry.get(name).build, [getattr(crocopy, SOLVERS[k]) for k in keys]) for name, keys in COMPILE_RUNS]
+    runs.append((registry.get("arm").build, [crocopy.SolverSQP, crocopy.SolverCSQP]))  # their QP and glue kernels
     return compile_kernels(lambda builder: builder(crocopy), runs)
 
 

@@ -96,7 +96,9 @@ def test_kernels_on_or_off_give_one_answer():
     for enabled in (True, False):
         with crocopy.use_kernels(enabled):
             solver = crocopy.SolverSQP(_unicycle())
-            solver.termination_tolerance = 1e-9
+            # Gauss-Newton converges linearly here; below a KKT of ~3e-9 the filter compares costs equal to the
+            # last bit and gaps of 1e-16, so round-off (kernels or BLAS) picks the step: stop before that.
+            solver.termination_tolerance = 1e-8
             assert solver.solve([], [], 100)
             runs.append((solver.iter, solver.cost))
     assert runs[0][0] == runs[1][0]

@@ -93,7 +93,8 @@ def _bench_vs_mim(args: argparse.Namespace) -> int:
     from .mim import run_vs_mim
 
     try:
-        report = run_vs_mim(args.problems, progress=functools.partial(print, file=sys.stderr, flush=True))
+        report = run_vs_mim(args.problems, progress=functools.partial(print, file=sys.stderr, flush=True),
+                            repeats=args.repeats or 5)
     except (ImportError, KeyError) as exc:
         print(exc.args[0], file=sys.stderr)
         return 2

@@ -17,18 +17,28 @@ every accepted step; the solve stops (False) when no step is accepted.  Unlike i
 reports the step actually taken, the rows are sized from ``ng_T`` on the terminal node (a constraint
 present but inactive there is fine), equalities ``nh > 0`` are accepted, and ``rho_sparse`` set by the
 user is the ``ρ̄`` each solve starts from.
+
+With kernels on, the rows are read from the nodes' ``g, Gx, Gu, h, Hx, Hu`` in one compiled pass (which also
+gives ``Ψ`` and ``gfeas``, the norm of the inequality rows' violation) and each QP's ADMM iterations run in
+one compiled call (:mod:`.csqp_kernel`; one call per iteration when ``max_solve_time`` is finite or
+``with_qp_callbacks`` prints them).
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Iterator
+from operator import is_
 
 import numpy as np
 
+from .. import kernels
+from ..enums import FeasibilityNorm
 from ..shooting import ShootingProblem
+from . import csqp_kernel
 from .base import BackwardPassError
-from .csqp_admm import NodeRows, StagewiseADMM
+from .csqp_admm import StagewiseADMM
+from .horizon import stores
 from .sqp import SolverSQP
 from .std_vector import StdVec_VectorXs
 
@@ -59,6 +69,10 @@ def _bounds(model, terminal: bool) -> tuple[np.ndarray, np.ndarray]:
     return np.r_[lb, np.zeros(nh)], np.r_[ub, np.zeros(nh)]
 
 
+_ROW_NAMES = ("g", "h", "Gx", "Gu", "Hx", "Hu")
+"""The data arrays a node's QP rows are read from (:func:`.csqp_kernel.node_rows`)."""
+
+
 class _Terminal:
     """The terminal node's LQ terms under the names the Riccati pass reads (``Lx``, ``Lxx``)."""
 
@@ -79,6 +93,10 @@ class SolverCSQP(SolverSQP):
     ``qp_iters``, ``norm_primal``, ``norm_dual``, ``norm_primal_rel``, ``norm_dual_rel``, ``dx``, ``du``,
     ``dx_tilde``, ``du_tilde``, ``lag_mul``, ``y``, ``z``, ``rho_vec``, ``max_solve_time_reached``.
     """
+
+    # Compiled nodes evaluate only nodes without constraints (a node with a constraint manager keeps its Python
+    # path), so the rows CSQP reads are always written by the models themselves.
+    _nodes_compiled = True
 
     def __init__(self, problem: ShootingProblem) -> None:
         super().__init__(problem)
@@ -114,15 +132,25 @@ class SolverCSQP(SolverSQP):
         models = [*problem.runningModels, problem.terminalModel]
         ndx = [m.state.ndx for m in models]
         nu = [m.nu for m in problem.runningModels] + [0]
-        rows = [NodeRows(*_bounds(m, t == problem.T), ndx[t], nu[t]) for t, m in enumerate(models)]
-        self._qp = StagewiseADMM(ndx, nu, rows)
-        self._qp.rho_bar = self._rho_base
-        self._qp.assign_rho(self.rho_min)
+        self._qp = qp = StagewiseADMM(ndx, nu, [_bounds(m, t == problem.T) for t, m in enumerate(models)])
+        self._ngh = np.array([(m.ng_T, m.nh_T) if t == problem.T else (m.ng, m.nh) for t, m in enumerate(models)],
+                             dtype=np.int64)
+        self._row_addr = np.zeros((len(models), len(_ROW_NAMES)), dtype=np.int64)
+        self._row_seen: list = []
+        self._row_datas: list = []
+        self._row_watch = True
+        self._row_out = np.zeros(3)
+        qp.rho_bar = self._rho_base
+        qp.assign_rho(self.rho_min)
 
     def _on_problem_change(self) -> bool:
         changed = super()._on_problem_change()
         self._build_qp()
         return changed
+
+    def __setstate__(self, state: dict) -> None:
+        super().__setstate__(state)
+        self._row_datas, self._row_seen, self._row_watch = [], [], True  # addresses are not valid in a copy
 
     # ------------------------------------------------------------------ read-outs
     @property
@@ -210,40 +238,79 @@ class SolverCSQP(SolverSQP):
 
     def calc(self, recalc: bool = True) -> float:
         """Evaluate and differentiate every node at the current iterate (if ``recalc``); update the gaps,
-        ``gap_norm``, the QP rows' data and ``constraint_norm``."""
+        ``gap_norm``, the QP rows' data, ``constraint_norm`` and ``gfeas``."""
         if recalc:
             self._synced = False
             self.calcDiff()
-        self.gap_norm = float(sum(np.abs(f).sum() for f in self.fs))
-        self._load_rows()
-        self.constraint_norm = self._violation(self.problem)
+        self.gap_norm = self._gap_norm()
+        self.constraint_norm = self._row_values(True)
         return self.cost
+
+    def computeInequalityFeasibility(self) -> float:
+        """``gfeas``: the norm (``feasNorm``) of ``max(lb - g, 0, g - ub)`` over the QP's inequality rows (the
+        terminal node's ``ng_T`` rows with their own bounds)."""
+        self._row_values(False)
+        return self.gfeas
+
+    def _row_values(self, load: bool) -> float:
+        """``Ψ`` (returned) and ``gfeas`` at the nodes' last ``calc``; if ``load``, the QP rows too (``C``, ``D``
+        from ``Gx, Gu`` and ``Hx, Hu``, ``lo/hi = lb/ub - (g, h)``)."""
+        qp = self._qp
+        saddr = self._row_addresses() if kernels.active else None
+        if saddr is None:
+            psi, vinf, v1 = self._row_values_numpy(load)
+        else:
+            out = self._row_out
+            csqp_kernel.node_rows(qp.dims, self._ngh, saddr, qp.lb, qp.ub, load, qp.C, qp.D, qp.lo, qp.hi, out)
+            psi, vinf, v1 = float(out[0]), float(out[1]), float(out[2])
+        self.gfeas = vinf if self.feasNorm == FeasibilityNorm.LInf else v1
+        return psi
+
+    def _row_addresses(self) -> np.ndarray | None:
+        """Where each node's ``g, h, Gx, Gu, Hx, Hu`` are (rows of the nodes with QP rows), or None when one cannot
+        be read in place (not C-contiguous float64: the numpy twin reads it).  Data fields own their arrays
+        (:mod:`crocopy.stored`), so the addresses are read once per list of datas; a data class that makes one of
+        them a property of its own has its arrays compared at every call."""
+        datas = [*self.problem.runningDatas, self.problem.terminalData]
+        active = [datas[t] for t in self._qp.active]
+        same = len(active) == len(self._row_datas) and all(map(is_, active, self._row_datas))
+        if same and not self._row_watch:
+            return self._row_addr
+        arrays = [getattr(d, name) for d in active for name in _ROW_NAMES]
+        if same and all(map(is_, arrays, self._row_seen)):
+            return self._row_addr
+        if not all(isinstance(a, np.ndarray) and a.dtype == np.float64 and a.flags.c_contiguous for a in arrays):
+            return None
+        self._row_datas, self._row_seen = active, arrays
+        self._row_watch = not all(stores(type(d), name) for d in active for name in _ROW_NAMES)
+        self._row_addr[:] = 0
+        for i, t in enumerate(self._qp.active):
+            self._row_addr[t] = [a.__array_interface__["data"][0] for a in arrays[6 * i:6 * i + 6]]
+        return self._row_addr
 
     def _node_rows(self, problem) -> Iterator[tuple]:
         """``(t, rows, data, ng, nh, c)`` of every node with QP rows, ``c = (g, h)`` at the node's last ``calc``."""
         datas = [*problem.runningDatas, problem.terminalData]
-        models = [*problem.runningModels, problem.terminalModel]
-        for t, r in enumerate(self._qp.rows):
-            if not r.lb.size:
-                continue
-            d, m = datas[t], models[t]
-            ng, nh = (m.ng_T, m.nh_T) if t == problem.T else (m.ng, m.nh)
-            yield t, r, d, ng, nh, np.r_[d.g[:ng], d.h[:nh]]
+        for t in self._qp.active:
+            d = datas[t]
+            ng, nh = self._ngh[t]
+            yield t, self._qp.rows[t], d, ng, nh, np.r_[d.g[:ng], d.h[:nh]]
 
-    def _load_rows(self) -> None:
-        """Copy each node's ``g, Gx, Gu`` (and ``h, Hx, Hu``) into its QP rows, with ``lo/hi = lb/ub - c``."""
+    def _row_values_numpy(self, load: bool) -> tuple[float, float, float]:
+        """Numpy twin of :func:`.csqp_kernel.node_rows`: ``(Ψ, ‖v‖∞, ‖v‖₁)``."""
         problem = self.problem
+        psi = vinf = v1 = 0.0
         for t, r, d, ng, nh, c in self._node_rows(problem):
-            r.C[:ng], r.C[ng:] = d.Gx[:ng], d.Hx[:nh]
-            if t < problem.T:
-                r.D[:ng], r.D[ng:] = d.Gu[:ng], d.Hu[:nh]
-            np.subtract(r.lb, c, out=r.lo)
-            np.subtract(r.ub, c, out=r.hi)
-
-    def _violation(self, problem) -> float:
-        """``Ψ``: the ℓ1 norm of the rows' bound violations at the nodes' last ``calc``."""
-        return sum(float(np.maximum(r.lb - c, 0.0).sum() + np.maximum(c - r.ub, 0.0).sum())
-                   for _, r, _, _, _, c in self._node_rows(problem))
+            if load:
+                r.C[:ng], r.C[ng:] = d.Gx[:ng], d.Hx[:nh]
+                if t < problem.T:
+                    r.D[:ng], r.D[ng:] = d.Gu[:ng], d.Hu[:nh]
+                np.subtract(r.lb, c, out=r.lo)
+                np.subtract(r.ub, c, out=r.hi)
+            psi += float(np.maximum(r.lb - c, 0.0).sum() + np.maximum(c - r.ub, 0.0).sum())
+            v = np.abs(np.maximum(np.maximum(r.lb[:ng] - c[:ng], 0.0), c[:ng] - r.ub[:ng]))
+            vinf, v1 = max(vinf, float(v.max(initial=0.0))), v1 + float(v.sum())
+        return psi, vinf, v1
 
     def _reset_rho(self) -> None:
         self._qp.rho_bar = self._rho_base
@@ -267,28 +334,32 @@ class SolverCSQP(SolverSQP):
                 if self.preg >= self.reg_max:
                     return False
         qp = self._qp
-        for a, b in zip(self.dx, qp.dx):
-            a[:] = b
-        for a, b in zip(self.du, qp.du):
-            a[:] = b
-        for a, b in zip(self.lag_mul, qp.multipliers()):
-            a[:] = b
+        dx, du, lam = self._steps
+        np.copyto(dx, qp.dx_s)
+        np.copyto(du, qp.du_s)
+        if kernels.active:
+            qp.multipliers_into(lam)
+        else:
+            for a, b in zip(self.lag_mul, qp.multipliers()):
+                a[:] = b
         self.norm_primal, self.norm_dual = qp.r_prim, qp.r_dual
         self.norm_primal_rel, self.norm_dual_rel = qp.s_prim, qp.s_dual
         return True
 
     def _admm(self) -> None:
         qp, problem = self._qp, self.problem
-        lq = [*problem.runningDatas, _Terminal(problem.terminalData)]
         mu = 0.0 if self.remove_reg else float(self.preg)
-        for r in qp.rows:
-            r.z[:] = 0.0
-            if self.reset_y:
-                r.y[:] = 0.0
+        qp.z[:] = 0.0
+        if self.reset_y:
+            qp.y[:] = 0.0
         if self.reset_rho:
             self._reset_rho()
         else:
             qp.assign_rho(self.rho_min)
+        if kernels.active:
+            self._admm_compiled(mu)
+            return
+        lq = [*problem.runningDatas, _Terminal(problem.terminalData)]
         if self.equality_qp_initial_guess:
             self.backwardPass_without_constraints(lq, mu)
         interval = max(int(self.rho_update_interval), 1)
@@ -303,6 +374,32 @@ class SolverCSQP(SolverSQP):
                 self.qp_iters = float(j)
                 return
 
+    def _admm_compiled(self, mu: float) -> None:
+        """The ADMM iterations in one compiled call (:meth:`.StagewiseADMM.run`), or one call per iteration when
+        the QP prints its iterations or the solve has a time limit (checked before each iteration)."""
+        qp, problem = self._qp, self.problem
+        args = (self._derivative_addresses(), self._horizon.addr, problem.terminalData, self, mu)
+        last = int(self.max_qp_iters)
+        self.qp_iters = float(last + 1)
+        if not self.with_qp_callbacks and self.max_solve_time == np.inf:
+            j = qp.run(*args, 1, last + 1, self.equality_qp_initial_guess)
+            if j:
+                self.qp_iters = float(j)
+            return
+        if self.equality_qp_initial_guess:
+            qp.run(*args, 1, 1, True)
+        interval = max(int(self.rho_update_interval), 1)
+        for j in range(1, last + 1):
+            if self._timed_out():
+                self.qp_iters = 0.0 if j == 1 else float(j - 1)
+                return
+            done = qp.run(*args, j, j + 1, False)
+            if j % interval == 0 and self.with_qp_callbacks:
+                qp.stopping_test(j, self)  # prints the iteration
+            if done:
+                self.qp_iters = float(j)
+                return
+
     def backwardPass_without_constraints(self, lq=None, mu: float | None = None) -> None:
         """The QP without rows and without ``σ`` (its step becomes the ADMM's anchor ``w̄``)."""
         problem = self.problem
@@ -313,6 +410,10 @@ class SolverCSQP(SolverSQP):
         self._qp.set_anchor()
 
     # ------------------------------------------------------------------ KKT, merit, line search
+    def _kkt_rows(self) -> tuple:
+        qp = self._qp
+        return qp.dims, qp.C, qp.D, qp.y
+
     def _constraint_force_x(self, t: int) -> np.ndarray | float:
         r = self._qp.rows[t]
         return r.C.T @ r.y if t and r.lb.size else 0.0
@@ -348,4 +449,4 @@ class SolverCSQP(SolverSQP):
         return self.cost_try + wd * self.gap_norm_try + wc * self.constraint_norm_try
 
     def _after_trial(self) -> None:
-        self.constraint_norm_try = self._violation(self.problem)
+        self.constraint_norm_try = self._row_values(False)

@@ -17,7 +17,8 @@ scales ``s_p = max(‖v‖∞, ‖z⁺‖∞)``, ``s_d = max‖[C D]ᵀ y⁺‖�
 (``|lb - ub| <= 1e-6``), ``ρ̄`` otherwise.  The factorisation of ``Quu`` is computed once per ``ρ``
 (the first iteration after each update); the other iterations only recompute ``k`` and ``p``.
 
-All of it is numpy, node by node (the QP iterations are not compiled).
+This module is the numpy twin, node by node (used when kernels are off); :mod:`.csqp_kernel` runs the same
+iterations compiled, on the stacks this class allocates once per problem shape (:meth:`StagewiseADMM.run`).
 """
 
 from __future__ import annotations
@@ -25,49 +26,80 @@ from __future__ import annotations
 import numpy as np
 from scipy.linalg.lapack import dpotrf, dpotrs
 
+from . import csqp_kernel, horizon
 from .base import BackwardPassError
+from .csqp_kernel import EQUALITY, FREE, INEQUALITY
+from .sqp_kernel import readable
 
 EQUALITY_TOL = 1e-6
 
 
 class NodeRows:
-    """The rows ``lo <= C δx + D δu <= hi`` of one node and their ADMM state (``z``, ``y``, ``rho``)."""
+    """The rows ``lo <= C δx + D δu <= hi`` of one node and their ADMM state (``z``, ``y``, ``rho``): views of
+    node ``t`` in the stacks of :class:`StagewiseADMM`."""
 
-    def __init__(self, lb: np.ndarray, ub: np.ndarray, ndx: int, nu: int) -> None:
-        n = lb.size
-        self.lb, self.ub = lb, ub
-        self.C, self.D = np.zeros((n, ndx)), np.zeros((n, nu))
-        self.lo, self.hi = np.zeros(n), np.zeros(n)
-        self.z, self.y, self.rho = np.zeros(n), np.zeros(n), np.zeros(n)
-        self.free = np.isneginf(lb) & np.isposinf(ub)
-        self.equality = ~self.free & (np.abs(lb - ub) <= EQUALITY_TOL)
-
-    def assign_rho(self, rho: float, rho_min: float) -> None:
-        """Per-row ``ρ``: ``rho_min`` (free), ``1e3 ρ̄`` (equality), ``ρ̄`` (the others)."""
-        self.rho[:] = rho
-        self.rho[self.equality] = 1e3 * rho
-        self.rho[self.free] = rho_min
+    def __init__(self, qp: StagewiseADMM, t: int, lb: np.ndarray, ub: np.ndarray) -> None:
+        n, nx, nu = lb.size, qp.ndx[t], qp.nu[t]
+        self.lb, self.ub = qp.lb[t, :n], qp.ub[t, :n]
+        self.lb[:], self.ub[:] = lb, ub
+        self.C, self.D = qp.C[t, :n, :nx], qp.D[t, :n, :nu]
+        self.lo, self.hi = qp.lo[t, :n], qp.hi[t, :n]
+        self.z, self.y, self.rho = qp.z[t, :n], qp.y[t, :n], qp.rho[t, :n]
+        free = np.isneginf(lb) & np.isposinf(ub)
+        equality = ~free & (np.abs(lb - ub) <= EQUALITY_TOL)
+        qp.kind[t, :n] = np.where(free, FREE, np.where(equality, EQUALITY, INEQUALITY))
 
 
 class StagewiseADMM:
-    """ADMM over the nodes ``0..N`` of dimensions ``ndx[t]``, ``nu[t]`` (``nu[N] = 0``) and ``rows[t]``."""
+    """ADMM over the nodes ``0..N`` of dimensions ``ndx[t]``, ``nu[t]`` (``nu[N] = 0``) whose rows have the
+    bounds ``bounds[t] = (lb, ub)``.
 
-    def __init__(self, ndx: list[int], nu: list[int], rows: list[NodeRows]) -> None:
-        self.N = len(ndx) - 1
-        self.ndx, self.nu, self.rows = ndx, nu, rows
-        self.active = [t for t, r in enumerate(rows) if r.lb.size]
-        self.dx = [np.zeros(n) for n in ndx]
-        self.du = [np.zeros(m) for m in nu[:-1]]
-        self.dx_bar = [np.zeros(n) for n in ndx]
-        self.du_bar = [np.zeros(m) for m in nu[:-1]]
-        self.P = [np.zeros((n, n)) for n in ndx]
-        self.p = [np.zeros(n) for n in ndx]
-        self.K = [np.zeros((m, n)) for m, n in zip(nu[:-1], ndx)]
-        self.k = [np.zeros(m) for m in nu[:-1]]
+    Its arrays are stacks padded to the largest node (``C (N+1, c, n)``, ``dx (N+1, n)``, ``P (N+1, n, n)``
+    ...) shared by the compiled iterations (:mod:`.csqp_kernel`) and, as per-node views (``rows[t].C``,
+    ``dx[t]`` ...), by the numpy twin below.
+    """
+
+    def __init__(self, ndx: list[int], nu: list[int], bounds: list[tuple[np.ndarray, np.ndarray]]) -> None:
+        self._args = (ndx, nu, bounds)
+        self.N = N = len(ndx) - 1
+        self.ndx, self.nu = ndx, nu
+        nc = [lb.size for lb, _ in bounds]
+        n, m, c = max(ndx), max(nu), max(nc)
+        self.dims = np.array([ndx, nu, nc], dtype=np.int64).T.copy()
+        self.kind = np.zeros((N + 1, c), dtype=np.int64)
+        self.C, self.D = np.zeros((N + 1, c, n)), np.zeros((N + 1, c, m))
+        self.lb, self.ub, self.lo, self.hi = (np.zeros((N + 1, c)) for _ in range(4))
+        self.z, self.y, self.rho, self.eta = (np.zeros((N + 1, c)) for _ in range(4))
+        self.dx_s, self.dx_bar_s, self.p_s, self.Pd_s = (np.zeros((N + 1, n)) for _ in range(4))
+        self.du_s, self.du_bar_s, self.k_s = (np.zeros((N + 1, m)) for _ in range(3))
+        self.P_s, self.K_s, self.L_s = np.zeros((N + 1, n, n)), np.zeros((N + 1, m, n)), np.zeros((N + 1, m, m))
+        self.rows = [NodeRows(self, t, lb, ub) for t, (lb, ub) in enumerate(bounds)]
+        self.active = [t for t, r in enumerate(self.rows) if r.lb.size]
+        self.dx = [self.dx_s[t, :k] for t, k in enumerate(ndx)]
+        self.du = [self.du_s[t, :k] for t, k in enumerate(nu[:-1])]
+        self.dx_bar = [self.dx_bar_s[t, :k] for t, k in enumerate(ndx)]
+        self.du_bar = [self.du_bar_s[t, :k] for t, k in enumerate(nu[:-1])]
+        self.P = [self.P_s[t, :k, :k] for t, k in enumerate(ndx)]
+        self.p = [self.p_s[t, :k] for t, k in enumerate(ndx)]
+        self.K = [self.K_s[t, :j, :k] for t, (j, k) in enumerate(zip(nu[:-1], ndx))]
+        self.k = [self.k_s[t, :j] for t, j in enumerate(nu[:-1])]
+        self._Pd = [self.Pd_s[t, :k] for t, k in enumerate(ndx)]
         self._chol: list = [None] * self.N
-        self._Pd = [np.zeros(n) for n in ndx]
         self.rho_bar = 0.1
         self.r_prim = self.r_dual = self.s_prim = self.s_dual = 0.0
+
+    _STATE = ("z", "y", "rho", "dx_s", "du_s", "dx_bar_s", "du_bar_s", "P_s", "p_s", "Pd_s", "K_s", "k_s", "L_s")
+
+    def __getstate__(self) -> dict:
+        """The constructor's arguments, the ADMM state and the read-outs (the views are rebuilt on unpickling)."""
+        return {"args": self._args, "arrays": {a: getattr(self, a) for a in self._STATE},
+                "scalars": (self.rho_bar, self.r_prim, self.r_dual, self.s_prim, self.s_dual)}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__init__(*state["args"])
+        for name, a in state["arrays"].items():
+            getattr(self, name)[...] = a
+        self.rho_bar, self.r_prim, self.r_dual, self.s_prim, self.s_dual = state["scalars"]
 
     # ------------------------------------------------------------------ Riccati x-update
     def riccati(self, lq, d: list, sigma: float, mu: float, rows: bool, full: bool) -> None:
@@ -175,8 +207,9 @@ class StagewiseADMM:
             a[:] = b
 
     def assign_rho(self, rho_min: float) -> None:
-        for r in self.rows:
-            r.assign_rho(self.rho_bar, rho_min)
+        """Per-row ``ρ``: ``rho_min`` (free), ``1e3 ρ̄`` (equality), ``ρ̄`` (the others)."""
+        rho, kind = self.rho_bar, self.kind
+        self.rho[:] = np.where(kind == FREE, rho_min, np.where(kind == EQUALITY, 1e3 * rho, rho))
 
     def iterate(self, j: int, s) -> bool:
         """ADMM iteration ``j`` (from 1) with settings ``s`` (the solver); True when the stopping test passed
@@ -202,20 +235,51 @@ class StagewiseADMM:
                 else:
                     r_d = max(r_d, _tmax(r.C, dz), _tmax(r.D, dz) if t < self.N else -np.inf)
                     s_d = max(s_d, _tmax(r.C, r.y), _tmax(r.D, r.y) if t < self.N else -np.inf)
-            r.z = z_new
+            r.z[:] = z_new
         self.set_anchor()
         if not check:
             return False
         self.r_prim, self.r_dual, self.s_prim, self.s_dual = r_p, r_d, s_p, s_d
         self._update_rho(s)
+        return self.stopping_test(j, s)
+
+    def stopping_test(self, j: int, s) -> bool:
+        """The stopping test of iteration ``j`` on the last residuals (printed if ``s.with_qp_callbacks``)."""
+        r_p, r_d = self.r_prim, self.r_dual
         if abs(s.eps_rel) <= np.finfo(float).eps:
             eps_p = eps_d = s.eps_abs
         else:
-            eps_p, eps_d = s.eps_abs + s.eps_rel * s_p, s.eps_abs + s.eps_rel * s_d
+            eps_p, eps_d = s.eps_abs + s.eps_rel * self.s_prim, s.eps_abs + s.eps_rel * self.s_dual
         if s.with_qp_callbacks:
             print(f"QP iter {j:5d}  r_prim {r_p:.3e} (eps {eps_p:.3e})  r_dual {r_d:.3e} (eps {eps_d:.3e})  "
                   f"rho {self.rho_bar:.3e}")
         return r_p <= eps_p and r_d <= eps_d
+
+    # ------------------------------------------------------------------ compiled iterations
+    def run(self, daddr: np.ndarray, haddr: np.ndarray, terminal, s, mu: float, j0: int, j1: int,
+            anchor: bool) -> int:
+        """ADMM iterations ``j0 <= j < j1`` compiled (:func:`.csqp_kernel.admm_run`; the equality pass first if
+        ``anchor``): ``daddr`` lists the running nodes' derivatives (:class:`.horizon.NodeDerivatives`),
+        ``haddr`` the solver's horizon buffer (gaps), ``terminal`` the terminal data; settings ``s`` (the
+        solver).  Returns the iteration whose stopping test passed, or 0.  Raises BackwardPassError."""
+        par = np.array([s.sigma, mu, s.alpha, s.rho_min, s.rho_max, s.adaptive_rho_tolerance, s.eps_abs, s.eps_rel,
+                        self.rho_bar])
+        ipar = np.array([j0, j1, max(int(s.rho_update_interval), 1), bool(s.update_rho_with_heuristic), anchor],
+                        dtype=np.int64)
+        out = np.array([self.r_prim, self.r_dual, self.s_prim, self.s_dual, self.rho_bar])
+        status = csqp_kernel.admm_run(
+            self.dims, daddr, haddr, horizon.FS, readable(terminal.Lx), readable(terminal.Lxx), self.kind, self.C,
+            self.D, self.lo, self.hi, self.z, self.y, self.rho, self.eta, self.dx_s, self.du_s, self.dx_bar_s,
+            self.du_bar_s, self.P_s, self.p_s, self.Pd_s, self.K_s, self.k_s, self.L_s, par, ipar, out)
+        self.r_prim, self.r_dual, self.s_prim, self.s_dual = (float(v) for v in out[:4])
+        self.rho_bar = float(out[4])
+        if status < 0:
+            raise BackwardPassError(f"Quu is not positive definite at node {-status - 1}")
+        return int(status)
+
+    def multipliers_into(self, lam: np.ndarray) -> None:
+        """``λ_t = p_t + P_t δx_t`` of the last pass into the stack ``lam (N+1, n)``, compiled."""
+        csqp_kernel.multipliers(self.dims, self.P_s, self.p_s, self.dx_s, lam)
 
     def _update_rho(self, s) -> None:
         with np.errstate(divide="ignore", invalid="ignore"):

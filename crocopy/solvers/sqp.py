@@ -22,6 +22,10 @@ and ``solve`` returns True once ``KKT <= termination_tolerance``.  Regularisatio
 start at ``regInit`` (``reg_min`` when None), go down after a step longer than ``th_stepDec``, up after
 one of at most ``th_stepInc`` (False at ``reg_max``).  The constraints of the nodes are ignored, as in
 mim-solvers (:class:`~crocopy.solvers.csqp.SolverCSQP` enforces them).
+
+``dx``, ``du``, ``lag_mul`` and ``fs_try`` are views of padded stacks ``(T+1, max ndx)``/``(T+1, max nu)``; with
+kernels on, the linear rollout, the KKT measure and the gap norms run compiled on them
+(:mod:`.sqp_kernel`), the backward pass is the DDP family's compiled Riccati pass.
 """
 
 from __future__ import annotations
@@ -30,13 +34,16 @@ import time
 
 import numpy as np
 
+from .. import kernels
 from ..guards import trusted_path
 from ..shooting import ShootingProblem
-from . import compiled_nodes
+from . import compiled_nodes, sqp_kernel
 from .base import check_solve_arguments
 from .ddp import SolverDDP
-from .std_vector import StdVecAttribute
+from .nonfinite import trajectory_finite
+from .std_vector import StdVecAttribute, allocate
 from .stopwatch import profiled
+from .trajectories import accept_trial
 
 
 class SolverSQP(SolverDDP):
@@ -68,11 +75,30 @@ class SolverSQP(SolverDDP):
         self._allocate_sqp()
 
     def _allocate_sqp(self) -> None:
+        """The steps ``dx``, ``du``, the multipliers ``lag_mul`` and ``fs_try``: views of padded stacks
+        ``(T+1, max ndx)``, ``(T+1, max nu)`` (what the compiled glue of :mod:`.sqp_kernel` writes)."""
         models = [*self.problem.runningModels, self.problem.terminalModel]
-        self.dx = [np.zeros(m.state.ndx) for m in models]
-        self.du = [np.zeros(m.nu) for m in models[:-1]]
-        self.lag_mul = [np.zeros(m.state.ndx) for m in models]
-        self.fs_try = [np.zeros(m.state.ndx) for m in models]
+        ndx, nu = [m.state.ndx for m in models], [m.nu for m in models[:-1]] + [0]
+        n, m = max(ndx), max(nu)
+        self._steps = np.zeros((len(ndx), n)), np.zeros((len(ndx), m)), np.zeros((len(ndx), n))
+        self._fs_try = np.zeros((len(ndx), n))
+        self._sqp_dims = np.array([ndx, nu, [0] * len(ndx)], dtype=np.int64).T.copy()
+        self._no_rows = (np.zeros((len(ndx), 0, n)), np.zeros((len(ndx), 0, m)), np.zeros((len(ndx), 0)))
+        self._scratch = np.zeros(max(n, m, 1))
+        self._bind_sqp_views()
+
+    def _bind_sqp_views(self) -> None:
+        """Make ``dx``, ``du``, ``lag_mul``, ``fs_try`` the views of their stacks (after allocating or unpickling;
+        assigning them later copies into these views, :class:`~.std_vector.Trajectory`)."""
+        (dx, du, lam), dims = self._steps, self._sqp_dims
+        allocate(self, "dx", [dx[t, :k] for t, k in enumerate(dims[:, 0])])
+        allocate(self, "du", [du[t, :k] for t, k in enumerate(dims[:-1, 1])])
+        allocate(self, "lag_mul", [lam[t, :k] for t, k in enumerate(dims[:, 0])])
+        allocate(self, "fs_try", [self._fs_try[t, :k] for t, k in enumerate(dims[:, 0])])
+
+    def __setstate__(self, state: dict) -> None:
+        super().__setstate__(state)
+        self._bind_sqp_views()
 
     def _on_problem_change(self) -> bool:
         changed = super()._on_problem_change()
@@ -143,14 +169,29 @@ class SolverSQP(SolverDDP):
         the backward pass, then ``dx``, ``du`` and ``lag_mul``.  Raises BackwardPassError."""
         if recalc:
             self.calcDiff()
-            self.gap_norm = float(sum(np.abs(f).sum() for f in self.fs))
+            self.gap_norm = self._gap_norm()
             self.merit = self.cost + self.mu_dynamic * self.gap_norm
         self.backwardPass()
         self._linear_rollout()
 
+    def _derivative_addresses(self) -> np.ndarray:
+        """Where the running nodes' ``Fx, Fu, Lxx, Lxu, Luu, Lx, Lu`` are (:class:`.horizon.NodeDerivatives`)."""
+        self._sync_problem()  # updateModel/circularAppend since the last solve
+        return self._derivatives.update(self.problem.runningDatas, self._node_dims)
+
+    def _gap_norm(self) -> float:
+        """``Γ = Σ_t ‖f_t‖₁``."""
+        if kernels.active:
+            return sqp_kernel.gap_l1(self._horizon.dims, self._horizon.addr)
+        return float(sum(np.abs(f).sum() for f in self.fs))
+
     def _linear_rollout(self) -> None:
         """``δu_t = -k_t - K_t δx_t``, ``δx_{t+1} = Fx δx_t + Fu δu_t + d_{t+1}`` and ``λ_t = p_t + P_t δx_t``."""
         problem = self.problem
+        if kernels.active:
+            sqp_kernel.linear_rollout(self._sqp_dims, self._derivative_addresses(), self._horizon.addr,
+                                      *self._steps)
+            return
         dx, du, fs = self.dx, self.du, self.fs
         dx[0][:] = fs[0]
         for t, d in enumerate(problem.runningDatas):
@@ -167,6 +208,13 @@ class SolverSQP(SolverDDP):
         """``KKT``: the ∞-norm of the Lagrangian's gradient at the current iterate (with ``lag_mul``) and
         of the gaps (mim-solvers' definition, see the module docstring)."""
         problem = self.problem
+        if kernels.active:
+            dims, C, D, y = self._kkt_rows()
+            worst = sqp_kernel.kkt(dims, self._derivative_addresses(), self._horizon.addr,
+                                   sqp_kernel.readable(problem.terminalData.Lx), self._steps[2], C, D, y, self._scratch)
+            self.KKT = max(worst, self._kkt_constraint_term())
+            self.stop = self.KKT
+            return self.KKT
         lam = self.lag_mul
         worst = 0.0
         for t, d in enumerate(problem.runningDatas):
@@ -180,6 +228,10 @@ class SolverSQP(SolverDDP):
         self.KKT = max(worst, self._kkt_constraint_term())
         self.stop = self.KKT
         return self.KKT
+
+    def _kkt_rows(self) -> tuple:
+        """``(dims, C, D, y)`` of the rows whose multipliers enter the KKT measure (none in SQP)."""
+        return (self._sqp_dims, *self._no_rows)
 
     def _constraint_force_x(self, t: int) -> np.ndarray | float:
         return 0.0
@@ -214,9 +266,8 @@ class SolverSQP(SolverDDP):
                 ok = not any(all(e <= v for e, v in zip(entry, trial)) for entry in recent)
             else:
                 ok = merit_try < self.merit
-            if ok and all(np.isfinite(x).all() for x in self.xs_try) and all(np.isfinite(u).all() for u in self.us_try):
-                self.xs, self.xs_try = self.xs_try, self.xs
-                self.us, self.us_try = self.us_try, self.us
+            if ok and trajectory_finite(self.xs_try, self.us_try):
+                accept_trial(self)  # xs ← xs_try, us ← us_try (copies: the solver's arrays never move)
                 self.cost = self.cost_try
                 self._synced = True
                 return True
@@ -251,7 +302,10 @@ class SolverSQP(SolverDDP):
         fs_try[0][:] = models[0].state.diff(self.xs_try[0], problem.x0) if problem.T else 0.0
         for t, (m, d) in enumerate(zip(problem.runningModels, problem.runningDatas)):
             m.state._diff_into(self.xs_try[t + 1], d.xnext, fs_try[t + 1])
-        self.gap_norm_try = float(sum(np.abs(f).sum() for f in fs_try))
+        if kernels.active:
+            self.gap_norm_try = sqp_kernel.stack_l1(self._sqp_dims, self._fs_try)
+        else:
+            self.gap_norm_try = float(sum(np.abs(f).sum() for f in fs_try))
         self._after_trial()
         return self._trial_merit()
 

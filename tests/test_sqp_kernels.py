@@ -1,0 +1,201 @@
+"""The compiled SQP/CSQP paths (:mod:`crocopy.solvers.csqp_kernel`, :mod:`crocopy.solvers.sqp_kernel`) against
+their numpy twins: kernels on or off give the same iterations, cost (1e-9), KKT and QP read-outs, on free and
+constrained problems, with the ADMM's variants; one compiled call per QP against one call per iteration
+(time limit, QP print-out); rebound or unreadable constraint arrays; pickled solvers."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import pickle
+
+import numpy as np
+import pytest
+from sqp_problems import LinearModel, random_lq
+
+import crocopy
+
+
+def _unicycle() -> crocopy.ShootingProblem:
+    m = crocopy.ActionModelUnicycle()
+    return crocopy.ShootingProblem(np.array([-1.0, -1.0, 1.0]), [m] * 20, m)
+
+
+def _boxed(seed: int = 2) -> crocopy.ShootingProblem:
+    """Random LQ whose first state (after ``x0``) and both controls are boxed, with a terminal equality (``nh``)."""
+    rows = lambda t: (np.r_[np.eye(3)[:1] * (t > 0), np.zeros((2, 3))], np.r_[np.zeros((1, 2)), np.eye(2)],  # noqa: E731
+                      np.array([-0.3, -0.4, -np.inf]), np.array([0.3, 0.4, 0.5]))
+    return random_lq(seed, T=10, rows=rows, terminal_eqs=(np.eye(3)[:2], np.zeros((2, 2)), np.array([0.1, -0.2])))
+
+
+def _solve(build, cls, kernels: bool, settings: dict | None = None, maxiter: int = 100):
+    with crocopy.use_kernels(kernels):
+        solver = cls(build())
+        for name, value in (settings or {}).items():
+            setattr(solver, name, value)
+        out = io.StringIO()
+        with contextlib.redirect_stdout(out):
+            converged = solver.solve([], [], maxiter)
+        return solver, converged, out.getvalue()
+
+
+def _assert_same(a, b) -> None:
+    (sa, ca, _), (sb, cb, _) = a, b
+    assert ca == cb and sa.iter == sb.iter
+    assert sa.cost == pytest.approx(sb.cost, rel=1e-9)
+    assert sa.KKT == pytest.approx(sb.KKT, rel=1e-6, abs=1e-12)
+    assert sa.gap_norm == pytest.approx(sb.gap_norm, rel=1e-6, abs=1e-12)
+    for x, y in zip(sa.xs, sb.xs):
+        np.testing.assert_allclose(x, y, rtol=1e-8, atol=1e-10)
+    for x, y in zip(sa.lag_mul, sb.lag_mul):
+        np.testing.assert_allclose(x, y, rtol=1e-6, atol=1e-9)
+
+
+@pytest.mark.parametrize("cls", [crocopy.SolverSQP, crocopy.SolverCSQP])
+def test_free_problem_kernels_on_or_off(cls):
+    # Gauss-Newton converges linearly here; from a KKT of ~1e-8 on, the filter compares costs equal to the last
+    # bit (round-off picks the step), so stop before that
+    runs = [_solve(_unicycle, cls, k, {"termination_tolerance": 1e-7}) for k in (True, False)]
+    assert runs[0][1]
+    _assert_same(*runs)
+
+
+VARIANTS = [{}, {"update_rho_with_heuristic": True}, {"rho_update_interval": 1}, {"equality_qp_initial_guess": False},
+            {"reset_rho": True, "reset_y": True}, {"mu_dynamic": -1.0}, {"rho_sparse": 1.0}]
+
+
+@pytest.mark.parametrize("settings", VARIANTS, ids=lambda s: ",".join(s) or "defaults")
+def test_constrained_problem_kernels_on_or_off(settings):
+    # an accurate QP: with eps_abs = 1e-4 the KKT measure stalls above the tolerance and the line search ends
+    # the solve on round-off (as in mim-solvers)
+    settings = {"termination_tolerance": 1e-5, "eps_abs": 1e-8, "eps_rel": 0.0, **settings}
+    runs = [_solve(_boxed, crocopy.SolverCSQP, k, settings) for k in (True, False)]
+    assert runs[0][1], runs[0][0].reason
+    _assert_same(*runs)
+    (on, _, _), (off, _, _) = runs
+    assert on.qp_iters == off.qp_iters > 0
+    assert on.constraint_norm == pytest.approx(off.constraint_norm, rel=1e-6, abs=1e-12)
+    assert on.gfeas == pytest.approx(off.gfeas, rel=1e-6, abs=1e-12)
+    assert on.rho_sparse == pytest.approx(off.rho_sparse, rel=1e-9)
+    for a, b in zip(on.y, off.y):
+        np.testing.assert_allclose(a, b, rtol=1e-6, atol=1e-9)
+    assert max(np.abs(y).max(initial=0.0) for y in on.y) > 1e-3  # some rows are active
+
+
+def test_nonlinear_constrained_problem_kernels_on_or_off():
+    pytest.importorskip("pinocchio")
+    from crocopy.bench.mim import build_problem
+
+    def build():
+        return build_problem(crocopy, "ur5_ee_eq")
+
+    runs = [_solve(build, crocopy.SolverCSQP, k, {"termination_tolerance": 1e-6}, 50) for k in (True, False)]
+    assert runs[0][1]
+    _assert_same(*runs)
+    assert runs[0][0].qp_iters == runs[1][0].qp_iters
+
+
+def test_one_call_per_qp_or_per_iteration():
+    """A time limit or the QP print-out runs the compiled ADMM one iteration per call: same answer, and the print-out
+    is the numpy twin's."""
+    one = _solve(_boxed, crocopy.SolverCSQP, True)
+    stepwise = _solve(_boxed, crocopy.SolverCSQP, True, {"max_solve_time": 1e6})
+    _assert_same(one, stepwise)
+    assert one[0].qp_iters == stepwise[0].qp_iters
+    printed = [_solve(_boxed, crocopy.SolverCSQP, k, {"with_qp_callbacks": True}, 3)[2] for k in (True, False)]
+    assert printed[0].count("QP iter") == printed[1].count("QP iter") > 0
+    assert [line.split()[2] for line in printed[0].splitlines() if "QP iter" in line] == [
+        line.split()[2] for line in printed[1].splitlines() if "QP iter" in line]
+
+
+class _FortranGxData(crocopy.ActionDataAbstract):
+    """A data class keeping ``Gx`` in Fortran order behind a property of its own (the kernel cannot read it in
+    place)."""
+
+    @property
+    def Gx(self) -> np.ndarray:
+        return self._gx
+
+    @Gx.setter
+    def Gx(self, value) -> None:
+        self._gx = np.asfortranarray(value, dtype=float)
+
+
+class _FortranGxModel(LinearModel):
+    def createData(self):
+        return _FortranGxData(self)
+
+
+def test_unreadable_constraint_arrays_take_the_numpy_twin():
+    """Rows whose ``Gx`` a kernel cannot read in place are read by the numpy twin: the same solve."""
+    results = []
+    for model_class in (LinearModel, _FortranGxModel):
+        boxed = _boxed()
+        problem = crocopy.ShootingProblem(boxed.x0, [_as(model_class, m) for m in boxed.runningModels],
+                                          boxed.terminalModel)
+        solver = crocopy.SolverCSQP(problem)
+        solver.eps_abs, solver.eps_rel, solver.termination_tolerance = 1e-8, 0.0, 1e-5
+        assert solver.solve([], [], 100)
+        assert (solver._row_addresses() is None) == (model_class is _FortranGxModel)
+        results.append((solver.iter, solver.cost))
+    assert results[1][0] == results[0][0]
+    assert results[1][1] == pytest.approx(results[0][1], rel=1e-12)
+
+
+def _as(cls, m: LinearModel) -> LinearModel:
+    return cls(m.A, m.B, m.c, m.Q, m.q, m.R, m.rows, m.eqs, m.terminal)
+
+
+@pytest.mark.parametrize("cls", [crocopy.SolverSQP, crocopy.SolverCSQP])
+def test_pickled_solver_keeps_its_stacks(cls):
+    solver = cls(_boxed())
+    solver.solve([], [], 2)
+    copy = pickle.loads(pickle.dumps(solver))
+    for s in (solver, copy):
+        s.solve([], [], 100)
+    assert copy.iter == solver.iter and copy.cost == pytest.approx(solver.cost, rel=1e-12)
+    for a, b in zip(copy.dx, solver.dx):
+        np.testing.assert_array_equal(a, b)
+    copy.dx[1][0] = 123.0
+    assert copy._steps[0][1, 0] == 123.0  # the read-outs are still views of the stacks the kernels write
+
+
+def _ur5_terminal_equality() -> crocopy.ShootingProblem:
+    """UR5 reaching a point held by a terminal equality; the running nodes have no constraint manager."""
+    from crocopy.problems.common import load_model
+
+    model = load_model("ur5")
+    x0 = np.r_[0.0, -1.0, 1.5, -0.5, 1.0, 0.0, np.zeros(6)]
+    state = crocopy.StateMultibody(model)
+    actuation = crocopy.ActuationModelFull(state)
+    target = np.array([0.4, 0.2, 0.5])
+
+    def node(terminal: bool):
+        costs = crocopy.CostModelSum(state, 6)
+        costs.addCost("x", crocopy.CostModelResidual(state, crocopy.ResidualModelState(state, x0, 6)), 0.1)
+        manager = None
+        if terminal:
+            manager = crocopy.ConstraintModelManager(state, 6)
+            ee = crocopy.ResidualModelFrameTranslation(state, model.getFrameId("tool0"), target, 6)
+            manager.addConstraint("ee", crocopy.ConstraintModelResidual(state, ee, np.zeros(3), np.zeros(3)))
+        else:
+            costs.addCost("u", crocopy.CostModelResidual(state, crocopy.ResidualModelControl(state, 6)), 1e-3)
+        dam = crocopy.DifferentialActionModelFreeFwdDynamics(state, actuation, costs, manager)
+        return crocopy.IntegratedActionModelEuler(dam, 0.0 if terminal else 0.02)
+
+    return crocopy.ShootingProblem(x0, [node(False) for _ in range(20)], node(True))
+
+
+def test_csqp_with_compiled_nodes():
+    """Nodes without constraints run compiled inside CSQP (the node with rows keeps its Python path)."""
+    pytest.importorskip("pinocchio")
+    from crocopy.solvers import compiled_nodes
+
+    runs = []
+    for enabled in (True, False):
+        solver, converged, _ = _solve(_ur5_terminal_equality, crocopy.SolverCSQP, enabled)
+        with crocopy.use_kernels(enabled):
+            assert (compiled_nodes.select(solver) is not None) == enabled
+        assert converged and solver.constraint_norm < 1e-8
+        runs.append((solver, converged, ""))
+    _assert_same(*runs)
