@@ -6,8 +6,9 @@ exact classes (a subclass may override a step, so it keeps the Python path):
 
 * ``IntegratedActionModelEuler`` with the identity control parametrization, over a
   ``DifferentialActionModelFreeFwdDynamics`` or a ``DifferentialActionModelContactFwdDynamics`` without
-  constraint rows (no manager, or one with no active constraint), whose active contacts are ``ContactModel3D``/``ContactModel6D`` on distinct joints (or with a
-  positive ``JMinvJt_damping``; see :mod:`.contact_lowering`);
+  constraint rows (no manager, or one with no active constraint), whose active contacts are
+  ``ContactModel3D``/``ContactModel6D`` on distinct joints (or with a positive ``JMinvJt_damping``; see
+  :mod:`.contact_lowering`);
 * its ``StateMultibody``'s Pinocchio model lowers (:func:`.lowering.lower_model`);
 * its actuation is ``ActuationModelFull``, ``ActuationModelFloatingBase``,
   ``ActuationModelFloatingBaseThrusters`` or ``ActuationModelLinear`` (``τ = S u`` with a constant ``S``);
