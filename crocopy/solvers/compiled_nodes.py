@@ -38,7 +38,7 @@ a solve without compiled nodes leaves them; the derivatives are, as without comp
 the iterate the last direction was computed at, except the Pinocchio data's derivative fields and the
 residuals' private intermediates (frame Jacobians), which compiled nodes do not write.  The compiled
 nodes are used only while :func:`crocopy.kernels_enabled`, by the solver classes that declare
-``_nodes_compiled = True`` in their own body (DDP, FDDP, Box-DDP, Box-FDDP; a subclass may read nested
+``_nodes_compiled = True`` in their own body (DDP, FDDP, Box-DDP, Box-FDDP, SQP, CSQP; a subclass may read nested
 datas mid-solve, so it opts in explicitly), and when every callback is one of crocopy's (a user
 callback may read nested datas).
 """
