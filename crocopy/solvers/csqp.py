@@ -269,13 +269,14 @@ class SolverCSQP(SolverSQP):
     def _row_addresses(self) -> np.ndarray | None:
         """Where each node's ``g, h, Gx, Gu, Hx, Hu`` are (rows of the nodes with QP rows), or None when one cannot
         be read in place (not C-contiguous float64: the numpy twin reads it).  Data fields own their arrays
-        (:mod:`crocopy.stored`), so the addresses are read once per list of datas; a data class that makes one of
-        them a property of its own has its arrays compared at every call."""
-        datas = [*self.problem.runningDatas, self.problem.terminalData]
-        active = [datas[t] for t in self._qp.active]
-        same = len(active) == len(self._row_datas) and all(map(is_, active, self._row_datas))
+        (:mod:`crocopy.stored`), so the addresses are read once per list of datas (a new list, after the problem's
+        nodes changed, comes with a new QP: :meth:`_build_qp`); a data class that makes one of them a property of its
+        own has its arrays compared at every call."""
+        same = bool(self._row_datas)
         if same and not self._row_watch:
             return self._row_addr
+        datas = [*self.problem.runningDatas, self.problem.terminalData]
+        active = [datas[t] for t in self._qp.active]
         arrays = [getattr(d, name) for d in active for name in _ROW_NAMES]
         if same and all(map(is_, arrays, self._row_seen)):
             return self._row_addr
