@@ -194,3 +194,23 @@ def test_jump_solves_with_and_without_compiled_nodes_match(solver):
                                               ("biped-walk", "SolverDDP")])
 def test_gait_solves_with_and_without_compiled_nodes_match(name, solver):
     _same_solves(name, solver, 30)
+
+
+def test_a_mutated_impulse_node_gives_the_python_answer():
+    """After a compiled solve, one impulse switched off and ``r_coeff`` changed: the next solve's compiled impulse
+    node is that of the mutated model (same iterations and cost as the Python path)."""
+    outcomes = []
+    for compiled in (True, False):
+        problem, xs, us = registry.build("jump")
+        make_solver("SolverFDDP", problem, compiled).solve(xs, us, 2)
+        t = next(t for t, m in enumerate(problem.runningModels) if isinstance(m, crocopy.ActionModelImpulseFwdDynamics))
+        model = problem.runningModels[t]
+        model.impulses.changeImpulseStatus(next(iter(model.impulses.impulses)), False)
+        model.r_coeff = 0.3
+        s = make_solver("SolverFDDP", problem, compiled)
+        if compiled:
+            assert isinstance(compiled_nodes.select(s).calcs[t].__self__, ImpulseNode)
+        s.solve(xs, us, 10)
+        outcomes.append((s.iter, s.cost))
+    assert outcomes[0][0] == outcomes[1][0]
+    assert outcomes[0][1] == pytest.approx(outcomes[1][1], rel=1e-9)
