@@ -507,7 +507,7 @@ horizon_calc = compiled(_horizon_calc, nogil=True)
 
 @compiled
 def fold(costs, t0, t1):
-    """``costs[t0] + ... + costs[t1 - 1]`` added in order (the sum :func:`horizon_calc_diff` returns)."""
+    """``costs[t0] + … + costs[t1 - 1]`` added in order (the sum :func:`horizon_calc_diff` returns)."""
     total = 0.0
     for t in range(t0, t1):
         total += costs[t]
