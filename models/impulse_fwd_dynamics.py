@@ -34,6 +34,7 @@ from crocopy.action_base import ActionDataAbstract, ActionModelAbstract
 from crocopy.array_views import share_arrays
 from crocopy.constraints.manager import ConstraintModelManager
 from crocopy.costs.sum import CostModelSum
+from crocopy.not_compiled import class_reason, decline
 from crocopy.validation import as_bool
 
 from .contact_fwd_dynamics import all_finite, link_cost_data
@@ -204,6 +205,15 @@ class ActionModelImpulseFwdDynamics(ArmatureMixin, KKTDampingMixin, ActionModelA
         self.costs.calcDiff(data.costs, x, u if self.costs.nu == 0 else None)
         if self.constraints is not None:
             self.constraints.calcDiff(data.constraints, x, u if self.constraints.nu == 0 else None)
+
+    def _compiled_node(self, data: "ActionDataImpulseFwdDynamics", terminal: bool, memo: dict) -> object | None:
+        """The compiled evaluator of the node ``(self, data)`` (:func:`.rbd.impulse_node.impulse_node`), or None for a
+        subclass or a node it cannot compile (the reason recorded in ``memo``, :mod:`crocopy.not_compiled`)."""
+        if type(self) is not ActionModelImpulseFwdDynamics:
+            return decline(memo, class_reason(self, "action"))
+        from .rbd.impulse_node import impulse_node
+
+        return impulse_node(self, data, terminal, memo)
 
     def __repr__(self) -> str:
         return f"ActionModelImpulseFwdDynamics(nx={self.state.nx}, nc={self.impulses.nc}, r_coeff={self._r_coeff})"

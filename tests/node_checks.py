@@ -26,7 +26,7 @@ def compare_with_python_node(iam, x: np.ndarray, u: np.ndarray, terminal: bool, 
     assert fast.cost == pytest.approx(slow.cost, rel=cost_rel, abs=1e-12)
     for name in ("xnext", "Fx", "Lx", "Lxx") if terminal else FIELDS:
         a, b = getattr(fast, name), getattr(slow, name)
-        np.testing.assert_allclose(a, b, rtol=rtol, atol=atol * max(1.0, np.abs(b).max()), err_msg=name)
+        np.testing.assert_allclose(a, b, rtol=rtol, atol=atol * max(1.0, np.abs(b).max(initial=0.0)), err_msg=name)
     other = iam.createData()
     evaluator.calc(x, uu)
     iam.calc(other, x, uu)

@@ -4,7 +4,7 @@
 its start (:func:`crocopy.solvers.compiled_nodes.select`: ``model._compiled_node(data, terminal, memo)``, one
 ``memo`` for the problem) and reads the reason a declined node recorded (:mod:`crocopy.not_compiled`), so the
 report and the solver cannot disagree.  A model class that offers no evaluator at all is named by what it is
-(``"impulse dynamics"``, ``"RK4 integrator"``, ``"action ActionModelUnicycle"``,
+(``"RK4 integrator"``, ``"action ActionModelUnicycle"``,
 ``"user Python subclass: action MyModel"``).
 
 What the report leaves out is the solve-wide switch (:mod:`crocopy.solvers.compiled_nodes`): compiled nodes are
@@ -17,9 +17,6 @@ from typing import NamedTuple
 
 from ..not_compiled import REASON, class_reason, user_class
 from ..shooting import ShootingProblem
-
-OFFERS_NONE = {"ActionModelImpulseFwdDynamics": "impulse dynamics"}
-"""Short names of the library's action models that offer no compiled evaluator (others: ``"action <class>"``)."""
 
 
 class NodeCoverage(NamedTuple):
@@ -72,4 +69,4 @@ def offers_none(model) -> str:
     rk = getattr(model, "rk_type", None)
     if rk is not None:
         return f"RK{int(rk)} integrator"
-    return OFFERS_NONE.get(type(model).__name__, f"action {type(model).__name__}")
+    return f"action {type(model).__name__}"

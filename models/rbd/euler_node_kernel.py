@@ -540,3 +540,8 @@ def node_calc_diff(tbl, ints, par, x, u):
         _integrate_chain(tbl, ints, x, rb)
     return par[0] * cost
 
+
+
+residual_rows, residual_jacobians = _residuals, _jacobians
+"""The cost stack's residual rows and their ``Jx`` rows of a node's table (:func:`_residuals`, :func:`_jacobians`),
+for the other compiled nodes (:mod:`.impulse_node_kernel`)."""
