@@ -82,7 +82,11 @@ class ActionModelImpulseFwdDynamics(ArmatureMixin, KKTDampingMixin, ActionModelA
         enable_force: bool = False,
     ) -> None:
         if constraints is not None and not isinstance(constraints, ConstraintModelManager):
-            constraints, r_coeff, inv_damping, enable_force = None, constraints, r_coeff, inv_damping
+            # Crocoddyl's overload without constraints: the positional arguments come one slot earlier, and the slot
+            # of ``inv_damping`` holds ``enable_force`` when it was given (else its own default, 0.0)
+            sixth = inv_damping
+            constraints, r_coeff, inv_damping = None, constraints, r_coeff
+            enable_force = sixth if isinstance(sixth, bool) else enable_force
         if not isinstance(getattr(state, "pinocchio", None), pin.Model):
             raise ValueError(f"state must be a StateMultibody, got {type(state).__name__}")
         if not isinstance(impulses, ImpulseModelMultiple):

@@ -152,3 +152,18 @@ def test_bad_input():
         crocopy.ActionModelImpulseFwdDynamics(state, impulses, costs, -0.1)
     with pytest.raises(ValueError, match="impulse data collector"):
         crocopy.ResidualModelImpulseCoM(state).createData(crocopy.DataCollectorMultibody(pm.createData()))
+
+
+def test_the_overload_without_constraints_takes_its_arguments_in_crocoddyls_order():
+    """``(state, impulses, costs, r_coeff, inv_damping[, enable_force])``, as Crocoddyl's second overload."""
+    import example_robot_data
+
+    state = crocopy.StateMultibody(example_robot_data.load("anymal").model)
+    impulses = crocopy.ImpulseModelMultiple(state)
+    costs = crocopy.CostModelSum(state, 0)
+    for args, kwargs, expected in (((0.2, 1e-3), {}, (0.2, 1e-3, False)), ((0.0, 1e-3), {}, (0.0, 1e-3, False)),
+                                   ((0.1, 1e-2, True), {}, (0.1, 1e-2, True)),
+                                   ((0.3, 1e-3), {"enable_force": True}, (0.3, 1e-3, True))):
+        model = crocopy.ActionModelImpulseFwdDynamics(state, impulses, costs, *args, **kwargs)
+        assert (model.r_coeff, model.JMinvJt_damping, model.enable_force) == expected
+        assert model.constraints is None
