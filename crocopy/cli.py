@@ -63,7 +63,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from . import __version__
-from .kernel_warmup import announce_cold_cache, compile_kernels, warm_up_kernels
+from .kernel_warmup import compile_kernels, warm_up_kernels
 from .solvers import SOLVERS
 
 EXIT_CONVERGED, EXIT_NOT_CONVERGED, EXIT_USAGE = 0, 1, 2
@@ -116,7 +116,6 @@ def _solve(args: argparse.Namespace) -> int:
 
     from .problems import registry
 
-    announced = announce_cold_cache()
     spec = registry.get(args.problem)
     problem, xs, us = spec.build(crocopy)
     solver_class = getattr(crocopy, SOLVERS[args.solver])
@@ -127,7 +126,7 @@ def _solve(args: argparse.Namespace) -> int:
         first.solve(xs, us, 1, False)
         solver_class(problem).solve(first.xs, first.us, 1, True)
 
-    warm_up_kernels(one_iteration_each_way, announced=announced)
+    warm_up_kernels(one_iteration_each_way)
     solver = solver_class(problem)
     if not args.quiet:
         solver.setCallbacks([crocopy.CallbackVerbose()])

@@ -53,6 +53,7 @@ This is logged once per class and step at DEBUG level on the ``"crocopy"`` logge
 from __future__ import annotations
 
 import contextlib
+import inspect
 import logging
 import os
 from collections.abc import Callable, Iterable, Iterator
@@ -79,6 +80,7 @@ logger = logging.getLogger("crocopy")
 
 KERNELS: list = []
 """Every kernel made by :func:`compiled` (numba dispatchers), in the order the modules defined them."""
+_KERNEL_IDS: set[int] = set()
 
 
 def cache_dir_fallback(package_dir: str, numba_cache_dir: str) -> str:
@@ -179,16 +181,50 @@ if available:
                 set_aside(*self._cache_file.last_data, exc)
                 return None
 
+    from numba.core import event as _event
+    from numba.core.registry import CPUDispatcher
+
+    class _Dispatcher(CPUDispatcher):
+        """numba's dispatcher of a kernel, typed from other kernels with its arguments' plain types: a constant
+        argument (``mat(table, base, 4)``) does not compile one specialisation per value."""
+
+        def get_call_template(self, args, kws):
+            plain = numba.types.unliteral
+            return super().get_call_template(tuple(map(plain, args)), {k: plain(v) for k, v in kws.items()})
+
+    class _Watcher(_event.Listener):
+        """Calls ``callback(dispatcher)`` when numba starts compiling a signature of one of :data:`KERNELS`."""
+
+        def __init__(self, callback: Callable[[object], None]) -> None:
+            self.callback = callback
+
+        def on_start(self, ev) -> None:
+            kernel = ev.data["dispatcher"]
+            if id(kernel) in _KERNEL_IDS:
+                self.callback(kernel)
+
+        def on_end(self, ev) -> None:
+            pass
+
+
+COMPILE_OPTIONS = {"nopython": True, "no_cfunc_wrapper": True}
+"""numba's options for every kernel: no C-callable wrapper (kernels are called from Python and from other
+kernels only), which numba would otherwise build for every kernel and every signature."""
+
 
 def compiled(function: Callable, nogil: bool = False) -> Callable:
     """``numba.njit(cache=True)(function)`` cached in :data:`cache_dir` and registered in :data:`KERNELS`;
     ``function`` itself without numba.  Where no folder can be written at all, the kernel is compiled
     in every process (uncached) and a warning is logged.  A cache entry that cannot be read back
     (truncated, garbage, another function's) is set aside with a one-line warning and compiled again.
-    ``nogil``: the kernel releases the GIL while it runs (several threads may run it at once)."""
+    ``nogil``: the kernel releases the GIL while it runs (several threads may run it at once).
+
+    To keep the first run short, a kernel compiles for its arguments' plain types when another kernel
+    calls it (one signature for ``f(a, 4)`` and ``f(a, 5)``) and gets no C-callable wrapper
+    (:data:`COMPILE_OPTIONS`)."""
     if not available:
         return function
-    kernel = numba.njit(function, nogil=nogil)
+    kernel = _Dispatcher(py_func=function, locals={}, targetoptions={**COMPILE_OPTIONS, "nogil": nogil})
     previous = numba.config.CACHE_DIR
     numba.config.CACHE_DIR = cache_dir  # read by numba when the cache picks its folder
     try:
@@ -198,6 +234,7 @@ def compiled(function: Callable, nogil: bool = False) -> Callable:
     finally:
         numba.config.CACHE_DIR = previous
     KERNELS.append(kernel)
+    _KERNEL_IDS.add(id(kernel))
     return kernel
 
 
@@ -306,6 +343,40 @@ def cache_is_cold(kernels: Iterable[object] | None = None) -> bool:
     """True when some kernel (default: every one in :data:`KERNELS`) is not :func:`is_cached`, i.e. the
     first solve will compile.  False without numba."""
     return available and not all(is_cached(k) for k in (KERNELS if kernels is None else kernels))
+
+
+@contextlib.contextmanager
+def watch_compilations(callback: Callable[[object], None]) -> Iterator[None]:
+    """Inside the block, ``callback(kernel)`` is called whenever numba starts compiling a signature of one of
+    :data:`KERNELS` (never when it loads one from its on-disk cache); without numba, never."""
+    if not available:
+        yield
+        return
+    watcher = _Watcher(callback)
+    _event.register("numba:compile", watcher)
+    try:
+        yield
+    finally:
+        _event.unregister("numba:compile", watcher)
+
+
+def kernel_callees(kernel: object) -> list:
+    """The kernels of :data:`KERNELS` that ``kernel``'s source names (as a global or ``module.name``): those
+    numba compiles with it unless they are cached."""
+    function = getattr(kernel, "py_func", None)
+    if function is None:
+        return []
+    names, codes = set(), [function.__code__]
+    while codes:
+        code = codes.pop()
+        names.update(code.co_names)
+        codes += [c for c in code.co_consts if hasattr(c, "co_names")]
+    found = {}
+    for name in names:
+        value = function.__globals__.get(name)
+        candidates = [getattr(value, n, None) for n in names] if inspect.ismodule(value) else [value]
+        found.update((id(c), c) for c in candidates if id(c) in _KERNEL_IDS and c is not kernel)
+    return list(found.values())
 
 
 def kernels_enabled() -> bool:

@@ -8,7 +8,6 @@ import os
 import re
 import subprocess
 import sys
-import time
 
 import numpy as np
 import pytest
@@ -187,25 +186,6 @@ def test_table1_row_uses_the_registry_success_rule(capsys):
     assert "- Box-DDP fails at least on pend, jump, hop, bar: no (jump (not run), hop (not run)" in out
 
 
-def test_warm_up_announces_compilation_while_it_runs(capsys):
-    numba = pytest.importorskip("numba")
-
-    @numba.njit(cache=False)
-    def kernel(x):
-        return 2.0 * x
-
-    def run():
-        kernel(1.0)
-        time.sleep(0.2)  # the watcher polls every 10 ms: it sees the compilation before run returns
-
-    spent = warm_up_kernels(run, [kernel], poll=0.01)
-    err = capsys.readouterr().err
-    assert err.startswith("compiling kernels (first run only) ...\n")
-    assert spent >= 0.2 and f"kernels compiled in {spent:.1f} s" in err and "not counted in the solve time" in err
-    assert warm_up_kernels(run, [kernel], poll=0.01) == 0.0  # compiled already: silent
-    assert capsys.readouterr().err == ""
-
-
 def test_warm_up_is_silent_when_the_kernels_are_cached(capsys):
     problem, xs, us = registry.get("quad-goal").build(crocopy)
     crocopy.SolverBoxFDDP(problem).solve(xs, us, 2, False)  # loads (or compiles) this process's kernels
@@ -222,7 +202,7 @@ def test_first_run_notice_with_an_empty_kernel_cache(tmp_path):
     run = subprocess.run([CROCOPY, "solve", "pend", "--quiet", "--no-html"], capture_output=True, text=True,
                          env=env, cwd=tmp_path)
     assert run.returncode == 0, run.stderr
-    assert "compiling kernels (first run only) ..." in run.stderr
+    assert re.search(r"^compiling kernels \(first run only\): \d+/\d+$", run.stderr, re.M)
     compile_s = float(re.search(r"kernels compiled in ([\d.]+) s", run.stderr).group(1))
     solve_s = float(re.search(r"after 92 iterations, cost [\d.e+-]+, ([\d.]+) s", run.stdout).group(1))
     assert solve_s < compile_s / 2

@@ -137,15 +137,6 @@ def test_a_run_on_a_cache_with_a_file_cut_in_half_succeeds_with_one_warning_line
     assert (repaired.returncode, repaired.stdout, repaired.stderr) == (0, "3.0 0\n", "")  # loaded, no warning
 
 
-def test_announce_cold_cache(monkeypatch, capsys):
-    monkeypatch.setattr(kernels, "cache_is_cold", lambda: True)
-    assert kernel_warmup.announce_cold_cache()
-    assert capsys.readouterr().err == kernel_warmup.COMPILING_NOTICE + "\n"
-    monkeypatch.setattr(kernels, "cache_is_cold", lambda: False)
-    assert not kernel_warmup.announce_cold_cache()
-    assert capsys.readouterr().err == ""
-
-
 def test_an_empty_cache_folder_is_cold_for_every_kernel(tmp_path):
     script = ("import crocopy\nfrom crocopy import kernels\n"
               "print(len(kernels.KERNELS), kernels.cache_is_cold(), any(map(kernels.is_cached, kernels.KERNELS)))")
