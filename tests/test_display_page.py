@@ -12,6 +12,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 import umsgpack
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from crocopy.models.display import collada, framing, page
 from crocopy.models.display.html import static_html_commands
@@ -74,6 +76,66 @@ def test_collada_robot_meshes_read_back_exactly():
     packed = collada.pack(text)
     assert len(packed.arrays) == text.count("<float_array") + text.count("<p>")
     assert collada.unpack(packed).split() == text.split()
+
+
+_TOKEN = re.compile(r"(-?)(0|[1-9][0-9]*)(?:\.([0-9]+))?(?:e(-?(?:0|[1-9][0-9]*)))?")
+
+
+def _reference_decimals(content: str):
+    """The decimal-list packing read token by token from its grammar (what the array version must give)."""
+    if content[:1].isspace():
+        return None
+    digits, flags, exponents = [], [], []
+    for token in content.split():
+        m = _TOKEN.fullmatch(token)
+        if m is None:
+            return None
+        sign, whole, fraction, exponent = m.group(1), m.group(2), m.group(3) or "", m.group(4)
+        if len(fraction) > 31 or int(whole + fraction) >= 2**32 or (exponent and not -128 <= int(exponent) <= 127):
+            return None
+        digits.append(int(whole + fraction))
+        flags.append(len(fraction) | (32 if sign else 0) | (64 if exponent else 0))
+        exponents += [int(exponent)] if exponent else []
+    return np.array(digits, np.uint32), np.array(flags, np.uint8), np.array(exponents, np.int8)
+
+
+def _same(a, b) -> bool:
+    if a is None or b is None:
+        return a is None and b is None
+    return all(x.dtype == y.dtype and np.array_equal(x, y) for x, y in zip(a, b))
+
+
+_DECIMALS = st.lists(
+    st.one_of(
+        st.builds(lambda s, w, f, e: s + str(w) + (f".{f}" if f else "") + (f"e{e}" if e is not None else ""),
+                  st.sampled_from(["", "-"]), st.integers(0, 10**11), st.text("0123456789", max_size=12),
+                  st.none() | st.integers(-200, 200)),
+        st.text("0123456789.-eE+ \n", min_size=1, max_size=8),
+    ),
+    max_size=8,
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(_DECIMALS, st.sampled_from([" ", "\n  ", "\t"]), st.sampled_from(["", " "]))
+def test_decimal_lists_pack_as_their_grammar_reads_them(tokens, separator, edge):
+    content = separator.join(tokens)
+    assert _same(collada._pack_decimals(content), _reference_decimals(content))
+    assert _same(collada._pack_decimals(content + edge), _reference_decimals(content + edge))
+    assert _same(collada._pack_decimals(edge + content), _reference_decimals(edge + content))
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.integers(0, 10**10).map(str) | st.sampled_from(["01", "00", "-1", "1.0", "x"]), max_size=9),
+       st.integers(1, 3))
+def test_index_lists_pack_as_their_grammar_reads_them(tokens, k):
+    packed = collada._pack_indices(" ".join(tokens), k)
+    plain = all(re.fullmatch(r"0|[1-9][0-9]{0,8}", t) for t in tokens) and len(tokens) % k == 0
+    if not plain:
+        assert packed is None
+    else:
+        values = np.array([int(t) for t in tokens], np.int64)
+        assert packed[1] == len(tokens) and np.array_equal(collada._unzigzag_columns(packed[0], len(tokens), k), values)
 
 
 def _track(values, name=".position", kind="vector3"):

@@ -33,10 +33,6 @@ _FLOAT_ARRAY = re.compile(r"(<float_array\b[^>]*>)([^<]*)(</float_array>)")
 _PRIMITIVE = re.compile(r"<(triangles|polylist|polygons|lines|linestrips|tristrips|trifans)\b.*?</\1>", re.S)
 _INDEX_LIST = re.compile(r"(<p>)([^<]*)(</p>)")
 _OFFSET = re.compile(r"<input\b[^>]*\boffset=\"(\d+)\"")
-_NUMBER = r"(?:0|[1-9]\d*)"
-_DECIMAL = re.compile(rf"(-?)({_NUMBER})(?:\.(\d+))?(?:e(-?{_NUMBER}))?")
-_DECIMAL_LIST = re.compile(rf"(?:-?{_NUMBER}(?:\.\d+)?(?:e-?{_NUMBER})?(?:\s+|$))*")
-_INDEX_LIST_TOKENS = re.compile(rf"(?:{_NUMBER}(?:\s+|$))*")
 _MAX_FRACTION = 31
 _NEGATIVE, _EXPONENT = 32, 64
 
@@ -80,25 +76,104 @@ def _format_decimals(digits: np.ndarray, flags: np.ndarray, exponents: np.ndarra
     return out
 
 
+class _Tokens:
+    """The whitespace-separated tokens of an ASCII text, read with array operations on its bytes (a regular
+    expression or a per-token loop costs seconds on a robot's meshes).
+
+    ``chars`` is the text's bytes; per character, ``token`` is the index of the token it belongs to (-1 for
+    whitespace); ``first`` indexes each token's first character.  ``None`` from :meth:`read` for a text
+    that is not ASCII, starts with whitespace or holds a byte outside ``allowed``.
+    """
+
+    def __init__(self, chars: np.ndarray, token: np.ndarray, first: np.ndarray) -> None:
+        self.chars, self.token, self.first = chars, token, first
+
+    @classmethod
+    def read(cls, content: str, allowed: bytes) -> _Tokens | None:
+        try:
+            chars = np.frombuffer(content.encode("ascii"), np.uint8)
+        except UnicodeEncodeError:
+            return None
+        space = (chars == 32) | ((chars >= 9) & (chars <= 13))
+        if chars.size and space[0]:
+            return None
+        if not np.isin(chars[~space], np.frombuffer(allowed, np.uint8)).all():
+            return None
+        starts = ~space & np.concatenate(([True], space[:-1]))
+        token = np.where(space, -1, np.cumsum(starts, dtype=np.int32) - 1)
+        return cls(chars, token, np.flatnonzero(starts))
+
+    def before(self, mask: np.ndarray) -> np.ndarray:
+        """Per character, how many characters of ``mask`` precede it in its token."""
+        counts = np.cumsum(mask, dtype=np.int32) - mask
+        return counts - counts[self.first][np.maximum(self.token, 0)]
+
+    def counts(self, mask: np.ndarray) -> np.ndarray:
+        """Per token, how many of its characters are in ``mask``."""
+        return np.bincount(self.token[mask], minlength=self.first.size)
+
+    def number(self, mask: np.ndarray, tokens: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Per token of ``tokens`` (sorted; each holds a character of ``mask``, and no other token does): the
+        integer its ``mask`` digits spell (exact for at most 19 digits) and how many digits there are."""
+        where = np.flatnonzero(mask)
+        starts = np.searchsorted(self.token[where], tokens)
+        places = np.diff(np.append(starts, where.size))
+        if where.size == 0 or places.max() > 19:
+            return np.zeros(tokens.size, np.uint64), places
+        rank = np.arange(where.size) - np.repeat(starts, places)
+        power = np.power(np.uint64(10), (np.repeat(places, places) - rank - 1).astype(np.uint64))
+        terms = (self.chars[where].astype(np.uint64) - np.uint64(48)) * power
+        return np.add.reduceat(terms, starts), places
+
+
 def _pack_decimals(content: str) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """Digits, flags and exponents of a whitespace-separated decimal list, or None if one would not
-    read back exactly (the grammar admits only tokens :func:`_format_decimals` writes back as they are)."""
-    if _DECIMAL_LIST.fullmatch(content) is None:
+    read back exactly (the grammar admits only tokens :func:`_format_decimals` writes back as they are:
+    ``[-]D[.F][e[-]E]``, ``D`` and ``E`` without leading zeros)."""
+    tokens = _Tokens.read(content, b"0123456789.-e")
+    if tokens is None:
         return None
-    parts = _DECIMAL.findall(content)
-    if not parts:
+    c = tokens.chars
+    if c.size == 0:
         return np.zeros(0, np.uint32), np.zeros(0, np.uint8), np.zeros(0, np.int8)
-    signs, wholes, fractions, exponents = (np.array(p) for p in zip(*parts))
-    fraction_digits = np.char.str_len(fractions)
-    digit_strings = np.char.add(wholes, fractions)
-    if fraction_digits.max() > _MAX_FRACTION or np.char.str_len(digit_strings).max() > 19:
+    digit = (c >= 48) & (c <= 57)
+    minus, dot, e = c == 45, c == 46, c == 101
+    previous = np.concatenate(([32], c[:-1]))
+    following = np.concatenate((c[1:], [32]))
+    prev_digit = (previous >= 48) & (previous <= 57)
+    next_digit = (following >= 48) & (following <= 57)
+    in_exponent = tokens.before(e) > 0
+    in_fraction = tokens.before(dot) > 0
+    first = np.zeros(c.size, bool)
+    first[tokens.first] = True
+    bad = (
+        (minus & ~(first | (previous == 101)))  # a sign opens the token or the exponent
+        | ((minus | dot) & ~next_digit)
+        | (dot & (~prev_digit | in_exponent | in_fraction))  # one point, between digits
+        | (e & (~prev_digit | ~(next_digit | (following == 45)) | in_exponent))  # one exponent after a digit
+        | ((c == 48) & next_digit & ~prev_digit & (previous != 46))  # a leading zero
+    )
+    if bad.any():
         return None
-    digits = digit_strings.astype(np.uint64)
-    has_exponent = exponents != ""
-    values = exponents[has_exponent].astype(np.int64)
-    if digits.max() >= 2**32 or np.any(values < -128) or np.any(values > 127):
+    ids = np.arange(tokens.first.size)
+    mantissa = digit & ~in_exponent
+    digits, places = tokens.number(mantissa, ids)
+    fraction_digits = tokens.counts(mantissa & in_fraction)
+    if places.max() > 19 or fraction_digits.max() > _MAX_FRACTION or digits.max() >= 2**32:
         return None
-    flags = fraction_digits | np.where(signs == "-", _NEGATIVE, 0) | np.where(has_exponent, _EXPONENT, 0)
+    has_exponent = np.zeros(ids.size, bool)
+    has_exponent[tokens.token[e]] = True
+    with_e = np.flatnonzero(has_exponent)
+    magnitudes, exponent_places = tokens.number(digit & in_exponent, with_e)
+    if exponent_places.size and exponent_places.max() > 3:
+        return None
+    negative_exponent = np.zeros(ids.size, bool)
+    negative_exponent[tokens.token[minus & in_exponent]] = True
+    values = np.where(negative_exponent[with_e], -magnitudes.astype(np.int64), magnitudes.astype(np.int64))
+    if np.any(values < -128) or np.any(values > 127):
+        return None
+    negative = c[tokens.first] == 45
+    flags = fraction_digits | np.where(negative, _NEGATIVE, 0) | np.where(has_exponent, _EXPONENT, 0)
     return digits.astype(np.uint32), flags.astype(np.uint8), values.astype(np.int8)
 
 
@@ -116,13 +191,16 @@ def _unzigzag_columns(z: np.ndarray, n: int, k: int) -> np.ndarray:
 
 def _pack_indices(content: str, k: int) -> tuple[np.ndarray, int] | None:
     """Zig-zag column differences of a whitespace-separated list of ``k``-column indices, and its length."""
-    if _INDEX_LIST_TOKENS.fullmatch(content) is None:
+    tokens = _Tokens.read(content, b"0123456789")
+    if tokens is None:
         return None
-    tokens = np.array(content.split())
-    if tokens.size % k or (tokens.size and np.char.str_len(tokens).max() > 9):
+    ids = np.arange(tokens.first.size)
+    if ids.size % k:
         return None
-    values = tokens.astype(np.int64)
-    return _zigzag_columns(values, k), values.size
+    values, places = tokens.number(tokens.token >= 0, ids)
+    if places.size and (places.max() > 9 or np.any((tokens.chars[tokens.first] == 48) & (places > 1))):
+        return None  # more than 9 digits, or a leading zero
+    return _zigzag_columns(values.astype(np.int64), k), ids.size
 
 
 def _trimmed(text: str, start: int, end: int) -> tuple[int, int]:
