@@ -25,6 +25,9 @@
   ``crocopy solve`` to its first iteration line, fresh (empty caches) and warm (:mod:`crocopy.bench.latency`)
 * ``crocopy bench --threads [--problems ...]``: node evaluation with ``problem.nthreads`` 1 and 2
   (:mod:`crocopy.bench.threads`)
+* ``crocopy bench --first-solve [--problems P] [--solver S] [--repeats N]``: a whole ``crocopy solve`` with its
+  HTML, fresh and warm: first iteration, end of the solve, HTML export, exit, CPU, whether the compile notice
+  was printed (:mod:`crocopy.bench.first_solve`)
 * ``crocopy bench --user-residual [--repeats N]``: the Talos-arm reach with its goal as the built-in residual, a
   ``ResidualModelNumba`` and a Python subclass, next to Crocoddyl's when installed (:mod:`crocopy.bench.user_residual`)
 * ``crocopy list``: the bundled problems
@@ -432,6 +435,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--latency", action="store_true",
                        help="seconds from launching `crocopy solve` to its first iteration line, with empty and "
                             "with filled caches, and of `import crocopy` (crocopy.bench.latency; first --problems)")
+    bench.add_argument("--first-solve", action="store_true",
+                       help="a whole `crocopy solve` with its HTML, with empty and with filled caches: first "
+                            "iteration, solve, HTML export, CPU (crocopy.bench.first_solve; first --problems)")
     bench.add_argument("--user-residual", action="store_true",
                        help="the Talos-arm reach with its goal as the built-in residual, a ResidualModelNumba and a "
                             "Python subclass, ms per iteration and ratios (crocopy.bench.user_residual)")

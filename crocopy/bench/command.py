@@ -67,6 +67,12 @@ def run_bench(args: argparse.Namespace) -> int:
 
         print(run_threads_bench(tuple(args.problems or PROBLEMS), repeats=args.repeats or 15))
         return 0
+    if args.first_solve:
+        from .first_solve import run_first_solve_bench
+
+        problem = args.problems[0] if args.problems else "jump"
+        print(run_first_solve_bench(problem, args.solver, repeats=args.repeats or 2))
+        return 0
     if args.user_residual:
         from .user_residual import run_user_residual_bench
 
