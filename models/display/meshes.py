@@ -14,6 +14,8 @@ import pinocchio as pin
 
 __all__ = ["has_mixed_texcoords", "plain_mesh"]
 
+_PRIMITIVE_OPENING = re.compile(r"<(?:triangles|polylist|polygons)\b")
+_PRIMITIVE_CLOSINGS = ("</triangles>", "</polylist>", "</polygons>")
 _PLAIN_MESH_CACHE: dict[str, tuple[np.ndarray, np.ndarray]] = {}
 
 
@@ -23,9 +25,21 @@ def has_mixed_texcoords(path: str) -> bool:
         return False
     with open(path, encoding="utf-8", errors="replace") as f:
         text = f.read()
-    blocks = re.findall(r"<(?:triangles|polylist|polygons)\b.*?</(?:triangles|polylist|polygons)>", text, re.S)
-    textured = sum('semantic="TEXCOORD"' in b for b in blocks)
-    return 0 < textured < len(blocks)
+    blocks = textured = 0
+    closing = {tag: 0 for tag in _PRIMITIVE_CLOSINGS}  # next position of each closing tag (-1: none left)
+    opening = _PRIMITIVE_OPENING.search(text)
+    while opening is not None:  # each block runs to the first closing tag of a primitive after it
+        for tag, at in closing.items():
+            if 0 <= at < opening.end():
+                closing[tag] = text.find(tag, opening.end())
+        ends = [at for at in closing.values() if at >= 0]
+        if not ends:
+            break
+        end = min(ends)
+        blocks += 1
+        textured += text.find('semantic="TEXCOORD"', opening.start(), end) >= 0
+        opening = _PRIMITIVE_OPENING.search(text, end + 1)
+    return 0 < textured < blocks
 
 
 def plain_mesh(geometry_object: pin.GeometryObject) -> tuple[np.ndarray, np.ndarray]:
