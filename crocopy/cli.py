@@ -61,15 +61,18 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import TypeVar
 
 from . import __version__
 from .kernel_warmup import compile_kernels, warm_up_kernels
 from .solvers import SOLVERS
 
 EXIT_CONVERGED, EXIT_NOT_CONVERGED, EXIT_USAGE = 0, 1, 2
+T = TypeVar("T")
 EXIT_STATUS_HELP = (
     "exit status: 0 success (solve: converged), 1 solve did not converge, "
     "2 usage error (bad flag or value, unknown name, unwritable output, missing extra)"
@@ -104,6 +107,29 @@ def _display_robot(problem):
     return None
 
 
+def in_background(function: Callable[..., T], *args: object) -> Callable[[], T]:
+    """Start ``function(*args)`` on a daemon thread; the returned callable waits for it and returns its result
+    (or raises its exception).  For work that releases the GIL (Pinocchio parsing a robot's meshes)."""
+    outcome: dict[str, object] = {}
+
+    def run() -> None:
+        try:
+            outcome["value"] = function(*args)
+        except BaseException as exc:  # noqa: BLE001 - raised again by the caller's wait
+            outcome["error"] = exc
+
+    thread = threading.Thread(target=run, name=f"crocopy-{function.__name__}", daemon=True)
+    thread.start()
+
+    def wait() -> T:
+        thread.join()
+        if "error" in outcome:
+            raise outcome["error"]
+        return outcome["value"]
+
+    return wait
+
+
 def _list(args: argparse.Namespace) -> int:
     from .problems import registry
 
@@ -122,6 +148,8 @@ def _solve(args: argparse.Namespace) -> int:
     spec = registry.get(args.problem)
     problem, xs, us = spec.build(crocopy)
     solver_class = getattr(crocopy, SOLVERS[args.solver])
+    html = None if args.no_html else args.html
+    display_robot = in_background(_display_robot, problem) if html else None  # meshes load while kernels compile
 
     def one_iteration_each_way() -> None:
         """One iteration from the guess (gaps open), one from its result flagged feasible (box steps)."""
@@ -152,9 +180,8 @@ def _solve(args: argparse.Namespace) -> int:
 
         plot_convergence_from_logger(logger, args.plot)
         print(f"convergence plot written to {args.plot}")
-    html = None if args.no_html else args.html
     if html:
-        robot = _display_robot(problem)
+        robot = display_robot()
         if robot is None:
             print(f"no meshcat model for {args.problem}; animation not written", file=sys.stderr)
         else:

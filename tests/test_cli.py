@@ -281,3 +281,19 @@ def test_readme_lists_every_solve_choice_and_the_compile_command():
     listed = re.search(r"`crocopy solve \[PROBLEM\] \[--solver ([a-z\\|]+)\]", readme).group(1).split("\\|")
     assert listed == sorted(SOLVERS)
     assert "| `crocopy compile` |" in readme
+
+
+def test_in_background_returns_the_result_or_raises_the_error_of_its_thread():
+    import threading
+
+    from crocopy.cli import in_background
+
+    seen = []
+    wait = in_background(lambda a, b: seen.append(threading.current_thread().name) or a + b, 2, 3)
+    assert wait() == 5 and seen and seen[0] != threading.current_thread().name
+
+    def fail():
+        raise KeyError("no robot")
+
+    with pytest.raises(KeyError, match="no robot"):
+        in_background(fail)()
