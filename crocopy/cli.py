@@ -48,12 +48,13 @@ Exit status: ``0`` success (``solve``: the solver converged), ``1`` ``solve`` ra
 converge, ``2`` usage error (also a missing optional extra, e.g. ``bench --vs`` without Crocoddyl).
 
 Before ``solve`` times the solve, one iteration of the same solver on the same problem loads the
-compiled (numba) kernels; on the first run after installation (unless ``crocopy compile`` ran) they
-are compiled, which takes about 100 s of CPU time (``time crocopy compile``: 99 s user in a fresh
-cache; the wall time grows with the machine's load) and is announced by a
-``compiling kernels (first run only) ...`` line, printed at launch when numba's cache lacks a
-kernel (:func:`crocopy.kernels.cache_is_cold`) and otherwise as soon as a compilation starts.  The
-reported solve time excludes that warm-up.
+compiled (numba) kernels; on the first run after installation (unless ``crocopy compile`` ran) the kernels
+this problem and solver need are compiled (the jump with Box-FDDP: 145 kernels, about 60 s of CPU time in a
+fresh cache; the wall time grows with the machine's load), announced by
+``compiling kernels (first run only): done/total`` as soon as numba starts compiling
+(:class:`crocopy.kernel_warmup.CompileProgress`); a run that compiles nothing prints no notice.  The
+reported solve time excludes that warm-up.  With ``--html``, the robot's meshes load on a background
+thread meanwhile.
 """
 
 from __future__ import annotations

@@ -164,6 +164,13 @@ if available:
             self._cache_file = _GuardedCacheFile(self._cache_path, self._impl.filename_base,
                                                  self._impl.locator.get_source_stamp())
 
+        wrapperless = False
+        """True while the dispatcher loads or saves an entry compiled without the Python wrapper."""
+
+        def _index_key(self, sig, codegen):
+            key = super()._index_key(sig, codegen)
+            return (*key, "for kernels") if self.wrapperless else key
+
         def _load_overload(self, sig, target_context):
             if not self._enabled:
                 return None
@@ -182,15 +189,57 @@ if available:
                 return None
 
     from numba.core import event as _event
+    from numba.core.compiler_lock import global_compiler_lock as _compiler_lock
     from numba.core.registry import CPUDispatcher
 
     class _Dispatcher(CPUDispatcher):
-        """numba's dispatcher of a kernel, typed from other kernels with its arguments' plain types: a constant
-        argument (``mat(table, base, 4)``) does not compile one specialisation per value."""
+        """numba's dispatcher of a kernel, made cheaper to compile for other kernels.
+
+        * Typed from another kernel with its arguments' plain types: a constant argument (``mat(table, base, 4)``)
+          does not compile one specialisation per value.
+        * Compiled for another kernel without numba's Python wrapper (which numba otherwise builds, optimises and
+          caches for every signature: about a sixth of a first run's compile time).  Such a signature is never
+          offered to Python calls: a Python call with it compiles (or loads) it again, wrapper included.  Its
+          cache entry is kept apart from the wrapped one (:meth:`_GuardedCache._index_key`).
+        """
+
+        _for_kernels = 0
+        """While above 0, this dispatcher is being typed from another kernel (:meth:`get_call_template`)."""
+
+        def __init__(self, *args, **kwargs) -> None:
+            super().__init__(*args, **kwargs)
+            self.kernels_only: set[tuple] = set()
+            """The signatures compiled (or loaded) without the Python wrapper."""
 
         def get_call_template(self, args, kws):
             plain = numba.types.unliteral
-            return super().get_call_template(tuple(map(plain, args)), {k: plain(v) for k, v in kws.items()})
+            with _compiler_lock:
+                self._for_kernels += 1
+                try:
+                    return super().get_call_template(tuple(map(plain, args)), {k: plain(v) for k, v in kws.items()})
+                finally:
+                    self._for_kernels -= 1
+
+        def compile(self, sig):
+            with _compiler_lock:
+                wrapperless = self._for_kernels > 0
+                args = tuple(_sigutils.normalize_signature(sig)[0])
+                if not wrapperless and args in self.kernels_only:
+                    del self.overloads[args]  # compiled for kernels only: a Python call needs the wrapper
+                    self.kernels_only.discard(args)
+                saved = self.targetoptions.get("no_cpython_wrapper", False), getattr(self._cache, "wrapperless", False)
+                self.targetoptions["no_cpython_wrapper"] = self._cache.wrapperless = wrapperless
+                try:
+                    return super().compile(sig)
+                finally:
+                    self.targetoptions["no_cpython_wrapper"], self._cache.wrapperless = saved
+
+        def add_overload(self, cres):
+            if self.targetoptions.get("no_cpython_wrapper"):  # kept out of the table Python calls are matched in
+                self.overloads[tuple(cres.signature.args)] = cres
+                self.kernels_only.add(tuple(cres.signature.args))
+            else:
+                super().add_overload(cres)
 
     class _Watcher(_event.Listener):
         """Calls ``callback(dispatcher)`` when numba starts compiling a signature of one of :data:`KERNELS`."""

@@ -122,3 +122,16 @@ def test_elsewhere_a_count_line_is_printed_at_most_every_interval():
 def test_nothing_compiled_prints_nothing():
     out = Terminal()
     assert CompileProgress(out).finish() == 0.0 and out.getvalue() == ""
+
+
+def test_a_kernel_compiled_for_kernels_only_gets_its_python_wrapper_when_python_calls_it(tiny):
+    module = tiny()
+    assert module.caller(1.0) == 9.0
+    (signature,) = module.leaf.signatures
+    assert module.leaf.kernels_only == {signature}  # compiled inside caller, without the wrapper
+    assert module.leaf(2.0, 3) == 6.0 and module.leaf.kernels_only == set()  # compiled again, wrapper included
+    assert kernel_warmup.compilations([module.leaf]) == 2
+    again = tiny()  # a later process: each entry is loaded from its own cache slot
+    assert again.leaf(2.0, 3) == 6.0 and again.caller(1.0) == 9.0
+    assert again.unused(1.0) == 1.0  # compiles unused; leaf's entry for kernels is loaded
+    assert kernel_warmup.compilations([again.leaf, again.caller]) == 0
