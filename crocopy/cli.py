@@ -54,7 +54,7 @@ fresh cache; the wall time grows with the machine's load), announced by
 ``compiling kernels (first run only): done/total`` as soon as numba starts compiling
 (:class:`crocopy.kernel_warmup.CompileProgress`); a run that compiles nothing prints no notice.  The
 reported solve time excludes that warm-up.  With ``--html``, the robot's meshes load on a background
-thread meanwhile.
+thread while kernels compile (after the solve when nothing compiles, so that they do not slow it).
 """
 
 from __future__ import annotations
@@ -69,7 +69,7 @@ from pathlib import Path
 from typing import TypeVar
 
 from . import __version__
-from .kernel_warmup import compile_kernels, warm_up_kernels
+from .kernel_warmup import CompileProgress, compile_kernels, warm_up_kernels
 from .solvers import SOLVERS
 
 EXIT_CONVERGED, EXIT_NOT_CONVERGED, EXIT_USAGE = 0, 1, 2
@@ -131,6 +131,24 @@ def in_background(function: Callable[..., T], *args: object) -> Callable[[], T]:
     return wait
 
 
+class Deferred:
+    """``function(*args)``, started in the background (:func:`in_background`) by :meth:`start`, or run when
+    :meth:`result` is asked for it first."""
+
+    def __init__(self, function: Callable[..., T], *args: object) -> None:
+        self.function, self.args = function, args
+        self.wait: Callable[[], T] | None = None
+
+    def start(self) -> None:
+        if self.wait is None:
+            self.wait = in_background(self.function, *self.args)
+
+    def result(self) -> T:
+        if self.wait is None:
+            return self.function(*self.args)
+        return self.wait()
+
+
 def _list(args: argparse.Namespace) -> int:
     from .problems import registry
 
@@ -149,8 +167,6 @@ def _solve(args: argparse.Namespace) -> int:
     spec = registry.get(args.problem)
     problem, xs, us = spec.build(crocopy)
     solver_class = getattr(crocopy, SOLVERS[args.solver])
-    html = None if args.no_html else args.html
-    display_robot = in_background(_display_robot, problem) if html else None  # meshes load while kernels compile
 
     def one_iteration_each_way() -> None:
         """One iteration from the guess (gaps open), one from its result flagged feasible (box steps)."""
@@ -158,7 +174,9 @@ def _solve(args: argparse.Namespace) -> int:
         first.solve(xs, us, 1, False)
         solver_class(problem).solve(first.xs, first.us, 1, True)
 
-    warm_up_kernels(one_iteration_each_way)
+    html = None if args.no_html else args.html
+    display_robot = Deferred(_display_robot, problem)  # if kernels compile, the meshes load meanwhile
+    warm_up_kernels(one_iteration_each_way, CompileProgress(on_compile=display_robot.start if html else None))
     solver = solver_class(problem)
     if not args.quiet:
         solver.setCallbacks([crocopy.CallbackVerbose()])
@@ -182,7 +200,7 @@ def _solve(args: argparse.Namespace) -> int:
         plot_convergence_from_logger(logger, args.plot)
         print(f"convergence plot written to {args.plot}")
     if html:
-        robot = display_robot()
+        robot = display_robot.result()
         if robot is None:
             print(f"no meshcat model for {args.problem}; animation not written", file=sys.stderr)
         else:

@@ -40,12 +40,15 @@ class CompileProgress:
     The first call prints the notice; on a terminal the line is then rewritten in place at every kernel,
     elsewhere (a pipe, a log) a new line is printed at most every ``interval`` seconds.  ``done`` counts the
     kernels compiled so far; ``total`` adds those they call, directly or not, that numba's cache lacks.
-    Nothing is printed when nothing is compiled.
+    Nothing is printed when nothing is compiled.  ``on_compile`` (if given) is called once, at the first
+    compilation (e.g. to start work that can overlap it).
     """
 
     def __init__(self, stream: TextIO | None = None, interval: float = 5.0,
-                 clock: Callable[[], float] = time.perf_counter) -> None:
+                 clock: Callable[[], float] = time.perf_counter,
+                 on_compile: Callable[[], object] | None = None) -> None:
         self.stream = sys.stderr if stream is None else stream
+        self.on_compile = on_compile
         self.interval = interval
         self.clock = clock
         self.compiled: dict[int, object] = {}
@@ -82,6 +85,8 @@ class CompileProgress:
         now = self.clock()
         if self.started is None:
             self.started = now
+            if self.on_compile is not None:
+                self.on_compile()
         self.signatures += 1
         self.compiled[id(kernel)] = kernel
         self._expect(kernel)

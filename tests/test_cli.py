@@ -297,3 +297,18 @@ def test_in_background_returns_the_result_or_raises_the_error_of_its_thread():
 
     with pytest.raises(KeyError, match="no robot"):
         in_background(fail)()
+
+
+def test_deferred_work_runs_in_the_background_once_started_else_when_asked_for():
+    import threading
+
+    from crocopy.cli import Deferred
+
+    threads = []
+    work = Deferred(lambda x: threads.append(threading.current_thread().name) or x * 2, 21)
+    assert work.result() == 42 and threads == [threading.current_thread().name]  # never started: runs here
+    work.start()
+    first = work.wait
+    work.start()
+    assert work.wait is first and work.result() == 42 and len(threads) == 2  # started once, on another thread
+    assert threads[1] != threading.current_thread().name

@@ -135,3 +135,15 @@ def test_a_kernel_compiled_for_kernels_only_gets_its_python_wrapper_when_python_
     assert again.leaf(2.0, 3) == 6.0 and again.caller(1.0) == 9.0
     assert again.unused(1.0) == 1.0  # compiles unused; leaf's entry for kernels is loaded
     assert kernel_warmup.compilations([again.leaf, again.caller]) == 0
+
+
+def test_on_compile_is_called_once_at_the_first_compilation(tiny):
+    module = tiny()
+    started = []
+    progress = CompileProgress(io.StringIO(), on_compile=lambda: started.append(True))
+    warm_up_kernels(lambda: module.caller(1.0), progress)
+    assert started == [True] and progress.signatures == 2
+    again = tiny()
+    quiet = CompileProgress(io.StringIO(), on_compile=lambda: started.append(True))
+    warm_up_kernels(lambda: again.caller(1.0), quiet)
+    assert started == [True]  # nothing compiled: not called
