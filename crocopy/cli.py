@@ -262,7 +262,18 @@ def _compile(args: argparse.Namespace) -> int:
 
     runs = [(registry.get(name).build, [getattr(crocopy, SOLVERS[k]) for k in keys]) for name, keys in COMPILE_RUNS]
     runs.append((registry.get("arm").build, [crocopy.SolverSQP, crocopy.SolverCSQP]))  # their QP and glue kernels
+    runs.append((_threaded_python_reach, [crocopy.SolverFDDP]))  # re-costing, two threads' ranges
     return compile_kernels(lambda builder: builder(crocopy), runs)
+
+
+def _threaded_python_reach(lib) -> tuple:
+    """A short reach whose goal is a Python residual, on two threads: the kernels that re-cost Python residuals'
+    nodes and add the ranges' costs (``crocopy compile``)."""
+    from .problems.user_residual import build_user_reach
+
+    problem, xs, us = build_user_reach(lib, "python", nodes=10)
+    problem.nthreads = 2
+    return problem, xs, us
 
 
 def _table1(args: argparse.Namespace) -> int:
