@@ -58,7 +58,8 @@ def trial_rollout(solver, steplength: float, gaps: bool = False, bounds: tuple[l
     cost = 0.0
     t = 0
     T = problem.T
-    by_node = -1  # a node the compiled step left non-finite: evaluated again without it (its Python path)
+    by_node = -1  # a node the compiled step left non-finite: evaluated again without it (its Python path, which
+    # takes least squares where a contact set is singular); if that diverges too, the trial stops there
     while t < T:
         if t in segments and t != by_node:
             end, horizon = segments[t], nodes.horizon
@@ -105,8 +106,10 @@ def trial_rollout(solver, steplength: float, gaps: bool = False, bounds: tuple[l
         else:
             calcs[t](x, u)
         cost += d.cost
-        t += 1
         xnext = d.xnext
+        if t == by_node and not np.isfinite(xnext).all():  # the Python path diverges too: the trial fails here
+            raise ForwardPassError("the rollout produced a non-finite state or cost")
+        t += 1
         x = xs_try[t]
         if gaps or t == gap_at:
             state._integrate_into(xnext, (steplength - 1.0) * fs[t], x)
