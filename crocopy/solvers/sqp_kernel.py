@@ -1,5 +1,5 @@
 """Compiled glue of :class:`~crocopy.solvers.sqp.SolverSQP` and :class:`~crocopy.solvers.csqp.SolverCSQP`
-(numba), twins of the numpy methods of :mod:`.sqp` and :mod:`.csqp`.
+(numba), twins of the numpy methods of :mod:`crocopy.solvers.sqp` and :mod:`crocopy.solvers.csqp`.
 
 They read the running nodes' ``Fx, Fu, Lxx, Lxu, Luu, Lx, Lu`` by address (``daddr (T, 7)``,
 :class:`.horizon.NodeDerivatives`), the solver's per-node arrays in its horizon buffer (``haddr (T+1, NQ)``,
