@@ -328,6 +328,27 @@ def contact_force_derivatives(
 
 
 @compiled
+def schur_factor(rb: RigidBodyModel, ws: RigidBodyWorkspace, cw: ContactWorkspace, Jc: np.ndarray, nc: int,
+                 damping: float) -> None:
+    """``cw.Y[:nc] = (M⁻¹ Jcᵀ)ᵀ`` and ``cw.G``, the lower Cholesky factor of ``Jc M⁻¹ Jcᵀ + damping I`` (first ``nc``
+    rows of ``Jc``), with the factor of ``M`` in ``ws``; ``G`` holds NaN (never a division by zero) where the
+    matrix is not positive definite."""
+    nv, Y, G = rb.nv, cw.Y, cw.G
+    for r in range(nc):
+        for k in range(nv):
+            Y[r, k] = Jc[r, k]
+        factor_solve(rb.dof_parent, ws.L, ws.dinv, Y[r])
+    for r in range(nc):
+        for c in range(r + 1):
+            acc = damping if r == c else 0.0
+            for k in range(nv):
+                acc += Jc[r, k] * Y[c, k]
+            for k in range(c):
+                acc -= G[r, k] * G[c, k]
+            G[r, c] = (math.sqrt(acc) if acc > 0.0 else math.nan) if r == c else acc / G[c, c]
+
+
+@compiled
 def contact_forward_dynamics(
     rb: RigidBodyModel,
     ws: RigidBodyWorkspace,
@@ -345,27 +366,17 @@ def contact_forward_dynamics(
     at the same ``(q, v)`` (its factor of ``M`` and ``ws.tau = b``); leaves ``cw.Y`` and ``cw.G``.  ``nc = 0`` is
     free dynamics.  Not a number (never a division by zero) if ``Jc M⁻¹ Jcᵀ + damping I`` is not positive
     definite."""
-    nv, Y, G = rb.nv, cw.Y, cw.G
+    nv, Y = rb.nv, cw.Y
     for k in range(nv):
         a_out[k] = tau[k] - ws.tau[k]
     factor_solve(rb.dof_parent, ws.L, ws.dinv, a_out)
+    schur_factor(rb, ws, cw, Jc, nc, damping)
     for r in range(nc):
-        for k in range(nv):
-            Y[r, k] = Jc[r, k]
-        factor_solve(rb.dof_parent, ws.L, ws.dinv, Y[r])
-    for r in range(nc):
-        for c in range(r + 1):
-            acc = damping if r == c else 0.0
-            for k in range(nv):
-                acc += Jc[r, k] * Y[c, k]
-            for k in range(c):
-                acc -= G[r, k] * G[c, k]
-            G[r, c] = (math.sqrt(acc) if acc > 0.0 else math.nan) if r == c else acc / G[c, c]
         acc = a0[r]
         for k in range(nv):
             acc += Jc[r, k] * a_out[k]
         lam_out[r] = -acc
-    cholesky_solve(G, nc, lam_out)
+    cholesky_solve(cw.G, nc, lam_out)
     for r in range(nc):
         for k in range(nv):
             a_out[k] += Y[r, k] * lam_out[r]

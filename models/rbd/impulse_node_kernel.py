@@ -26,16 +26,13 @@ it).
 
 from __future__ import annotations
 
-import math
-
 from crocopy.costs.stack_kernel import activation_values, derivatives_and_sums
 from crocopy.kernels import compiled
 from crocopy.solvers.riccati_kernel import cholesky_solve
 
-from .contact_kernel import contact_dynamics_derivatives, contact_force_derivatives
+from .contact_kernel import contact_dynamics_derivatives, contact_force_derivatives, schur_factor
 from .dynamics_kernel import (
     dynamics_derivatives,
-    factor_solve,
     forward_dynamics,
     forward_kinematics,
     frame_jacobian,
@@ -120,24 +117,14 @@ def _impulse_velocity(rb, ws, cw, Jc, nc, e, damping, v, vnext, lam):
     """``vnext = v⁺`` and ``lam[:nc] = Λ`` (see the module docstring); leaves ``cw.Y`` and ``cw.G`` as
     :func:`~.contact_kernel.contact_forward_dynamics` does.  Needs the factor of ``M`` in ``ws``.  Not a number
     (never a division by zero) if ``G`` is not positive definite."""
-    nv, Y, G = rb.nv, cw.Y, cw.G
+    nv, Y = rb.nv, cw.Y
+    schur_factor(rb, ws, cw, Jc, nc, damping)
     for r in range(nc):
-        for k in range(nv):
-            Y[r, k] = Jc[r, k]
-        factor_solve(rb.dof_parent, ws.L, ws.dinv, Y[r])
-    for r in range(nc):
-        for c in range(r + 1):
-            acc = damping if r == c else 0.0
-            for k in range(nv):
-                acc += Jc[r, k] * Y[c, k]
-            for k in range(c):
-                acc -= G[r, k] * G[c, k]
-            G[r, c] = (math.sqrt(acc) if acc > 0.0 else math.nan) if r == c else acc / G[c, c]
         acc = 0.0
         for k in range(nv):
             acc += Jc[r, k] * v[k]
         lam[r] = -(1.0 + e) * acc
-    cholesky_solve(G, nc, lam)
+    cholesky_solve(cw.G, nc, lam)
     for k in range(nv):
         vnext[k] = v[k]
     for r in range(nc):
