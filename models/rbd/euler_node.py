@@ -64,13 +64,7 @@ def compiled_residual_classes() -> dict[type, str]:
     """Every residual class that declares a ``compiled_kind`` of its own (beside its maths, with its
     ``compiled_parameters()``), with that kind: the registry of the kinds compiled nodes evaluate (a subclass
     inherits none: it may override ``calc``)."""
-    found, stack = {}, [ResidualModelAbstract]
-    while stack:
-        cls = stack.pop()
-        stack.extend(cls.__subclasses__())
-        if "compiled_kind" in cls.__dict__:
-            found[cls] = cls.__dict__["compiled_kind"]
-    return found
+    return {cls: cls.__dict__["compiled_kind"] for cls in declaring(ResidualModelAbstract, "compiled_kind")}
 
 
 def residual_kind(residual) -> int | None:
