@@ -14,6 +14,9 @@
   (:mod:`crocopy.bench.box_parity`)
 * ``crocopy bench --compat [--problems ...] [--out FILE]``: Crocoddyl's shipped example scripts and gait
   builders run with ``crocoddyl`` bound to crocopy, next to Crocoddyl's own runs (:mod:`crocopy.bench.compat`)
+* ``crocopy bench --mim-examples [--problems ...] [--out FILE]``: mim-solvers' example scripts (downloaded once
+  from its sdist on PyPI) run with ``crocoddyl`` and ``mim_solvers`` bound to crocopy, next to mim-solvers' own
+  runs (:mod:`crocopy.bench.mim_examples`)
 * ``crocopy bench --coverage [--problems ...] [--shipped [JOB ...]] [--out FILE]``: nodes compiled / nodes per
   bundled problem and per Crocoddyl script and gait, with why the others are not (:mod:`crocopy.bench.coverage`)
 * ``crocopy bench --models [--problems ...]``: calc + calcDiff time and per-model-kind differences of
@@ -429,8 +432,9 @@ def check_args(args: argparse.Namespace) -> str | None:
             error = error or _unwritable(args.plot, "--plot")
         return error
     if args.command in ("table1", "bench"):
-        # with --compat, --problems names Crocoddyl's scripts and gaits, checked by crocopy.bench.compat
-        error = None if getattr(args, "compat", False) else _unknown_problems(args.problems)
+        # with --compat (--mim-examples), --problems names Crocoddyl's (mim-solvers') scripts, checked there
+        scripts = getattr(args, "compat", False) or getattr(args, "mim_examples", False)
+        error = None if scripts else _unknown_problems(args.problems)
         if error is None and args.command == "bench" and args.out:
             error = _unwritable(args.out, "--out")
         return error
@@ -472,7 +476,8 @@ def build_parser() -> argparse.ArgumentParser:
                        help="with --vs: no further full-solve round starts after this many seconds per problem")
     bench.add_argument("--no-memory", action="store_true", help="with --vs: skip the peak-memory subprocesses")
     bench.add_argument("--out", default=None,
-                       help="with --vs or --coverage: also write the markdown report to this file")
+                       help="with --vs, --coverage, --compat or --mim-examples: also write the markdown report "
+                            "to this file")
     bench.add_argument("--batch", action="store_true",
                        help="10 quadrotor solves serially and with crocopy.solve_many (crocopy.bench.batch)")
     bench.add_argument("--scaling", action="store_true",
@@ -486,6 +491,10 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--compat", action="store_true",
                        help="Crocoddyl's shipped example scripts and gait builders run with crocopy as crocoddyl, "
                             "next to Crocoddyl's own runs (crocopy.bench.compat; bench extra; --problems selects)")
+    bench.add_argument("--mim-examples", action="store_true",
+                       help="mim-solvers' example scripts (from its sdist on PyPI) run with crocopy as crocoddyl and "
+                            "mim_solvers, next to mim-solvers' own runs (crocopy.bench.mim_examples; bench extra; "
+                            "--problems selects)")
     bench.add_argument("--coverage", action="store_true",
                        help="nodes compiled / nodes per builder (--problems) and per Crocoddyl script and gait "
                             "(--shipped; bench extra), and why the others are not (crocopy.bench.coverage)")

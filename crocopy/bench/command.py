@@ -50,6 +50,10 @@ def run_bench(args: argparse.Namespace) -> int:
         from .compat import run_compat_cli
 
         return run_compat_cli(args.problems, args.out)
+    if args.mim_examples:
+        from .mim_examples import run_mim_examples_cli
+
+        return run_mim_examples_cli(args.problems, args.out)
     if args.coverage:
         from .coverage import run_coverage_cli
 
