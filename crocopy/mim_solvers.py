@@ -5,6 +5,9 @@ imports: ``SolverSQP``, ``SolverCSQP`` (:mod:`crocopy.solvers.sqp`, :mod:`crocop
 ``CallbackVerbose``, ``CallbackLogger`` and ``plotConvergence`` (mim-solvers' flavours,
 :mod:`crocopy.callbacks.sqp`), ``CallbackAbstract``, and the DDP/FDDP solvers mim-solvers still exports.
 ``SolverPROXQP`` (a dense QP per iteration) is not provided.
+
+mim-solvers 0.3.0's own example scripts run to their end this way, with its iterations and costs
+(``crocopy bench --mim-examples``, :mod:`crocopy.bench.mim_examples`).
 """
 
 from __future__ import annotations
