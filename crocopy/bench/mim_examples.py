@@ -7,17 +7,20 @@ index link, must be :data:`SDIST_SHA256`), kept in the user cache folder
 (:func:`crocopy.user_cache.user_cache_dir`, ``mim-solvers/``) and checked again at each later use.
 Its ``examples/*.py`` are extracted into a temporary folder and only executed, never read or copied.
 
-Each script is run twice, each time in its own subprocess with a timeout, no display and
-``MPLBACKEND=Agg`` (the machinery of :mod:`crocopy.bench.compat`):
+Each run of :data:`JOBS` (a script and its command-line words) is made twice, each time in its own
+subprocess with a timeout, ``MPLBACKEND=Agg`` and no display (the machinery of :mod:`crocopy.bench.compat`;
+a script that opens a viewer ends there: ``ur5.py`` opens one and then loops forever):
 
 - with ``sys.modules["crocoddyl"]`` bound to crocopy (``crocoddyl.utils`` is the Crocoddyl wheel's
   folder, executed on crocopy) and ``sys.modules["mim_solvers"]`` bound to :mod:`crocopy.mim_solvers`;
-- with Crocoddyl 3.2.1 and mim-solvers 0.3.0 themselves (the ``bench`` extra).
+- with Crocoddyl 3.2.1 and mim-solvers 0.3.0 themselves (the ``bench`` extra, whose ``numpy<2.4`` lets
+  ``solo12``'s friction-cone residual write its 1-element array into Crocoddyl's residual vector).
 
 Every outermost ``solve`` call is recorded: solver class, iterations, final cost, and the KKT
-residual when the solver has one.  The report is a markdown table: does the script run to its end
-with crocopy (or its first error), crocopy's solves next to mim-solvers', and the largest relative
-cost difference over the solves both runs made.
+residual when the solver has one.  The report is a markdown table: does the run end with crocopy (or
+its first error), does it end as mim-solvers' run does (also both at the same error on the same line),
+crocopy's solves next to mim-solvers', and the largest relative cost difference over the solves both
+runs made.
 """
 
 from __future__ import annotations
