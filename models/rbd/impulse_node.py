@@ -37,6 +37,7 @@ from ..impulses import ImpulseModel3D, ImpulseModel6D
 from ..state_multibody import StateMultibody
 from . import impulse_node_kernel as kernel
 from . import node_table as table
+from .constraint_rows import ConstraintRows
 from .euler_node import Lowered, generic_reason, lowered, residual_kind, table_entries
 from .joint_types import NotLowerable
 from .lowering import RigidBodyModel
@@ -112,6 +113,8 @@ class ImpulseNode:
                     "ref_p": np.zeros((n, 3)), "kin": np.zeros(1), "user_dims": np.zeros(5, dtype=np.int64),
                     "user_Ru": np.zeros((1, 0))}
         """The table's entries the impulse node does not use or keeps for itself (``dFx``: ``∂v⁺/∂x``)."""
+        self.rows = ConstraintRows(0, ndx)
+        """No constraint rows (a node with constraints is declined)."""
         self.no_control = np.zeros(0)
         self._items: list | None = None
         self._residuals: list = []
@@ -184,7 +187,7 @@ class ImpulseNode:
             "Lxu": data.Lxu, "Luu": data.Luu, "r": stack.r, "lb": stack.lb, "ub": stack.ub,
             "act_weights": stack.act_weights, "item_costs": stack.item_costs, "item_weights": stack.item_weights,
             "weights": stack.weights, "Ar": stack.Ar, "Arr": stack.Arr, "Jx": stack.Jx, "Jc": stack.Jc,
-            "HJx": stack.HJx, **u_part, **self.own,
+            "HJx": stack.HJx, **u_part, **self.own, **self.rows.fields(data, data),
         }
         scratch_entries = low.scratch(0, self.nc)[1]
         arrays = [fields[e.name] for e in table.NODE_ARRAYS]
@@ -193,7 +196,8 @@ class ImpulseNode:
             state = self.model.state
             sizes = {"nx": state.nx, "ndx": state.ndx, "nv": state.nv, "nu": 0, "nr": stack.r.shape[0],
                      "nr_u": stack.r.shape[0] - stack.u_start, "n_stack": stack.item_costs.shape[0],
-                     "n_contacts": len(self.impulses) // table.CONTACT_FIELDS, "n_kin": 1, "nr_user": 1}
+                     "n_contacts": len(self.impulses) // table.CONTACT_FIELDS, "n_kin": 1, "nr_user": 1,
+                     **self.rows.sizes(data)}
             table.check_arrays(table.NODE_ARRAYS, arrays, sizes)
             self._data_entries = table_entries(arrays)
             self._data_arrays = arrays
