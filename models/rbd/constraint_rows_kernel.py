@@ -53,17 +53,20 @@ from .node_table import (
 
 @compiled
 def has_rows(ints) -> bool:
-    """Whether the node has constraints to evaluate (a program ``c_rows`` that is not empty)."""
-    return ints[SHAPES + 3 * E_C_ROWS] > 0
+    """Whether the node has constraint rows to write (``g`` or ``h`` not empty; at the terminal node, maybe none of
+    them a ``T_constraint`` one: then the program is empty and the rows are zero)."""
+    return ints[SHAPES + 3 * E_G] + ints[SHAPES + 3 * E_H] > 0
 
 
 @compiled
 def constraint_table(tbl, ints):
-    """``(c_tbl, c_ints)``: the node's constraint table, ``c_tbl`` filled from ``tbl`` (see the module docstring)."""
+    """``(c_tbl, c_ints)``: the node's constraint table, ``c_tbl`` filled from ``tbl`` (see the module docstring);
+    both empty when the node has no constraint to evaluate."""
     ctbl, cints = ivec(tbl, ints, E_C_TBL), ivec(tbl, ints, E_C_INTS)
-    for k in range(tbl.shape[0]):
-        ctbl[k] = tbl[k]
-    ctbl[E_R], ctbl[E_JX], ctbl[E_JU] = tbl[E_CR], tbl[E_CJX], tbl[E_CJU]
+    if cints.shape[0]:
+        for k in range(ctbl.shape[0]):
+            ctbl[k] = tbl[k]
+        ctbl[E_R], ctbl[E_JX], ctbl[E_JU] = tbl[E_CR], tbl[E_CJX], tbl[E_CJU]
     return ctbl, cints
 
 

@@ -369,9 +369,10 @@ def _constraints(tbl, ints, par, rb, ws, x, u, derivatives):
     """The constraint manager's rows (:mod:`.constraint_rows_kernel`): its residuals by the cost items' kernels on the
     node's constraint table, stacked into ``g``, ``h`` (and their Jacobians, if ``derivatives``)."""
     ctbl, cints = constraint_table(tbl, ints)
-    _residuals(ctbl, cints, par, rb, ws, x, u)
-    if derivatives:
-        _jacobians(ctbl, cints, par, rb, ws, x, u)
+    if cints.shape[0]:
+        _residuals(ctbl, cints, par, rb, ws, x, u)
+        if derivatives:
+            _jacobians(ctbl, cints, par, rb, ws, x, u)
     stack_rows(tbl, ints, derivatives)
 
 
