@@ -77,7 +77,8 @@ def arm_node(names: tuple[str, ...], dt: float = 0.01, costs=None, inactive: tup
 
 def solo_node(terminal: bool = False):
     """Solo12 on four 3D contacts, its CoM pushed forward by a cost, with joint-position limits (inequalities), the
-    CoM kept in a box on the running nodes (inequality) and held 2 cm forward at the terminal node (equality)."""
+    CoM kept in a box on the running nodes (inequality) and held 2 cm forward at the terminal node (equality); on the
+    running nodes a friction cone on one foot and torque bounds (inequalities)."""
     model = load("solo12")
     state = crocopy.StateMultibody(model)
     actuation = crocopy.ActuationModelFloatingBase(state)
@@ -110,6 +111,9 @@ def solo_node(terminal: bool = False):
         manager.addConstraint("com", crocopy.ConstraintModelResidual(
             state, crocopy.ResidualModelCoMPosition(state, com, nu), np.full(3, -0.01), np.array([0.03, 0.01, 0.01])))
     if not terminal:
+        cone = crocopy.FrictionCone(np.eye(3), 0.7, 4, False)
+        friction = crocopy.ResidualModelContactFrictionCone(state, model.getFrameId("FL_FOOT"), cone, nu)
+        manager.addConstraint("cone", crocopy.ConstraintModelResidual(state, friction, cone.lb, cone.ub))
         manager.addConstraint("torques", crocopy.ConstraintModelResidual(
             state, crocopy.ResidualModelControl(state, nu), -np.full(nu, 2.0), np.full(nu, 2.0)))
     dam = crocopy.DifferentialActionModelContactFwdDynamics(state, actuation, contacts, costs, manager, 0.0, True)
@@ -354,3 +358,37 @@ def test_a_node_without_constraints_skips_the_rows():
         iam = arm_node(names)
         evaluator = iam._compiled_node(iam.createData(), False, {})
         assert bool(constraint_rows_kernel.has_rows(evaluator.ints)) is rows
+
+
+@pytest.mark.parametrize("name", ["SolverIntro", "SolverProjection"])
+def test_equality_solvers_take_compiled_nodes_with_rows(name):
+    """Intro and projection read the action datas' equality rows, which compiled nodes write: the same iterations
+    and cost with compiled nodes, with the models' own evaluations, and with kernels off."""
+    from node_checks import make_solver
+
+    from crocopy.solvers import compiled_nodes
+
+    def build():
+        running, terminal = arm_node(("control", "translation"), dt=0.02), arm_node((), dt=0.0)
+        manager = running.differential.constraints
+        reference = crocopy.ResidualModelControl(running.state, np.full(running.nu, 0.3))
+        manager.removeConstraint("control")
+        manager.addConstraint("control", crocopy.ConstraintModelResidual(running.state, reference))
+        x0 = running.state.integrate(running.state.zero(), np.full(running.state.ndx, 0.1))
+        return crocopy.ShootingProblem(x0, [running] * 10, terminal)
+
+    results = []
+    for kernels, compiled in ((True, True), (True, False), (False, False)):
+        with crocopy.use_kernels(kernels):
+            problem = build()
+            assert problem.runningModels[0].nh == problem.runningModels[0].nu
+            solver = make_solver(name, problem, compiled)
+            if kernels and compiled:
+                assert compiled_nodes.select(solver) is not None
+            solver.solve([problem.x0] * (problem.T + 1), [np.zeros(m.nu) for m in problem.runningModels], 20)
+            us = np.array(solver.us)
+            results.append((solver.iter, solver.cost, us))
+    for iters, cost, _ in results[1:]:
+        assert iters == results[0][0] > 0
+        assert cost == pytest.approx(results[0][1], rel=1e-9)
+    np.testing.assert_allclose(results[0][2], 0.3, atol=1e-6)

@@ -10,9 +10,10 @@ residual item per constraint (the cost items' kinds and fields, :mod:`.node_tabl
 per constraint.  The bounds ``lb``/``ub`` are not the node's: the solvers read them from the models.
 
 A constraint qualifies when it is a ``ConstraintModelResidual`` (exact class: a subclass may override ``calc``) whose
-residual is of a compiled kind other than a user's (``ResidualModelNumba``); at the terminal node its residual must
-not read the control or the contact forces.  A manager whose data was made for another active set (the Python path
-raises there, naming it) keeps the node on the Python path.
+residual is of a compiled kind other than a user's (``ResidualModelNumba``): state, control, frame placement,
+translation, rotation, velocity, centre of mass, and the friction and wrench cones of an active contact; at the
+terminal node its residual must not read the control or the contact forces.  A manager whose data was made for
+another active set (the Python path raises there, naming it) keeps the node on the Python path.
 """
 
 from __future__ import annotations
@@ -52,9 +53,10 @@ class ConstraintRows:
         self.residuals: list = []
         """``(kind, residual)`` of each item, in item order (their parameters follow the cost items')."""
 
-    def read(self, manager, terminal: bool, kind_of, offset: int, parameters) -> str | None:
+    def read(self, manager, terminal: bool, kind_of, offset: int, parameters, contact_rows: dict) -> str | None:
         """Read ``manager`` (or None) of a node (``terminal`` or not): items, parameters from ``offset`` on in ``par``
-        (``parameters(kind, residual)`` their values, ``kind_of(residual)`` the kernel's kind or None); returns
+        (``parameters(kind, residual)`` their values, ``kind_of(residual)`` the kernel's kind or None; a cone's
+        contact by its frame in ``contact_rows``: ``frame -> (first row, rows)`` of the active contacts); returns
         None, or why the node cannot compile (:mod:`crocopy.not_compiled`)."""
         items, residuals, program, row, control_rows = [], [], [], 0, []
         for item in ([] if manager is None else manager.constraints.values()):
@@ -69,10 +71,13 @@ class ConstraintRows:
                 return class_reason(residual, "constraint residual")
             if terminal and kind not in TERMINAL_KINDS:
                 return class_reason(residual, "constraint residual") + " at the terminal node"
-            if kind == table.CONE:
-                return class_reason(residual, "constraint residual")
             nr = residual.nr
             frame, reference = getattr(residual, "id", 0), int(residual.type) if kind == table.VELOCITY else 0
+            if kind == table.CONE:
+                first, nc = contact_rows.get(frame, (0, 0))
+                if nc < residual.ncf:
+                    return "cone constraint without its active contact"
+                frame, reference = first, residual.ncf
             items += [kind, row, nr, frame, reference, offset, 0, 0, 0, 0]
             residuals.append((kind, residual))
             program += [int(constraint.nh > 0), row, nr]

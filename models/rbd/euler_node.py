@@ -309,7 +309,7 @@ class EulerNode:
             offset += len(self._parameters(kind, residual))
         manager = self.model.differential.constraints
         why = ConstraintRows.sized(manager, self._data(), ddata) or self.rows.read(
-            manager, self.terminal, residual_kind, offset, self._parameters)
+            manager, self.terminal, residual_kind, offset, self._parameters, self.contacts.rows)
         if why is not None:
             return why
         self._items, self._residuals = items, residuals + self.rows.residuals
