@@ -392,3 +392,17 @@ def test_equality_solvers_take_compiled_nodes_with_rows(name):
         assert iters == results[0][0] > 0
         assert cost == pytest.approx(results[0][1], rel=1e-9)
     np.testing.assert_allclose(results[0][2], 0.3, atol=1e-6)
+
+
+def test_two_threads_give_one_threads_rows_and_solve():
+    """Each node fills its own constraint table from the table of the thread evaluating it: bit-identical solves."""
+    results = []
+    for nthreads in (1, 2):
+        problem = arm_problem()
+        problem.nthreads = nthreads
+        solver = crocopy.SolverCSQP(problem)
+        solver.termination_tolerance = 2e-3
+        solver.solve([problem.x0] * (problem.T + 1), [np.zeros(m.nu) for m in problem.runningModels], 10)
+        results.append((solver.iter, solver.cost, np.array([d.g.copy() for d in problem.runningDatas])))
+    assert results[0][0] == results[1][0] and results[0][1] == results[1][1]
+    np.testing.assert_array_equal(results[0][2], results[1][2])

@@ -118,13 +118,21 @@ def entry_shapes(entries: tuple, sizes: dict[str, int]) -> list[tuple[int, ...]]
     that depend on ``u`` ``nr_u``, items ``n_stack``; contact rows ``nc`` and contacts ``n_contacts``; the users'
     kinematics ``n_kin`` and their largest ``u`` rows ``nr_user``, at least 1; the constraint rows ``ng``, ``nh``,
     their residual rows ``nrc``, the lengths ``n_tbl``, ``n_c_ints``, ``n_c_rows`` of the constraint table, integers
-    and program; ``ncm = max(nc, 1)`` is added): an expression is evaluated over those names."""
-    names = {**sizes, "ncm": max(sizes.get("nc", 0), 1)}
-    return [tuple(_size(d, names) for d in e.shape) for e in entries]
+    and program; ``ncm = max(nc, 1)`` is added): an expression is evaluated over those names.  The shapes are kept
+    per declaration and sizes (the nodes of a problem mostly share theirs)."""
+    key = (entries, tuple(sorted(sizes.items())))
+    if key not in _SHAPES:
+        if len(_SHAPES) > 256:
+            _SHAPES.clear()
+        names = {**sizes, "ncm": max(sizes.get("nc", 0), 1)}
+        _SHAPES[key] = [tuple(_size(d, names) for d in e.shape) for e in entries]
+    return _SHAPES[key]
 
 
 _EXPRESSIONS: dict[str, object] = {}
 """Each size expression compiled once."""
+_SHAPES: dict[tuple, list] = {}
+"""The shapes of a declaration for given sizes."""
 
 
 def _size(d: int | str, names: dict[str, int]) -> int:
