@@ -406,3 +406,41 @@ def test_two_threads_give_one_threads_rows_and_solve():
         results.append((solver.iter, solver.cost, np.array([d.g.copy() for d in problem.runningDatas])))
     assert results[0][0] == results[1][0] and results[0][1] == results[1][1]
     np.testing.assert_array_equal(results[0][2], results[1][2])
+
+
+@pytest.mark.parametrize("manager_nu", [0, 12])
+def test_impulse_rows_equal_the_python_node(manager_nu):
+    """An impulse node's manager: every active constraint when its ``nu`` is 0, else the ``T_constraint`` ones (as
+    the Python model evaluates it)."""
+    from test_impulse_node import impulse_model
+
+    model = impulse_model("anymal-lwa")
+    state = model.state
+    foot = state.pinocchio.getFrameId("LF_FOOT")
+    manager = crocopy.ConstraintModelManager(state, manager_nu)
+    manager.addConstraint("com", crocopy.ConstraintModelResidual(
+        state, crocopy.ResidualModelCoMPosition(state, np.array([0.0, 0.0, 0.4]), manager_nu)))
+    manager.addConstraint("foot", _constraint(
+        state, crocopy.ResidualModelFrameTranslation(state, foot, np.array([0.3, 0.2, 0.0]), manager_nu), "g"))
+    manager.addConstraint("x", _constraint(state, crocopy.ResidualModelState(state, state.zero(), manager_nu), "g",
+                                           False))
+    constrained = crocopy.ActionModelImpulseFwdDynamics(state, model.impulses, model.costs, manager)
+    rng = np.random.default_rng(2)
+    x = state.integrate(state.zero(), 0.2 * rng.standard_normal(state.ndx))
+    fast, slow = constrained.createData(), constrained.createData()
+    evaluator = constrained._compiled_node(fast, False, {})
+    assert evaluator is not None
+    for step in ("calcDiff", "calc"):
+        fast.g[:], fast.h[:] = np.nan, np.nan
+        if step == "calcDiff":
+            evaluator.calcDiff(x, np.zeros(0), False)
+            constrained.calc(slow, x, np.zeros(0))
+            constrained.calcDiff(slow, x, np.zeros(0))
+        else:
+            evaluator.calc(x, np.zeros(0))
+        for name in ROW_FIELDS if step == "calcDiff" else ("g", "h"):
+            a, b = getattr(fast, name), getattr(slow, name)
+            np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-9 * max(1.0, np.abs(b).max(initial=0.0)),
+                                       err_msg=f"{step} {name}")
+    rows = state.ndx if manager_nu == 0 else 0
+    assert np.count_nonzero(fast.g[3 + rows:]) == 0 and np.abs(fast.g[:3 + rows]).max() > 0

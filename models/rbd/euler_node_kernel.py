@@ -559,6 +559,6 @@ def node_calc_diff(tbl, ints, par, x, u):
 
 
 
-residual_rows, residual_jacobians = _residuals, _jacobians
+residual_rows, residual_jacobians, constraint_values = _residuals, _jacobians, _constraints
 """The cost stack's residual rows and their ``Jx`` rows of a node's table (:func:`_residuals`, :func:`_jacobians`),
-for the other compiled nodes (:mod:`.impulse_node_kernel`)."""
+and its constraint rows (:func:`_constraints`), for the other compiled nodes (:mod:`.impulse_node_kernel`)."""

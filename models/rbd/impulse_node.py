@@ -4,8 +4,10 @@
 ``calc``/``calcDiff`` the kernels of :mod:`.impulse_node_kernel` can do.  A node qualifies when, on the exact
 classes (a subclass may override a step):
 
-* the model is ``ActionModelImpulseFwdDynamics`` without constraints, on a ``StateMultibody`` whose Pinocchio model
-  lowers (:func:`.lowering.lower_model`);
+* the model is ``ActionModelImpulseFwdDynamics`` on a ``StateMultibody`` whose Pinocchio model lowers
+  (:func:`.lowering.lower_model`), with no constraint manager or one whose active constraints
+  :mod:`.constraint_rows` lowers with residuals of the kinds below (all of them when the manager has ``nu = 0``,
+  else the ``T_constraint`` ones, as the Python model evaluates them);
 * its active impulses are ``ImpulseModel3D``/``ImpulseModel6D`` (any reference frame; ``WORLD`` is read as
   ``LOCAL_WORLD_ALIGNED``, as the impulses do) on distinct joints, or with a positive ``JMinvJt_damping`` (else
   the Python model takes its least-squares path, which the kernels do not implement);
@@ -56,8 +58,6 @@ _NODES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 def impulse_node(model, data, terminal: bool, memo: dict) -> ImpulseNode | None:
     """The refreshed evaluator of the impulse node ``(model, data)``, or None if it does not qualify (the reason
     recorded in ``memo``, :mod:`crocopy.not_compiled`; the caller has checked the model's own class)."""
-    if model.constraints is not None:
-        return decline(memo, "constraint manager")
     if type(model.state) is not StateMultibody:
         return decline(memo, class_reason(model.state, "state"))
     impulses = [m for _, m in model.impulses._active]
@@ -114,7 +114,6 @@ class ImpulseNode:
                     "user_Ru": np.zeros((1, 0))}
         """The table's entries the impulse node does not use or keeps for itself (``dFx``: ``∂v⁺/∂x``)."""
         self.rows = ConstraintRows(0, ndx)
-        """No constraint rows (a node with constraints is declined)."""
         self.no_control = np.zeros(0)
         self._items: list | None = None
         self._residuals: list = []
@@ -173,7 +172,16 @@ class ImpulseNode:
                       0, 0, 0, 0]
             residuals.append(residual)
             offset += len(residual.compiled_parameters())
-        self._items, self._residuals = items, residuals
+        manager = self.model.constraints
+        why = ConstraintRows.sized(manager, data, data) or self.rows.read(
+            manager, manager is not None and manager.nu != 0, residual_kind, offset,
+            lambda kind, residual: residual.compiled_parameters(), {})
+        if why is not None:
+            return why
+        other = next((r for kind, r in self.rows.residuals if kind not in KINDS), None)
+        if other is not None:
+            return class_reason(other, "constraint residual") + " in an impulse node"
+        self._items, self._residuals = items, residuals + [r for _, r in self.rows.residuals]
         return None
 
     def _table(self, low: Lowered, data, stack, changed: bool) -> None:
@@ -189,6 +197,9 @@ class ImpulseNode:
             "weights": stack.weights, "Ar": stack.Ar, "Arr": stack.Arr, "Jx": stack.Jx, "Jc": stack.Jc,
             "HJx": stack.HJx, **u_part, **self.own, **self.rows.fields(data, data),
         }
+        n = table.NODE + len(table.NODE_ARRAYS) + len(table.SCRATCH_ARRAYS)
+        self.rows.allocate(n, table.SHAPES + 3 * n + len(self._items) + len(stack.starts) + len(self.impulses))
+        fields.update(self.rows.arrays)
         scratch_entries = low.scratch(0, self.nc)[1]
         arrays = [fields[e.name] for e in table.NODE_ARRAYS]
         known = self._data_arrays
@@ -225,6 +236,7 @@ class ImpulseNode:
         self.ints = np.concatenate([header, shapes, np.array(items, dtype=np.int64),
                                     np.asarray(stack.starts, dtype=np.int64), np.array(self.impulses, dtype=np.int64)])
         self.tbl = addresses
+        self.rows.constraint_ints(self.ints)
         self._lowered = low
 
     def calc(self, x: np.ndarray, u: np.ndarray | None) -> None:
