@@ -29,11 +29,18 @@ TERMINAL_KINDS = (table.STATE, table.PLACEMENT, table.TRANSLATION, table.ROTATIO
 """The residual kinds a terminal node's constraints may have (neither the control nor the contact forces)."""
 
 
+_EMPTY: dict[tuple[int, int], dict[str, np.ndarray]] = {}
+"""The constraint arrays without rows of the nodes of ``(nu, ndx)`` (empty, so shared: nothing is ever written)."""
+
+
 def _empty(nu: int, ndx: int) -> dict[str, np.ndarray]:
-    """The node's constraint arrays without rows."""
-    return {"c_tbl": np.zeros(0, dtype=np.int64), "c_ints": np.zeros(0, dtype=np.int64),
-            "c_rows": np.zeros(0, dtype=np.int64), "cr": np.zeros(0), "cJx": np.zeros((0, ndx)),
-            "cJu": np.zeros((0, nu))}
+    """The node's constraint arrays without rows (a new dict of the shared empty arrays)."""
+    key = (nu, ndx)
+    if key not in _EMPTY:
+        _EMPTY[key] = {"c_tbl": np.zeros(0, dtype=np.int64), "c_ints": np.zeros(0, dtype=np.int64),
+                       "c_rows": np.zeros(0, dtype=np.int64), "cr": np.zeros(0), "cJx": np.zeros((0, ndx)),
+                       "cJu": np.zeros((0, nu))}
+    return dict(_EMPTY[key])
 
 
 class ConstraintRows:
