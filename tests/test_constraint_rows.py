@@ -444,3 +444,23 @@ def test_impulse_rows_equal_the_python_node(manager_nu):
                                        err_msg=f"{step} {name}")
     rows = state.ndx if manager_nu == 0 else 0
     assert np.count_nonzero(fast.g[3 + rows:]) == 0 and np.abs(fast.g[:3 + rows]).max() > 0
+
+
+@pytest.mark.parametrize("terminal", [False, True])
+def test_user_numba_residual_rows_equal_the_python_node(terminal):
+    """A user's ``ResidualModelNumba`` as a constraint (an orientation equality and, on running nodes, a
+    velocity-and-control box whose ``Ru`` goes to ``Gu``) beside a built-in one."""
+    from test_residual_numba import UpAxis, VelocityControl
+
+    iam = arm_node(("translation",))
+    state, nu = iam.state, iam.nu
+    manager = iam.differential.constraints
+    fid = state.pinocchio.getFrameId(frame("kinova"))
+    manager.addConstraint("up", crocopy.ConstraintModelResidual(state, UpAxis(state, fid, nu)))
+    manager.addConstraint("vu", _constraint(state, VelocityControl(state, nu), "g"))
+    iam = crocopy.IntegratedActionModelEuler(iam.differential, 0.01)
+    x, u = random_point(iam, np.random.default_rng(9))
+    compare_rows(iam, x, u, terminal)
+    data = iam.createData()
+    iam._compiled_node(data, terminal, {}).calcDiff(x, None if terminal else u, False)
+    assert np.abs(data.Hx).max() > 0.1 and (terminal or np.abs(data.Gu).max() > 0.1)

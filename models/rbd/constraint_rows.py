@@ -10,9 +10,9 @@ residual item per constraint (the cost items' kinds and fields, :mod:`.node_tabl
 per constraint.  The bounds ``lb``/``ub`` are not the node's: the solvers read them from the models.
 
 A constraint qualifies when it is a ``ConstraintModelResidual`` (exact class: a subclass may override ``calc``) whose
-residual is of a compiled kind other than a user's (``ResidualModelNumba``): state, control, frame placement,
-translation, rotation, velocity, centre of mass, and the friction and wrench cones of an active contact; at the
-terminal node its residual must not read the control or the contact forces.  A manager whose data was made for
+residual is of a compiled kind: state, control, frame placement, translation, rotation, velocity, centre of mass, the
+friction and wrench cones of an active contact, a user's ``ResidualModelNumba``; at the terminal node its residual
+must not read the control (a user's gets an empty ``u``) or the contact forces.  A manager whose data was made for
 another active set (the Python path raises there, naming it) keeps the node on the Python path.
 """
 
@@ -25,8 +25,10 @@ from crocopy.not_compiled import class_reason
 
 from . import node_table as table
 
-TERMINAL_KINDS = (table.STATE, table.PLACEMENT, table.TRANSLATION, table.ROTATION, table.VELOCITY, table.COM)
-"""The residual kinds a terminal node's constraints may have (neither the control nor the contact forces)."""
+TERMINAL_KINDS = (table.STATE, table.PLACEMENT, table.TRANSLATION, table.ROTATION, table.VELOCITY, table.COM,
+                  table.USER)
+"""The residual kinds a terminal node's constraints may have (neither the control nor the contact forces; a user's
+residual is called with an empty ``u``, as in a terminal cost)."""
 
 
 _EMPTY: dict[tuple[int, int], dict[str, np.ndarray]] = {}
@@ -59,13 +61,15 @@ class ConstraintRows:
         self.items: list[int] = []
         self.residuals: list = []
         """``(kind, residual)`` of each item, in item order (their parameters follow the cost items')."""
+        self.user_rows = 0
+        """The rows of the largest user residual (``ResidualModelNumba``): the node's ``user_Ru`` holds as many."""
 
     def read(self, manager, terminal: bool, kind_of, offset: int, parameters, contact_rows: dict) -> str | None:
         """Read ``manager`` (or None) of a node (``terminal`` or not): items, parameters from ``offset`` on in ``par``
         (``parameters(kind, residual)`` their values, ``kind_of(residual)`` the kernel's kind or None; a cone's
         contact by its frame in ``contact_rows``: ``frame -> (first row, rows)`` of the active contacts); returns
         None, or why the node cannot compile (:mod:`crocopy.not_compiled`)."""
-        items, residuals, program, row, control_rows = [], [], [], 0, []
+        items, residuals, program, row, control_rows, self.user_rows = [], [], [], 0, [], 0
         for item in ([] if manager is None else manager.constraints.values()):
             constraint = item.constraint
             if not item.active or (terminal and not constraint.T_constraint):
@@ -74,18 +78,23 @@ class ConstraintRows:
                 return class_reason(constraint, "constraint")
             residual = constraint.residual
             kind = kind_of(residual)
-            if kind is None or kind == table.USER:
+            if kind is None:
                 return class_reason(residual, "constraint residual")
             if terminal and kind not in TERMINAL_KINDS:
                 return class_reason(residual, "constraint residual") + " at the terminal node"
             nr = residual.nr
             frame, reference = getattr(residual, "id", 0), int(residual.type) if kind == table.VELOCITY else 0
+            user = [0, 0, 0, 0]
+            if kind == table.USER:
+                frame, reference = residual.frame, int(residual.frame_reference)
+                user = [residual.flags, *residual.callbacks(), len(parameters(kind, residual))]
+                self.user_rows = max(self.user_rows, nr)
             if kind == table.CONE:
                 first, nc = contact_rows.get(frame, (0, 0))
                 if nc < residual.ncf:
                     return "cone constraint without its active contact"
                 frame, reference = first, residual.ncf
-            items += [kind, row, nr, frame, reference, offset, 0, 0, 0, 0]
+            items += [kind, row, nr, frame, reference, offset, *user]
             residuals.append((kind, residual))
             program += [int(constraint.nh > 0), row, nr]
             if kind == table.CONTROL:

@@ -315,6 +315,7 @@ class EulerNode:
         self._items, self._residuals = items, residuals + self.rows.residuals
         self._n_parameters = offset + sum(len(self._parameters(*r)) for r in self.rows.residuals)
         self.python = PythonResiduals(self.model.state.pinocchio, ddata.pinocchio, python)
+        rows_u = max(rows_u, self.rows.user_rows)
         if self.parameters["user_Ru"].shape[0] < rows_u:
             self.parameters["user_Ru"] = np.zeros((rows_u, self.model.nu))
         return None

@@ -175,7 +175,7 @@ class ImpulseNode:
         manager = self.model.constraints
         why = ConstraintRows.sized(manager, data, data) or self.rows.read(
             manager, manager is not None and manager.nu != 0, residual_kind, offset,
-            lambda kind, residual: residual.compiled_parameters(), {})
+            lambda kind, residual: residual.compiled_parameters() if kind in KINDS else [], {})
         if why is not None:
             return why
         other = next((r for kind, r in self.rows.residuals if kind not in KINDS), None)
