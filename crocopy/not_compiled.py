@@ -2,8 +2,9 @@
 
 A node's compiled evaluator is offered by ``model._compiled_node(data, terminal, memo)``
 (:mod:`crocopy.solvers.compiled_nodes`), which returns None when the node does not qualify.  Every such return
-goes through :func:`decline`, which writes a short reason (``"constraint manager"``, ``"contact ContactModel1D"``,
-``"residual ResidualModelContactForce"``, ``"user Python subclass: actuation MyActuation"``, ...) into the solve's
+goes through :func:`decline`, which writes a short reason (``"constraint residual ResidualModelControlGrav"``,
+``"contact ContactModel1D"``, ``"residual ResidualModelContactForce"``, ``"user Python subclass: actuation
+MyActuation"``, ...) into the solve's
 ``memo`` under :data:`REASON`: :func:`crocopy.solvers.coverage.compiled_coverage` reads it there, so the coverage
 it reports is the very decision a solve makes, never a second copy of the rules.
 """

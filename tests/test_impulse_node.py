@@ -148,8 +148,11 @@ def test_the_nodes_it_declines_say_why():
     other = crocopy.ActionModelImpulseFwdDynamics(state, model.impulses, costs, inv_damping=1e-3)
     assert _declined(other) == "residual ResidualModelImpulseCoM in an impulse node"
     manager = crocopy.ConstraintModelManager(state, 0)
-    constrained = crocopy.ActionModelImpulseFwdDynamics(state, model.impulses, model.costs, manager)
-    assert _declined(constrained) == "constraint manager"
+    constrained = crocopy.ActionModelImpulseFwdDynamics(state, model.impulses, model.costs, manager, inv_damping=1e-3)
+    assert constrained._compiled_node(constrained.createData(), False, {}) is not None  # no rows: compiles
+    manager.addConstraint("com", crocopy.ConstraintModelResidual(state, crocopy.ResidualModelImpulseCoM(state)))
+    constrained = crocopy.ActionModelImpulseFwdDynamics(state, model.impulses, model.costs, manager, inv_damping=1e-3)
+    assert _declined(constrained) == "constraint residual ResidualModelImpulseCoM"
 
     class UserImpulse(crocopy.ActionModelImpulseFwdDynamics):
         pass

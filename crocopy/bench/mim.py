@@ -259,6 +259,6 @@ def run_vs_mim(problems: list[str] | None = None, progress=None, repeats: int = 
                          f"{r['ms_per_iter']:.2f} ({lo:.2f}-{hi:.2f}) | {versus} |")
     header = ("## crocopy vs mim-solvers (SolverSQP / SolverCSQP)\n\nFrom `x0` at every node and zero controls, "
               f"one thread, at most 200 iterations, {repeats} solves per library and case. crocopy's ADMM "
-              "iterations and the SQP glue are compiled; nodes whose constraint manager has an active row are "
-              "evaluated in Python (compiled nodes take the others).\n")
+              "iterations and the SQP glue are compiled; so are the nodes, their constraint managers' rows "
+              "included.\n")
     return header + "\n" + "\n".join(lines) + "\n"

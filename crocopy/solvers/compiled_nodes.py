@@ -27,7 +27,8 @@ that has re-read the model's parameters (references, weights, time step) and has
 or ``None`` (models without the method, or nodes it cannot compile).  ``terminal`` tells whether the node is the
 problem's terminal node; ``memo`` is a dictionary shared by the nodes of one solve (for what they
 derive once from shared models).  Today the Euler-integrated free and contact forward dynamics of
-a multibody system with residual costs have one (:mod:`crocopy.models.rbd.euler_node`).
+a multibody system with residual costs have one (:mod:`crocopy.models.rbd.euler_node`), which also writes the
+constraint rows ``g, Gx, Gu, h, Hx, Hu`` of its constraint manager (:mod:`crocopy.models.rbd.constraint_rows`).
 
 Inside ``solve`` those evaluators replace ``model.calc``/``model.calcDiff`` in the derivatives and the
 rollout.  They write the action data fields above, and the arrays the nested datas share with them (the
@@ -38,8 +39,8 @@ a solve without compiled nodes leaves them; the derivatives are, as without comp
 the iterate the last direction was computed at, except the Pinocchio data's derivative fields and the
 residuals' private intermediates (frame Jacobians), which compiled nodes do not write.  The compiled
 nodes are used only while :func:`crocopy.kernels_enabled`, by the solver classes that declare
-``_nodes_compiled = True`` in their own body (DDP, FDDP, Box-DDP, Box-FDDP, SQP, CSQP; a subclass may read nested
-datas mid-solve, so it opts in explicitly), and when every callback is one of crocopy's (a user
+``_nodes_compiled = True`` in their own body (DDP, FDDP, Box-DDP, Box-FDDP, SQP, CSQP, Intro, projection; a subclass
+may read nested datas mid-solve, so it opts in explicitly), and when every callback is one of crocopy's (a user
 callback may read nested datas).
 """
 

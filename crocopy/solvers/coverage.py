@@ -1,14 +1,17 @@
 """Which nodes of a shooting problem a solve evaluates as compiled nodes, and why the others are not.
 
 :func:`compiled_coverage` asks every node for its compiled evaluator exactly as a solve of the DDP family does at
-its start (:func:`crocopy.solvers.compiled_nodes.select`: ``model._compiled_node(data, terminal, memo)``, one
-``memo`` for the problem) and reads the reason a declined node recorded (:mod:`crocopy.not_compiled`), so the
+its start (the datas a changed item set made stale made again, ``problem.refresh_datas()``, then
+:func:`crocopy.solvers.compiled_nodes.select`: ``model._compiled_node(data, terminal, memo)``, one ``memo`` for the
+problem) and reads the reason a declined node recorded (:mod:`crocopy.not_compiled`), so the
 report and the solver cannot disagree.  A model class that offers no evaluator at all is named by what it is
 (``"RK4 integrator"``, ``"action ActionModelUnicycle"``,
 ``"user Python subclass: action MyModel"``).
 
 What the report leaves out is the solve-wide switch (:mod:`crocopy.solvers.compiled_nodes`): compiled nodes are
-used only while :func:`crocopy.kernels_enabled`, by DDP, FDDP, Box-DDP and Box-FDDP, with crocopy's callbacks.
+used only while :func:`crocopy.kernels_enabled`, by DDP, FDDP, Box-DDP, Box-FDDP, SQP and CSQP, with crocopy's
+callbacks.  A node with a constraint manager is compiled when its constraints lower
+(:mod:`crocopy.models.rbd.constraint_rows`), its rows then written by the compiled call.
 """
 
 from __future__ import annotations
@@ -48,6 +51,7 @@ def compiled_coverage(problem) -> list[NodeCoverage]:
     """
     if not isinstance(problem, ShootingProblem):
         raise TypeError(f"problem must be a ShootingProblem, got {type(problem).__name__}")
+    problem.refresh_datas()
     memo: dict = {}
     nodes = [*zip(problem.runningModels, problem.runningDatas), (problem.terminalModel, problem.terminalData)]
     out = []

@@ -94,8 +94,7 @@ class SolverCSQP(SolverSQP):
     ``dx_tilde``, ``du_tilde``, ``lag_mul``, ``y``, ``z``, ``rho_vec``, ``max_solve_time_reached``.
     """
 
-    # Compiled nodes evaluate only nodes without constraints (a node with a constraint manager keeps its Python
-    # path), so the rows CSQP reads are always written by the models themselves.
+    # Compiled nodes write the rows CSQP reads (g, h and their Jacobians in the action datas: constraint_rows.py).
     _nodes_compiled = True
 
     def __init__(self, problem: ShootingProblem) -> None:

@@ -149,6 +149,8 @@ class SolverIntro(SolverFDDP):
         crocopy's: relative pivot threshold of the rank decisions (machine epsilon, times ``min(nh, nu)``).
     """
 
+    _nodes_compiled = True  # reads only the action datas' values, derivatives and rows (compiled nodes write them)
+
     def __init__(self, problem: ShootingProblem) -> None:
         super().__init__(problem)
         self.eq_solver = EqualitySolverType.LuNull

@@ -52,6 +52,8 @@ class SolverProjection(SolverDDP):
         rank-deficient, have relative degree above one or over-constrain the controls.
     """
 
+    _nodes_compiled = True  # reads only the action datas' values, derivatives and rows (compiled nodes write them)
+
     def __init__(self, problem: ShootingProblem) -> None:
         super().__init__(problem)
         self.sigma = 10.0

@@ -5,8 +5,8 @@
 exact classes (a subclass may override a step, so it keeps the Python path):
 
 * ``IntegratedActionModelEuler`` with the identity control parametrization, over a
-  ``DifferentialActionModelFreeFwdDynamics`` or a ``DifferentialActionModelContactFwdDynamics`` without
-  constraint rows (no manager, or one with no active constraint), whose active contacts are
+  ``DifferentialActionModelFreeFwdDynamics`` or a ``DifferentialActionModelContactFwdDynamics`` (with a constraint
+  manager whose active constraints :mod:`.constraint_rows` lowers, or none), whose active contacts are
   ``ContactModel3D``/``ContactModel6D`` on distinct joints (or with a positive ``JMinvJt_damping``; see
   :mod:`.contact_lowering`);
 * its ``StateMultibody``'s Pinocchio model lowers (:func:`.lowering.lower_model`);
@@ -52,6 +52,7 @@ from ..state_multibody import StateMultibody
 from . import euler_node_kernel as kernel
 from . import horizon_kernel as horizons
 from . import node_table as table
+from .constraint_rows import ConstraintRows
 from .contact_lowering import ContactSet
 from .joint_types import NotLowerable
 from .lowering import RigidBodyModel, declaring, lower_model, make_workspace
@@ -189,8 +190,6 @@ def euler_node(iam, data, terminal: bool, memo: dict, contacts: list = ()) -> Eu
     None if the node does not qualify (the reason recorded in ``memo``, :mod:`crocopy.not_compiled`; the caller,
     the free or contact dynamics model, has checked its own class, the integrator's and the contacts')."""
     dam = iam.differential
-    if dam.constraints is not None and (dam.constraints.ng or dam.constraints.nh):
-        return decline(memo, "constraint manager")
     if type(dam.state) is not StateMultibody:
         return decline(memo, class_reason(dam.state, "state"))
     if type(dam.actuation) not in ACTUATIONS:
@@ -231,6 +230,7 @@ class EulerNode:
         self._data_entries = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
         self._residuals: list | None = None
         self._items: list = []
+        self.rows = ConstraintRows(iam.nu, iam.state.ndx)
         self.python = PythonResiduals(iam.state.pinocchio, data.differential.pinocchio, [])
         self._lowered: Lowered | None = None
         self._seen = -1
@@ -307,9 +307,15 @@ class EulerNode:
             items += [kind, rows.start, rows.stop - rows.start, frame, reference, offset, *user]
             residuals.append((kind, residual))
             offset += len(self._parameters(kind, residual))
-        self._items, self._residuals = items, residuals
-        self._n_parameters = offset
+        manager = self.model.differential.constraints
+        why = ConstraintRows.sized(manager, self._data(), ddata) or self.rows.read(
+            manager, self.terminal, residual_kind, offset, self._parameters, self.contacts.rows)
+        if why is not None:
+            return why
+        self._items, self._residuals = items, residuals + self.rows.residuals
+        self._n_parameters = offset + sum(len(self._parameters(*r)) for r in self.rows.residuals)
         self.python = PythonResiduals(self.model.state.pinocchio, ddata.pinocchio, python)
+        rows_u = max(rows_u, self.rows.user_rows)
         if self.parameters["user_Ru"].shape[0] < rows_u:
             self.parameters["user_Ru"] = np.zeros((rows_u, self.model.nu))
         return None
@@ -347,8 +353,11 @@ class EulerNode:
             "r": stack.r, "lb": stack.lb, "ub": stack.ub, "act_weights": stack.act_weights,
             "item_costs": stack.item_costs, "item_weights": stack.item_weights, "weights": stack.weights,
             "Ar": stack.Ar, "Arr": stack.Arr, "Jx": stack.Jx, "Ju": stack.Ju, "Jc": stack.Jc, "HJx": stack.HJx,
-            "Juc": stack.Juc, "HJu": stack.HJu, **self.parameters,
+            "Juc": stack.Juc, "HJu": stack.HJu, **self.parameters, **self.rows.fields(data, ddata),
         }
+        n = table.NODE + len(table.NODE_ARRAYS) + len(table.SCRATCH_ARRAYS)
+        self.rows.allocate(n, table.SHAPES + 3 * n + len(self._items) + len(stack.starts) + len(self.contacts.ints))
+        fields.update(self.rows.arrays)
         scratch, scratch_entries = low.scratch(self.model.nu, self.contacts.nc)
         self.shared_minv = not hasattr(ddata, "Minv")
         fields["Minv"] = scratch["Minv"] if self.shared_minv else ddata.Minv
@@ -359,7 +368,7 @@ class EulerNode:
             sizes = {"nx": state.nx, "ndx": state.ndx, "nv": state.nv, "nu": self.model.nu, "nr": stack.r.shape[0],
                      "nr_u": stack.r.shape[0] - stack.u_start, "n_stack": stack.item_costs.shape[0],
                      "n_contacts": len(self.contacts.models), "n_kin": kinematics_size(state.nv),
-                     "nr_user": self.parameters["user_Ru"].shape[0]}
+                     "nr_user": self.parameters["user_Ru"].shape[0], **self.rows.sizes(data)}
             table.check_arrays(table.NODE_ARRAYS, arrays, sizes)
             self._data_entries = table_entries(arrays)
             self._data_arrays = arrays
@@ -388,6 +397,7 @@ class EulerNode:
                                     np.asarray(stack.starts, dtype=np.int64),
                                     np.array(self.contacts.ints, dtype=np.int64)])
         self.tbl = addresses
+        self.rows.constraint_ints(self.ints)
         self._lowered = low
 
     def calc(self, x: np.ndarray, u: np.ndarray | None) -> None:

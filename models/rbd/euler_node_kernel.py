@@ -32,6 +32,7 @@ from crocopy.kernels import (
 from crocopy.solvers.riccati_kernel import feedback_control
 
 from .com_kernel import center_of_mass
+from .constraint_rows_kernel import constraint_table, has_rows, stack_rows
 from .contact_kernel import (
     contact_calc,
     contact_calc_diff,
@@ -364,6 +365,18 @@ def _values(tbl, ints, par, x, u, rb, ws):
 
 
 @compiled
+def _constraints(tbl, ints, par, rb, ws, x, u, derivatives):
+    """The constraint manager's rows (:mod:`.constraint_rows_kernel`): its residuals by the cost items' kernels on the
+    node's constraint table, stacked into ``g``, ``h`` (and their Jacobians, if ``derivatives``)."""
+    ctbl, cints = constraint_table(tbl, ints)
+    if cints.shape[0]:
+        _residuals(ctbl, cints, par, rb, ws, x, u)
+        if derivatives:
+            _jacobians(ctbl, cints, par, rb, ws, x, u)
+    stack_rows(tbl, ints, derivatives)
+
+
+@compiled
 def _contact_dynamics(tbl, ints, par, rb, ws, tau, a):
     """The contacts' stacked ``Jc`` and drift, then ``a`` and ``λ`` of the contact dynamics (after the free
     :func:`~.dynamics_kernel.forward_dynamics` at the same state)."""
@@ -414,6 +427,8 @@ def node_calc(tbl, ints, par, x, u):
     _step(tbl, ints, par, x, rb)
     if _singular(tbl, ints):
         return math.nan
+    if has_rows(ints):
+        _constraints(tbl, ints, par, rb, ws, x, u, False)
     return cost if ints[TERMINAL] else par[0] * cost
 
 
@@ -512,6 +527,8 @@ def node_calc_diff(tbl, ints, par, x, u):
             for j in range(df_dx.shape[1]):
                 df_dx[i, j] = 0.0
     _jacobians(tbl, ints, par, rb, ws, x, u)
+    if has_rows(ints):
+        _constraints(tbl, ints, par, rb, ws, x, u, True)
     Lx, Lu, Lxx = vec(tbl, ints, E_LX), vec(tbl, ints, E_LU), mat(tbl, ints, E_LXX)
     Lxu, Luu = mat(tbl, ints, E_LXU), mat(tbl, ints, E_LUU)
     r, lb, ub, act_w = vec(tbl, ints, E_R), vec(tbl, ints, E_LB), vec(tbl, ints, E_UB), vec(tbl, ints, E_ACT_WEIGHTS)
@@ -542,6 +559,6 @@ def node_calc_diff(tbl, ints, par, x, u):
 
 
 
-residual_rows, residual_jacobians = _residuals, _jacobians
+residual_rows, residual_jacobians, constraint_values = _residuals, _jacobians, _constraints
 """The cost stack's residual rows and their ``Jx`` rows of a node's table (:func:`_residuals`, :func:`_jacobians`),
-for the other compiled nodes (:mod:`.impulse_node_kernel`)."""
+and its constraint rows (:func:`_constraints`), for the other compiled nodes (:mod:`.impulse_node_kernel`)."""

@@ -4,8 +4,10 @@
 ``calc``/``calcDiff`` the kernels of :mod:`.impulse_node_kernel` can do.  A node qualifies when, on the exact
 classes (a subclass may override a step):
 
-* the model is ``ActionModelImpulseFwdDynamics`` without constraints, on a ``StateMultibody`` whose Pinocchio model
-  lowers (:func:`.lowering.lower_model`);
+* the model is ``ActionModelImpulseFwdDynamics`` on a ``StateMultibody`` whose Pinocchio model lowers
+  (:func:`.lowering.lower_model`), with no constraint manager or one whose active constraints
+  :mod:`.constraint_rows` lowers with residuals of the kinds below (all of them when the manager has ``nu = 0``,
+  else the ``T_constraint`` ones, as the Python model evaluates them);
 * its active impulses are ``ImpulseModel3D``/``ImpulseModel6D`` (any reference frame; ``WORLD`` is read as
   ``LOCAL_WORLD_ALIGNED``, as the impulses do) on distinct joints, or with a positive ``JMinvJt_damping`` (else
   the Python model takes its least-squares path, which the kernels do not implement);
@@ -37,6 +39,7 @@ from ..impulses import ImpulseModel3D, ImpulseModel6D
 from ..state_multibody import StateMultibody
 from . import impulse_node_kernel as kernel
 from . import node_table as table
+from .constraint_rows import ConstraintRows
 from .euler_node import Lowered, generic_reason, lowered, residual_kind, table_entries
 from .joint_types import NotLowerable
 from .lowering import RigidBodyModel
@@ -55,8 +58,6 @@ _NODES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 def impulse_node(model, data, terminal: bool, memo: dict) -> ImpulseNode | None:
     """The refreshed evaluator of the impulse node ``(model, data)``, or None if it does not qualify (the reason
     recorded in ``memo``, :mod:`crocopy.not_compiled`; the caller has checked the model's own class)."""
-    if model.constraints is not None:
-        return decline(memo, "constraint manager")
     if type(model.state) is not StateMultibody:
         return decline(memo, class_reason(model.state, "state"))
     impulses = [m for _, m in model.impulses._active]
@@ -112,6 +113,7 @@ class ImpulseNode:
                     "ref_p": np.zeros((n, 3)), "kin": np.zeros(1), "user_dims": np.zeros(5, dtype=np.int64),
                     "user_Ru": np.zeros((1, 0))}
         """The table's entries the impulse node does not use or keeps for itself (``dFx``: ``∂v⁺/∂x``)."""
+        self.rows = ConstraintRows(0, ndx)
         self.no_control = np.zeros(0)
         self._items: list | None = None
         self._residuals: list = []
@@ -170,7 +172,16 @@ class ImpulseNode:
                       0, 0, 0, 0]
             residuals.append(residual)
             offset += len(residual.compiled_parameters())
-        self._items, self._residuals = items, residuals
+        manager = self.model.constraints
+        why = ConstraintRows.sized(manager, data, data) or self.rows.read(
+            manager, manager is not None and manager.nu != 0, residual_kind, offset,
+            lambda kind, residual: residual.compiled_parameters() if kind in KINDS else [], {})
+        if why is not None:
+            return why
+        other = next((r for kind, r in self.rows.residuals if kind not in KINDS), None)
+        if other is not None:
+            return class_reason(other, "constraint residual") + " in an impulse node"
+        self._items, self._residuals = items, residuals + [r for _, r in self.rows.residuals]
         return None
 
     def _table(self, low: Lowered, data, stack, changed: bool) -> None:
@@ -184,8 +195,11 @@ class ImpulseNode:
             "Lxu": data.Lxu, "Luu": data.Luu, "r": stack.r, "lb": stack.lb, "ub": stack.ub,
             "act_weights": stack.act_weights, "item_costs": stack.item_costs, "item_weights": stack.item_weights,
             "weights": stack.weights, "Ar": stack.Ar, "Arr": stack.Arr, "Jx": stack.Jx, "Jc": stack.Jc,
-            "HJx": stack.HJx, **u_part, **self.own,
+            "HJx": stack.HJx, **u_part, **self.own, **self.rows.fields(data, data),
         }
+        n = table.NODE + len(table.NODE_ARRAYS) + len(table.SCRATCH_ARRAYS)
+        self.rows.allocate(n, table.SHAPES + 3 * n + len(self._items) + len(stack.starts) + len(self.impulses))
+        fields.update(self.rows.arrays)
         scratch_entries = low.scratch(0, self.nc)[1]
         arrays = [fields[e.name] for e in table.NODE_ARRAYS]
         known = self._data_arrays
@@ -193,7 +207,8 @@ class ImpulseNode:
             state = self.model.state
             sizes = {"nx": state.nx, "ndx": state.ndx, "nv": state.nv, "nu": 0, "nr": stack.r.shape[0],
                      "nr_u": stack.r.shape[0] - stack.u_start, "n_stack": stack.item_costs.shape[0],
-                     "n_contacts": len(self.impulses) // table.CONTACT_FIELDS, "n_kin": 1, "nr_user": 1}
+                     "n_contacts": len(self.impulses) // table.CONTACT_FIELDS, "n_kin": 1, "nr_user": 1,
+                     **self.rows.sizes(data)}
             table.check_arrays(table.NODE_ARRAYS, arrays, sizes)
             self._data_entries = table_entries(arrays)
             self._data_arrays = arrays
@@ -221,6 +236,7 @@ class ImpulseNode:
         self.ints = np.concatenate([header, shapes, np.array(items, dtype=np.int64),
                                     np.asarray(stack.starts, dtype=np.int64), np.array(self.impulses, dtype=np.int64)])
         self.tbl = addresses
+        self.rows.constraint_ints(self.ints)
         self._lowered = low
 
     def calc(self, x: np.ndarray, u: np.ndarray | None) -> None:

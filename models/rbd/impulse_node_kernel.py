@@ -30,6 +30,7 @@ from crocopy.costs.stack_kernel import activation_values, derivatives_and_sums
 from crocopy.kernels import compiled
 from crocopy.solvers.riccati_kernel import cholesky_solve
 
+from .constraint_rows_kernel import has_rows
 from .contact_kernel import contact_dynamics_derivatives, contact_force_derivatives, schur_factor
 from .dynamics_kernel import (
     dynamics_derivatives,
@@ -39,7 +40,7 @@ from .dynamics_kernel import (
     frame_velocity,
     frame_velocity_derivatives,
 )
-from .euler_node_kernel import residual_jacobians, residual_rows
+from .euler_node_kernel import constraint_values, residual_jacobians, residual_rows
 from .node_table import (
     E_A,
     E_ACT_WEIGHTS,
@@ -155,8 +156,12 @@ def _values(tbl, ints, par, x, u, rb, ws):
 
 @compiled
 def impulse_calc(tbl, ints, par, x, u):
-    """``xnext`` of the impulse node at ``x`` (``u`` has no entries); returns its cost."""
-    return _values(tbl, ints, par, x, u, entry_model(tbl, ints), entry_workspace(tbl, ints))
+    """``xnext`` of the impulse node at ``x`` (``u`` has no entries) and its constraint rows; returns its cost."""
+    rb, ws = entry_model(tbl, ints), entry_workspace(tbl, ints)
+    cost = _values(tbl, ints, par, x, u, rb, ws)
+    if has_rows(ints):
+        constraint_values(tbl, ints, par, rb, ws, x, u, False)
+    return cost
 
 
 @compiled
@@ -219,6 +224,8 @@ def impulse_calc_diff(tbl, ints, par, x, u):
     rb, ws = entry_model(tbl, ints), entry_workspace(tbl, ints)
     cost = _values(tbl, ints, par, x, u, rb, ws)
     residual_jacobians(tbl, ints, par, rb, ws, x, u)
+    if has_rows(ints):
+        constraint_values(tbl, ints, par, rb, ws, x, u, True)
     r, lb, ub, act_w = vec(tbl, ints, E_R), vec(tbl, ints, E_LB), vec(tbl, ints, E_UB), vec(tbl, ints, E_ACT_WEIGHTS)
     derivatives_and_sums(
         r, lb, ub, act_w, vec(tbl, ints, E_WEIGHTS), vec(tbl, ints, E_AR), vec(tbl, ints, E_ARR),

@@ -58,7 +58,7 @@ class Entry(NamedTuple):
 
 
 _DATA, _DIFF, _STACK, _NODE, _CONTACTS = "action data", "differential data", "cost stack", "node", "contact set"
-_SCRATCH, _CW = "scratch", "contact workspace"
+_SCRATCH, _CW, _ROWS = "scratch", "contact workspace", "constraint rows"
 
 NODE_ARRAYS = (
     Entry("xnext", ("nx",), _DATA), Entry("dx", ("ndx",), _DATA), Entry("Fx", ("ndx", "ndx"), _DATA),
@@ -77,9 +77,18 @@ NODE_ARRAYS = (
     Entry("ref_R", ("n_contacts", 3, 3), _CONTACTS), Entry("ref_p", ("n_contacts", 3), _CONTACTS),
     Entry("kin", ("n_kin",), _NODE), Entry("user_dims", (5,), _NODE, np.int64),
     Entry("user_Ru", ("nr_user", "nu"), _NODE),
+    Entry("c_tbl", ("n_tbl",), _ROWS, np.int64), Entry("c_ints", ("n_c_ints",), _ROWS, np.int64),
+    Entry("c_rows", ("n_c_rows",), _ROWS, np.int64), Entry("cr", ("nrc",), _ROWS),
+    Entry("cJx", ("nrc", "ndx"), _ROWS), Entry("cJu", ("nrc", "nu"), _ROWS),
+    Entry("g", ("ng",), _DATA), Entry("Gx", ("ng", "ndx"), _DATA), Entry("Gu", ("ng", "nu"), _DATA),
+    Entry("h", ("nh",), _DATA), Entry("Hx", ("nh", "ndx"), _DATA), Entry("Hu", ("nh", "nu"), _DATA),
+    Entry("dg", ("ng",), _DIFF), Entry("dGx", ("ng", "ndx"), _DIFF), Entry("dGu", ("ng", "nu"), _DIFF),
+    Entry("dh", ("nh",), _DIFF), Entry("dHx", ("nh", "ndx"), _DIFF), Entry("dHu", ("nh", "nu"), _DIFF),
 )
 """The node's own arrays (its data's, its differential data's, its cost stack's, its actuation matrix ``S`` and
-contacts, the kinematics its users' residuals read), in table order."""
+contacts, the kinematics its users' residuals read; its constraint manager's rows, :mod:`.constraint_rows`: the
+constraint table and program, the constraint residuals ``cr`` and Jacobians ``cJx``, ``cJu``, and the rows ``g``,
+``h`` and Jacobians of the action data and of the differential data), in table order."""
 SCRATCH_ARRAYS = (
     Entry("tau", ("nv",), _SCRATCH), Entry("dtau_dq", ("nv", "nv"), _SCRATCH),
     Entry("dtau_dv", ("nv", "nv"), _SCRATCH), Entry("J6", (6, "nv"), _SCRATCH), Entry("K6", (6, "nv"), _SCRATCH),
@@ -107,14 +116,23 @@ globals().update({"E_" + name.upper(): k for name, k in ENTRIES.items()})
 def entry_shapes(entries: tuple, sizes: dict[str, int]) -> list[tuple[int, ...]]:
     """The shapes of ``entries`` for a node of ``sizes`` (``nv, nx, ndx, nu``; the cost stack's rows ``nr``, rows
     that depend on ``u`` ``nr_u``, items ``n_stack``; contact rows ``nc`` and contacts ``n_contacts``; the users'
-    kinematics ``n_kin`` and their largest ``u`` rows ``nr_user``, at least 1; ``ncm = max(nc, 1)`` is added): an
-    expression is evaluated over those names."""
-    names = {**sizes, "ncm": max(sizes.get("nc", 0), 1)}
-    return [tuple(_size(d, names) for d in e.shape) for e in entries]
+    kinematics ``n_kin`` and their largest ``u`` rows ``nr_user``, at least 1; the constraint rows ``ng``, ``nh``,
+    their residual rows ``nrc``, the lengths ``n_tbl``, ``n_c_ints``, ``n_c_rows`` of the constraint table, integers
+    and program; ``ncm = max(nc, 1)`` is added): an expression is evaluated over those names.  The shapes are kept
+    per declaration and sizes (the nodes of a problem mostly share theirs)."""
+    key = (entries, tuple(sorted(sizes.items())))
+    if key not in _SHAPES:
+        if len(_SHAPES) > 256:
+            _SHAPES.clear()
+        names = {**sizes, "ncm": max(sizes.get("nc", 0), 1)}
+        _SHAPES[key] = [tuple(_size(d, names) for d in e.shape) for e in entries]
+    return _SHAPES[key]
 
 
 _EXPRESSIONS: dict[str, object] = {}
 """Each size expression compiled once."""
+_SHAPES: dict[tuple, list] = {}
+"""The shapes of a declaration for given sizes."""
 
 
 def _size(d: int | str, names: dict[str, int]) -> int:
