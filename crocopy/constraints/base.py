@@ -22,7 +22,7 @@ from ..guards import Guarded, point_control_guards
 from ..residuals.base import ResidualModelAbstract
 from ..state import StateAbstract
 from ..validation import as_vector, check_bounds
-from ..versioning import Parametrized
+from ..versioning import Parametrized, touch
 
 
 class ConstraintType(enum.IntEnum):
@@ -117,11 +117,13 @@ class ConstraintModelAbstract(Parametrized, Guarded):
         upper = as_vector(upper, self.ng, "upper", allow_nonfinite=True)
         check_bounds(lower, upper, "lower", "upper")
         self._lb, self._ub = lower.copy(), upper.copy()
+        touch(self)
 
     def removeBounds(self) -> None:
         """Make the inequality rows unbounded."""
         self._lb = np.full(self.ng, -np.inf)
         self._ub = np.full(self.ng, np.inf)
+        touch(self)
 
     def createData(self, data: DataCollectorAbstract | None = None) -> "ConstraintDataAbstract":
         """Allocate the data this constraint writes into (``data`` is the node's data collector)."""
