@@ -199,3 +199,61 @@ def test_csqp_with_compiled_nodes():
         assert converged and solver.constraint_norm < 1e-8
         runs.append((solver, converged, ""))
     _assert_same(*runs)
+
+
+def _quadrotor(python_nodes: tuple = (), nthreads: int = 1):
+    """quad-goal with ``python_nodes`` on the Python path (a subclass of the integrator), on ``nthreads``."""
+    from crocopy.problems import registry
+
+    problem, xs, us = registry.build("quad-goal")
+    models = list(problem.runningModels)
+
+    class Euler(crocopy.IntegratedActionModelEuler):
+        pass
+
+    for t in python_nodes:
+        models[t] = Euler(models[t].differential, models[t].dt)
+    problem = crocopy.ShootingProblem(problem.x0, models, problem.terminalModel)
+    problem.nthreads = nthreads
+    return problem, xs, us
+
+
+def _user_reach():
+    """A Kinova reach whose nodes have a Python residual (compiled nodes run it in Python around their call)."""
+    from crocopy.problems.user_residual import build_user_reach
+
+    return build_user_reach(crocopy, "python", robot="kinova", nodes=12)
+
+
+TRIALS = {"ranges": (lambda: _quadrotor((3, 17)), {0: 3, 4: 17, 18: 50}),
+          "first node in Python": (lambda: _quadrotor((0, 9)), {1: 9, 10: 50}),
+          "threads": (lambda: _quadrotor((5,), nthreads=2), {0: 5, 6: 50}),
+          "Python residuals": (_user_reach, {0: 12})}
+
+
+@pytest.mark.parametrize("case", TRIALS)
+def test_sqp_trial_over_compiled_ranges_equals_the_node_loop(case):
+    """SQP's trial point (``x ⊕ α δx``, the nodes, the gaps) over compiled ranges equals the node loop's."""
+    pytest.importorskip("pinocchio")
+    from crocopy.solvers import compiled_nodes
+
+    build, segments = TRIALS[case]
+    problem, xs, us = build()
+    solver = crocopy.SolverSQP(problem)
+    state = problem.runningModels[0].state
+    solver.setCandidate([state.integrate(xs[0], np.full(state.ndx, 0.01)), *xs[1:]], us, False)  # a gap at node 0
+    nodes = compiled_nodes.attach(solver)
+    assert nodes.segments == segments
+    solver.computeDirection()
+    assert max(np.abs(d).max() for d in solver.dx) > 1e-3  # a step that moves every part of the trial
+    for alpha in (1.0, 0.25):
+        solver._nodes = nodes
+        merit = solver.tryStep(alpha)
+        fast = [[v.copy() for v in vs] for vs in (solver.xs_try, solver.us_try, solver.fs_try)]
+        fast_norms = solver.cost_try, solver.gap_norm_try
+        solver._nodes = None
+        assert solver.tryStep(alpha) == pytest.approx(merit, rel=1e-9)
+        assert fast_norms == pytest.approx((solver.cost_try, solver.gap_norm_try), rel=1e-9)
+        for a_list, b_list in zip(fast, (solver.xs_try, solver.us_try, solver.fs_try)):
+            for a, b in zip(a_list, b_list):
+                np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-11)

@@ -287,27 +287,34 @@ class SolverSQP(SolverDDP):
     def tryStep(self, steplength: float = 1.0) -> float:
         """Evaluate the trial ``x ⊕ α δx``, ``u + α δu`` (``xs_try``, ``us_try``, ``cost_try``, ``fs_try``,
         ``gap_norm_try``) and return its merit."""
-        problem = self.problem
-        models = [*problem.runningModels, problem.terminalModel]
-        for t, m in enumerate(models):
-            m.state._integrate_into(self.xs[t], steplength * self.dx[t], self.xs_try[t])
-        for t, u in enumerate(self.us):
-            np.add(u, steplength * self.du[t], out=self.us_try[t])
         nodes = self._nodes
         if nodes is None:
-            self.cost_try = problem.calc(self.xs_try, self.us_try)
+            self._python_trial(steplength)
         else:
-            self.cost_try = nodes.calc(problem, self.xs_try, self.us_try)
+            self.cost_try = nodes.trial(self.problem, self.xs, self.us, self.dx, self.du, steplength,
+                                        (self.xs_try, self.us_try, self.fs_try), self._addresses(),
+                                        (*self._steps[:2], self._fs_try, self._scratch))
         fs_try = self.fs_try
-        fs_try[0][:] = models[0].state.diff(self.xs_try[0], problem.x0) if problem.T else 0.0
-        for t, (m, d) in enumerate(zip(problem.runningModels, problem.runningDatas)):
-            m.state._diff_into(self.xs_try[t + 1], d.xnext, fs_try[t + 1])
         if kernels.active:
             self.gap_norm_try = sqp_kernel.stack_l1(self._sqp_dims, self._fs_try)
         else:
             self.gap_norm_try = float(sum(np.abs(f).sum() for f in fs_try))
         self._after_trial()
         return self._trial_merit()
+
+    def _python_trial(self, steplength: float) -> None:
+        """The trial point node by node (without compiled nodes): ``xs_try``, ``us_try``, ``cost_try``, ``fs_try``."""
+        problem = self.problem
+        models = [*problem.runningModels, problem.terminalModel]
+        for t, m in enumerate(models):
+            m.state._integrate_into(self.xs[t], steplength * self.dx[t], self.xs_try[t])
+        for t, u in enumerate(self.us):
+            np.add(u, steplength * self.du[t], out=self.us_try[t])
+        self.cost_try = problem.calc(self.xs_try, self.us_try)
+        fs_try = self.fs_try
+        fs_try[0][:] = models[0].state.diff(self.xs_try[0], problem.x0) if problem.T else 0.0
+        for t, (m, d) in enumerate(zip(problem.runningModels, problem.runningDatas)):
+            m.state._diff_into(self.xs_try[t + 1], d.xnext, fs_try[t + 1])
 
     def _after_trial(self) -> None:
         """Hook: what a subclass measures at a trial point besides the cost and the gaps."""
