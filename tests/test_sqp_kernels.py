@@ -257,3 +257,22 @@ def test_sqp_trial_over_compiled_ranges_equals_the_node_loop(case):
         for a_list, b_list in zip(fast, (solver.xs_try, solver.us_try, solver.fs_try)):
             for a, b in zip(a_list, b_list):
                 np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-11)
+
+
+@pytest.mark.parametrize("kernels", [True, False], ids=["kernels", "python"])
+def test_solver_prepares_its_compiled_nodes_when_made(kernels):
+    """The node tables are made with the solver (with kernels on), and the solve uses those evaluators."""
+    pytest.importorskip("pinocchio")
+    from crocopy.models.rbd import euler_node
+    from crocopy.solvers import compiled_nodes
+
+    problem = _ur5_terminal_equality()
+    datas = problem.runningDatas
+    assert all(euler_node._NODES.get(d) is None for d in datas)
+    with crocopy.use_kernels(kernels):
+        solver = crocopy.SolverCSQP(problem)
+        made = [euler_node._NODES.get(d) for d in datas]
+        assert all(node is not None for node in made) == kernels and (kernels or not any(made))
+        if kernels:
+            assert [calc.__self__ for calc in compiled_nodes.select(solver).calcs[:-1]] == made
+        assert solver.solve([], [], 50) and solver.constraint_norm < 1e-8

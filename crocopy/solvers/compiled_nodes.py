@@ -45,6 +45,7 @@ callback may read nested datas).
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable
 from itertools import groupby, islice
 
@@ -258,3 +259,12 @@ def attach(solver) -> CompiledNodes | None:
     solver._nodes = select(solver)
     return solver._nodes
 
+
+
+def prepare(solver) -> None:
+    """Make the compiled evaluators of ``solver.problem``'s nodes now (their tables of addresses, checked), which the
+    first solve would otherwise make, as Crocoddyl's and mim-solvers' solvers allocate their workspace when they are
+    made.  Every solve still re-reads the models' parameters (:func:`select`).  An array a node cannot list
+    (ValueError) is left for the solve to report."""
+    with contextlib.suppress(ValueError):
+        select(solver)

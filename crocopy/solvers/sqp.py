@@ -25,7 +25,10 @@ mim-solvers (:class:`~crocopy.solvers.csqp.SolverCSQP` enforces them).
 
 ``dx``, ``du``, ``lag_mul`` and ``fs_try`` are views of padded stacks ``(T+1, max ndx)``/``(T+1, max nu)``; with
 kernels on, the linear rollout, the KKT measure and the gap norms run compiled on them
-(:mod:`.sqp_kernel`), the backward pass is the DDP family's compiled Riccati pass.
+(:mod:`.sqp_kernel`), the backward pass is the DDP family's compiled Riccati pass, and over compiled nodes
+(:mod:`.compiled_nodes`) each range of nodes evaluates its trial point (``x ⊕ α δx``, ``u + α δu``, the nodes, the
+trial gaps) in one call.  Those nodes' tables are made with the solver (:func:`.compiled_nodes.prepare`), as
+Crocoddyl's solvers allocate their workspace; each solve re-reads the models' parameters.
 """
 
 from __future__ import annotations
@@ -73,6 +76,7 @@ class SolverSQP(SolverDDP):
         self.gap_norm = 0.0
         self.gap_norm_try = 0.0
         self._allocate_sqp()
+        compiled_nodes.prepare(self)
 
     def _allocate_sqp(self) -> None:
         """The steps ``dx``, ``du``, the multipliers ``lag_mul`` and ``fs_try``: views of padded stacks
