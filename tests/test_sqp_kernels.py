@@ -261,7 +261,8 @@ def test_sqp_trial_over_compiled_ranges_equals_the_node_loop(case):
 
 @pytest.mark.parametrize("kernels", [True, False], ids=["kernels", "python"])
 def test_solver_prepares_its_compiled_nodes_when_made(kernels):
-    """The node tables are made with the solver (with kernels on), and the solve uses those evaluators."""
+    """The node tables and the addresses the kernels read are made with the solver (with kernels on), and the solve
+    uses those evaluators."""
     pytest.importorskip("pinocchio")
     from crocopy.models.rbd import euler_node
     from crocopy.solvers import compiled_nodes
@@ -273,6 +274,8 @@ def test_solver_prepares_its_compiled_nodes_when_made(kernels):
         solver = crocopy.SolverCSQP(problem)
         made = [euler_node._NODES.get(d) for d in datas]
         assert all(node is not None for node in made) == kernels and (kernels or not any(made))
+        assert (solver._trajectory_addresses is not None) == kernels
+        assert solver._derivatives.addr.shape[0] == (problem.T if kernels else 0)
         if kernels:
             assert [calc.__self__ for calc in compiled_nodes.select(solver).calcs[:-1]] == made
         assert solver.solve([], [], 50) and solver.constraint_norm < 1e-8
