@@ -279,3 +279,36 @@ def test_solver_prepares_its_compiled_nodes_when_made(kernels):
         if kernels:
             assert [calc.__self__ for calc in compiled_nodes.select(solver).calcs[:-1]] == made
         assert solver.solve([], [], 50) and solver.constraint_norm < 1e-8
+
+
+@pytest.mark.parametrize("interval", [1, 3])
+def test_admm_skips_a_refactorisation_only_when_rho_is_unchanged(interval):
+    """The compiled ADMM refactorises on schedule only when ``ρ̄`` changed since the last factorisation: its iterates
+    equal, to the last bit, those of the schedule run one iteration per call with every factorisation made."""
+    solver = crocopy.SolverCSQP(_boxed())
+    solver.eps_abs, solver.eps_rel, solver.rho_update_interval, solver.max_qp_iters = 1e-10, 0.0, interval, 60
+    solver.solve([], [], 1)  # a QP at the initial point
+    solver.calc(True)
+    qp = solver._qp
+    start = {name: getattr(qp, name).copy() for name in ("y", "z", "rho")}
+    args = (solver._derivative_addresses(), solver._horizon.addr, solver.problem.terminalData, solver, 1e-6)
+    runs = []
+    for per_call in (False, True):
+        for name, value in start.items():
+            getattr(qp, name)[...] = value
+        qp.rho_bar, qp.factorised = 0.1, False
+        qp.run(*args, 1, 1, True)
+        done = 0
+        if per_call:
+            for j in range(1, 61):
+                qp.factorised = False  # every scheduled factorisation made
+                done = qp.run(*args, j, j + 1, False)
+                if done:
+                    break
+        else:
+            done = qp.run(*args, 1, 61, False)
+        runs.append((done, qp.rho_bar, *(a.copy() for a in (qp.y, qp.z, qp.rho, qp.dx_s, qp.du_s, qp.P_s, qp.K_s))))
+    assert runs[0][1] != 0.1  # ρ̄ moved at least once
+    assert runs[0][0] == runs[1][0] and runs[0][1] == runs[1][1]
+    for a, b in zip(runs[0][2:], runs[1][2:]):
+        np.testing.assert_array_equal(a, b)

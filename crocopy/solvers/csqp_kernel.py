@@ -11,8 +11,11 @@ Lxx, Lxu, Luu, Lx, Lu`` where the datas keep them (``daddr (N, 7)``, :class:`.ho
 and the gaps in the solver's horizon buffer (``haddr[:, FS]``, :class:`.horizon.Horizon`).
 
 Settings ``par``: ``(σ, μ, α, rho_min, rho_max, adaptive_rho_tolerance, eps_abs, eps_rel, ρ̄)``;
-``ipar``: ``(j0, j1, rho_update_interval, update_rho_with_heuristic, equality pass first)``.  It writes
-the residuals of its last check and ``ρ̄`` into ``out = (r_p, r_d, s_p, s_d, ρ̄)`` and returns the
+``ipar``: ``(j0, j1, rho_update_interval, update_rho_with_heuristic, equality pass first, factorised)``.  A
+scheduled refactorisation (every ``rho_update_interval`` iterations) is skipped while ``factorised``: the factors
+are those of the current ``ρ`` (the same numbers), i.e. since the last one no ``ρ̄`` update (nor equality pass) came.
+It writes the residuals of its last check, ``ρ̄`` and ``factorised`` into ``out = (r_p, r_d, s_p, s_d, ρ̄,
+factorised)`` and returns the
 iteration whose stopping test passed, 0 when none did before ``j1``, or ``-(t + 1)`` when ``Quu`` of
 node ``t`` is not positive definite (nor finite).  :func:`multipliers` gives ``λ_t = p_t + P_t δx_t``.
 Row kinds (``kind``): :data:`INEQUALITY`, :data:`EQUALITY`, :data:`FREE`.
@@ -374,6 +377,7 @@ def _admm_run(dims, daddr, haddr, fs_col, LxT, LxxT, kind, C, D, lo, hi, z, y, r
     sigma, mu, alpha, rho_min, rho_max, tol, eps_abs, eps_rel, rho_bar = (par[0], par[1], par[2], par[3], par[4],
                                                                         par[5], par[6], par[7], par[8])
     j0, j1, interval, heuristic, anchor = ipar[0], ipar[1], ipar[2], ipar[3] != 0, ipar[4] != 0
+    current = ipar[5] != 0 and not anchor
     nmax, mmax, cmax = P.shape[1], K.shape[1], C.shape[1]
     w = max(nmax, mmax, 1)
     S = np.zeros((5, w, w))
@@ -385,6 +389,7 @@ def _admm_run(dims, daddr, haddr, fs_col, LxT, LxxT, kind, C, D, lo, hi, z, y, r
     if anchor:
         t = riccati(dims, daddr, haddr, fs_col, LxT, LxxT, 0.0, mu, False, True, C, D, rho, eta, dx_bar, du_bar, P, p,
                     Pd, K, k, L, S, Sv, idx)
+        out[5] = 0.0
         if t >= 0:
             return -(t + 1)
         rollout(dims, daddr, haddr, fs_col, K, k, dx, du)
@@ -394,11 +399,14 @@ def _admm_run(dims, daddr, haddr, fs_col, LxT, LxxT, kind, C, D, lo, hi, z, y, r
         for t in range(N + 1):
             for r in range(dims[t, 2]):
                 eta[t, r] = y[t, r] - rho[t, r] * z[t, r]
-        full = interval == 1 or j % interval == 1
+        full = (interval == 1 or j % interval == 1) and not current
         t = riccati(dims, daddr, haddr, fs_col, LxT, LxxT, sigma, mu, True, full, C, D, rho, eta, dx_bar, du_bar, P,
                     p, Pd, K, k, L, S, Sv, idx)
         if t >= 0:
+            out[5] = 0.0
             return -(t + 1)
+        current = True
+        out[5] = 1.0
         rollout(dims, daddr, haddr, fs_col, K, k, dx, du)
         check = j % interval == 0
         update(dims, C, D, lo, hi, z, y, rho, dx, du, alpha, check, heuristic, v, wv, out)
@@ -413,6 +421,8 @@ def _admm_run(dims, daddr, haddr, fs_col, LxT, LxxT, kind, C, D, lo, hi, z, y, r
                 rho_bar = estimate
                 out[4] = rho_bar
                 assign_rho(dims, kind, rho, rho_bar, rho_min)
+                current = False
+                out[5] = 0.0
         if abs(eps_rel) <= np.finfo(np.float64).eps:
             eps_p = eps_d = eps_abs
         else:
