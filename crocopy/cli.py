@@ -262,7 +262,7 @@ def _compile(args: argparse.Namespace) -> int:
 
     runs = [(registry.get(name).build, [getattr(crocopy, SOLVERS[k]) for k in keys]) for name, keys in COMPILE_RUNS]
     runs.append((registry.get("arm").build, [crocopy.SolverSQP, crocopy.SolverCSQP]))  # their QP and glue kernels
-    runs.append((_threaded_python_reach, [crocopy.SolverFDDP]))  # re-costing, two threads' ranges
+    runs.append((_threaded_python_reach, [crocopy.SolverFDDP, crocopy.SolverSQP]))  # re-costing, two threads' ranges
     return compile_kernels(lambda builder: builder(crocopy), runs)
 
 

@@ -21,7 +21,8 @@ that has re-read the model's parameters (references, weights, time step) and has
   ``horizon.fold(t0, t) -> total`` adds the costs before it), and ``horizon.calc_diff(xs, us, fs, xs_at, us_at,
   fs_at, t0, t1) -> total`` their ``calcDiff`` (and their gaps ``fs[t+1]`` when ``fs_at``, the gaps' addresses);
   each node's cost is in
-  ``horizon.costs[t]``, which the caller stores in the datas.  The calls cover each maximal range of such
+  ``horizon.costs[t]``, which the caller stores in the datas; optionally ``horizon.trial(...)``, SolverSQP/
+  SolverCSQP's trial point of a range (:meth:`CompiledNodes.trial`).  The calls cover each maximal range of such
   nodes (:attr:`CompiledNodes.segments`); the other nodes keep their Python step in between;
 
 or ``None`` (models without the method, or nodes it cannot compile).  ``terminal`` tells whether the node is the
@@ -168,7 +169,6 @@ class CompiledNodes:
         problem.cost = cost
         return cost
 
-
     def trial(self, problem, xs, us, dx, du, alpha: float, trajectories: tuple, at: TrajectoryAddresses,
               stacks: tuple) -> float:
         """SolverSQP/SolverCSQP's trial point: ``x̂_t = x_t ⊕ α δx_t``, ``û_t = u_t + α δu_t``, every node's value
@@ -258,7 +258,6 @@ def attach(solver) -> CompiledNodes | None:
     The datas are then those of a solve (the nested ones not updated) until ``problem.calc``/``calcDiff``."""
     solver._nodes = select(solver)
     return solver._nodes
-
 
 
 def prepare(solver) -> None:
