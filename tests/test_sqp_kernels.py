@@ -312,3 +312,15 @@ def test_admm_skips_a_refactorisation_only_when_rho_is_unchanged(interval):
     assert runs[0][0] == runs[1][0] and runs[0][1] == runs[1][1]
     for a, b in zip(runs[0][2:], runs[1][2:]):
         np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("where", ["state", "control"])
+@pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
+def test_a_non_finite_trial_is_seen_with_kernels_on_or_off(where, value):
+    """The line search's check of a trial's states and controls (compiled, by address; numpy twin)."""
+    for enabled in (True, False):
+        with crocopy.use_kernels(enabled):
+            solver = crocopy.SolverSQP(_unicycle())
+            assert solver._trial_finite()
+            (solver.xs_try[7] if where == "state" else solver.us_try[19])[1] = value
+            assert not solver._trial_finite()

@@ -284,13 +284,20 @@ class SolverSQP(SolverDDP):
                 ok = not any(all(e <= v for e, v in zip(entry, trial)) for entry in recent)
             else:
                 ok = merit_try < self.merit
-            if ok and trajectory_finite(self.xs_try, self.us_try):
+            if ok and self._trial_finite():
                 accept_trial(self)  # xs ← xs_try, us ← us_try (copies: the solver's arrays never move)
                 self.cost = self.cost_try
                 self._synced = True
                 return True
         self._synced = False
         return False
+
+    def _trial_finite(self) -> bool:
+        """Whether ``xs_try`` and ``us_try`` are finite."""
+        if kernels.active:
+            a = self._addresses()
+            return sqp_kernel.all_finite(a.xs_try, a.nx) and sqp_kernel.all_finite(a.us_try, a.nu)
+        return trajectory_finite(self.xs_try, self.us_try)
 
     def _after_line_search(self, accepted: bool) -> bool:
         """The regularisation schedule; False when it reaches ``reg_max`` after a too short step."""
