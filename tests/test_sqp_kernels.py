@@ -324,3 +324,21 @@ def test_a_non_finite_trial_is_seen_with_kernels_on_or_off(where, value):
             assert solver._trial_finite()
             (solver.xs_try[7] if where == "state" else solver.us_try[19])[1] = value
             assert not solver._trial_finite()
+
+
+def test_sqp_on_a_gait_kernels_on_or_off():
+    """SQP over contact nodes (compiled ranges) and impulse nodes (their own compiled calls, between the ranges)."""
+    pytest.importorskip("pinocchio")
+    from crocopy.problems import quadruped
+    from crocopy.solvers import compiled_nodes
+
+    runs = []
+    for enabled in (True, False):
+        with crocopy.use_kernels(enabled):
+            problem, xs, us = quadruped.build_gait(crocopy, "walk", step_knots=2, support_knots=1, cycles=1)
+            solver = crocopy.SolverSQP(problem)
+            if enabled:
+                assert compiled_nodes.select(solver).segments == {0: 3, 4: 7, 8: 11, 12: 15, 16: 17}
+            converged = solver.solve(xs, us, 8)
+            runs.append((solver, converged, ""))
+    _assert_same(*runs)
