@@ -342,3 +342,20 @@ def test_sqp_on_a_gait_kernels_on_or_off():
             converged = solver.solve(xs, us, 8)
             runs.append((solver, converged, ""))
     _assert_same(*runs)
+
+
+def test_row_spans_cover_every_nonzero_entry():
+    """The ADMM's products run over each row's span of nonzero entries: first to last nonzero, ``(0, 0)`` for a zero
+    row, no ``D`` span on the terminal node."""
+    from crocopy.solvers.csqp_kernel import row_spans
+
+    dims = np.array([[4, 3, 3], [4, 3, 2], [4, 0, 1]], dtype=np.int64)
+    C, D = np.zeros((3, 3, 4)), np.zeros((3, 3, 3))
+    C[0, 0, 1], C[0, 0, 2], C[0, 1, 3], D[0, 1, 0], D[0, 2, 2] = 1.0, -2.0, 3.0, 4.0, 5.0
+    C[1, 1, 0], C[1, 1, 3], D[1, 0, 1] = 1.0, 1.0, -1.0
+    C[2, 0, 0], D[2, 0, 1] = 2.0, 9.0  # D of the terminal node is never read
+    spans = np.full((3, 3, 4), -1, dtype=np.int64)
+    row_spans(dims, C, D, spans)
+    assert spans[0, :3].tolist() == [[1, 3, 0, 0], [3, 4, 0, 1], [0, 0, 2, 3]]
+    assert spans[1, :2].tolist() == [[0, 0, 1, 2], [0, 4, 0, 0]]
+    assert spans[2, 0].tolist() == [0, 1, 0, 0]
