@@ -265,8 +265,16 @@ def _compile(args: argparse.Namespace) -> int:
 
     runs = [(registry.get(name).build, [getattr(crocopy, SOLVERS[k]) for k in keys]) for name, keys in COMPILE_RUNS]
     runs.append((registry.get("arm").build, [crocopy.SolverSQP, crocopy.SolverCSQP]))  # their QP and glue kernels
-    runs.append((_threaded_python_reach, [crocopy.SolverFDDP]))  # re-costing, two threads' ranges
+    runs.append((_threaded_python_reach, [crocopy.SolverFDDP, crocopy.SolverSQP]))  # re-costing, two threads' ranges
+    runs.append((_terminal_equality_reach, [crocopy.SolverCSQP]))  # the QP rows' kernel
     return compile_kernels(lambda builder: builder(crocopy), runs)
+
+
+def _terminal_equality_reach(lib) -> tuple:
+    """mim-solvers' UR5 reach with a terminal equality row (``crocopy compile``: CSQP's kernel that reads the rows)."""
+    from .bench.mim import build_problem
+
+    return build_problem(lib, "ur5_ee_eq"), [], []
 
 
 def _threaded_python_reach(lib) -> tuple:

@@ -199,3 +199,163 @@ def test_csqp_with_compiled_nodes():
         assert converged and solver.constraint_norm < 1e-8
         runs.append((solver, converged, ""))
     _assert_same(*runs)
+
+
+def _quadrotor(python_nodes: tuple = (), nthreads: int = 1):
+    """quad-goal with ``python_nodes`` on the Python path (a subclass of the integrator), on ``nthreads``."""
+    from crocopy.problems import registry
+
+    problem, xs, us = registry.build("quad-goal")
+    models = list(problem.runningModels)
+
+    class Euler(crocopy.IntegratedActionModelEuler):
+        pass
+
+    for t in python_nodes:
+        models[t] = Euler(models[t].differential, models[t].dt)
+    problem = crocopy.ShootingProblem(problem.x0, models, problem.terminalModel)
+    problem.nthreads = nthreads
+    return problem, xs, us
+
+
+def _user_reach():
+    """A Kinova reach whose nodes have a Python residual (compiled nodes run it in Python around their call)."""
+    from crocopy.problems.user_residual import build_user_reach
+
+    return build_user_reach(crocopy, "python", robot="kinova", nodes=12)
+
+
+TRIALS = {"ranges": (lambda: _quadrotor((3, 17)), {0: 3, 4: 17, 18: 50}),
+          "first node in Python": (lambda: _quadrotor((0, 9)), {1: 9, 10: 50}),
+          "threads": (lambda: _quadrotor((5,), nthreads=2), {0: 5, 6: 50}),
+          "Python residuals": (_user_reach, {0: 12})}
+
+
+@pytest.mark.parametrize("case", TRIALS)
+def test_sqp_trial_over_compiled_ranges_equals_the_node_loop(case):
+    """SQP's trial point (``x ⊕ α δx``, the nodes, the gaps) over compiled ranges equals the node loop's."""
+    pytest.importorskip("pinocchio")
+    from crocopy.solvers import compiled_nodes
+
+    build, segments = TRIALS[case]
+    problem, xs, us = build()
+    solver = crocopy.SolverSQP(problem)
+    state = problem.runningModels[0].state
+    solver.setCandidate([state.integrate(xs[0], np.full(state.ndx, 0.01)), *xs[1:]], us, False)  # a gap at node 0
+    nodes = compiled_nodes.attach(solver)
+    assert nodes.segments == segments
+    solver.computeDirection()
+    assert max(np.abs(d).max() for d in solver.dx) > 1e-3  # a step that moves every part of the trial
+    for alpha in (1.0, 0.25):
+        solver._nodes = nodes
+        merit = solver.tryStep(alpha)
+        fast = [[v.copy() for v in vs] for vs in (solver.xs_try, solver.us_try, solver.fs_try)]
+        fast_norms = solver.cost_try, solver.gap_norm_try
+        solver._nodes = None
+        assert solver.tryStep(alpha) == pytest.approx(merit, rel=1e-9)
+        assert fast_norms == pytest.approx((solver.cost_try, solver.gap_norm_try), rel=1e-9)
+        for a_list, b_list in zip(fast, (solver.xs_try, solver.us_try, solver.fs_try)):
+            for a, b in zip(a_list, b_list):
+                np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-11)
+
+
+@pytest.mark.parametrize("kernels", [True, False], ids=["kernels", "python"])
+def test_solver_prepares_its_compiled_nodes_when_made(kernels):
+    """The node tables and the addresses the kernels read are made with the solver (with kernels on), and the solve
+    uses those evaluators."""
+    pytest.importorskip("pinocchio")
+    from crocopy.models.rbd import euler_node
+    from crocopy.solvers import compiled_nodes
+
+    problem = _ur5_terminal_equality()
+    datas = problem.runningDatas
+    assert all(euler_node._NODES.get(d) is None for d in datas)
+    with crocopy.use_kernels(kernels):
+        solver = crocopy.SolverCSQP(problem)
+        made = [euler_node._NODES.get(d) for d in datas]
+        assert all(node is not None for node in made) == kernels and (kernels or not any(made))
+        assert (solver._trajectory_addresses is not None) == kernels
+        assert solver._derivatives.addr.shape[0] == (problem.T if kernels else 0)
+        if kernels:
+            assert [calc.__self__ for calc in compiled_nodes.select(solver).calcs[:-1]] == made
+        assert solver.solve([], [], 50) and solver.constraint_norm < 1e-8
+
+
+@pytest.mark.parametrize("interval", [1, 3])
+def test_admm_skips_a_refactorisation_only_when_rho_is_unchanged(interval):
+    """The compiled ADMM refactorises on schedule only when ``ρ̄`` changed since the last factorisation: its iterates
+    equal, to the last bit, those of the schedule run one iteration per call with every factorisation made."""
+    solver = crocopy.SolverCSQP(_boxed())
+    solver.eps_abs, solver.eps_rel, solver.rho_update_interval, solver.max_qp_iters = 1e-10, 0.0, interval, 60
+    solver.solve([], [], 1)  # a QP at the initial point
+    solver.calc(True)
+    qp = solver._qp
+    start = {name: getattr(qp, name).copy() for name in ("y", "z", "rho")}
+    args = (solver._derivative_addresses(), solver._horizon.addr, solver.problem.terminalData, solver, 1e-6)
+    runs = []
+    for per_call in (False, True):
+        for name, value in start.items():
+            getattr(qp, name)[...] = value
+        qp.rho_bar, qp.factorised = 0.1, False
+        qp.run(*args, 1, 1, True)
+        done = 0
+        if per_call:
+            for j in range(1, 61):
+                qp.factorised = False  # every scheduled factorisation made
+                done = qp.run(*args, j, j + 1, False)
+                if done:
+                    break
+        else:
+            done = qp.run(*args, 1, 61, False)
+        runs.append((done, qp.rho_bar, *(a.copy() for a in (qp.y, qp.z, qp.rho, qp.dx_s, qp.du_s, qp.P_s, qp.K_s))))
+    assert runs[0][1] != 0.1  # ρ̄ moved at least once
+    assert runs[0][0] == runs[1][0] and runs[0][1] == runs[1][1]
+    for a, b in zip(runs[0][2:], runs[1][2:]):
+        np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("where", ["state", "control"])
+@pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
+def test_a_non_finite_trial_is_seen_with_kernels_on_or_off(where, value):
+    """The line search's check of a trial's states and controls (compiled, by address; numpy twin)."""
+    for enabled in (True, False):
+        with crocopy.use_kernels(enabled):
+            solver = crocopy.SolverSQP(_unicycle())
+            assert solver._trial_finite()
+            (solver.xs_try[7] if where == "state" else solver.us_try[19])[1] = value
+            assert not solver._trial_finite()
+
+
+def test_sqp_on_a_gait_kernels_on_or_off():
+    """SQP over contact nodes (compiled ranges) and impulse nodes (their own compiled calls, between the ranges)."""
+    pytest.importorskip("pinocchio")
+    from crocopy.problems import quadruped
+    from crocopy.solvers import compiled_nodes
+
+    runs = []
+    for enabled in (True, False):
+        with crocopy.use_kernels(enabled):
+            problem, xs, us = quadruped.build_gait(crocopy, "walk", step_knots=2, support_knots=1, cycles=1)
+            solver = crocopy.SolverSQP(problem)
+            if enabled:
+                assert compiled_nodes.select(solver).segments == {0: 3, 4: 7, 8: 11, 12: 15, 16: 17}
+            converged = solver.solve(xs, us, 8)
+            runs.append((solver, converged, ""))
+    _assert_same(*runs)
+
+
+def test_row_spans_cover_every_nonzero_entry():
+    """The ADMM's products run over each row's span of nonzero entries: first to last nonzero, ``(0, 0)`` for a zero
+    row, no ``D`` span on the terminal node."""
+    from crocopy.solvers.csqp_kernel import row_spans
+
+    dims = np.array([[4, 3, 3], [4, 3, 2], [4, 0, 1]], dtype=np.int64)
+    C, D = np.zeros((3, 3, 4)), np.zeros((3, 3, 3))
+    C[0, 0, 1], C[0, 0, 2], C[0, 1, 3], D[0, 1, 0], D[0, 2, 2] = 1.0, -2.0, 3.0, 4.0, 5.0
+    C[1, 1, 0], C[1, 1, 3], D[1, 0, 1] = 1.0, 1.0, -1.0
+    C[2, 0, 0], D[2, 0, 1] = 2.0, 9.0  # D of the terminal node is never read
+    spans = np.full((3, 3, 4), -1, dtype=np.int64)
+    row_spans(dims, C, D, spans)
+    assert spans[0, :3].tolist() == [[1, 3, 0, 0], [3, 4, 0, 1], [0, 0, 2, 3]]
+    assert spans[1, :2].tolist() == [[0, 0, 1, 2], [0, 4, 0, 0]]
+    assert spans[2, 0].tolist() == [0, 1, 0, 0]

@@ -21,7 +21,8 @@ that has re-read the model's parameters (references, weights, time step) and has
   ``horizon.fold(t0, t) -> total`` adds the costs before it), and ``horizon.calc_diff(xs, us, fs, xs_at, us_at,
   fs_at, t0, t1) -> total`` their ``calcDiff`` (and their gaps ``fs[t+1]`` when ``fs_at``, the gaps' addresses);
   each node's cost is in
-  ``horizon.costs[t]``, which the caller stores in the datas.  The calls cover each maximal range of such
+  ``horizon.costs[t]``, which the caller stores in the datas; optionally ``horizon.trial(...)``, SolverSQP/
+  SolverCSQP's trial point of a range (:meth:`CompiledNodes.trial`).  The calls cover each maximal range of such
   nodes (:attr:`CompiledNodes.segments`); the other nodes keep their Python step in between;
 
 or ``None`` (models without the method, or nodes it cannot compile).  ``terminal`` tells whether the node is the
@@ -46,6 +47,7 @@ callback may read nested datas).
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable
 from itertools import groupby, islice
 
@@ -168,6 +170,49 @@ class CompiledNodes:
         problem.cost = cost
         return cost
 
+    def trial(self, problem, xs, us, dx, du, alpha: float, trajectories: tuple, at: TrajectoryAddresses,
+              stacks: tuple) -> float:
+        """SolverSQP/SolverCSQP's trial point: ``x̂_t = x_t ⊕ α δx_t``, ``û_t = u_t + α δu_t``, every node's value
+        there and the gaps ``f̂_{t+1} = xnext_t ⊖ x̂_{t+1}``, ``f̂_0 = x0 ⊖ x̂_0``; returns the total cost.
+
+        ``trajectories = (xs_try, us_try, fs_try)``, the lists written (the solver's own arrays, at the addresses
+        ``at``); ``stacks = (dx, du, fs, step)``: the padded stacks ``(T+1, n)``/``(T+1, m)`` the lists ``dx``, ``du``,
+        ``fs_try`` are views of, and a scratch of at least ``n`` entries.  Each range of nodes of a horizon with a
+        ``trial(addresses, x0, dx, du, alpha, fs, step, trajectories, t0, t1) -> total`` is one call (its nodes' costs
+        in ``horizon.costs``); the other nodes go one by one (their states and controls first, so a range reads the
+        state after it)."""
+        xs_try, us_try, fs_try = trajectories
+        models, datas, x0 = problem.runningModels, problem.runningDatas, problem.x0
+        trial = getattr(self.horizon, "trial", None)
+        segments = self.segments if trial is not None else {}
+        outside = self.python_nodes if trial is not None else range(problem.T)
+        for t in outside:
+            models[t].state._integrate_into(xs[t], alpha * dx[t], xs_try[t])
+            np.add(us[t], alpha * du[t], out=us_try[t])
+        problem.terminalModel.state._integrate_into(xs[-1], alpha * dx[-1], xs_try[-1])
+        cost = 0.0
+        if segments:
+            horizon = self.horizon
+            addresses = (at.xs, at.us, at.xs_try, at.us_try)
+            for t0, t1 in segments.items():
+                cost += trial(addresses, x0, *stacks[:2], alpha, *stacks[2:], trajectories, t0, t1)
+                for d, c in zip(islice(datas, t0, t1), horizon.costs[t0:t1].tolist()):
+                    d.cost = c
+        for t in outside:
+            self.calcs[t](xs_try[t], us_try[t])
+            d = datas[t]
+            cost += d.cost
+            models[t].state._diff_into(xs_try[t + 1], d.xnext, fs_try[t + 1])
+        if 0 not in segments:
+            if problem.T:
+                models[0].state._diff_into(xs_try[0], x0, fs_try[0])
+            else:
+                fs_try[0][:] = 0.0
+        self.calcs[-1](xs_try[-1], None)
+        cost += problem.terminalData.cost
+        problem.cost = cost
+        return cost
+
 
 def select(solver) -> CompiledNodes | None:
     """The compiled nodes of ``solver.problem`` for this solve, or None (no node has one, or the
@@ -215,3 +260,11 @@ def attach(solver) -> CompiledNodes | None:
     solver._nodes = select(solver)
     return solver._nodes
 
+
+def prepare(solver) -> None:
+    """Make the compiled evaluators of ``solver.problem``'s nodes now (their tables of addresses, checked), which the
+    first solve would otherwise make, as Crocoddyl's and mim-solvers' solvers allocate their workspace when they are
+    made.  Every solve still re-reads the models' parameters (:func:`select`).  An array a node cannot list
+    (ValueError) is left for the solve to report."""
+    with contextlib.suppress(ValueError):
+        select(solver)

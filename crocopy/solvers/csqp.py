@@ -255,6 +255,9 @@ class SolverCSQP(SolverSQP):
         """``Ψ`` (returned) and ``gfeas`` at the nodes' last ``calc``; if ``load``, the QP rows too (``C``, ``D``
         from ``Gx, Gu`` and ``Hx, Hu``, ``lo/hi = lb/ub - (g, h)``)."""
         qp = self._qp
+        if not qp.active:  # no node has a row
+            self.gfeas = 0.0
+            return 0.0
         saddr = self._row_addresses() if kernels.active else None
         if saddr is None:
             psi, vinf, v1 = self._row_values_numpy(load)

@@ -87,6 +87,9 @@ class StagewiseADMM:
         self._chol: list = [None] * self.N
         self.rho_bar = 0.1
         self.r_prim = self.r_dual = self.s_prim = self.s_dual = 0.0
+        self.factorised = False
+        """Whether ``P``, ``K``, ``L`` are the factors of the current ``ρ`` (set by :meth:`run`; every QP starts with
+        :meth:`assign_rho`, which clears it)."""
 
     _STATE = ("z", "y", "rho", "dx_s", "du_s", "dx_bar_s", "du_bar_s", "P_s", "p_s", "Pd_s", "K_s", "k_s", "L_s")
 
@@ -209,6 +212,7 @@ class StagewiseADMM:
     def assign_rho(self, rho_min: float) -> None:
         """Per-row ``ρ``: ``rho_min`` (free), ``1e3 ρ̄`` (equality), ``ρ̄`` (the others)."""
         rho, kind = self.rho_bar, self.kind
+        self.factorised = False
         self.rho[:] = np.where(kind == FREE, rho_min, np.where(kind == EQUALITY, 1e3 * rho, rho))
 
     def iterate(self, j: int, s) -> bool:
@@ -264,15 +268,16 @@ class StagewiseADMM:
         solver).  Returns the iteration whose stopping test passed, or 0.  Raises BackwardPassError."""
         par = np.array([s.sigma, mu, s.alpha, s.rho_min, s.rho_max, s.adaptive_rho_tolerance, s.eps_abs, s.eps_rel,
                         self.rho_bar])
-        ipar = np.array([j0, j1, max(int(s.rho_update_interval), 1), bool(s.update_rho_with_heuristic), anchor],
-                        dtype=np.int64)
-        out = np.array([self.r_prim, self.r_dual, self.s_prim, self.s_dual, self.rho_bar])
+        ipar = np.array([j0, j1, max(int(s.rho_update_interval), 1), bool(s.update_rho_with_heuristic), anchor,
+                         self.factorised], dtype=np.int64)
+        out = np.array([self.r_prim, self.r_dual, self.s_prim, self.s_dual, self.rho_bar, self.factorised])
         status = csqp_kernel.admm_run(
             self.dims, daddr, haddr, horizon.FS, readable(terminal.Lx), readable(terminal.Lxx), self.kind, self.C,
             self.D, self.lo, self.hi, self.z, self.y, self.rho, self.eta, self.dx_s, self.du_s, self.dx_bar_s,
             self.du_bar_s, self.P_s, self.p_s, self.Pd_s, self.K_s, self.k_s, self.L_s, par, ipar, out)
         self.r_prim, self.r_dual, self.s_prim, self.s_dual = (float(v) for v in out[:4])
         self.rho_bar = float(out[4])
+        self.factorised = bool(out[5])
         if status < 0:
             raise BackwardPassError(f"Quu is not positive definite at node {-status - 1}")
         return int(status)

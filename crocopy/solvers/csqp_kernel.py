@@ -11,8 +11,13 @@ Lxx, Lxu, Luu, Lx, Lu`` where the datas keep them (``daddr (N, 7)``, :class:`.ho
 and the gaps in the solver's horizon buffer (``haddr[:, FS]``, :class:`.horizon.Horizon`).
 
 Settings ``par``: ``(σ, μ, α, rho_min, rho_max, adaptive_rho_tolerance, eps_abs, eps_rel, ρ̄)``;
-``ipar``: ``(j0, j1, rho_update_interval, update_rho_with_heuristic, equality pass first)``.  It writes
-the residuals of its last check and ``ρ̄`` into ``out = (r_p, r_d, s_p, s_d, ρ̄)`` and returns the
+The rows' products (``C δx``, ``Cᵀ η`` ...) run over each row's span of nonzero entries (:func:`row_spans`, found
+once per call: a selection row or a constraint on the state alone costs its nonzeros only; the same numbers).
+``ipar``: ``(j0, j1, rho_update_interval, update_rho_with_heuristic, equality pass first, factorised)``.  A
+scheduled refactorisation (every ``rho_update_interval`` iterations) is skipped while ``factorised``: the factors
+are those of the current ``ρ`` (the same numbers), i.e. since the last one no ``ρ̄`` update (nor equality pass) came.
+It writes the residuals of its last check, ``ρ̄`` and ``factorised`` into ``out = (r_p, r_d, s_p, s_d, ρ̄,
+factorised)`` and returns the
 iteration whose stopping test passed, 0 when none did before ``j1``, or ``-(t + 1)`` when ``Quu`` of
 node ``t`` is not positive definite (nor finite).  :func:`multipliers` gives ``λ_t = p_t + P_t δx_t``.
 Row kinds (``kind``): :data:`INEQUALITY`, :data:`EQUALITY`, :data:`FREE`.
@@ -168,10 +173,38 @@ factorise = compiled(_factorise)
 
 
 
+def _row_spans(dims, C, D, spans):
+    """Where each row's nonzero entries are: ``C[t, r, spans[t, r, 0]:spans[t, r, 1]]`` and ``D[t, r, spans[t, r, 2]:
+    spans[t, r, 3]]`` (``(0, 0)`` for a zero row); the products of the ADMM iterations skip the rest (a selection row,
+    a constraint on the state alone)."""
+    N = dims.shape[0] - 1
+    for t in range(N + 1):
+        n, m, c = dims[t, 0], dims[t, 1], dims[t, 2]
+        for r in range(c):
+            first, last = 0, 0
+            for i in range(n):
+                if C[t, r, i] != 0.0:
+                    if last == 0:
+                        first = i
+                    last = i + 1
+            spans[t, r, 0], spans[t, r, 1] = first, last
+            first, last = 0, 0
+            for i in range(m if t < N else 0):
+                if D[t, r, i] != 0.0:
+                    if last == 0:
+                        first = i
+                    last = i + 1
+            spans[t, r, 2], spans[t, r, 3] = first, last
+
+
+row_spans = compiled(_row_spans)
+
+
 def _riccati(dims, daddr, haddr, fs_col, LxT, LxxT, sigma, mu, rows, full, C, D, rho, eta, dx_bar, du_bar, P, p, Pd,
-             K, k, L, S, Sv, idx):
+             K, k, L, S, Sv, idx, spans):
     """The backward pass of :meth:`.csqp_admm.StagewiseADMM.riccati`; -1, or the node whose ``Quu`` failed.
-    The stacks are indexed in place (a row view per node costs a reference count)."""
+    The stacks are indexed in place (a row view per node costs a reference count); the rows' products run over their
+    nonzero spans (:func:`row_spans`)."""
     N = dims.shape[0] - 1
     Qxx, Qxu, Quu, W, Wu = S[0], S[1], S[2], S[3], S[4]
     Qx, Qu, g = Sv[0], Sv[1], Sv[2]
@@ -184,7 +217,7 @@ def _riccati(dims, daddr, haddr, fs_col, LxT, LxxT, sigma, mu, rows, full, C, D,
     if terminal_rows:
         for r in range(c):
             a_ = eta[N, r]
-            for i in range(n):
+            for i in range(spans[N, r, 0], spans[N, r, 1]):
                 p[N, i] += C[N, r, i] * a_
     if full:
         for i in range(n):
@@ -230,9 +263,9 @@ def _riccati(dims, daddr, haddr, fs_col, LxT, LxxT, sigma, mu, rows, full, C, D,
         for r in range(c if with_rows else 0):
             a_ = eta[t, r]
             if with_rows == 2:
-                for i in range(n):
+                for i in range(spans[t, r, 0], spans[t, r, 1]):
                     Qx[i] += C[t, r, i] * a_
-            for i in range(m):
+            for i in range(spans[t, r, 2], spans[t, r, 3]):
                 Qu[i] += D[t, r, i] * a_
         if full and not factorise(n, m, c, n1, Fx, Fu, matrix_at(daddr[t, 2], n, n), matrix_at(daddr[t, 3], n, m),
                                   matrix_at(daddr[t, 4], m, m), C[t], D[t], rho[t], with_rows, sigma, mu,
@@ -289,13 +322,13 @@ def _rollout(dims, daddr, haddr, fs_col, K, k, dx, du):
 rollout = compiled(_rollout)
 
 
-def _transpose_max(C, D, t, rows, n, m, v, w, best):
+def _transpose_max(C, D, t, rows, n, m, v, w, best, spans):
     """``max(best, ‖C_tᵀ v‖∞, ‖D_tᵀ v‖∞)`` over ``rows`` rows (``D`` skipped when ``m = 0``; ``w``: scratch)."""
     for i in range(n):
         w[i] = 0.0
     for r in range(rows):
         a = v[r]
-        for i in range(n):
+        for i in range(spans[t, r, 0], spans[t, r, 1]):
             w[i] += C[t, r, i] * a
     for i in range(n):
         best = max(best, abs(w[i]))
@@ -304,7 +337,7 @@ def _transpose_max(C, D, t, rows, n, m, v, w, best):
             w[i] = 0.0
         for r in range(rows):
             a = v[r]
-            for i in range(m):
+            for i in range(spans[t, r, 2], spans[t, r, 3]):
                 w[i] += D[t, r, i] * a
         for i in range(m):
             best = max(best, abs(w[i]))
@@ -314,9 +347,9 @@ def _transpose_max(C, D, t, rows, n, m, v, w, best):
 transpose_max = compiled(_transpose_max)
 
 
-def _update(dims, C, D, lo, hi, z, y, rho, dx, du, alpha, check, heuristic, v, w, out):
+def _update(dims, C, D, lo, hi, z, y, rho, dx, du, alpha, check, heuristic, v, w, out, spans):
     """Projection and dual ascent of every row (``z``, ``y``); if ``check``, ``out[:4] = (r_p, r_d, s_p, s_d)``
-    (``v``, ``w``: scratch)."""
+    (``v``, ``w``: scratch; the rows' products over their nonzero ``spans``)."""
     N = dims.shape[0] - 1
     r_p = r_d = s_p = s_d = -np.inf
     for t in range(N + 1):
@@ -325,10 +358,10 @@ def _update(dims, C, D, lo, hi, z, y, rho, dx, du, alpha, check, heuristic, v, w
             continue
         for r in range(c):
             acc = 0.0
-            for j in range(n):
+            for j in range(spans[t, r, 0], spans[t, r, 1]):
                 acc += C[t, r, j] * dx[t, j]
             if t < N:
-                for j in range(m):
+                for j in range(spans[t, r, 2], spans[t, r, 3]):
                     acc += D[t, r, j] * du[t, j]
             v[r] = acc
         for r in range(c):
@@ -345,8 +378,8 @@ def _update(dims, C, D, lo, hi, z, y, rho, dx, du, alpha, check, heuristic, v, w
                     s_d = max(s_d, abs(y[t, r]))
             v[r] = dz
         if check and not heuristic:
-            r_d = transpose_max(C, D, t, c, n, m if t < N else 0, v, w, r_d)
-            s_d = transpose_max(C, D, t, c, n, m if t < N else 0, y[t], w, s_d)
+            r_d = transpose_max(C, D, t, c, n, m if t < N else 0, v, w, r_d, spans)
+            s_d = transpose_max(C, D, t, c, n, m if t < N else 0, y[t], w, s_d, spans)
     if check:
         out[0], out[1], out[2], out[3] = r_p, r_d, s_p, s_d
 
@@ -374,6 +407,7 @@ def _admm_run(dims, daddr, haddr, fs_col, LxT, LxxT, kind, C, D, lo, hi, z, y, r
     sigma, mu, alpha, rho_min, rho_max, tol, eps_abs, eps_rel, rho_bar = (par[0], par[1], par[2], par[3], par[4],
                                                                         par[5], par[6], par[7], par[8])
     j0, j1, interval, heuristic, anchor = ipar[0], ipar[1], ipar[2], ipar[3] != 0, ipar[4] != 0
+    current = ipar[5] != 0 and not anchor
     nmax, mmax, cmax = P.shape[1], K.shape[1], C.shape[1]
     w = max(nmax, mmax, 1)
     S = np.zeros((5, w, w))
@@ -382,9 +416,12 @@ def _admm_run(dims, daddr, haddr, fs_col, LxT, LxxT, kind, C, D, lo, hi, z, y, r
     wv = np.zeros(w)
     idx = np.arange(max(mmax, 1))
     N = dims.shape[0] - 1
+    spans = np.zeros((N + 1, max(cmax, 1), 4), dtype=np.int64)
+    row_spans(dims, C, D, spans)
     if anchor:
         t = riccati(dims, daddr, haddr, fs_col, LxT, LxxT, 0.0, mu, False, True, C, D, rho, eta, dx_bar, du_bar, P, p,
-                    Pd, K, k, L, S, Sv, idx)
+                    Pd, K, k, L, S, Sv, idx, spans)
+        out[5] = 0.0
         if t >= 0:
             return -(t + 1)
         rollout(dims, daddr, haddr, fs_col, K, k, dx, du)
@@ -394,14 +431,17 @@ def _admm_run(dims, daddr, haddr, fs_col, LxT, LxxT, kind, C, D, lo, hi, z, y, r
         for t in range(N + 1):
             for r in range(dims[t, 2]):
                 eta[t, r] = y[t, r] - rho[t, r] * z[t, r]
-        full = interval == 1 or j % interval == 1
+        full = (interval == 1 or j % interval == 1) and not current
         t = riccati(dims, daddr, haddr, fs_col, LxT, LxxT, sigma, mu, True, full, C, D, rho, eta, dx_bar, du_bar, P,
-                    p, Pd, K, k, L, S, Sv, idx)
+                    p, Pd, K, k, L, S, Sv, idx, spans)
         if t >= 0:
+            out[5] = 0.0
             return -(t + 1)
+        current = True
+        out[5] = 1.0
         rollout(dims, daddr, haddr, fs_col, K, k, dx, du)
         check = j % interval == 0
-        update(dims, C, D, lo, hi, z, y, rho, dx, du, alpha, check, heuristic, v, wv, out)
+        update(dims, C, D, lo, hi, z, y, rho, dx, du, alpha, check, heuristic, v, wv, out, spans)
         dx_bar[:, :] = dx
         du_bar[:, :] = du
         if not check:
@@ -413,6 +453,8 @@ def _admm_run(dims, daddr, haddr, fs_col, LxT, LxxT, kind, C, D, lo, hi, z, y, r
                 rho_bar = estimate
                 out[4] = rho_bar
                 assign_rho(dims, kind, rho, rho_bar, rho_min)
+                current = False
+                out[5] = 0.0
         if abs(eps_rel) <= np.finfo(np.float64).eps:
             eps_p = eps_d = eps_abs
         else:

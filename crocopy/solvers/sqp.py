@@ -25,7 +25,11 @@ mim-solvers (:class:`~crocopy.solvers.csqp.SolverCSQP` enforces them).
 
 ``dx``, ``du``, ``lag_mul`` and ``fs_try`` are views of padded stacks ``(T+1, max ndx)``/``(T+1, max nu)``; with
 kernels on, the linear rollout, the KKT measure and the gap norms run compiled on them
-(:mod:`.sqp_kernel`), the backward pass is the DDP family's compiled Riccati pass.
+(:mod:`.sqp_kernel`), the backward pass is the DDP family's compiled Riccati pass, and over compiled nodes
+(:mod:`.compiled_nodes`) each range of nodes evaluates its trial point (``x ⊕ α δx``, ``u + α δu``, the nodes, the
+trial gaps) in one call.  Those nodes' tables and the addresses the kernels read are made with the solver
+(:func:`.compiled_nodes.prepare`), as Crocoddyl's solvers allocate their workspace; each solve re-reads the models'
+parameters.
 """
 
 from __future__ import annotations
@@ -40,6 +44,7 @@ from ..shooting import ShootingProblem
 from . import compiled_nodes, sqp_kernel
 from .base import check_solve_arguments
 from .ddp import SolverDDP
+from .horizon import NodeDerivatives
 from .nonfinite import trajectory_finite
 from .std_vector import StdVecAttribute, allocate
 from .stopwatch import profiled
@@ -73,6 +78,7 @@ class SolverSQP(SolverDDP):
         self.gap_norm = 0.0
         self.gap_norm_try = 0.0
         self._allocate_sqp()
+        self._prepare_kernels()
 
     def _allocate_sqp(self) -> None:
         """The steps ``dx``, ``du``, the multipliers ``lag_mul`` and ``fs_try``: views of padded stacks
@@ -86,6 +92,18 @@ class SolverSQP(SolverDDP):
         self._no_rows = (np.zeros((len(ndx), 0, n)), np.zeros((len(ndx), 0, m)), np.zeros((len(ndx), 0)))
         self._scratch = np.zeros(max(n, m, 1))
         self._bind_sqp_views()
+
+    def _prepare_kernels(self) -> None:
+        """With kernels on, what the first solve would otherwise make: the compiled nodes' tables
+        (:func:`.compiled_nodes.prepare`) and the addresses of the trajectories and of the nodes' derivatives."""
+        if not kernels.active:
+            return
+        compiled_nodes.prepare(self)
+        self._addresses()
+        try:
+            self._derivative_addresses()
+        except ValueError:  # a derivative array of the wrong size: the solve reports it
+            self._derivatives = NodeDerivatives()
 
     def _bind_sqp_views(self) -> None:
         """Make ``dx``, ``du``, ``lag_mul``, ``fs_try`` the views of their stacks (after allocating or unpickling;
@@ -266,13 +284,20 @@ class SolverSQP(SolverDDP):
                 ok = not any(all(e <= v for e, v in zip(entry, trial)) for entry in recent)
             else:
                 ok = merit_try < self.merit
-            if ok and trajectory_finite(self.xs_try, self.us_try):
+            if ok and self._trial_finite():
                 accept_trial(self)  # xs ← xs_try, us ← us_try (copies: the solver's arrays never move)
                 self.cost = self.cost_try
                 self._synced = True
                 return True
         self._synced = False
         return False
+
+    def _trial_finite(self) -> bool:
+        """Whether ``xs_try`` and ``us_try`` are finite."""
+        if kernels.active:
+            a = self._addresses()
+            return sqp_kernel.all_finite(a.xs_try, a.nx) and sqp_kernel.all_finite(a.us_try, a.nu)
+        return trajectory_finite(self.xs_try, self.us_try)
 
     def _after_line_search(self, accepted: bool) -> bool:
         """The regularisation schedule; False when it reaches ``reg_max`` after a too short step."""
@@ -287,27 +312,34 @@ class SolverSQP(SolverDDP):
     def tryStep(self, steplength: float = 1.0) -> float:
         """Evaluate the trial ``x ⊕ α δx``, ``u + α δu`` (``xs_try``, ``us_try``, ``cost_try``, ``fs_try``,
         ``gap_norm_try``) and return its merit."""
-        problem = self.problem
-        models = [*problem.runningModels, problem.terminalModel]
-        for t, m in enumerate(models):
-            m.state._integrate_into(self.xs[t], steplength * self.dx[t], self.xs_try[t])
-        for t, u in enumerate(self.us):
-            np.add(u, steplength * self.du[t], out=self.us_try[t])
         nodes = self._nodes
         if nodes is None:
-            self.cost_try = problem.calc(self.xs_try, self.us_try)
+            self._python_trial(steplength)
         else:
-            self.cost_try = nodes.calc(problem, self.xs_try, self.us_try)
+            self.cost_try = nodes.trial(self.problem, self.xs, self.us, self.dx, self.du, steplength,
+                                        (self.xs_try, self.us_try, self.fs_try), self._addresses(),
+                                        (*self._steps[:2], self._fs_try, self._scratch))
         fs_try = self.fs_try
-        fs_try[0][:] = models[0].state.diff(self.xs_try[0], problem.x0) if problem.T else 0.0
-        for t, (m, d) in enumerate(zip(problem.runningModels, problem.runningDatas)):
-            m.state._diff_into(self.xs_try[t + 1], d.xnext, fs_try[t + 1])
         if kernels.active:
             self.gap_norm_try = sqp_kernel.stack_l1(self._sqp_dims, self._fs_try)
         else:
             self.gap_norm_try = float(sum(np.abs(f).sum() for f in fs_try))
         self._after_trial()
         return self._trial_merit()
+
+    def _python_trial(self, steplength: float) -> None:
+        """The trial point node by node (without compiled nodes): ``xs_try``, ``us_try``, ``cost_try``, ``fs_try``."""
+        problem = self.problem
+        models = [*problem.runningModels, problem.terminalModel]
+        for t, m in enumerate(models):
+            m.state._integrate_into(self.xs[t], steplength * self.dx[t], self.xs_try[t])
+        for t, u in enumerate(self.us):
+            np.add(u, steplength * self.du[t], out=self.us_try[t])
+        self.cost_try = problem.calc(self.xs_try, self.us_try)
+        fs_try = self.fs_try
+        fs_try[0][:] = models[0].state.diff(self.xs_try[0], problem.x0) if problem.T else 0.0
+        for t, (m, d) in enumerate(zip(problem.runningModels, problem.runningDatas)):
+            m.state._diff_into(self.xs_try[t + 1], d.xnext, fs_try[t + 1])
 
     def _after_trial(self) -> None:
         """Hook: what a subclass measures at a trial point besides the cost and the gaps."""

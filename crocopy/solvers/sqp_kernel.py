@@ -12,10 +12,13 @@ each node's ``(ndx, nu, nc)`` and ``C (T+1, c, n)``, ``D (T+1, c, m)``, ``y (T+1
   f_{t+1}``, then ``λ_t = Vxx_t (δx_t - f_t) + Vx_t``;
 * :func:`kkt`: ``max(‖Lx_t + Fx_tᵀ λ_{t+1} - λ_t + [t >= 1] C_tᵀ y_t‖∞, ‖Lu_t + Fu_tᵀ λ_{t+1} + D_tᵀ y_t‖∞,
   ‖Lx_T - λ_T + C_Tᵀ y_T‖∞, max_t ‖f_t‖∞)``;
-* :func:`gap_l1`: ``Σ_t ‖f_t‖₁`` (:func:`stack_l1` for gaps in a stack, summed in the same order).
+* :func:`gap_l1`: ``Σ_t ‖f_t‖₁`` (:func:`stack_l1` for gaps in a stack, summed in the same order);
+* :func:`all_finite`: whether the vectors at some addresses are finite (a trial's states and controls).
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -141,3 +144,18 @@ def _stack_l1(dims, f):
 
 gap_l1 = compiled(_gap_l1)
 stack_l1 = compiled(_stack_l1)
+
+
+def _all_finite(addresses, sizes):
+    """True when the ``sizes[t]`` floats at ``addresses[t]`` are finite, for every t."""
+    for t in range(addresses.shape[0]):
+        n = sizes[t]
+        if n:
+            v = vector_at(addresses[t], n)
+            for i in range(n):
+                if not math.isfinite(v[i]):
+                    return False
+    return True
+
+
+all_finite = compiled(_all_finite)

@@ -52,6 +52,7 @@ from ..state_multibody import StateMultibody
 from . import euler_node_kernel as kernel
 from . import horizon_kernel as horizons
 from . import node_table as table
+from . import trial_kernel
 from .constraint_rows import ConstraintRows
 from .contact_lowering import ContactSet
 from .joint_types import NotLowerable
@@ -558,6 +559,9 @@ class EulerHorizon:
             total += horizons.horizon_recost(self.tbls, self.ints, self.ioff, self.par, self.poff,
                                            self._python_in(t0, t1), self.costs)
         return total
+
+    trial = trial_kernel.trial
+    """SolverSQP/SolverCSQP's trial point of the nodes ``t0 <= t < t1`` (:func:`.trial_kernel.trial`)."""
 
     def _python_in(self, t0: int, t1: int) -> np.ndarray:
         """The nodes ``t0 <= t < t1`` with Python residuals (made once per range)."""
