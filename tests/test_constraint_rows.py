@@ -326,6 +326,39 @@ def test_mutation_after_a_solve_gives_a_fresh_problems_solve(case):
     assert results[True][1] == pytest.approx(results[False][1], rel=1e-9)
 
 
+@pytest.mark.parametrize("kernels", [True, False])
+@pytest.mark.parametrize("case", list(MUTATIONS))
+def test_a_solver_solving_again_after_a_mutation_gives_a_new_solvers_solve(case, kernels):
+    """The same SolverCSQP follows bounds changed by ``updateBounds`` and constraints switched on or off (its QP rows
+    and their bounds), as a solver made after the change does (both reset their multipliers and ρ at each QP, so
+    that nothing else carries over from the first solve)."""
+    prepare, mutate = MUTATIONS[case]
+
+    def solver_for(problem):
+        solver = crocopy.SolverCSQP(problem)
+        solver.termination_tolerance = 2e-3
+        solver.reset_y = solver.reset_rho = True
+        return solver
+
+    def solve(solver):
+        problem = solver.problem
+        solver.solve([problem.x0] * (problem.T + 1), [np.zeros(m.nu) for m in problem.runningModels], 8)
+        return solver.iter, solver.cost, solver.constraint_norm
+
+    with crocopy.use_kernels(kernels):
+        problem = arm_problem(T=8)
+        if prepare is not None:
+            prepare(problem)
+        solver = solver_for(problem)
+        before = solve(solver)
+        mutate(problem)
+        again = solve(solver)
+        fresh = solve(solver_for(problem))
+    assert again[0] == fresh[0]
+    assert again[1:] == pytest.approx(fresh[1:], rel=1e-9, abs=1e-12)
+    assert again[1] != pytest.approx(before[1], rel=1e-6)
+
+
 class UserConstraint(crocopy.ConstraintModelResidual):
     """A user's subclass: it may override ``calc``, so its node keeps the Python path."""
 

@@ -35,6 +35,7 @@ import numpy as np
 from .. import kernels
 from ..enums import FeasibilityNorm
 from ..shooting import ShootingProblem
+from ..versioning import STRUCTURE, ParametersVersion
 from . import csqp_kernel
 from .base import BackwardPassError
 from .csqp_admm import StagewiseADMM
@@ -126,12 +127,17 @@ class SolverCSQP(SolverSQP):
         self._rho_base = 0.1
         self._build_qp()
 
-    def _build_qp(self) -> None:
+    def _node_bounds(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        models = [*self.problem.runningModels, self.problem.terminalModel]
+        self._bounds_seen = (ParametersVersion.value, STRUCTURE[0])
+        return [_bounds(m, t == self.problem.T) for t, m in enumerate(models)]
+
+    def _build_qp(self, bounds: list[tuple[np.ndarray, np.ndarray]] | None = None) -> None:
         problem = self.problem
         models = [*problem.runningModels, problem.terminalModel]
         ndx = [m.state.ndx for m in models]
         nu = [m.nu for m in problem.runningModels] + [0]
-        self._qp = qp = StagewiseADMM(ndx, nu, [_bounds(m, t == problem.T) for t, m in enumerate(models)])
+        self._qp = qp = StagewiseADMM(ndx, nu, self._node_bounds() if bounds is None else bounds)
         self._ngh = np.array([(m.ng_T, m.nh_T) if t == problem.T else (m.ng, m.nh) for t, m in enumerate(models)],
                              dtype=np.int64)
         self._row_addr = np.zeros((len(models), len(_ROW_NAMES)), dtype=np.int64)
@@ -187,8 +193,22 @@ class SolverCSQP(SolverSQP):
         return StdVec_VectorXs(self._qp.du)
 
     # ------------------------------------------------------------------ solve
+    def _follow_bounds(self) -> None:
+        """Follow the constraints' bounds (``updateBounds``) and rows (a constraint switched on or off) when the
+        clocks moved since they were read: new bounds of the same shapes are taken in place (the ADMM state is kept,
+        as mim-solvers reads its bounds at every QP), new shapes make the QP again."""
+        if self._bounds_seen == (ParametersVersion.value, STRUCTURE[0]):
+            return
+        bounds = self._node_bounds()
+        rows = self._qp.rows
+        if any(lb.shape != r.lb.shape for (lb, _), r in zip(bounds, rows)):
+            self._build_qp(bounds)
+        elif any(not np.array_equal(lb, r.lb) or not np.array_equal(ub, r.ub) for (lb, ub), r in zip(bounds, rows)):
+            self._qp.update_bounds(bounds)
+
     def _start_sqp(self, init_xs, init_us, regInit) -> None:
         super()._start_sqp(init_xs, init_us, regInit)
+        self._follow_bounds()
         if self.remove_reg:
             self.preg = self.dreg = 0.0
         self.max_solve_time_reached = False

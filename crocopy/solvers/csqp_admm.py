@@ -41,10 +41,15 @@ class NodeRows:
     def __init__(self, qp: StagewiseADMM, t: int, lb: np.ndarray, ub: np.ndarray) -> None:
         n, nx, nu = lb.size, qp.ndx[t], qp.nu[t]
         self.lb, self.ub = qp.lb[t, :n], qp.ub[t, :n]
-        self.lb[:], self.ub[:] = lb, ub
         self.C, self.D = qp.C[t, :n, :nx], qp.D[t, :n, :nu]
         self.lo, self.hi = qp.lo[t, :n], qp.hi[t, :n]
         self.z, self.y, self.rho = qp.z[t, :n], qp.y[t, :n], qp.rho[t, :n]
+        self.bound(qp, t, lb, ub)
+
+    def bound(self, qp: StagewiseADMM, t: int, lb: np.ndarray, ub: np.ndarray) -> None:
+        """Take the bounds ``lb``, ``ub`` (this node's shape) and classify the rows (free, equality, inequality)."""
+        n = lb.size
+        self.lb[:], self.ub[:] = lb, ub
         free = np.isneginf(lb) & np.isposinf(ub)
         equality = ~free & (np.abs(lb - ub) <= EQUALITY_TOL)
         qp.kind[t, :n] = np.where(free, FREE, np.where(equality, EQUALITY, INEQUALITY))
@@ -90,6 +95,13 @@ class StagewiseADMM:
         self.factorised = False
         """Whether ``P``, ``K``, ``L`` are the factors of the current ``ρ`` (set by :meth:`run`; every QP starts with
         :meth:`assign_rho`, which clears it)."""
+
+    def update_bounds(self, bounds: list[tuple[np.ndarray, np.ndarray]]) -> None:
+        """New values of the rows' bounds, of the shapes the QP was made with (the ADMM state is kept)."""
+        for t, (row, (lb, ub)) in enumerate(zip(self.rows, bounds)):
+            row.bound(self, t, lb, ub)
+        self._args = (self.ndx, self.nu, bounds)
+        self.factorised = False
 
     _STATE = ("z", "y", "rho", "dx_s", "du_s", "dx_bar_s", "du_bar_s", "P_s", "p_s", "Pd_s", "K_s", "k_s", "L_s")
 
