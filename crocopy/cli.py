@@ -159,6 +159,14 @@ def _list(args: argparse.Namespace) -> int:
     return 0
 
 
+def one_iteration_each_way(solver_class: type, problem: object, xs: list, us: list) -> None:
+    """``crocopy solve``'s warm-up: one iteration from the guess (gaps open), one from its result flagged feasible
+    (box steps): every kernel the solve calls, with its argument types."""
+    first = solver_class(problem)
+    first.solve(xs, us, 1, False)
+    solver_class(problem).solve(first.xs, first.us, 1, True)
+
+
 def _solve(args: argparse.Namespace) -> int:
     import crocopy
 
@@ -167,16 +175,10 @@ def _solve(args: argparse.Namespace) -> int:
     spec = registry.get(args.problem)
     problem, xs, us = spec.build(crocopy)
     solver_class = getattr(crocopy, SOLVERS[args.solver])
-
-    def one_iteration_each_way() -> None:
-        """One iteration from the guess (gaps open), one from its result flagged feasible (box steps)."""
-        first = solver_class(problem)
-        first.solve(xs, us, 1, False)
-        solver_class(problem).solve(first.xs, first.us, 1, True)
-
     html = None if args.no_html else args.html
     display_robot = Deferred(_display_robot, problem)  # if kernels compile, the meshes load meanwhile
-    warm_up_kernels(one_iteration_each_way, CompileProgress(on_compile=display_robot.start if html else None))
+    warm_up_kernels(lambda: one_iteration_each_way(solver_class, problem, xs, us),
+                    CompileProgress(on_compile=display_robot.start if html else None))
     solver = solver_class(problem)
     if not args.quiet:
         solver.setCallbacks([crocopy.CallbackVerbose()])
@@ -260,6 +262,15 @@ def _compile(args: argparse.Namespace) -> int:
 
     from .problems import registry
 
+    if args.solve is not None:  # what `crocopy solve PROBLEM --solver S` calls, only (the wheel build's warm-up)
+        problem, xs, us = registry.get(args.solve).build(crocopy)
+        solver_class = getattr(crocopy, SOLVERS[args.solver])
+        warm_up_kernels(lambda: one_iteration_each_way(solver_class, problem, xs, us))
+        missing = [k.py_func.__qualname__ for k in crocopy.kernels.KERNELS
+                   if k.signatures and not crocopy.kernels.is_cached(k)]
+        print(f"kernels of `crocopy solve {args.solve} --solver {args.solver}` ready"
+              + (f"; not cached: {', '.join(missing)}" if missing else ""))
+        return 1 if missing else 0
     runs = [(registry.get(name).build, [getattr(crocopy, SOLVERS[k]) for k in keys]) for name, keys in COMPILE_RUNS]
     runs.append((registry.get("arm").build, [crocopy.SolverSQP, crocopy.SolverCSQP]))  # their QP and glue kernels
     runs.append((_threaded_python_reach, [crocopy.SolverFDDP]))  # re-costing, two threads' ranges
@@ -428,6 +439,8 @@ def check_args(args: argparse.Namespace) -> str | None:
             args.plot, error = _plot_file(args.plot)
             error = error or _unwritable(args.plot, "--plot")
         return error
+    if args.command == "compile" and args.solve is not None:
+        return _unknown_problems([args.solve])
     if args.command in ("table1", "bench"):
         # with --compat, --problems names Crocoddyl's scripts and gaits, checked by crocopy.bench.compat
         error = None if getattr(args, "compat", False) else _unknown_problems(args.problems)
@@ -505,7 +518,11 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--runs", type=_positive_int, default=3,
                        help="with --batch/--scaling: repetitions (median reported)")
     command("list", _list, "list the bundled problems")
-    command("compile", _compile, "compile the numba kernels ahead (once after installing; solves then start at once)")
+    compile_ = command("compile", _compile,
+                       "compile the numba kernels ahead (once after installing; solves then start at once)")
+    compile_.add_argument("--solve", default=None, metavar="PROBLEM",
+                          help="only the kernels of `crocopy solve PROBLEM --solver S` (see `crocopy list`)")
+    compile_.add_argument("--solver", choices=sorted(SOLVERS), default="boxfddp", help="with --solve: the solver")
     solve = command("solve", _solve, "solve a problem and write its meshcat animation")
     solve.add_argument("problem", nargs="?", default="jump", help="problem name, see `crocopy list` (default: jump)")
     solve.add_argument("--solver", choices=sorted(SOLVERS), default="boxfddp")
