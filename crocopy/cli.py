@@ -508,6 +508,10 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--first-solve", action="store_true",
                        help="a whole `crocopy solve` with its HTML, with empty and with filled caches: first "
                             "iteration, solve, HTML export, CPU (crocopy.bench.first_solve; first --problems)")
+    bench.add_argument("--fresh-install", action="store_true",
+                       help="with --first-solve or --vs crocoddyl: first install --source into a new venv (pip install"
+                            " .), then time its first solve (crocopy.bench.fresh_install)")
+    bench.add_argument("--source", default=".", help="with --fresh-install: the crocopy checkout to install (.)")
     bench.add_argument("--user-residual", action="store_true",
                        help="the Talos-arm reach with its goal as the built-in residual, a ResidualModelNumba and a "
                             "Python subclass, ms per iteration and ratios (crocopy.bench.user_residual)")
