@@ -149,6 +149,18 @@ class Deferred:
         return self.wait()
 
 
+class AfterFirstIteration:
+    """A solver callback calling ``action()`` once, at the end of the first iteration (after the verbose line)."""
+
+    def __init__(self, action: Callable[[], object]) -> None:
+        self.action: Callable[[], object] | None = action
+
+    def __call__(self, solver: object) -> None:
+        if self.action is not None:
+            action, self.action = self.action, None
+            action()
+
+
 def _list(args: argparse.Namespace) -> int:
     from .problems import registry
 
@@ -176,14 +188,16 @@ def _solve(args: argparse.Namespace) -> int:
     problem, xs, us = spec.build(crocopy)
     solver_class = getattr(crocopy, SOLVERS[args.solver])
     html = None if args.no_html else args.html
-    display_robot = Deferred(_display_robot, problem)  # if kernels compile, the meshes load meanwhile
+    display_robot = Deferred(_display_robot, problem)  # loads while kernels compile, or from the first iteration
     warm_up_kernels(lambda: one_iteration_each_way(solver_class, problem, xs, us),
                     CompileProgress(on_compile=display_robot.start if html else None))
     solver = solver_class(problem)
     if not args.quiet:
         solver.setCallbacks([crocopy.CallbackVerbose()])
     logger = crocopy.CallbackLogger()
-    solver.setCallbacks([*solver.getCallbacks(), logger])
+    # The robot's meshes load on a thread (Pinocchio parsing them, GIL released) once the first line is out.
+    later = [AfterFirstIteration(display_robot.start)] if html else []
+    solver.setCallbacks([*solver.getCallbacks(), logger, *later])
     t0 = time.perf_counter()
     converged = solver.solve(xs, us, args.maxiter or spec.maxiter, False)
     elapsed = time.perf_counter() - t0

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import crocopy
-from crocopy.cli import EXIT_CONVERGED, EXIT_NOT_CONVERGED, EXIT_USAGE, main, warm_up_kernels
+from crocopy.cli import EXIT_CONVERGED, EXIT_NOT_CONVERGED, EXIT_USAGE, AfterFirstIteration, main, warm_up_kernels
 from crocopy.problems import registry
 
 CROCOPY = os.path.join(os.path.dirname(sys.executable), "crocopy")
@@ -312,3 +312,11 @@ def test_deferred_work_runs_in_the_background_once_started_else_when_asked_for()
     work.start()
     assert work.wait is first and work.result() == 42 and len(threads) == 2  # started once, on another thread
     assert threads[1] != threading.current_thread().name
+
+
+def test_after_first_iteration_acts_once_at_the_first_callback():
+    calls = []
+    callback = AfterFirstIteration(lambda: calls.append(len(calls)))
+    for _ in range(3):
+        callback(object())
+    assert calls == [0]
