@@ -280,7 +280,7 @@ def test_readme_lists_every_solve_choice_and_the_compile_command():
     readme = open(os.path.join(os.path.dirname(__file__), "..", "README.md"), encoding="utf-8").read()
     listed = re.search(r"`crocopy solve \[PROBLEM\] \[--solver ([a-z\\|]+)\]", readme).group(1).split("\\|")
     assert listed == sorted(SOLVERS)
-    assert "| `crocopy compile` |" in readme
+    assert "| `crocopy compile [--solve PROBLEM [--solver S]]` |" in readme
 
 
 def test_in_background_returns_the_result_or_raises_the_error_of_its_thread():
