@@ -108,6 +108,14 @@ def _display_robot(problem):
     return None
 
 
+def _display_ready(problem) -> tuple:
+    """:func:`_display_robot` and a meshcat server spawned for its export (``(None, None)`` without a robot)."""
+    from .models.display.server import spawn_meshcat_server
+
+    robot = _display_robot(problem)
+    return (robot, spawn_meshcat_server()) if robot is not None else (None, None)
+
+
 def in_background(function: Callable[..., T], *args: object) -> Callable[[], T]:
     """Start ``function(*args)`` on a daemon thread; the returned callable waits for it and returns its result
     (or raises its exception).  For work that releases the GIL (Pinocchio parsing a robot's meshes)."""
@@ -188,14 +196,14 @@ def _solve(args: argparse.Namespace) -> int:
     problem, xs, us = spec.build(crocopy)
     solver_class = getattr(crocopy, SOLVERS[args.solver])
     html = None if args.no_html else args.html
-    display_robot = Deferred(_display_robot, problem)  # loads while kernels compile, or from the first iteration
+    display_robot = Deferred(_display_ready, problem)  # loads while kernels compile, or from the first iteration
     warm_up_kernels(lambda: one_iteration_each_way(solver_class, problem, xs, us),
                     CompileProgress(on_compile=display_robot.start if html else None))
     solver = solver_class(problem)
     if not args.quiet:
         solver.setCallbacks([crocopy.CallbackVerbose()])
     logger = crocopy.CallbackLogger()
-    # The robot's meshes load on a thread (Pinocchio parsing them, GIL released) once the first line is out.
+    # The robot's meshes load (Pinocchio parsing them, GIL released) and its server starts once the first line is out.
     later = [AfterFirstIteration(display_robot.start)] if html else []
     solver.setCallbacks([*solver.getCallbacks(), logger, *later])
     t0 = time.perf_counter()
@@ -216,13 +224,13 @@ def _solve(args: argparse.Namespace) -> int:
         plot_convergence_from_logger(logger, args.plot)
         print(f"convergence plot written to {args.plot}")
     if html:
-        robot = display_robot.result()
+        robot, spawned = display_robot.result()
         if robot is None:
             print(f"no meshcat model for {args.problem}; animation not written", file=sys.stderr)
         else:
-            from .models.display.html import export_html_from_solver
+            from .models.display.html import export_html_on_server
 
-            print(f"meshcat animation written to {export_html_from_solver(robot, solver, html)}")
+            print(f"meshcat animation written to {export_html_on_server(robot, solver, html, spawned)}")
     return EXIT_CONVERGED if converged else EXIT_NOT_CONVERGED
 
 
