@@ -112,6 +112,9 @@ SHIPPED_DIR: str = os.path.join(os.path.dirname(os.path.abspath(__file__)), "_ke
 BUILD_SWITCH = "CROCOPY_BUILD_KERNEL_CACHE"
 """Set to ``"1"`` (by the wheel build only) to write every kernel compiled into :data:`SHIPPED_DIR`."""
 
+SHIPPED_SWITCH = "CROCOPY_SHIPPED_KERNELS"
+"""Set to ``"0"`` to ignore :data:`SHIPPED_DIR` (every kernel then comes from numba's cache or compiles)."""
+
 
 @functools.cache
 def _digest(path: str, size: int, mtime_ns: int) -> str:
@@ -200,7 +203,8 @@ if available:
             self.readers = [self._cache_file]
             """The cache files an entry is looked up in, in order: the shipped ones, then numba's."""
             building = os.environ.get(BUILD_SWITCH) == "1"
-            if building or os.path.isdir(SHIPPED_DIR):  # one folder per package: numba's names omit the package
+            if building or (os.environ.get(SHIPPED_SWITCH) != "0" and os.path.isdir(SHIPPED_DIR)):
+                # one folder per package: numba's file names omit the package
                 folder = os.path.join(SHIPPED_DIR, *(py_func.__module__ or "").split(".")[:-1])
                 if building:
                     os.makedirs(folder, exist_ok=True)

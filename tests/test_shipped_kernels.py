@@ -100,3 +100,10 @@ def test_the_build_backend_adds_the_dependencies_unless_switched_off(monkeypatch
     assert not any(r.startswith("numba") for r in crocopy_build.get_requires_for_build_wheel())
     monkeypatch.setenv(crocopy_build.SWITCH, "1")
     assert crocopy_build.get_requires_for_build_wheel() == ["wheel", *requirements]
+
+
+def test_the_shipped_folder_can_be_switched_off(shipped, monkeypatch):
+    monkeypatch.setenv(kernels.SHIPPED_SWITCH, "0")
+    ignoring = kernels.compiled(_quadruple)
+    assert not kernels.is_cached(ignoring)
+    assert ignoring(2.0) == 8.0 and kernel_warmup.compilations([ignoring]) == 1
