@@ -46,11 +46,11 @@ the run goes on.
 
 An installed copy may also hold kernels compiled when its wheel was built (``pip install .``, see
 ``build_support/crocopy_build.py``): numba's index and data files in :data:`SHIPPED_DIR` (a folder per
-package), read before the
-cache above and never written at run time.  An entry there is used only when everything numba keys an entry
-by matches: the numba version, the kernel's source file (its SHA-256, :func:`source_digest`) and bytecode,
-the argument types, and the CPU (name and features) the process compiles for; anything else (another
-machine, an edited kernel, another numba) finds no entry there and compiles as without it.
+package), read before the cache above and never written at run time.  An entry there is used only when
+everything numba keys an entry by matches: the numba version, the kernel's source file (its SHA-256,
+:func:`source_digest`) and bytecode, the argument types, and the CPU (name and features) the process
+compiles for; anything else (another machine, an edited kernel, another numba) finds no entry there and
+compiles as without it.  ``CROCOPY_SHIPPED_KERNELS=0`` (:data:`SHIPPED_SWITCH`) ignores that folder.
 
 A subclass that overrides a step a kernel fuses (a solver's ``computeGains``, a multibody state's
 ``integrate``, an activation's ``calc``) keeps its override: that step then runs in Python/numpy.
