@@ -111,6 +111,14 @@ def _display_robot(problem):
     return None
 
 
+def _display_ready(problem) -> tuple:
+    """:func:`_display_robot` and a meshcat server spawned for its export (``(None, None)`` without a robot)."""
+    from .models.display.server import spawn_meshcat_server
+
+    robot = _display_robot(problem)
+    return (robot, spawn_meshcat_server()) if robot is not None else (None, None)
+
+
 def in_background(function: Callable[..., T], *args: object) -> Callable[[], T]:
     """Start ``function(*args)`` on a daemon thread; the returned callable waits for it and returns its result
     (or raises its exception).  For work that releases the GIL (Pinocchio parsing a robot's meshes)."""
@@ -152,6 +160,18 @@ class Deferred:
         return self.wait()
 
 
+class AfterFirstIteration:
+    """A solver callback calling ``action()`` once, at the end of the first iteration (after the verbose line)."""
+
+    def __init__(self, action: Callable[[], object]) -> None:
+        self.action: Callable[[], object] | None = action
+
+    def __call__(self, solver: object) -> None:
+        if self.action is not None:
+            action, self.action = self.action, None
+            action()
+
+
 def _list(args: argparse.Namespace) -> int:
     from .problems import registry
 
@@ -162,6 +182,14 @@ def _list(args: argparse.Namespace) -> int:
     return 0
 
 
+def one_iteration_each_way(solver_class: type, problem: object, xs: list, us: list) -> None:
+    """``crocopy solve``'s warm-up: one iteration from the guess (gaps open), one from its result flagged feasible
+    (box steps): every kernel the solve calls, with its argument types."""
+    first = solver_class(problem)
+    first.solve(xs, us, 1, False)
+    solver_class(problem).solve(first.xs, first.us, 1, True)
+
+
 def _solve(args: argparse.Namespace) -> int:
     import crocopy
 
@@ -170,21 +198,17 @@ def _solve(args: argparse.Namespace) -> int:
     spec = registry.get(args.problem)
     problem, xs, us = spec.build(crocopy)
     solver_class = getattr(crocopy, SOLVERS[args.solver])
-
-    def one_iteration_each_way() -> None:
-        """One iteration from the guess (gaps open), one from its result flagged feasible (box steps)."""
-        first = solver_class(problem)
-        first.solve(xs, us, 1, False)
-        solver_class(problem).solve(first.xs, first.us, 1, True)
-
     html = None if args.no_html else args.html
-    display_robot = Deferred(_display_robot, problem)  # if kernels compile, the meshes load meanwhile
-    warm_up_kernels(one_iteration_each_way, CompileProgress(on_compile=display_robot.start if html else None))
+    display_robot = Deferred(_display_ready, problem)  # loads while kernels compile, or from the first iteration
+    warm_up_kernels(lambda: one_iteration_each_way(solver_class, problem, xs, us),
+                    CompileProgress(on_compile=display_robot.start if html else None))
     solver = solver_class(problem)
     if not args.quiet:
         solver.setCallbacks([crocopy.CallbackVerbose()])
     logger = crocopy.CallbackLogger()
-    solver.setCallbacks([*solver.getCallbacks(), logger])
+    # The robot's meshes load (Pinocchio parsing them, GIL released) and its server starts once the first line is out.
+    later = [AfterFirstIteration(display_robot.start)] if html else []
+    solver.setCallbacks([*solver.getCallbacks(), logger, *later])
     t0 = time.perf_counter()
     converged = solver.solve(xs, us, args.maxiter or spec.maxiter, False)
     elapsed = time.perf_counter() - t0
@@ -203,13 +227,13 @@ def _solve(args: argparse.Namespace) -> int:
         plot_convergence_from_logger(logger, args.plot)
         print(f"convergence plot written to {args.plot}")
     if html:
-        robot = display_robot.result()
+        robot, spawned = display_robot.result()
         if robot is None:
             print(f"no meshcat model for {args.problem}; animation not written", file=sys.stderr)
         else:
-            from .models.display.html import export_html_from_solver
+            from .models.display.html import export_html_on_server
 
-            print(f"meshcat animation written to {export_html_from_solver(robot, solver, html)}")
+            print(f"meshcat animation written to {export_html_on_server(robot, solver, html, spawned)}")
     return EXIT_CONVERGED if converged else EXIT_NOT_CONVERGED
 
 
@@ -263,6 +287,15 @@ def _compile(args: argparse.Namespace) -> int:
 
     from .problems import registry
 
+    if args.solve is not None:  # what `crocopy solve PROBLEM --solver S` calls, only (the wheel build's warm-up)
+        problem, xs, us = registry.get(args.solve).build(crocopy)
+        solver_class = getattr(crocopy, SOLVERS[args.solver])
+        warm_up_kernels(lambda: one_iteration_each_way(solver_class, problem, xs, us))
+        missing = [k.py_func.__qualname__ for k in crocopy.kernels.KERNELS
+                   if k.signatures and not crocopy.kernels.is_cached(k)]
+        print(f"kernels of `crocopy solve {args.solve} --solver {args.solver}` ready"
+              + (f"; not cached: {', '.join(missing)}" if missing else ""))
+        return 1 if missing else 0
     runs = [(registry.get(name).build, [getattr(crocopy, SOLVERS[k]) for k in keys]) for name, keys in COMPILE_RUNS]
     runs.append((registry.get("arm").build, [crocopy.SolverSQP, crocopy.SolverCSQP]))  # their QP and glue kernels
     runs.append((_threaded_python_reach, [crocopy.SolverFDDP, crocopy.SolverSQP]))  # re-costing, two threads' ranges
@@ -439,6 +472,8 @@ def check_args(args: argparse.Namespace) -> str | None:
             args.plot, error = _plot_file(args.plot)
             error = error or _unwritable(args.plot, "--plot")
         return error
+    if args.command == "compile" and args.solve is not None:
+        return _unknown_problems([args.solve])
     if args.command in ("table1", "bench"):
         # with --compat (--mim-examples), --problems names Crocoddyl's (mim-solvers') scripts, checked there
         scripts = getattr(args, "compat", False) or getattr(args, "mim_examples", False)
@@ -512,6 +547,10 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--first-solve", action="store_true",
                        help="a whole `crocopy solve` with its HTML, with empty and with filled caches: first "
                             "iteration, solve, HTML export, CPU (crocopy.bench.first_solve; first --problems)")
+    bench.add_argument("--fresh-install", action="store_true",
+                       help="with --first-solve or --vs crocoddyl: first install --source into a new venv (pip install"
+                            " .), then time its first solve (crocopy.bench.fresh_install)")
+    bench.add_argument("--source", default=".", help="with --fresh-install: the crocopy checkout to install (.)")
     bench.add_argument("--user-residual", action="store_true",
                        help="the Talos-arm reach with its goal as the built-in residual, a ResidualModelNumba and a "
                             "Python subclass, ms per iteration and ratios (crocopy.bench.user_residual)")
@@ -522,7 +561,11 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--runs", type=_positive_int, default=3,
                        help="with --batch/--scaling: repetitions (median reported)")
     command("list", _list, "list the bundled problems")
-    command("compile", _compile, "compile the numba kernels ahead (once after installing; solves then start at once)")
+    compile_ = command("compile", _compile,
+                       "compile the numba kernels ahead (once after installing; solves then start at once)")
+    compile_.add_argument("--solve", default=None, metavar="PROBLEM",
+                          help="only the kernels of `crocopy solve PROBLEM --solver S` (see `crocopy list`)")
+    compile_.add_argument("--solver", choices=sorted(SOLVERS), default="boxfddp", help="with --solve: the solver")
     solve = command("solve", _solve, "solve a problem and write its meshcat animation")
     solve.add_argument("problem", nargs="?", default="jump", help="problem name, see `crocopy list` (default: jump)")
     solve.add_argument("--solver", choices=sorted(SOLVERS), default="boxfddp")

@@ -44,6 +44,14 @@ cannot be read back (truncated by a full disk or a killed write, garbage, anothe
 is deleted with a one-line warning on the ``"crocopy"`` logger and the kernel is compiled again, so
 the run goes on.
 
+An installed copy may also hold kernels compiled when its wheel was built (``pip install .``, see
+``build_support/crocopy_build.py``): numba's index and data files in :data:`SHIPPED_DIR` (a folder per
+package), read before the cache above and never written at run time.  An entry there is used only when
+everything numba keys an entry by matches: the numba version, the kernel's source file (its SHA-256,
+:func:`source_digest`) and bytecode, the argument types, and the CPU (name and features) the process
+compiles for; anything else (another machine, an edited kernel, another numba) finds no entry there and
+compiles as without it.  ``CROCOPY_SHIPPED_KERNELS=0`` (:data:`SHIPPED_SWITCH`) ignores that folder.
+
 A subclass that overrides a step a kernel fuses (a solver's ``computeGains``, a multibody state's
 ``integrate``, an activation's ``calc``) keeps its override: that step then runs in Python/numpy.
 This is logged once per class and step at DEBUG level on the ``"crocopy"`` logger
@@ -53,6 +61,8 @@ This is logged once per class and step at DEBUG level on the ``"crocopy"`` logge
 from __future__ import annotations
 
 import contextlib
+import functools
+import hashlib
 import inspect
 import logging
 import os
@@ -94,6 +104,33 @@ def cache_dir_fallback(package_dir: str, numba_cache_dir: str) -> str:
 
 cache_dir: str = cache_dir_fallback(os.path.dirname(__file__), numba.config.CACHE_DIR) if available else ""
 """Where :func:`compiled` caches the kernels (``""``: beside the sources), see :func:`cache_dir_fallback`."""
+
+
+SHIPPED_DIR: str = os.path.join(os.path.dirname(os.path.abspath(__file__)), "_kernel_cache")
+"""Where a wheel ships the kernels compiled when it was built (absent in a checkout or an editable install)."""
+
+BUILD_SWITCH = "CROCOPY_BUILD_KERNEL_CACHE"
+"""Set to ``"1"`` (by the wheel build only) to write every kernel compiled into :data:`SHIPPED_DIR`."""
+
+SHIPPED_SWITCH = "CROCOPY_SHIPPED_KERNELS"
+"""Set to ``"0"`` to ignore :data:`SHIPPED_DIR` (every kernel then comes from numba's cache or compiles)."""
+
+
+@functools.cache
+def _digest(path: str, size: int, mtime_ns: int) -> str:
+    with open(path, "rb") as f:
+        return hashlib.sha256(f.read()).hexdigest()
+
+
+def source_digest(function: Callable) -> str:
+    """SHA-256 of the source file defining ``function`` (what the entries of :data:`SHIPPED_DIR` are stamped
+    with, whatever numba's own stamp); ``""`` when there is no such file."""
+    path = function.__code__.co_filename
+    try:
+        stat = os.stat(path)
+    except OSError:
+        return ""
+    return _digest(path, stat.st_size, stat.st_mtime_ns)
 
 
 def _identity(path: str) -> tuple[int, int, int]:
@@ -163,6 +200,18 @@ if available:
             super().__init__(py_func)
             self._cache_file = _GuardedCacheFile(self._cache_path, self._impl.filename_base,
                                                  self._impl.locator.get_source_stamp())
+            self.readers = [self._cache_file]
+            """The cache files an entry is looked up in, in order: the shipped ones, then numba's."""
+            building = os.environ.get(BUILD_SWITCH) == "1"
+            if building or (os.environ.get(SHIPPED_SWITCH) != "0" and os.path.isdir(SHIPPED_DIR)):
+                # one folder per package: numba's file names omit the package
+                folder = os.path.join(SHIPPED_DIR, *(py_func.__module__ or "").split(".")[:-1])
+                if building:
+                    os.makedirs(folder, exist_ok=True)
+                shipped = _GuardedCacheFile(folder, self._impl.filename_base, source_digest(py_func))
+                self.readers.insert(0, shipped)
+                if building:
+                    self.readers, self._cache_file = [shipped], shipped
 
         wrapperless = False
         """True while the dispatcher loads or saves an entry compiled without the Python wrapper."""
@@ -174,19 +223,21 @@ if available:
         def _load_overload(self, sig, target_context):
             if not self._enabled:
                 return None
-            data = self._cache_file.load(self._index_key(sig, target_context.codegen()))
-            if data is None:
-                return None
-            try:
-                fndesc, signature = data[1], data[3]
-                args = tuple(_sigutils.normalize_signature(sig)[0])
-                expected = self._py_func.__qualname__, self._py_func.__module__ or _dynamic_modname, args
-                if (fndesc.qualname, fndesc.modname, tuple(signature.args)) != expected:
-                    raise TypeError(f"an entry of {fndesc.modname}.{fndesc.qualname}{tuple(signature.args)}")
-                return self._impl.rebuild(target_context, data)
-            except Exception as exc:  # noqa: BLE001 - a foreign or damaged payload fails in many ways
-                set_aside(*self._cache_file.last_data, exc)
-                return None
+            key = self._index_key(sig, target_context.codegen())
+            for reader in self.readers:
+                data = reader.load(key)
+                if data is None:
+                    continue
+                try:
+                    fndesc, signature = data[1], data[3]
+                    args = tuple(_sigutils.normalize_signature(sig)[0])
+                    expected = self._py_func.__qualname__, self._py_func.__module__ or _dynamic_modname, args
+                    if (fndesc.qualname, fndesc.modname, tuple(signature.args)) != expected:
+                        raise TypeError(f"an entry of {fndesc.modname}.{fndesc.qualname}{tuple(signature.args)}")
+                    return self._impl.rebuild(target_context, data)
+                except Exception as exc:  # noqa: BLE001 - a foreign or damaged payload fails in many ways
+                    set_aside(*reader.last_data, exc)
+            return None
 
     from numba.core import event as _event
     from numba.core.compiler_lock import global_compiler_lock as _compiler_lock
@@ -375,17 +426,17 @@ carray = numba.carray if available else None
 
 
 def is_cached(kernel: object) -> bool:
-    """True when numba's on-disk cache holds a usable index for ``kernel``: one written by this numba
-    for the kernel's current source, listing at least one compiled signature.  Nothing is compiled
+    """True when numba's on-disk cache (or :data:`SHIPPED_DIR`) holds a usable index for ``kernel``: one written
+    by this numba for the kernel's current source, listing at least one compiled signature.  Nothing is compiled
     or loaded; a dispatcher without a cache counts as not cached."""
     cache = getattr(kernel, "_cache", None)
-    index = getattr(cache, "_cache_file", None)
-    if index is None:
-        return False
-    try:
-        return bool(index._load_index())
-    except Exception:  # noqa: BLE001 - whatever makes the index unreadable makes the cache unusable
-        return False
+    for index in getattr(cache, "readers", ()):
+        try:
+            if index._load_index():
+                return True
+        except Exception:  # noqa: BLE001 - whatever makes the index unreadable makes the cache unusable
+            pass
+    return False
 
 
 def cache_is_cold(kernels: Iterable[object] | None = None) -> bool:

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import crocopy
-from crocopy.cli import EXIT_CONVERGED, EXIT_NOT_CONVERGED, EXIT_USAGE, main, warm_up_kernels
+from crocopy.cli import EXIT_CONVERGED, EXIT_NOT_CONVERGED, EXIT_USAGE, AfterFirstIteration, main, warm_up_kernels
 from crocopy.problems import registry
 
 CROCOPY = os.path.join(os.path.dirname(sys.executable), "crocopy")
@@ -198,7 +198,8 @@ def test_warm_up_is_silent_when_the_kernels_are_cached(capsys):
 def test_first_run_notice_with_an_empty_kernel_cache(tmp_path):
     """A fresh numba cache: the notice appears, and the timed solve compiles nothing more (its ms/iteration
     is that of a warm run, far below the compilation's seconds)."""
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache"), "OMP_NUM_THREADS": "1"}
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache"), "OMP_NUM_THREADS": "1",
+           "CROCOPY_SHIPPED_KERNELS": "0"}  # not the kernels a wheel ships
     run = subprocess.run([CROCOPY, "solve", "pend", "--quiet", "--no-html"], capture_output=True, text=True,
                          env=env, cwd=tmp_path)
     assert run.returncode == 0, run.stderr
@@ -280,7 +281,7 @@ def test_readme_lists_every_solve_choice_and_the_compile_command():
     readme = open(os.path.join(os.path.dirname(__file__), "..", "README.md"), encoding="utf-8").read()
     listed = re.search(r"`crocopy solve \[PROBLEM\] \[--solver ([a-z\\|]+)\]", readme).group(1).split("\\|")
     assert listed == sorted(SOLVERS)
-    assert "| `crocopy compile` |" in readme
+    assert "| `crocopy compile [--solve PROBLEM [--solver S]]` |" in readme
 
 
 def test_in_background_returns_the_result_or_raises_the_error_of_its_thread():
@@ -312,3 +313,11 @@ def test_deferred_work_runs_in_the_background_once_started_else_when_asked_for()
     work.start()
     assert work.wait is first and work.result() == 42 and len(threads) == 2  # started once, on another thread
     assert threads[1] != threading.current_thread().name
+
+
+def test_after_first_iteration_acts_once_at_the_first_callback():
+    calls = []
+    callback = AfterFirstIteration(lambda: calls.append(len(calls)))
+    for _ in range(3):
+        callback(object())
+    assert calls == [0]

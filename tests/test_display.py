@@ -349,3 +349,15 @@ def test_forces_from_a_real_contact_problem(anymal, tmp_path, monkeypatch):
         solver.setCallbacks([crocopy.CallbackDisplay(d), logger])
         solver.solve([], [], 2)
         assert calls == [solver.problem.T + 1] * len(logger.iters) and calls
+
+
+def test_a_spawned_server_is_connected_quietly_and_ended_with_its_viewer(capsys):
+    from crocopy.models.display.server import connect_spawned, spawn_meshcat_server, stop_meshcat_server
+
+    proc, zmq_url = spawned = spawn_meshcat_server()
+    assert proc.poll() is None and zmq_url.startswith("tcp://")
+    viewer = connect_spawned(spawned, timeout=30)
+    viewer["/box"].set_transform(np.eye(4))  # a request the server answers (else TimeoutError)
+    stop_meshcat_server(viewer)
+    assert proc.poll() is not None  # ended with the viewer
+    assert "visualizer" not in capsys.readouterr().out  # no URL printed

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import base64
+import hashlib
 import json
 import re
 import zlib
@@ -307,3 +308,21 @@ def test_fit_view_camera_scene_shift_and_live_widening(tmp_path):
         d.setCameraPosition([4.0, 2.0, 3.0])
         with pytest.raises(ValueError, match="target"):
             d.setCameraTarget([1.0, np.nan, 0.0])
+
+
+def test_packed_collada_is_kept_in_the_user_cache_and_a_damaged_file_is_packed_again(monkeypatch, tmp_path):
+    monkeypatch.setenv("CROCOPY_CACHE_DIR", str(tmp_path))
+    packs = []
+    pack = collada.pack
+    monkeypatch.setattr(collada, "pack", lambda text: packs.append(text) or pack(text))
+    text = _dae(["0.5", "-1.25e-3", "7"], ["0", "1", "2", "2", "1", "0"])
+    for process in range(3):  # each a later process: nothing in memory
+        monkeypatch.setattr(page, "_COLLADA_CACHE", {})
+        packed = page.packed_collada(text)
+        assert collada.unpack(packed).split() == text.split() and [a[0] for a in packed.arrays] == ["f", "i"]
+        (cached,) = (tmp_path / "display").glob("*.npz")
+        assert cached == page.packed_file(hashlib.sha1(text.encode()).digest())
+        if process == 1:
+            cached.write_bytes(cached.read_bytes()[:40])  # truncated: read as missing, packed and written again
+    assert len(packs) == 2  # the first process, and the one after the damage
+    assert page._read_packed(cached) is not None

@@ -140,7 +140,7 @@ def test_a_run_on_a_cache_with_a_file_cut_in_half_succeeds_with_one_warning_line
 def test_an_empty_cache_folder_is_cold_for_every_kernel(tmp_path):
     script = ("import crocopy\nfrom crocopy import kernels\n"
               "print(len(kernels.KERNELS), kernels.cache_is_cold(), any(map(kernels.is_cached, kernels.KERNELS)))")
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path), kernels.SHIPPED_SWITCH: "0"}  # not the wheel's kernels
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, cwd=tmp_path,
                           timeout=300)
     assert done.returncode == 0, done.stderr
@@ -151,7 +151,7 @@ def test_an_empty_cache_folder_is_cold_for_every_kernel(tmp_path):
 @pytest.mark.slow
 def test_crocopy_compile_fills_an_empty_cache_then_solve_compiles_nothing(tmp_path):
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba"), "CROCOPY_CACHE_DIR": str(tmp_path / "user"),
-           "OMP_NUM_THREADS": "1"}
+           "OMP_NUM_THREADS": "1", kernels.SHIPPED_SWITCH: "0"}
     first = subprocess.run([CROCOPY, "compile"], capture_output=True, text=True, env=env, cwd=tmp_path)
     assert first.returncode == 0, first.stderr
     assert first.stderr.startswith(kernel_warmup.COMPILING_NOTICE)

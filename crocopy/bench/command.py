@@ -73,9 +73,18 @@ def run_bench(args: argparse.Namespace) -> int:
         return 0
     if args.first_solve:
         from .first_solve import run_first_solve_bench
+        from .fresh_install import run_fresh_install_bench
 
         problem = args.problems[0] if args.problems else "jump"
-        print(run_first_solve_bench(problem, args.solver, repeats=args.repeats or 2))
+        if not args.fresh_install:
+            print(run_first_solve_bench(problem, args.solver, repeats=args.repeats or 2))
+            return 0
+        try:
+            _report(run_fresh_install_bench(args.source, problem, args.solver, repeats=args.repeats or 2), args.out,
+                    announce=True)
+        except ValueError as exc:
+            print(exc.args[0], file=sys.stderr)
+            return 2
         return 0
     if args.user_residual:
         from .user_residual import run_user_residual_bench
@@ -123,6 +132,10 @@ def _bench_vs(args: argparse.Namespace) -> int:
     progress = functools.partial(print, file=sys.stderr, flush=True)
     parts = []
     try:
+        if args.fresh_install:
+            from .fresh_install import check_source
+
+            check_source(args.source)  # refused before any work
         if shipped and args.shipped:
             from .compat import jobs
 
@@ -147,7 +160,11 @@ def _bench_vs(args: argparse.Namespace) -> int:
 
             progress("compiled nodes: every builder, script and gait")
             parts.append(run_coverage([], [], progress))
-    except (BenchDependencyError, KeyError) as exc:
+        if args.fresh_install:
+            from .fresh_install import run_fresh_install_bench
+
+            parts.append(run_fresh_install_bench(args.source, progress=progress))
+    except (BenchDependencyError, KeyError, ValueError) as exc:
         print(exc.args[0], file=sys.stderr)
         return 2
     _report("\n".join(parts), args.out, announce=True)

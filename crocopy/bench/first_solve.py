@@ -100,15 +100,18 @@ def _values(run: Run) -> dict[str, float | None]:
 
 
 def measure(problem: str = "jump", solver: str = "boxfddp", repeats: int = 2, env: Mapping[str, str] | None = None,
-            progress: Callable[[str], None] | None = None) -> dict[str, dict[str, list]]:
-    """``repeats`` rounds of (fresh run, warm run): the samples by run kind (``fresh``/``warm``) and measure."""
+            progress: Callable[[str], None] | None = None,
+            command: Sequence[str] | None = None) -> dict[str, dict[str, list]]:
+    """``repeats`` rounds of (fresh run, warm run): the samples by run kind (``fresh``/``warm``) and measure.
+    ``command``: the ``crocopy`` command to run (default: this environment's)."""
     base = {**(os.environ if env is None else env), "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
     samples: dict[str, dict[str, list]] = {kind: {k: [] for k in KINDS} for kind in ("fresh", "warm")}
     for r in range(repeats):
         with tempfile.TemporaryDirectory(prefix="crocopy-first-solve-cache-") as cache:
             env_r = {**base, "NUMBA_CACHE_DIR": os.path.join(cache, "numba"),
                      "CROCOPY_CACHE_DIR": os.path.join(cache, "crocopy")}
-            argv = [*crocopy_command(), "solve", problem, "--solver", solver, "--html", os.path.join(cache, "a.html")]
+            argv = [*(command or crocopy_command()), "solve", problem, "--solver", solver,
+                    "--html", os.path.join(cache, "a.html")]
             for kind in ("fresh", "warm"):
                 run = time_run(argv, env_r, problem)
                 if run.returncode not in (0, 1) or run.first_iteration is None:
@@ -129,14 +132,17 @@ def _s(value: float | bool | None) -> str:
     return "-" if value is None else f"{value:.2f}"
 
 
-def format_report(samples: Mapping[str, Mapping[str, Sequence]], problem: str, solver: str) -> str:
-    """Markdown table: per run kind and measure, the median and every sample (seconds)."""
+def format_report(samples: Mapping[str, Mapping[str, Sequence]], problem: str, solver: str,
+                  title: str | None = None) -> str:
+    """Markdown table: per run kind and measure, the median and every sample (seconds).  ``title``: a heading
+    and paragraph in place of the default heading (the command is then named before the table's description)."""
     load = os.getloadavg()
-    lines = [f"## A whole first solve: `crocopy solve {problem} --solver {solver} --html FILE`", "",
-             "Seconds from the launch, fresh (empty caches) and warm (the same caches again); `html` is the"
-             " animation's export, `CPU` the process's user + system seconds; `notice` whether the compile notice"
-             f" was printed. Medians of the rounds (load average {load[0]:.2f} at the end, {os.cpu_count()} CPUs).",
-             "", "| run | measure | median | samples |", "|---|---|---|---|"]
+    command = f"`crocopy solve {problem} --solver {solver} --html FILE`"
+    lines = [f"## A whole first solve: {command}", ""] if title is None else [title, "", f"{command}:"]
+    lines += ["Seconds from the launch, fresh (empty caches) and warm (the same caches again); `html` is the"
+              " animation's export, `CPU` the process's user + system seconds; `notice` whether the compile notice"
+              f" was printed. Medians of the rounds (load average {load[0]:.2f} at the end, {os.cpu_count()} CPUs).",
+              "", "| run | measure | median | samples |", "|---|---|---|---|"]
     for kind, by in samples.items():
         for measure_name, values in by.items():
             if measure_name == "notice":

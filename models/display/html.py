@@ -26,6 +26,7 @@ from meshcat.animation import Animation
 
 from .meshcat_display import MeshcatDisplay
 from .page import keyed_animation, meshcat_commands, read_page, write_page
+from .server import connect_spawned, stop_meshcat_server
 
 __all__ = ["record_animation", "export_animation", "export_html", "export_html_from_solver", "static_html_commands"]
 
@@ -161,6 +162,19 @@ def export_html_from_solver(
     """Export a solver's trajectory (with contact forces, cones and frame trajectories) to HTML."""
     with _quiet_display(robot, display_kwargs) as display:
         return display.exportHTMLFromSolver(solver, os.fspath(path), factor=factor, fps=fps)
+
+
+def export_html_on_server(
+    robot: Any, solver: Any, path: str | os.PathLike, spawned: tuple, **display_kwargs: Any
+) -> str:
+    """:func:`export_html_from_solver` through a server started ahead (``spawned``, from
+    :func:`~crocopy.models.display.server.spawn_meshcat_server`, e.g. on a thread while the solve runs), which
+    is ended afterwards."""
+    viewer = connect_spawned(spawned)
+    try:
+        return export_html_from_solver(robot, solver, path, viewer=viewer, **display_kwargs)
+    finally:
+        stop_meshcat_server(viewer)
 
 
 def static_html_commands(path: str | os.PathLike) -> list[dict]:

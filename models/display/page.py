@@ -4,12 +4,15 @@ meshcat's own export (``Visualizer.static_html``) inlines the viewer's JavaScrip
 base64 ``data:`` URL per scene command, so every mesh is stored as often as the robot uses it
 (ANYmal's four legs share three meshes) and Collada meshes as text. This page instead holds:
 
-* an index (JSON) and one base64 string: the deflate (zlib) stream of a bundle of sections;
+* an index (JSON) and one base64 string: the deflate (zlib, level 1: a few percent larger than level 6, three
+  times faster) stream of a bundle of sections;
 * the sections: the viewer's JavaScript, the scene commands (msgpack, as meshcat sends them) and
   the payloads, each stored once by content. A payload is any string or binary value of at least
   :data:`MIN_PAYLOAD` bytes inside a command (mesh files, vertex and index arrays, textures); the
   command keeps the marker ``"\\u0000crocopy-blob:<k>"`` in its place;
-* Collada text packed by :mod:`.collada` (numbers as integers), rebuilt exactly in the browser;
+* Collada text packed by :mod:`.collada` (numbers as integers), rebuilt exactly in the browser; the packed
+  form of each text is kept in the user cache (:func:`packed_collada`), so a robot's meshes are packed once
+  per machine, not at every export;
 * animation tracks in three.js' ``times`` / ``values`` form as float32 arrays (the precision
   three.js plays them at), with the keys inside runs of equal values removed (the interpolation
   between the two ends of a run gives the same value); the animation comes after the scene.
@@ -22,17 +25,21 @@ back into each decoded command before meshcat handles it.
 from __future__ import annotations
 
 import base64
+import contextlib
 import hashlib
 import html as html_module
 import json
 import os
 import re
 import zlib
+from pathlib import Path
 from typing import Any
 
 import meshcat
 import numpy as np
 import umsgpack
+
+from crocopy.user_cache import user_cache_dir
 
 from . import collada
 
@@ -170,11 +177,55 @@ class _Bundle:
 _COLLADA_CACHE: dict[bytes, collada.PackedCollada] = {}
 
 
-def _pack_collada(bundle: _Bundle, text: str) -> dict:
+def _packer_version() -> str:
+    """What tells one version of the packing from another: the SHA-1 of ``collada.py``."""
+    with open(collada.__file__, "rb") as f:
+        return hashlib.sha1(f.read()).hexdigest()[:16]
+
+
+def packed_file(key: bytes) -> Path:
+    """The user-cache file (:func:`crocopy.user_cache.user_cache_dir`) of the packed Collada text whose SHA-1 is
+    ``key``, for this version of the packing."""
+    return user_cache_dir("display") / f"{key.hex()}-{_packer_version()}.npz"
+
+
+def _read_packed(path: Path) -> collada.PackedCollada | None:
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            return collada.PackedCollada(
+                pieces=json.loads(str(z["pieces"])), arrays=[tuple(a) for a in json.loads(str(z["arrays"]))],
+                digits=z["digits"], flags=z["flags"], exponents=z["exponents"], indices=z["indices"])
+    except Exception:  # noqa: BLE001 - missing, truncated or foreign: packed again
+        return None
+
+
+def _write_packed(path: Path, p: collada.PackedCollada) -> None:
+    temporary = path.with_name(f"{path.name}.{os.getpid()}.tmp.npz")
+    with contextlib.suppress(OSError):
+        path.parent.mkdir(parents=True, exist_ok=True)
+        np.savez(temporary, pieces=json.dumps(p.pieces), arrays=json.dumps(p.arrays), digits=p.digits,
+                 flags=p.flags, exponents=p.exponents, indices=p.indices)
+        os.replace(temporary, path)
+    with contextlib.suppress(OSError):
+        temporary.unlink()
+
+
+def packed_collada(text: str) -> collada.PackedCollada:
+    """:func:`collada.pack` of ``text``, kept in memory and in the user cache (a robot's meshes are packed once per
+    machine, not once per export); an unreadable cache file is packed again and replaced."""
     key = hashlib.sha1(text.encode("utf-8")).digest()
     if key not in _COLLADA_CACHE:
-        _COLLADA_CACHE[key] = collada.pack(text)
-    p = _COLLADA_CACHE[key]
+        path = packed_file(key)
+        p = _read_packed(path)
+        if p is None:
+            p = collada.pack(text)
+            _write_packed(path, p)
+        _COLLADA_CACHE[key] = p
+    return _COLLADA_CACHE[key]
+
+
+def _pack_collada(bundle: _Bundle, text: str) -> dict:
+    p = packed_collada(text)
     return {
         "pieces": bundle.add(json.dumps(p.pieces).encode("utf-8")),
         "arrays": [list(a) for a in p.arrays],
@@ -200,7 +251,7 @@ def write_page(commands: list[dict], path: str | os.PathLike, title: str = "croc
     ordered += [c for c in commands if c.get("type") == "set_animation"]
     packed = [umsgpack.packb(bundle.take_payloads(compact_animation(c))) for c in ordered]
     index = {"viewer": viewer, "commands": [bundle.add(p) for p in packed], "blobs": bundle.blobs, "mark": BLOB_MARK}
-    data = base64.b64encode(zlib.compress(b"".join(bundle.chunks), 6)).decode("ascii")
+    data = base64.b64encode(zlib.compress(b"".join(bundle.chunks), 1)).decode("ascii")
     page = _TEMPLATE.format(
         title=html_module.escape(title), index=json.dumps(index, separators=(",", ":")), data=data, loader=_LOADER
     )
