@@ -229,6 +229,15 @@ def test_without_mim_solvers_the_command_names_the_bench_extra(monkeypatch, caps
     assert "bench" in capsys.readouterr().err
 
 
+def test_the_full_crocoddyl_report_says_when_the_mim_sections_were_not_run(monkeypatch):
+    from crocopy.bench.command import _mim_sections
+
+    monkeypatch.setitem(sys.modules, "mim_solvers", None)
+    sections = _mim_sections(lambda message: None, 1)
+    assert len(sections) == 1 and sections[0].startswith("## crocopy vs mim-solvers") and "Not run" in sections[0]
+    assert "mim-solvers 0.3.0" in sections[0]
+
+
 SCRIPT = """\
 import sys
 

@@ -121,6 +121,20 @@ def _bench_vs_mim(args: argparse.Namespace) -> int:
     return 0
 
 
+def _mim_sections(progress, repeats: int) -> list[str]:
+    """SolverSQP/SolverCSQP against mim-solvers and mim-solvers' own examples, when mim-solvers is installed (the
+    bench extra); else a line saying they were not run."""
+    from .mim import import_mim_solvers, run_vs_mim
+    from .mim_examples import format_table, run_mim_examples
+
+    try:
+        import_mim_solvers()
+    except ImportError as exc:
+        return [f"## crocopy vs mim-solvers\n\nNot run: {exc.args[0]}\n"]
+    progress("mim-solvers: SQP/CSQP cases, then its own examples")
+    return [run_vs_mim(None, progress=progress, repeats=repeats), format_table(run_mim_examples(progress=progress))]
+
+
 def _bench_vs(args: argparse.Namespace) -> int:
     if args.vs == "mim":
         return _bench_vs_mim(args)
@@ -160,6 +174,7 @@ def _bench_vs(args: argparse.Namespace) -> int:
 
             progress("compiled nodes: every builder, script and gait")
             parts.append(run_coverage([], [], progress))
+            parts.extend(_mim_sections(progress, args.repeats or 5))
         if args.fresh_install:
             from .fresh_install import run_fresh_install_bench
 
