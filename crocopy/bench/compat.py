@@ -329,19 +329,27 @@ def format_table(rows: Sequence[Row]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def run_compat_cli(names: Sequence[str] | None, out: str | None) -> int:
-    """The ``crocopy bench --compat`` command: run, print the table, write it to ``out``."""
+def report_cli(run: Callable[..., list[Row]], table: Callable[[Sequence[Row]], str], names: Sequence[str] | None,
+               out: str | None, refused: tuple[type[Exception], ...] = ()) -> int:
+    """A bench command over script runs: ``run(names, progress=...)`` with progress lines on stderr, its ``table``
+    printed and written to ``out``; exit status 2 with the message of a missing dependency, an unknown name or
+    one of ``refused``."""
     try:
-        rows = run_compat(names, progress=lambda line: print(line, file=sys.stderr, flush=True))
-    except (BenchDependencyError, KeyError) as exc:
+        rows = run(names, progress=lambda line: print(line, file=sys.stderr, flush=True))
+    except (BenchDependencyError, KeyError, *refused) as exc:
         print(exc.args[0], file=sys.stderr)
         return 2
-    table = format_table(rows)
-    print(table)
+    report = table(rows)
+    print(report)
     if out:
-        pathlib.Path(out).write_text(table, encoding="utf-8")
+        pathlib.Path(out).write_text(report, encoding="utf-8")
         print(f"report written to {out}", file=sys.stderr)
     return 0
+
+
+def run_compat_cli(names: Sequence[str] | None, out: str | None) -> int:
+    """The ``crocopy bench --compat`` command: run, print the table, write it to ``out``."""
+    return report_cli(run_compat, format_table, names, out)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -400,17 +400,7 @@ def format_table(rows: Sequence[compat.Row]) -> str:
 
 def run_mim_examples_cli(names: Sequence[str] | None, out: str | None) -> int:
     """The ``crocopy bench --mim-examples`` command: run, print the table, write it to ``out``."""
-    try:
-        rows = run_mim_examples(names, progress=lambda line: print(line, file=sys.stderr, flush=True))
-    except (BenchDependencyError, KeyError, SdistError) as exc:
-        print(exc.args[0], file=sys.stderr)
-        return 2
-    table = format_table(rows)
-    print(table)
-    if out:
-        pathlib.Path(out).write_text(table, encoding="utf-8")
-        print(f"report written to {out}", file=sys.stderr)
-    return 0
+    return compat.report_cli(run_mim_examples, format_table, names, out, (SdistError,))
 
 
 def main(argv: Sequence[str] | None = None) -> int:
