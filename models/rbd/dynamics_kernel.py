@@ -27,9 +27,9 @@ ov_λ(j) × ψ̇`` (configuration) and ``φ = ψ̇ + ov_j × s`` (velocity), so 
 inertias ``Ic`` and composite ``Bc = Σ (ov ×* oI - oI ov× + (·) ×* oI ov)`` over subtrees: ``O(nv)`` 6x6
 products, then ``O(nv · depth)`` 6-vector dot products; the ancestors of ``j`` see ``d τ_l = oS_lᵀ dF_j``.
 
-Inner 6x6 loops are written out: calling a compiled helper that is not inlined makes numba count references to
-every array of ``rb`` and ``ws`` (about 0.5 µs); the 6-vector helpers (:mod:`.spatial`) work on tuples and are
-inlined.
+Inner 6x6 loops are written out; the 6-vector helpers (:mod:`.spatial`) work on tuples and are inlined.  The
+kernels keep no reference counts (:func:`crocopy.kernels.uncounted`): numba would otherwise count a reference to
+every array of ``rb`` and ``ws`` around each call that passes them on (about 90 calls of its runtime).
 As in Pinocchio (4.0 and 4.1, measured), RNEA and CRBA include the armature, so ``∂τ/∂a = M``.
 
 Frames.  ``reference`` is ``int(pin.WORLD) = 0``, ``int(pin.LOCAL) = 1`` or ``int(pin.LOCAL_WORLD_ALIGNED) = 2``.
@@ -369,6 +369,15 @@ def dynamics_derivatives(
     ``ws.BcS[c] = Bc_lᵀ S_c``; a dof of a strict ancestor the same with ``l = j``, plus ``S_cᵀ (s ×* F_j)`` in q.
     """
     forward_kinematics(rb, ws, q, v)
+    rnea_derivatives(rb, ws, a, dtau_dq_out, dtau_dv_out)
+
+
+@uncounted
+def rnea_derivatives(
+    rb: RigidBodyModel, ws: RigidBodyWorkspace, a: np.ndarray, dtau_dq_out: np.ndarray, dtau_dv_out: np.ndarray
+) -> None:
+    """:func:`dynamics_derivatives` on the kinematics already in ``ws`` (a :func:`forward_kinematics` at the same
+    ``(q, v)``, e.g. the one of :func:`forward_dynamics`)."""
     _rnea_pass(rb, ws, a, ws.tau)
     _composite_coriolis(rb, ws)
     oS, ov, oa, of, oIc, oBc, Y, Z = ws.oS, ws.ov, ws.oa, ws.of, ws.oIc, ws.oBc, ws.IcS, ws.BcS

@@ -38,7 +38,6 @@ from .contact_kernel import (
     contact_forward_dynamics,
 )
 from .dynamics_kernel import (
-    dynamics_derivatives,
     forward_dynamics,
     forward_kinematics,
     frame_jacobian,
@@ -46,6 +45,7 @@ from .dynamics_kernel import (
     frame_velocity,
     frame_velocity_derivatives,
     mass_inverse,
+    rnea_derivatives,
 )
 from .lie_kernel import dintegrate, jlog3, jlog6, log3, log6, state_diff, state_integrate, state_jdiff
 from .node_table import (
@@ -440,10 +440,10 @@ def node_rollout_step(tbl, ints, par, x_ref, x, u_ref, k, K, alpha, lb, ub, u, d
 @uncounted
 def _dynamics_jacobians(tbl, ints, x, rb, ws):
     """``dFx = -(M + diag ε)⁻¹ ∂RNEA/∂(q, v)`` and ``dFu = (M + diag ε)⁻¹ S`` at the last ``calc`` point."""
-    nq, nv, nu = ints[NQ], ints[NV], ints[NU]
+    nv, nu = ints[NV], ints[NU]
     Minv, dq, dv = mat(tbl, ints, E_MINV), mat(tbl, ints, E_DTAU_DQ), mat(tbl, ints, E_DTAU_DV)
     dFx, dFu, Sm, a = mat(tbl, ints, E_DFX), mat(tbl, ints, E_DFU), mat(tbl, ints, E_S), vec(tbl, ints, E_A)
-    dynamics_derivatives(rb, ws, x[:nq], x[nq:], a, dq, dv)
+    rnea_derivatives(rb, ws, a, dq, dv)  # the kinematics of _values at (q, v) are still in ws
     if ints[N_CONTACTS]:
         cw, Jcs, lam, da0_dx = (entry_contact_workspace(tbl, ints), mat(tbl, ints, E_JCS), vec(tbl, ints, E_LAM),
                                 mat(tbl, ints, E_DA0_DX))
