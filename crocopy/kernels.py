@@ -312,7 +312,7 @@ COMPILE_OPTIONS = {"nopython": True, "no_cfunc_wrapper": True}
 kernels only), which numba would otherwise build for every kernel and every signature."""
 
 
-def compiled(function: Callable, nogil: bool = False) -> Callable:
+def compiled(function: Callable, nogil: bool = False, counted: bool = True) -> Callable:
     """``numba.njit(cache=True)(function)`` cached in :data:`cache_dir` and registered in :data:`KERNELS`;
     ``function`` itself without numba.  Where no folder can be written at all, the kernel is compiled
     in every process (uncached) and a warning is logged.  A cache entry that cannot be read back
@@ -321,10 +321,18 @@ def compiled(function: Callable, nogil: bool = False) -> Callable:
 
     To keep the first run short, a kernel compiles for its arguments' plain types when another kernel
     calls it (one signature for ``f(a, 4)`` and ``f(a, 5)``) and gets no C-callable wrapper
-    (:data:`COMPILE_OPTIONS`)."""
+    (:data:`COMPILE_OPTIONS`).
+
+    ``counted=False`` (:func:`uncounted`): the kernel keeps no reference counts.  numba otherwise counts a
+    reference to every array a kernel receives or makes (each member of a tuple of arrays too) with a call at its
+    start and end, around every call that passes arrays on, which costs more than the arithmetic of a small robot.
+    Such a kernel allocates nothing and returns no array (numba refuses to compile one that does); the arrays it
+    receives are kept alive by its caller.  Every other kernel counts them (set explicitly: a kernel called from an
+    uncounted one would otherwise inherit the setting)."""
     if not available:
         return function
-    kernel = _Dispatcher(py_func=function, locals={}, targetoptions={**COMPILE_OPTIONS, "nogil": nogil})
+    kernel = _Dispatcher(py_func=function, locals={},
+                         targetoptions={**COMPILE_OPTIONS, "nogil": nogil, "_nrt": counted})
     previous = numba.config.CACHE_DIR
     numba.config.CACHE_DIR = cache_dir  # read by numba when the cache picks its folder
     try:
@@ -336,6 +344,12 @@ def compiled(function: Callable, nogil: bool = False) -> Callable:
     KERNELS.append(kernel)
     _KERNEL_IDS.add(id(kernel))
     return kernel
+
+
+def uncounted(function: Callable, nogil: bool = False) -> Callable:
+    """:func:`compiled` with ``counted=False``: a kernel that keeps no reference counts (it allocates nothing and
+    returns no array)."""
+    return compiled(function, nogil=nogil, counted=False)
 
 
 def _pointer_intrinsic(element: str) -> Callable:

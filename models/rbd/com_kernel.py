@@ -17,12 +17,12 @@ import math
 
 import numpy as np
 
-from crocopy.kernels import compiled
+from crocopy.kernels import uncounted
 
 from .lowering import RigidBodyModel, RigidBodyWorkspace
 
 
-@compiled
+@uncounted
 def _subtree_moment(rb, ws, j):
     """``(m_j, h_j)``: mass and first moment ``Σ m_i c_i`` (world) of the subtree of joint ``j``."""
     oR, op, com, mass = ws.oR, ws.op, rb.com, rb.mass
@@ -38,7 +38,7 @@ def _subtree_moment(rb, ws, j):
     return m, hx, hy, hz
 
 
-@compiled
+@uncounted
 def center_of_mass(rb: RigidBodyModel, ws: RigidBodyWorkspace, com_out: np.ndarray, Jcom_out: np.ndarray) -> None:
     """``com_out (3,)``: the world centre of mass; ``Jcom_out (3, nv)``: its Jacobian (after
     :func:`~.dynamics_kernel.forward_kinematics`)."""

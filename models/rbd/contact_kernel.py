@@ -55,7 +55,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from crocopy.kernels import compiled
+from crocopy.kernels import uncounted
 from crocopy.solvers.riccati_kernel import cholesky_solve
 
 from .dynamics_kernel import LOCAL, LOCAL_WORLD_ALIGNED, factor_solve, frame_jacobian, frame_pose, to_reference
@@ -108,13 +108,13 @@ def make_contact_workspace(rb: RigidBodyModel, nc_max: int) -> ContactWorkspace:
                               for shape in CONTACT_WORKSPACE.values()))
 
 
-@compiled
+@uncounted
 def _cross(a0, a1, a2, b0, b1, b2):
     """``a × b`` of two 3-vectors given by their components."""
     return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
 
 
-@compiled
+@uncounted
 def _rotate(R, m):
     """``(R m_l, R m_ω)`` of a 6-tuple."""
     return (
@@ -127,14 +127,14 @@ def _rotate(R, m):
     )
 
 
-@compiled
+@uncounted
 def _no_gravity(rb, ws, i):
     """``oa_i + g``: the spatial acceleration of joint ``i`` without the gravity RNEA puts at the root."""
     g = rb.gravity
     return plus(get6(ws.oa, i), (g[0], g[1], g[2], g[3], g[4], g[5]))
 
 
-@compiled
+@uncounted
 def _frame_motion(rb, ws, cw, fid, nc, kp, kd, ref_R, ref_p):
     """Frame pose (``ws.Rf, ws.pf``), LOCAL Jacobian (``cw.J6``); returns the joint ``i``, ``v_f`` and the LOCAL
     contact acceleration ``c`` (6-tuple; 3D: zero angular part) at the kinematics in ``ws``.  For a 6D contact
@@ -169,7 +169,7 @@ def _frame_motion(rb, ws, cw, fid, nc, kp, kd, ref_R, ref_p):
     return i, vf, c
 
 
-@compiled
+@uncounted
 def contact_calc(
     rb: RigidBodyModel,
     ws: RigidBodyWorkspace,
@@ -205,7 +205,7 @@ def contact_calc(
             Jc_out[row + r, k] = col[r]
 
 
-@compiled
+@uncounted
 def contact_calc_diff(
     rb: RigidBodyModel,
     ws: RigidBodyWorkspace,
@@ -278,7 +278,7 @@ def contact_calc_diff(
         j = par
 
 
-@compiled
+@uncounted
 def contact_force_derivatives(
     rb: RigidBodyModel,
     ws: RigidBodyWorkspace,
@@ -327,7 +327,7 @@ def contact_force_derivatives(
         j = parent[j]
 
 
-@compiled
+@uncounted
 def schur_factor(rb: RigidBodyModel, ws: RigidBodyWorkspace, cw: ContactWorkspace, Jc: np.ndarray, nc: int,
                  damping: float) -> None:
     """``cw.Y[:nc] = (M⁻¹ Jcᵀ)ᵀ`` and ``cw.G``, the lower Cholesky factor of ``Jc M⁻¹ Jcᵀ + damping I`` (first ``nc``
@@ -348,7 +348,7 @@ def schur_factor(rb: RigidBodyModel, ws: RigidBodyWorkspace, cw: ContactWorkspac
             G[r, c] = (math.sqrt(acc) if acc > 0.0 else math.nan) if r == c else acc / G[c, c]
 
 
-@compiled
+@uncounted
 def contact_forward_dynamics(
     rb: RigidBodyModel,
     ws: RigidBodyWorkspace,
@@ -382,7 +382,7 @@ def contact_forward_dynamics(
             a_out[k] += Y[r, k] * lam_out[r]
 
 
-@compiled
+@uncounted
 def contact_dynamics_derivatives(
     rb: RigidBodyModel,
     ws: RigidBodyWorkspace,

@@ -27,9 +27,9 @@ ov_λ(j) × ψ̇`` (configuration) and ``φ = ψ̇ + ov_j × s`` (velocity), so 
 inertias ``Ic`` and composite ``Bc = Σ (ov ×* oI - oI ov× + (·) ×* oI ov)`` over subtrees: ``O(nv)`` 6x6
 products, then ``O(nv · depth)`` 6-vector dot products; the ancestors of ``j`` see ``d τ_l = oS_lᵀ dF_j``.
 
-Inner 6x6 loops are written out: calling a compiled helper that is not inlined makes numba count references to
-every array of ``rb`` and ``ws`` (about 0.5 µs); the 6-vector helpers (:mod:`.spatial`) work on tuples and are
-inlined.
+Inner 6x6 loops are written out; the 6-vector helpers (:mod:`.spatial`) work on tuples and are inlined.  The
+kernels keep no reference counts (:func:`crocopy.kernels.uncounted`): numba would otherwise count a reference to
+every array of ``rb`` and ``ws`` around each call that passes them on (about 90 calls of its runtime).
 As in Pinocchio (4.0 and 4.1, measured), RNEA and CRBA include the armature, so ``∂τ/∂a = M``.
 
 Frames.  ``reference`` is ``int(pin.WORLD) = 0``, ``int(pin.LOCAL) = 1`` or ``int(pin.LOCAL_WORLD_ALIGNED) = 2``.
@@ -43,7 +43,7 @@ import math
 
 import numpy as np
 
-from crocopy.kernels import compiled
+from crocopy.kernels import uncounted
 
 from .joint_types import FREEFLYER, PRISMATIC, REVOLUTE
 from .lowering import RigidBodyModel, RigidBodyWorkspace
@@ -54,7 +54,7 @@ LOCAL = 1
 LOCAL_WORLD_ALIGNED = 2
 
 
-@compiled
+@uncounted
 def forward_kinematics(rb: RigidBodyModel, ws: RigidBodyWorkspace, q: np.ndarray, v: np.ndarray) -> None:
     """``ws.oR, ws.op`` (``oMi``), ``ws.oS`` (world motion subspace), ``ws.ov``, ``ws.ow`` and ``ws.oI``."""
     oR, op, oS, ov, ow, oI = ws.oR, ws.op, ws.oS, ws.ov, ws.ow, ws.oI
@@ -161,7 +161,7 @@ def forward_kinematics(rb: RigidBodyModel, ws: RigidBodyWorkspace, q: np.ndarray
         oI[i, 5, 4] -= m * cy * cz
 
 
-@compiled
+@uncounted
 def _rnea_pass(rb, ws, a, tau):
     """RNEA on the kinematics in ``ws``: ``ws.oa, ws.oh, ws.oIa``, ``ws.of`` (subtree forces), ``tau (nv,)``."""
     oS, ov, ow, oa, oI, oh, oIa, of = ws.oS, ws.ov, ws.ow, ws.oa, ws.oI, ws.oh, ws.oIa, ws.of
@@ -194,7 +194,7 @@ def _rnea_pass(rb, ws, a, tau):
             set6(of, par, plus(get6(of, par), fi))
 
 
-@compiled
+@uncounted
 def _crba(rb, ws):
     """``ws.M``: the joint-space inertia matrix (armature included), from the composite inertias ``ws.oIc``."""
     M, oS, oI, oIc = ws.M, ws.oS, ws.oI, ws.oIc
@@ -232,7 +232,7 @@ def _crba(rb, ws):
                     oIc[par, r, c] += oIc[i, r, c]
 
 
-@compiled
+@uncounted
 def _factor(rb, ws):
     """``ws.L``: the lower-triangular ``L`` with ``ws.M = Lᵀ L`` and the branch-induced sparsity of ``M``
     (Featherstone's LTL factorization: no fill-in, ``O(nv · depth²)``).  A pivot that is not positive (a
@@ -261,7 +261,7 @@ def _factor(rb, ws):
             i = lam[i]
 
 
-@compiled
+@uncounted
 def factor_solve(lam: np.ndarray, L: np.ndarray, dinv: np.ndarray, x: np.ndarray) -> None:
     """``x (nv,) ← (Lᵀ L)⁻¹ x`` in place, with the factor of :func:`_factor`, ``dinv = 1 / diag(L)`` and
     ``lam = rb.dof_parent`` (arrays only: a call passing ``rb`` would count references to all its arrays)."""
@@ -280,7 +280,7 @@ def factor_solve(lam: np.ndarray, L: np.ndarray, dinv: np.ndarray, x: np.ndarray
         x[k] *= dinv[k]
 
 
-@compiled
+@uncounted
 def forward_dynamics(
     rb: RigidBodyModel, ws: RigidBodyWorkspace, q: np.ndarray, v: np.ndarray, tau: np.ndarray, a_out: np.ndarray
 ) -> None:
@@ -295,7 +295,7 @@ def forward_dynamics(
     factor_solve(rb.dof_parent, ws.L, ws.dinv, a_out)
 
 
-@compiled
+@uncounted
 def mass_inverse(rb: RigidBodyModel, ws: RigidBodyWorkspace, Minv_out: np.ndarray) -> None:
     """``Minv_out (nv, nv) = M⁻¹`` (armature included) from the factor ``ws.L`` of the last
     :func:`forward_dynamics`, one sparse solve per column (``O(nv² · depth)``), then mirrored to be symmetric."""
@@ -325,7 +325,7 @@ def mass_inverse(rb: RigidBodyModel, ws: RigidBodyWorkspace, Minv_out: np.ndarra
             Minv_out[i, j] = Minv_out[j, i]
 
 
-@compiled
+@uncounted
 def _composite_coriolis(rb, ws):
     """``ws.oIc``, ``ws.oBc``: composite inertias and composite ``B_i = ov_i ×* oI_i - oI_i (ov_i ×) + (· ×* h_i)``."""
     oI, oIc, oBc, ov, oh, Mx = ws.oI, ws.oIc, ws.oBc, ws.ov, ws.oh, ws.tmp
@@ -351,7 +351,7 @@ def _composite_coriolis(rb, ws):
                     oBc[par, r, c] += oBc[i, r, c]
 
 
-@compiled
+@uncounted
 def dynamics_derivatives(
     rb: RigidBodyModel,
     ws: RigidBodyWorkspace,
@@ -369,6 +369,15 @@ def dynamics_derivatives(
     ``ws.BcS[c] = Bc_lᵀ S_c``; a dof of a strict ancestor the same with ``l = j``, plus ``S_cᵀ (s ×* F_j)`` in q.
     """
     forward_kinematics(rb, ws, q, v)
+    rnea_derivatives(rb, ws, a, dtau_dq_out, dtau_dv_out)
+
+
+@uncounted
+def rnea_derivatives(
+    rb: RigidBodyModel, ws: RigidBodyWorkspace, a: np.ndarray, dtau_dq_out: np.ndarray, dtau_dv_out: np.ndarray
+) -> None:
+    """:func:`dynamics_derivatives` on the kinematics already in ``ws`` (a :func:`forward_kinematics` at the same
+    ``(q, v)``, e.g. the one of :func:`forward_dynamics`)."""
     _rnea_pass(rb, ws, a, ws.tau)
     _composite_coriolis(rb, ws)
     oS, ov, oa, of, oIc, oBc, Y, Z = ws.oS, ws.ov, ws.oa, ws.of, ws.oIc, ws.oBc, ws.IcS, ws.BcS
@@ -423,7 +432,7 @@ def dynamics_derivatives(
             i = parent[i]
 
 
-@compiled
+@uncounted
 def frame_pose(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int) -> int:
     """``ws.Rf, ws.pf``: ``oMf`` of frame ``fid``; returns its parent joint."""
     i = rb.frame_joint[fid]
@@ -438,7 +447,7 @@ def frame_pose(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int) -> int:
     return i
 
 
-@compiled
+@uncounted
 def to_reference(R: np.ndarray, p: np.ndarray, m: tuple, reference: int) -> tuple:
     """The world motion ``m`` (6-tuple) read in ``reference`` at the frame ``(R (3, 3), p (3,))``."""
     vx, vy, vz, wx, wy, wz = m
@@ -458,7 +467,7 @@ def to_reference(R: np.ndarray, p: np.ndarray, m: tuple, reference: int) -> tupl
     )
 
 
-@compiled
+@uncounted
 def frame_placement(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int, R_out: np.ndarray, p_out: np.ndarray) -> None:
     """``oMf`` of frame ``fid`` (``R_out (3, 3)``, ``p_out (3,)``) after :func:`forward_kinematics`."""
     frame_pose(rb, ws, fid)
@@ -468,7 +477,7 @@ def frame_placement(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int, R_out:
             R_out[r, c] = ws.Rf[r, c]
 
 
-@compiled
+@uncounted
 def frame_jacobian(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int, reference: int, J_out: np.ndarray) -> None:
     """``J_out (6, nv)``: the Jacobian of frame ``fid`` in ``reference`` (zero outside its support)."""
     i = frame_pose(rb, ws, fid)
@@ -486,7 +495,7 @@ def frame_jacobian(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int, referen
         i = parent[i]
 
 
-@compiled
+@uncounted
 def frame_velocity(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int, reference: int, out6: np.ndarray) -> None:
     """``out6 (6,)``: the spatial velocity of frame ``fid`` in ``reference``, linear then angular."""
     i = frame_pose(rb, ws, fid)
@@ -495,7 +504,7 @@ def frame_velocity(rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int, referen
         out6[r] = m[r]
 
 
-@compiled
+@uncounted
 def frame_velocity_derivatives(
     rb: RigidBodyModel, ws: RigidBodyWorkspace, fid: int, reference: int, dv_dq_out: np.ndarray, dv_dv_out: np.ndarray
 ) -> None:

@@ -26,9 +26,7 @@ import math
 
 from crocopy.costs.stack_kernel import activation_values, derivatives_and_sums
 from crocopy.integrators.euler_kernel import add_integrate_jacobian, euler_chain
-from crocopy.kernels import (
-    compiled,
-)
+from crocopy.kernels import compiled, uncounted
 from crocopy.solvers.riccati_kernel import feedback_control
 
 from .com_kernel import center_of_mass
@@ -41,7 +39,6 @@ from .contact_kernel import (
     contact_forward_dynamics,
 )
 from .dynamics_kernel import (
-    dynamics_derivatives,
     forward_dynamics,
     forward_kinematics,
     frame_jacobian,
@@ -49,6 +46,7 @@ from .dynamics_kernel import (
     frame_velocity,
     frame_velocity_derivatives,
     mass_inverse,
+    rnea_derivatives,
 )
 from .lie_kernel import dintegrate, jlog3, jlog6, log3, log6, state_diff, state_integrate, state_jdiff
 from .node_table import (
@@ -149,7 +147,7 @@ from .node_table import (
 from .user_residual_kernel import user_call, user_jacobians, user_kinematics
 
 
-@compiled
+@uncounted
 def _matmul(A, B, out, rows, cols, inner):
     """``out[:rows, :cols] = A[:rows, :inner] B[:inner, :cols]``."""
     for i in range(rows):
@@ -160,7 +158,7 @@ def _matmul(A, B, out, rows, cols, inner):
             out[i, j] = acc
 
 
-@compiled
+@uncounted
 def _rotation_error(rb, ws, fid, par, o, R3):
     """``Rrefᵀ oRf`` into ``R3``; ``par[o:o+9]`` is ``Rrefᵀ`` (row-major); leaves ``oMf`` in ``ws.Rf, ws.pf``."""
     frame_placement(rb, ws, fid, ws.Rf, ws.pf)
@@ -172,7 +170,7 @@ def _rotation_error(rb, ws, fid, par, o, R3):
             R3[i, j] = acc
 
 
-@compiled
+@uncounted
 def _relative_frame(rb, ws, fid, par, o, R3, p3):
     """``pref⁻¹ oMf`` into ``(R3, p3)``; ``par[o:o+9]`` is ``pref⁻¹``'s rotation (row-major), then its translation."""
     _rotation_error(rb, ws, fid, par, o, R3)
@@ -183,7 +181,7 @@ def _relative_frame(rb, ws, fid, par, o, R3, p3):
         p3[i] = acc
 
 
-@compiled
+@uncounted
 def _residuals(tbl, ints, par, rb, ws, x, u):
     """Every compiled item's residual rows of the stack."""
     nq, nv = ints[NQ], ints[NV]
@@ -230,7 +228,7 @@ def _residuals(tbl, ints, par, rb, ws, x, u):
             raise ValueError("compiled node: unknown residual kind")
 
 
-@compiled
+@uncounted
 def _force_jacobians(tbl, ints, par, nr, row, ncf, o, Jx_rows, start):
     """``A ∂λ/∂x`` into ``Jx_rows`` and, at a running node, ``A ∂λ/∂u`` into the stacked ``Ju`` rows of stack row
     ``start`` (``A (nr, ncf)`` row-major at ``par[o]``, ``λ`` from stacked row ``row``)."""
@@ -252,7 +250,7 @@ def _force_jacobians(tbl, ints, par, nr, row, ncf, o, Jx_rows, start):
             Ju[u0 + i, c] = acc
 
 
-@compiled
+@uncounted
 def _jacobians(tbl, ints, par, rb, ws, x, u):
     """Every compiled item's rows of the stacked ``Jx`` (a control residual's are zero and stay so) and the force
     residuals' rows of ``Ju`` (after :func:`_dynamics_jacobians` at a running node)."""
@@ -309,7 +307,7 @@ def _jacobians(tbl, ints, par, rb, ws, x, u):
                     rows[i, j] = acc
 
 
-@compiled
+@uncounted
 def _velocity_jacobian(rb, ws, fid, ref, dq, dv, m6, v6, rows, nv):
     """``(∂v_f/∂q, ∂v_f/∂v)`` in frame ``ref``; LOCAL_WORLD_ALIGNED as ``R (∂v_l/∂q - [v_l]× J_ω)`` (see
     :class:`~crocopy.models.ResidualModelFrameVelocity`), ``R`` the frame rotation."""
@@ -336,7 +334,7 @@ def _velocity_jacobian(rb, ws, fid, ref, dq, dv, m6, v6, rows, nv):
                 rows[s + i, nv + j] = R[i, 0] * dv[s, j] + R[i, 1] * dv[s + 1, j] + R[i, 2] * dv[s + 2, j]
 
 
-@compiled
+@uncounted
 def _values(tbl, ints, par, x, u, rb, ws):
     """Dynamics (running node) and residuals at ``(x, u)``; returns the cost stack's weighted sum."""
     nq, nv, nu = ints[NQ], ints[NV], ints[NU]
@@ -376,7 +374,7 @@ def _constraints(tbl, ints, par, rb, ws, x, u, derivatives):
     stack_rows(tbl, ints, derivatives)
 
 
-@compiled
+@uncounted
 def _contact_dynamics(tbl, ints, par, rb, ws, tau, a):
     """The contacts' stacked ``Jc`` and drift, then ``a`` and ``λ`` of the contact dynamics (after the free
     :func:`~.dynamics_kernel.forward_dynamics` at the same state)."""
@@ -388,7 +386,7 @@ def _contact_dynamics(tbl, ints, par, rb, ws, tau, a):
     contact_forward_dynamics(rb, ws, cw, tau, Jcs, a0, ints[NC], par[1], a, vec(tbl, ints, E_LAM))
 
 
-@compiled
+@uncounted
 def _step(tbl, ints, par, x, rb):
     """``dx`` and ``xnext`` of the Euler step (``xnext = x`` at the terminal node)."""
     nq, nv = ints[NQ], ints[NV]
@@ -405,7 +403,7 @@ def _step(tbl, ints, par, x, rb):
     state_integrate(rb.jtype, rb.idx_q, rb.idx_v, nq, nv, x, dx, xnext)
 
 
-@compiled
+@uncounted
 def _singular(tbl, ints):
     """Whether the running node's acceleration is not finite: a contact set whose KKT system is singular at this
     state (the Python path then takes least squares), or a diverged state."""
@@ -418,7 +416,7 @@ def _singular(tbl, ints):
     return False
 
 
-@compiled
+@uncounted
 def node_calc(tbl, ints, par, x, u):
     """``xnext`` of the node at ``(x, u)``; returns its cost (``dt`` times the stack's for a running node), NaN when
     the acceleration is not finite (:func:`_singular`: the caller evaluates the node on the Python path)."""
@@ -432,7 +430,7 @@ def node_calc(tbl, ints, par, x, u):
     return cost if ints[TERMINAL] else par[0] * cost
 
 
-@compiled
+@uncounted
 def node_rollout_step(tbl, ints, par, x_ref, x, u_ref, k, K, alpha, lb, ub, u, dx, x_next, f, gap):
     """One node of the DDP family's rollout (the node step of ``_trial_rollout``): ``dx = x ⊖ x_ref``,
     ``u = clamp(u_ref - α k - K dx, lb, ub)``, the node at ``(x, u)``, and ``x_next = xnext``, or
@@ -454,13 +452,13 @@ def node_rollout_step(tbl, ints, par, x_ref, x, u_ref, k, K, alpha, lb, ub, u, d
     return cost
 
 
-@compiled
+@uncounted
 def _dynamics_jacobians(tbl, ints, x, rb, ws):
     """``dFx = -(M + diag ε)⁻¹ ∂RNEA/∂(q, v)`` and ``dFu = (M + diag ε)⁻¹ S`` at the last ``calc`` point."""
-    nq, nv, nu = ints[NQ], ints[NV], ints[NU]
+    nv, nu = ints[NV], ints[NU]
     Minv, dq, dv = mat(tbl, ints, E_MINV), mat(tbl, ints, E_DTAU_DQ), mat(tbl, ints, E_DTAU_DV)
     dFx, dFu, Sm, a = mat(tbl, ints, E_DFX), mat(tbl, ints, E_DFU), mat(tbl, ints, E_S), vec(tbl, ints, E_A)
-    dynamics_derivatives(rb, ws, x[:nq], x[nq:], a, dq, dv)
+    rnea_derivatives(rb, ws, a, dq, dv)  # the kinematics of _values at (q, v) are still in ws
     if ints[N_CONTACTS]:
         cw, Jcs, lam, da0_dx = (entry_contact_workspace(tbl, ints), mat(tbl, ints, E_JCS), vec(tbl, ints, E_LAM),
                                 mat(tbl, ints, E_DA0_DX))
@@ -485,7 +483,7 @@ def _dynamics_jacobians(tbl, ints, x, rb, ws):
     _matmul(Minv, Sm, dFu, nv, nu, nv)
 
 
-@compiled
+@uncounted
 def _integrate_chain(tbl, ints, x, rb):
     """Lie-group end of the Euler chain rule: ``rows = Jv [Fx Fu][:nv]`` (the transport), then
     :func:`~crocopy.integrators.euler_kernel.add_integrate_jacobian` with ``Jq``.  ``Jv`` is block diagonal, one
@@ -509,7 +507,7 @@ def _integrate_chain(tbl, ints, x, rb):
     add_integrate_jacobian(rows, Jq, Fx, Fu)
 
 
-@compiled
+@uncounted
 def node_calc_diff(tbl, ints, par, x, u):
     """Values and derivatives of the node at ``(x, u)`` (self-contained); returns its cost, NaN when the acceleration
     is not finite (as :func:`node_calc`)."""

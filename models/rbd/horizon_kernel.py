@@ -10,7 +10,7 @@ GIL (several threads may run disjoint ranges at once, :mod:`.node_threads`).
 from __future__ import annotations
 
 from crocopy.costs.stack_kernel import activation_values
-from crocopy.kernels import compiled, matrix_at, vector_at
+from crocopy.kernels import matrix_at, uncounted, vector_at
 
 from .euler_node_kernel import node_calc, node_calc_diff, node_rollout_step
 from .lie_kernel import state_diff
@@ -31,7 +31,7 @@ from .node_table import (
 )
 
 
-@compiled
+@uncounted
 def horizon_rollout(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs, nus, nx, ndx,
                     alpha, gaps, gap_at, t0, t1, costs):
     """:func:`node_rollout_step` over the running nodes ``t0 <= t < t1`` in one call; returns the sum of their costs
@@ -57,7 +57,7 @@ def horizon_rollout(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, ks
     return total
 
 
-@compiled
+@uncounted
 def horizon_recost(tbls, ints, ioff, par, poff, nodes, costs):
     """The costs of the running ``nodes`` again from their cost stacks as they stand (after the rows of their Python
     residuals were written, :mod:`.python_residuals`), into ``costs[t]``; returns the change of their sum."""
@@ -95,7 +95,7 @@ def _horizon_calc_diff(tbls, ints, ioff, par, poff, xs, us, nus, nx, ndx, gaps, 
     return total
 
 
-horizon_calc_diff = compiled(_horizon_calc_diff, nogil=True)
+horizon_calc_diff = uncounted(_horizon_calc_diff, nogil=True)
 
 
 def _horizon_calc(tbls, ints, ioff, par, poff, xs, us, nus, nx, t0, t1, costs):
@@ -110,10 +110,10 @@ def _horizon_calc(tbls, ints, ioff, par, poff, xs, us, nus, nx, t0, t1, costs):
     return total
 
 
-horizon_calc = compiled(_horizon_calc, nogil=True)
+horizon_calc = uncounted(_horizon_calc, nogil=True)
 
 
-@compiled
+@uncounted
 def fold(costs, t0, t1):
     """The sum of ``costs[t0:t1]`` added in node order (as :func:`horizon_calc_diff` adds it)."""
     total = 0.0

@@ -59,7 +59,7 @@ from __future__ import annotations
 
 import math
 
-from crocopy.kernels import compiled
+from crocopy.kernels import uncounted
 
 from .joint_types import FREEFLYER, REVOLUTE_UB
 
@@ -70,7 +70,7 @@ _SMALL = 1e-2
 # --- 3x3 matrices as row-major 9-tuples (values, no allocation) --------------------------------------
 
 
-@compiled
+@uncounted
 def _mm(a, b):
     """``a @ b``."""
     return (
@@ -83,19 +83,19 @@ def _mm(a, b):
     )
 
 
-@compiled
+@uncounted
 def _tr(a):
     """``aᵀ``."""
     return (a[0], a[3], a[6], a[1], a[4], a[7], a[2], a[5], a[8])
 
 
-@compiled
+@uncounted
 def _skew(x, y, z):
     """``[(x, y, z)]``, the matrix of the cross product."""
     return (0.0, -z, y, z, 0.0, -x, -y, x, 0.0)
 
 
-@compiled
+@uncounted
 def _poly(a, b, w, ww):
     """``I + a W + b WW``."""
     return (
@@ -105,7 +105,7 @@ def _poly(a, b, w, ww):
     )
 
 
-@compiled
+@uncounted
 def _lin(a, x, b, y, c, z, d, u):
     """``a x + b y + c z + d u`` for 9-tuples."""
     return (
@@ -117,14 +117,14 @@ def _lin(a, x, b, y, c, z, d, u):
     )
 
 
-@compiled
+@uncounted
 def _add(a, b):
     """``a + b``."""
     return (a[0] + b[0], a[1] + b[1], a[2] + b[2], a[3] + b[3], a[4] + b[4], a[5] + b[5], a[6] + b[6],
             a[7] + b[7], a[8] + b[8])
 
 
-@compiled
+@uncounted
 def _mv(a, x, y, z):
     """``a @ (x, y, z)``."""
     return (
@@ -134,13 +134,13 @@ def _mv(a, x, y, z):
     )
 
 
-@compiled
+@uncounted
 def _load(R):
     """A (3, 3) array as a 9-tuple."""
     return (R[0, 0], R[0, 1], R[0, 2], R[1, 0], R[1, 1], R[1, 2], R[2, 0], R[2, 1], R[2, 2])
 
 
-@compiled
+@uncounted
 def _store(a, out, r0, c0):
     """``out[r0:r0+3, c0:c0+3] = a``."""
     for i in range(3):
@@ -151,7 +151,7 @@ def _store(a, out, r0, c0):
 # --- SO(3) coefficients --------------------------------------------------------------------------------
 
 
-@compiled
+@uncounted
 def _series(t2, m, weighted):
     """``Σ_k (-t2)^k w_k/(2k + m)!`` with ``w_k = k + 1`` (``weighted``) or 1, to round-off for ``t2 < 1``."""
     term = 1.0
@@ -164,7 +164,7 @@ def _series(t2, m, weighted):
     return total
 
 
-@compiled
+@uncounted
 def _coefs(t):
     """``(sin t/t, (1 - cos t)/t², (t - sin t)/t³)``."""
     if t < 1.0:
@@ -174,7 +174,7 @@ def _coefs(t):
     return (s / t, (1.0 - c) / (t * t), (t - s) / (t * t * t))
 
 
-@compiled
+@uncounted
 def _inv_coef(t):
     """``1/t² - (1 + cos t)/(2 t sin t)``, the ``[ω]²`` coefficient of ``Jr(ω)⁻¹`` (``t ∈ [0, π]``)."""
     if t < _SMALL:
@@ -184,7 +184,7 @@ def _inv_coef(t):
     return 1.0 / (t * t) - math.cos(h) / (2.0 * t * math.sin(h))
 
 
-@compiled
+@uncounted
 def _exp3_t(x, y, z):
     t = math.sqrt(x * x + y * y + z * z)
     a, b, _ = _coefs(t)
@@ -192,7 +192,7 @@ def _exp3_t(x, y, z):
     return _poly(a, b, w, _mm(w, w))
 
 
-@compiled
+@uncounted
 def _jr_t(x, y, z, sign):
     """``Jr(ω)`` (``sign = -1``) or ``Jl(ω) = Jr(ω)ᵀ`` (``sign = 1``)."""
     t = math.sqrt(x * x + y * y + z * z)
@@ -201,7 +201,7 @@ def _jr_t(x, y, z, sign):
     return _poly(sign * b, c, w, _mm(w, w))
 
 
-@compiled
+@uncounted
 def _jr_inv_t(x, y, z, sign):
     """``Jr(ω)⁻¹`` (``sign = 1``) or ``Jl(ω)⁻¹`` (``sign = -1``)."""
     t = math.sqrt(x * x + y * y + z * z)
@@ -209,7 +209,7 @@ def _jr_inv_t(x, y, z, sign):
     return _poly(0.5 * sign, _inv_coef(t), w, _mm(w, w))
 
 
-@compiled
+@uncounted
 def _log3_t(R):
     """``log3(R)`` as ``(x, y, z)``."""
     ax, ay, az = 0.5 * (R[7] - R[5]), 0.5 * (R[2] - R[6]), 0.5 * (R[3] - R[1])
@@ -241,7 +241,7 @@ def _log3_t(R):
     return (t * k0, t * k1, t * k2)
 
 
-@compiled
+@uncounted
 def _q_t(rx, ry, rz, x, y, z):
     """Barfoot's ``Q(ρ, φ)``, the upper-right block of SE(3)'s left Jacobian."""
     t2 = x * x + y * y + z * z
@@ -267,13 +267,13 @@ def _q_t(rx, ry, rz, x, y, z):
 # --- public SO(3) -------------------------------------------------------------------------------------
 
 
-@compiled
+@uncounted
 def log3(R, w_out):
     """``w_out (3,) = log3(R (3, 3))``, angle in ``[0, π]``."""
     w_out[0], w_out[1], w_out[2] = _log3_t(_load(R))
 
 
-@compiled
+@uncounted
 def jlog3(R, J_out):
     """``J_out (3, 3) = Jlog3(R) = Jexp3(log3 R)⁻¹``."""
     x, y, z = _log3_t(_load(R))
@@ -283,13 +283,13 @@ def jlog3(R, J_out):
 # --- SE(3) ---------------------------------------------------------------------------------------------
 
 
-@compiled
+@uncounted
 def _exp6_t(vx, vy, vz, x, y, z):
     """``exp6([v; ω])`` as ``(R, p)`` tuples."""
     return _exp3_t(x, y, z), _mv(_jr_t(x, y, z, 1.0), vx, vy, vz)
 
 
-@compiled
+@uncounted
 def _log6_t(R, px, py, pz):
     """``log6(R, p)`` as ``(ρx, ρy, ρz, φx, φy, φz)``."""
     x, y, z = _log3_t(R)
@@ -297,7 +297,7 @@ def _log6_t(R, px, py, pz):
     return rx, ry, rz, x, y, z
 
 
-@compiled
+@uncounted
 def _jexp6_into(vx, vy, vz, x, y, z, J, r0, c0):
     """``J[r0:r0+6, c0:c0+6] = jexp6([v; ω])``."""
     A = _jr_t(x, y, z, -1.0)
@@ -309,7 +309,7 @@ def _jexp6_into(vx, vy, vz, x, y, z, J, r0, c0):
             J[r0 + 3 + i, c0 + j] = 0.0
 
 
-@compiled
+@uncounted
 def _jlog6_into(R, px, py, pz, J, r0, c0):
     """``J[r0:r0+6, c0:c0+6] = jlog6(R, p)``."""
     rx, ry, rz, x, y, z = _log6_t(R, px, py, pz)
@@ -323,7 +323,7 @@ def _jlog6_into(R, px, py, pz, J, r0, c0):
             J[r0 + 3 + i, c0 + j] = 0.0
 
 
-@compiled
+@uncounted
 def _adjoint_into(R, px, py, pz, J, r0, c0):
     """``J[r0:r0+6, c0:c0+6] = Ad(R, p) = [[R, [p] R], [0, R]]``."""
     _store(R, J, r0, c0)
@@ -334,7 +334,7 @@ def _adjoint_into(R, px, py, pz, J, r0, c0):
             J[r0 + 3 + i, c0 + j] = 0.0
 
 
-@compiled
+@uncounted
 def _inverse_t(R, px, py, pz):
     """``(R, p)⁻¹ = (Rᵀ, -Rᵀ p)`` as tuples."""
     Rt = _tr(R)
@@ -342,7 +342,7 @@ def _inverse_t(R, px, py, pz):
     return Rt, (-qx, -qy, -qz)
 
 
-@compiled
+@uncounted
 def log6(R, p, out6):
     """``out6 (6,) = log6(R, p) = [v; ω]``."""
     res = _log6_t(_load(R), p[0], p[1], p[2])
@@ -350,7 +350,7 @@ def log6(R, p, out6):
         out6[k] = res[k]
 
 
-@compiled
+@uncounted
 def jlog6(R, p, J_out):
     """``J_out (6, 6) = Jlog6(R, p)``."""
     _jlog6_into(_load(R), p[0], p[1], p[2], J_out, 0, 0)
@@ -359,7 +359,7 @@ def jlog6(R, p, J_out):
 # --- quaternions [x, y, z, w] -------------------------------------------------------------------------
 
 
-@compiled
+@uncounted
 def _quat_rot_t(x, y, z, w):
     """The rotation of a unit quaternion (Eigen's ``toRotationMatrix`` formula)."""
     return (
@@ -372,13 +372,13 @@ def _quat_rot_t(x, y, z, w):
 # --- configuration space --------------------------------------------------------------------------------
 
 
-@compiled
+@uncounted
 def _placement_t(q, i):
     """``M(q[i:i+7])`` of a free-flyer configuration as ``(R, p)`` tuples."""
     return _quat_rot_t(q[i + 3], q[i + 4], q[i + 5], q[i + 6]), (q[i], q[i + 1], q[i + 2])
 
 
-@compiled
+@uncounted
 def _relative_t(q0, q1, i):
     """``M(q0)⁻¹ M(q1)`` of the free flyer at ``q[i:i+7]`` as ``(R, p)`` tuples."""
     R0, p0 = _placement_t(q0, i)
@@ -387,7 +387,7 @@ def _relative_t(q0, q1, i):
     return _mm(R0t, R1), _mv(R0t, p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2])
 
 
-@compiled
+@uncounted
 def _integrate_freeflyer(q, iq, v, iv, q_out):
     x0, y0, z0, w0 = q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6]
     wx, wy, wz = v[iv + 3], v[iv + 4], v[iv + 5]
@@ -412,7 +412,7 @@ def _integrate_freeflyer(q, iq, v, iv, q_out):
     q_out[iq + 3], q_out[iq + 4], q_out[iq + 5], q_out[iq + 6] = f * x, f * y, f * z, f * w
 
 
-@compiled
+@uncounted
 def integrate(jtype, idx_q, idx_v, q, v, q_out):
     """``q_out (nq,) = q ⊕ v`` (``pinocchio.integrate``)."""
     for j in range(1, jtype.shape[0]):
@@ -429,7 +429,7 @@ def integrate(jtype, idx_q, idx_v, q, v, q_out):
             q_out[iq] = q[iq] + v[iv]
 
 
-@compiled
+@uncounted
 def difference(jtype, idx_q, idx_v, q0, q1, v_out):
     """``v_out (nv,) = q1 ⊖ q0`` (``pinocchio.difference``; a continuous joint's ``atan2(c0 s1 - s0 c1, c0 c1 + s0 s1)``
     also where ``c0 c1 + s0 s1`` rounds above 1, where Pinocchio returns 0)."""
@@ -447,7 +447,7 @@ def difference(jtype, idx_q, idx_v, q0, q1, v_out):
             v_out[iv] = q1[iq] - q0[iq]
 
 
-@compiled
+@uncounted
 def _ddifference_blocks(jtype, idx_q, idx_v, q0, q1, arg, J):
     """The diagonal blocks of ``∂(q1 ⊖ q0)/∂(q0 or q1)`` into ``J`` at ``(idx_v, idx_v)``."""
     for j in range(1, jtype.shape[0]):
@@ -472,7 +472,7 @@ def _ddifference_blocks(jtype, idx_q, idx_v, q0, q1, arg, J):
                 J[iv + r, iv + 3 + c] = -right
 
 
-@compiled
+@uncounted
 def _dintegrate_blocks(jtype, idx_q, idx_v, v, arg, J):
     """The diagonal blocks of ``∂(q ⊕ v)/∂(q or v)`` into ``J`` at ``(idx_v, idx_v)`` (independent of ``q``)."""
     for j in range(1, jtype.shape[0]):
@@ -487,14 +487,14 @@ def _dintegrate_blocks(jtype, idx_q, idx_v, v, arg, J):
             _adjoint_into(Rt, pt[0], pt[1], pt[2], J, iv, iv)
 
 
-@compiled
+@uncounted
 def _zero(J):
     for r in range(J.shape[0]):
         for c in range(J.shape[1]):
             J[r, c] = 0.0
 
 
-@compiled
+@uncounted
 def dintegrate(jtype, idx_q, idx_v, q, v, arg, J_out):
     """``J_out (nv, nv) = ∂(q ⊕ v)/∂q`` (``arg = 0``) or ``∂(q ⊕ v)/∂v`` (``arg = 1``) (``pinocchio.dIntegrate``)."""
     _zero(J_out)
@@ -504,7 +504,7 @@ def dintegrate(jtype, idx_q, idx_v, q, v, arg, J_out):
 # --- multibody state x = [q, v] ---------------------------------------------------------------------------
 
 
-@compiled
+@uncounted
 def state_diff(jtype, idx_q, idx_v, nq, nv, x0, x1, out):
     """``out (2 nv,) = [q1 ⊖ q0, v1 - v0]`` (``StateMultibody.diff``)."""
     difference(jtype, idx_q, idx_v, x0, x1, out)
@@ -512,7 +512,7 @@ def state_diff(jtype, idx_q, idx_v, nq, nv, x0, x1, out):
         out[nv + k] = x1[nq + k] - x0[nq + k]
 
 
-@compiled
+@uncounted
 def state_integrate(jtype, idx_q, idx_v, nq, nv, x, dx, out):
     """``out (nq + nv,) = [q ⊕ dq, v + dv]`` (``StateMultibody.integrate``)."""
     integrate(jtype, idx_q, idx_v, x, dx, out)
@@ -520,7 +520,7 @@ def state_integrate(jtype, idx_q, idx_v, nq, nv, x, dx, out):
         out[nq + k] = x[nq + k] + dx[nv + k]
 
 
-@compiled
+@uncounted
 def state_jdiff(jtype, idx_q, idx_v, nq, nv, x0, x1, first, J_out):
     """``J_out (2 nv, 2 nv)``: ``StateMultibody.Jdiff(x0, x1)[0]`` (``first``) or ``[1]``."""
     _zero(J_out)

@@ -9,53 +9,53 @@ from __future__ import annotations
 
 import numpy as np
 
-from crocopy.kernels import compiled
+from crocopy.kernels import uncounted
 
 
-@compiled
+@uncounted
 def get6(A: np.ndarray, i: int) -> tuple:
     """Row ``i`` of an ``(n, 6)`` array as a tuple."""
     return A[i, 0], A[i, 1], A[i, 2], A[i, 3], A[i, 4], A[i, 5]
 
 
-@compiled
+@uncounted
 def set6(A: np.ndarray, i: int, m: tuple) -> None:
     """``A[i] = m``."""
     A[i, 0], A[i, 1], A[i, 2], A[i, 3], A[i, 4], A[i, 5] = m
 
 
-@compiled
+@uncounted
 def plus(m: tuple, n: tuple) -> tuple:
     """``m + n`` of two 6-tuples."""
     return m[0] + n[0], m[1] + n[1], m[2] + n[2], m[3] + n[3], m[4] + n[4], m[5] + n[5]
 
 
-@compiled
+@uncounted
 def minus(m: tuple, n: tuple) -> tuple:
     """``m - n`` of two 6-tuples."""
     return m[0] - n[0], m[1] - n[1], m[2] - n[2], m[3] - n[3], m[4] - n[4], m[5] - n[5]
 
 
-@compiled
+@uncounted
 def times(m: tuple, x: float) -> tuple:
     """``x m`` of a 6-tuple and a scalar."""
     return m[0] * x, m[1] * x, m[2] * x, m[3] * x, m[4] * x, m[5] * x
 
 
-@compiled
+@uncounted
 def unit(c: int) -> tuple:
     """The ``c``-th unit 6-tuple."""
     return (1.0 if c == 0 else 0.0, 1.0 if c == 1 else 0.0, 1.0 if c == 2 else 0.0,
             1.0 if c == 3 else 0.0, 1.0 if c == 4 else 0.0, 1.0 if c == 5 else 0.0)
 
 
-@compiled
+@uncounted
 def dot(m: tuple, n: tuple) -> float:
     """``mᵀ n`` of two 6-tuples."""
     return m[0] * n[0] + m[1] * n[1] + m[2] * n[2] + m[3] * n[3] + m[4] * n[4] + m[5] * n[5]
 
 
-@compiled
+@uncounted
 def mcross(m: tuple, n: tuple) -> tuple:
     """``m × n`` of two motions (6-tuples)."""
     return (
@@ -68,7 +68,7 @@ def mcross(m: tuple, n: tuple) -> tuple:
     )
 
 
-@compiled
+@uncounted
 def fcross(m: tuple, f: tuple) -> tuple:
     """``m ×* f`` of a motion and a force (6-tuples)."""
     return (

@@ -4,7 +4,7 @@ kinematics buffer filled from the node's workspace, and the calls of the residua
 
 from __future__ import annotations
 
-from crocopy.kernels import address, call_address, compiled
+from crocopy.kernels import address, call_address, uncounted
 
 from .com_kernel import center_of_mass
 from .dynamics_kernel import frame_jacobian, frame_placement
@@ -29,7 +29,7 @@ from .node_table import (
 )
 
 
-@compiled
+@uncounted
 def user_kinematics(tbl, ints, rb, ws, fid, ref, flags, derivatives):
     """The kinematics buffer of a ``USER`` item (:mod:`crocopy.models.residual_numba`): placement (flag 1), frame
     Jacobian in ``ref`` (flag 2, ``derivatives``), centre of mass (flag 4) and its Jacobian (``derivatives``)."""
@@ -59,7 +59,7 @@ def user_kinematics(tbl, ints, rb, ws, fid, ref, flags, derivatives):
                     kin[15 + 6 * nv + nv * i + j] = Jcom[i, j]
 
 
-@compiled
+@uncounted
 def user_call(tbl, ints, par, b, x, u, function, out, out_u):
     """Call a ``USER`` item's C callback ``function`` (:func:`crocopy.kernels.call_address`) on ``out``/``out_u``."""
     dims = ivec(tbl, ints, E_USER_DIMS)
@@ -69,7 +69,7 @@ def user_call(tbl, ints, par, b, x, u, function, out, out_u):
                  address(vec(tbl, ints, E_KIN)), address(out), address(out_u))
 
 
-@compiled
+@uncounted
 def user_jacobians(tbl, ints, par, rb, ws, b, x, u, rows):
     """A ``USER`` item's rows of ``Jx`` and, when it depends on ``u`` at a running node, of ``Ju`` (zeroed, then
     written by its callback)."""
