@@ -62,14 +62,22 @@ def trial_rollout(solver, steplength: float, gaps: bool = False, bounds: tuple[l
     # takes least squares where a contact set is singular); if that diverges too, the trial stops there
     chunked = steplength in solver._diverged_steps or solver._last_trial_diverged  # likely to diverge
     diverged = False
+    ends = None  # after a diverged step: the end of the compiled range of every node inside one
     while t < T:
-        if t in segments and t != by_node:
-            end, horizon = segments[t], nodes.horizon
+        start = t in segments
+        if ends is None and diverged and segments and not nodes.horizon.python:
+            ends = {s: end for t0, end in segments.items() for s in range(t0, end)}
+        if (start or ends is not None and t in ends) and t != by_node:
+            end, horizon = ends[t] if ends is not None else segments[t], nodes.horizon
             c, bad = segment_rollout(horizon, addresses, xs_try, us_try, steplength, gaps, gap_at, t, end, chunked)
             if bad is not None:
                 end = by_node = bad
                 chunked = diverged = True
-            cost += c
+            if start:
+                cost += c
+            else:  # within a range, after a diverged step: its node steps' costs added one by one, as they were
+                for c in horizon.costs[t:end].tolist():
+                    cost += c
             for d, c in zip(islice(datas, t, end), horizon.costs[t:end].tolist()):
                 d.cost = c
             t = end
