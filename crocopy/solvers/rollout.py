@@ -3,7 +3,9 @@
 ``û_t = clamp(u_t - α k_t - K_t (x̂_t ⊖ x_t), lb_t, ub_t)`` and ``x̂_{t+1} = f(x̂_t, û_t)``, the gaps kept open by
 ``(1 - α)`` where the solver asks (FDDP).  :func:`trial_rollout` is ``SolverDDP._trial_rollout``;
 :func:`horizon_addresses` prepares the compiled calls that run each range of compiled nodes
-(:mod:`.compiled_nodes`).
+(:mod:`.compiled_nodes`).  A trial likely to diverge (its step length diverged last time, or the trial before it
+did) runs its ranges in growing steps (:func:`segment_rollout`), so that the work stops near the divergence; the
+numbers are those of one call.
 """
 
 from __future__ import annotations
@@ -148,7 +150,7 @@ def segment_rollout(horizon, addresses: tuple, xs_try: list, us_try: list, stepl
 
     One call covers the range; ``chunked`` (a trial likely to diverge) runs it in calls of :data:`CHUNK`, then twice
     as many nodes each, so that a divergence stops the work near where it arose (a call runs to its end).  The total
-    is the same either way: the nodes' costs added in node order from the range's first (:meth:`fold`), as one call
+    is the same either way: the nodes' costs added in node order from the range's first (``horizon.fold``), as one call
     adds them.  A horizon with Python residuals (whose costs a call corrects after its nodes) runs in one call.
     """
     if not chunked or horizon.python:
