@@ -122,6 +122,9 @@ class SolverDDP(SolverAbstract):
         self._bound_addresses = None
         self._trajectory_addresses = None
         self._synced = False
+        self._diverged_steps: set[float] = set()
+        """Step lengths whose last trial had a compiled step diverge (:func:`.rollout.segment_rollout`)."""
+        self._last_trial_diverged = False
 
     _views = ("Vxx", "Vx", "fs", "Qxx", "Qxu", "Quu", "Qx", "Qu", "K", "k")
     """Attributes holding views of the horizon's buffer: not pickled, bound again to the copy's buffer."""

@@ -23,7 +23,7 @@ appended: ``"non-finite Fx at node 0 in the derivatives: the mass matrix is sing
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -45,25 +45,38 @@ class NonFiniteError(RuntimeError):
         Phase of the iteration (``"derivatives"``, ``"backward pass"``, ``"rollout"``, ...).
     """
 
-    def __init__(self, quantity: str, node: int | None, where: str, cause: str | None = None) -> None:
+    def __init__(self, quantity: str, node: int | None, where: str,
+                 cause: str | Callable[[], str | None] | None = None) -> None:
         at = "" if node is None else f" at node {node}"
-        super().__init__(f"non-finite {quantity}{at} in the {where}" + (f": {cause}" if cause else ""))
+        self._text = f"non-finite {quantity}{at} in the {where}"
+        self._cause = cause
+        super().__init__(self._text if callable(cause) else self._text + (f": {cause}" if cause else ""))
         self.quantity = quantity
         self.node = node
         self.where = where
+
+    def __str__(self) -> str:
+        """The message; a ``cause`` given as a function is asked for then (a model's diagnosis, which may cost a
+        factorisation: the error of a rejected trial is often never read)."""
+        cause = self._cause
+        if callable(cause):
+            cause = self._cause = cause()
+            self.args = (self._text + (f": {cause}" if cause else ""),)
+        return str(self.args[0])
 
 
 def _finite(value) -> bool:
     return bool(np.isfinite(value).all())
 
 
-def _cause(problem, t: int | None) -> str | None:
-    """What the model of node ``t`` (or the differential model it integrates) says caused its NaN/inf, if anything."""
+def _cause(problem, t: int | None) -> Callable[[], str | None] | None:
+    """What the model of node ``t`` (or the differential model it integrates) says caused its NaN/inf, if anything:
+    a function asked when the message is read."""
     if t is None:
         return None
     model = problem.runningModels[t] if t < problem.T else problem.terminalModel
     explain = getattr(getattr(model, "differential", model), "nonfinite_cause", None)
-    return explain() if callable(explain) else None
+    return explain if callable(explain) else None
 
 
 def locate_in_derivatives(problem) -> NonFiniteError | None:
@@ -100,16 +113,34 @@ def locate_in_backward_pass(solver) -> NonFiniteError | None:
 
 
 def locate_in_rollout(problem, xs: Sequence[np.ndarray], us: Sequence[np.ndarray]) -> NonFiniteError | None:
-    """The first non-finite state, control or node cost of a rollout (None if all are finite)."""
+    """The first non-finite state, control or node cost of a rollout (None if all are finite): at the first node
+    where one is, the state first, then the control, then the cost."""
     datas = [*problem.runningDatas, problem.terminalData]
-    for t, (x, d) in enumerate(zip(xs, datas)):
-        if not _finite(x):
-            return NonFiniteError("state", t, "rollout", _cause(problem, t - 1) if t else None)
-        if t < len(us) and not _finite(us[t]):
-            return NonFiniteError("control", t, "rollout")
-        if not np.isfinite(d.cost):
-            return NonFiniteError("cost", t, "rollout", _cause(problem, t))
-    return None
+    n = min(len(xs), len(datas))
+    costs = np.fromiter((d.cost for d in datas[:n]), dtype=float, count=n)
+    bad_costs = np.flatnonzero(~np.isfinite(costs))
+    firsts = (_first_nonfinite(xs[:n]), _first_nonfinite(us[:n]), int(bad_costs[0]) if bad_costs.size else None)
+    found = [(t, rank) for rank, t in enumerate(firsts) if t is not None]
+    if not found:
+        return None
+    t, rank = min(found)
+    if rank == 0:
+        return NonFiniteError("state", t, "rollout", _cause(problem, t - 1) if t else None)
+    if rank == 1:
+        return NonFiniteError("control", t, "rollout")
+    return NonFiniteError("cost", t, "rollout", _cause(problem, t))
+
+
+def _first_nonfinite(arrays: Sequence[np.ndarray]) -> int | None:
+    """The index of the first array of ``arrays`` with a NaN/inf entry, None if all are finite."""
+    if not len(arrays):
+        return None
+    sizes = np.fromiter((a.size for a in arrays), dtype=np.int64, count=len(arrays))
+    flat = np.concatenate([np.ravel(a) for a in arrays])
+    bad = np.flatnonzero(~np.isfinite(flat))
+    if not bad.size:
+        return None
+    return int(np.searchsorted(np.cumsum(sizes), bad[0], side="right"))
 
 
 def trajectory_finite(xs: Sequence[np.ndarray], us: Sequence[np.ndarray]) -> bool:

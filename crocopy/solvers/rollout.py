@@ -3,7 +3,9 @@
 ``û_t = clamp(u_t - α k_t - K_t (x̂_t ⊖ x_t), lb_t, ub_t)`` and ``x̂_{t+1} = f(x̂_t, û_t)``, the gaps kept open by
 ``(1 - α)`` where the solver asks (FDDP).  :func:`trial_rollout` is ``SolverDDP._trial_rollout``;
 :func:`horizon_addresses` prepares the compiled calls that run each range of compiled nodes
-(:mod:`.compiled_nodes`).
+(:mod:`.compiled_nodes`).  A trial likely to diverge (its step length diverged last time, or the trial before it
+did) runs its ranges in growing steps (:func:`segment_rollout`), so that the work stops near the divergence; the
+numbers are those of one call.
 """
 
 from __future__ import annotations
@@ -60,16 +62,24 @@ def trial_rollout(solver, steplength: float, gaps: bool = False, bounds: tuple[l
     T = problem.T
     by_node = -1  # a node the compiled step left non-finite: evaluated again without it (its Python path, which
     # takes least squares where a contact set is singular); if that diverges too, the trial stops there
+    chunked = steplength in solver._diverged_steps or solver._last_trial_diverged  # likely to diverge
+    diverged = False
+    ends = None  # after a diverged step: the end of the compiled range of every node inside one
     while t < T:
-        if t in segments and t != by_node:
-            end, horizon = segments[t], nodes.horizon
-            c = horizon.rollout(addresses, xs_try, us_try, steplength, gaps, gap_at, t, end)
-            if not math.isfinite(c):
-                bad = next((s for s in range(t, end) if not math.isfinite(horizon.costs[s])), None)
-                if bad is not None:
-                    end = by_node = bad
-                    c = horizon.fold(t, end)
-            cost += c
+        start = t in segments
+        if ends is None and diverged and segments and not nodes.horizon.python:
+            ends = {s: end for t0, end in segments.items() for s in range(t0, end)}
+        if (start or ends is not None and t in ends) and t != by_node:
+            end, horizon = ends[t] if ends is not None else segments[t], nodes.horizon
+            c, bad = segment_rollout(horizon, addresses, xs_try, us_try, steplength, gaps, gap_at, t, end, chunked)
+            if bad is not None:
+                end = by_node = bad
+                chunked = diverged = True
+            if start:
+                cost += c
+            else:  # within a range, after a diverged step: its node steps' costs added one by one, as they were
+                for c in horizon.costs[t:end].tolist():
+                    cost += c
             for d, c in zip(islice(datas, t, end), horizon.costs[t:end].tolist()):
                 d.cost = c
             t = end
@@ -92,6 +102,7 @@ def trial_rollout(solver, steplength: float, gaps: bool = False, bounds: tuple[l
                                   gaps or t + 1 == gap_at)
                 if not math.isfinite(c):
                     by_node = t
+                    chunked = diverged = True
                     continue
                 cost += c
                 x = x_next
@@ -108,6 +119,8 @@ def trial_rollout(solver, steplength: float, gaps: bool = False, bounds: tuple[l
         cost += d.cost
         xnext = d.xnext
         if t == by_node and not np.isfinite(xnext).all():  # the Python path diverges too: the trial fails here
+            xs_try[t + 1][:] = xnext  # where the search of the reason finds it (a horizon call may not have reached it)
+            _note_divergence(solver, steplength, True)
             raise ForwardPassError("the rollout produced a non-finite state or cost")
         t += 1
         x = xs_try[t]
@@ -120,9 +133,55 @@ def trial_rollout(solver, steplength: float, gaps: bool = False, bounds: tuple[l
     else:
         calcs[-1](x, None)
     cost += problem.terminalData.cost
+    _note_divergence(solver, steplength, diverged)
     if not np.isfinite(cost) or not np.isfinite(x).all():
         raise ForwardPassError("the rollout produced a non-finite state or cost")
     solver.cost_try = cost
+
+
+CHUNK = 8
+"""Nodes in the first compiled call of a range run in steps (:func:`segment_rollout`); each next call doubles."""
+
+
+def segment_rollout(horizon, addresses: tuple, xs_try: list, us_try: list, steplength: float, gaps: bool,
+                    gap_at: int, t0: int, t1: int, chunked: bool) -> tuple[float, int | None]:
+    """The compiled rollout of the nodes ``t0 <= t < t1``: ``(total, None)``, or ``(total before node t, t)`` where
+    node ``t`` is the first whose cost is not finite (its compiled step diverged: the caller evaluates it again).
+
+    One call covers the range; ``chunked`` (a trial likely to diverge) runs it in calls of :data:`CHUNK`, then twice
+    as many nodes each, so that a divergence stops the work near where it arose (a call runs to its end).  The total
+    is the same either way: the nodes' costs added in node order from the range's first (``horizon.fold``), as one call
+    adds them.  A horizon with Python residuals (whose costs a call corrects after its nodes) runs in one call.
+    """
+    if not chunked or horizon.python:
+        c = horizon.rollout(addresses, xs_try, us_try, steplength, gaps, gap_at, t0, t1)
+        if math.isfinite(c):
+            return c, None
+        bad = _first_nonfinite(horizon.costs, t0, t1)
+        return (c, None) if bad is None else (horizon.fold(t0, bad), bad)
+    a, size = t0, CHUNK
+    while a < t1:
+        b = min(a + size, t1)
+        if not math.isfinite(horizon.rollout(addresses, xs_try, us_try, steplength, gaps, gap_at, a, b)):
+            bad = _first_nonfinite(horizon.costs, a, b)
+            if bad is not None:
+                return horizon.fold(t0, bad), bad
+        a, size = b, 2 * size
+    return horizon.fold(t0, t1), None
+
+
+def _first_nonfinite(costs: np.ndarray, t0: int, t1: int) -> int | None:
+    return next((s for s in range(t0, t1) if not math.isfinite(costs[s])), None)
+
+
+def _note_divergence(solver, steplength: float, diverged: bool) -> None:
+    """Remember whether a compiled step diverged in this trial (its next trial, and the next one with this step
+    length, then run their compiled ranges in steps, :func:`segment_rollout`)."""
+    solver._last_trial_diverged = diverged
+    if diverged:
+        solver._diverged_steps.add(steplength)
+    else:
+        solver._diverged_steps.discard(steplength)
 
 
 def horizon_addresses(solver, nodes, lbs: list | None, ubs: list | None) -> tuple:
