@@ -21,7 +21,7 @@ import numpy as np
 
 from crocopy.kernels import compiled, vector_at
 
-from .euler_node_kernel import node_calc
+from .horizon_kernel import horizon_calc
 from .lie_kernel import state_diff, state_integrate
 from .node_table import E_XNEXT, NQ, NV, entry_model, vec
 
@@ -63,12 +63,7 @@ def _trial(tbls, ints, ioff, par, poff, x0, xs, us, xs_try, us_try, nus, nx, ndx
            costs):
     """The whole trial of the range (module docstring) in one call; returns the sum of the nodes' costs."""
     horizon_points(tbls, ints, ioff, xs, us, xs_try, us_try, nus, nx, ndx, dx, du, alpha, step, t0, t1)
-    total = 0.0
-    for t in range(t0, t1):
-        cost = node_calc(tbls[t], ints[ioff[t]: ioff[t + 1]], par[poff[t]: poff[t + 1]], vector_at(xs_try[t], nx),
-                         vector_at(us_try[t], nus[t]))
-        costs[t] = cost
-        total += cost
+    total = horizon_calc(tbls, ints, ioff, par, poff, xs_try, us_try, nus, nx, t0, t1, costs)
     horizon_gaps(tbls, ints, ioff, x0, xs_try, nx, fs, t0, t1)
     return total
 
