@@ -221,13 +221,15 @@ def _solve(args: argparse.Namespace) -> int:
     )
     for line in _motion_notes(problem, solver, logger):
         print(f"{args.problem}: {line}")
+    # The display's thread (it imports meshcat, hence IPython) ends before pyplot is imported here: pyplot reads a
+    # half-imported IPython module otherwise.
+    robot, spawned = display_robot.result() if html else (None, None)
     if args.plot:
         from .callbacks.plotting import plot_convergence_from_logger
 
         plot_convergence_from_logger(logger, args.plot)
         print(f"convergence plot written to {args.plot}")
     if html:
-        robot, spawned = display_robot.result()
         if robot is None:
             print(f"no meshcat model for {args.problem}; animation not written", file=sys.stderr)
         else:
@@ -277,11 +279,6 @@ def _motion_notes(problem, solver, logger) -> list[str]:
     return notes
 
 
-COMPILE_RUNS = (("jump", ("boxfddp", "fddp", "ddp", "boxddp")), ("pend", ("fddp", "boxfddp")), ("arm", ("fddp",)))
-"""``crocopy compile``'s warm-up solves: problem → solver keys (together they call every kernel, with the
-argument types the bundled problems give them)."""
-
-
 def _compile(args: argparse.Namespace) -> int:
     import crocopy
 
@@ -296,28 +293,9 @@ def _compile(args: argparse.Namespace) -> int:
         print(f"kernels of `crocopy solve {args.solve} --solver {args.solver}` ready"
               + (f"; not cached: {', '.join(missing)}" if missing else ""))
         return 1 if missing else 0
-    runs = [(registry.get(name).build, [getattr(crocopy, SOLVERS[k]) for k in keys]) for name, keys in COMPILE_RUNS]
-    runs.append((registry.get("arm").build, [crocopy.SolverSQP, crocopy.SolverCSQP]))  # their QP and glue kernels
-    runs.append((_threaded_python_reach, [crocopy.SolverFDDP, crocopy.SolverSQP]))  # re-costing, two threads' ranges
-    runs.append((_terminal_equality_reach, [crocopy.SolverCSQP]))  # the QP rows' kernel
-    return compile_kernels(lambda builder: builder(crocopy), runs)
+    from .bench.compile_runs import warm_up_runs
 
-
-def _terminal_equality_reach(lib) -> tuple:
-    """mim-solvers' UR5 reach with a terminal equality row (``crocopy compile``: CSQP's kernel that reads the rows)."""
-    from .bench.mim import build_problem
-
-    return build_problem(lib, "ur5_ee_eq"), [], []
-
-
-def _threaded_python_reach(lib) -> tuple:
-    """A short reach whose goal is a Python residual, on two threads: the kernels that re-cost Python residuals'
-    nodes and add the ranges' costs (``crocopy compile``)."""
-    from .problems.user_residual import build_user_reach
-
-    problem, xs, us = build_user_reach(lib, "python", nodes=10)
-    problem.nthreads = 2
-    return problem, xs, us
+    return compile_kernels(lambda builder: builder(crocopy), warm_up_runs(crocopy, SOLVERS))
 
 
 def _table1(args: argparse.Namespace) -> int:
