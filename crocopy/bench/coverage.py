@@ -162,12 +162,11 @@ def format_section(rows: Sequence[Row]) -> str:
     """The markdown section: one row per builder or job, totals per source, then every reason with its nodes."""
     header = "| problem | source | problems | solvers | nodes compiled / nodes | not compiled: nodes, why |"
     lines = ["## Compiled nodes (`crocopy bench --coverage`)", "",
-             "The nodes a solve of the DDP family (DDP, FDDP, Box-DDP, Box-FDDP, with kernels on) evaluates as one "
-             "compiled call, per problem, and why the others keep the Python path (`crocopy.compiled_coverage`: "
-             "the solver's own decision, node by node). Crocoddyl's jobs run with `crocoddyl` bound to crocopy; "
-             "each problem one of their solves was called on counts once, whichever solver it used (the other "
-             "solvers, such as SolverIntro, evaluate every node in Python). A reason is the first test a node "
-             "fails.", "",
+             "The nodes a solve evaluates as one compiled call (with kernels on: the DDP family, SQP, CSQP, Intro "
+             "and the projection solver take compiled nodes), per problem, and why the others keep the Python "
+             "path (`crocopy.compiled_coverage`: the solver's own decision, node by node). Crocoddyl's jobs run "
+             "with `crocoddyl` bound to crocopy; each problem one of their solves was called on counts once, "
+             "whichever solver it used. A reason is the first test a node fails.", "",
              header, "|---" * header.count(" | ") + "|---|", *(format_row(r) for r in rows), ""]
     by_source: dict[str, list[Row]] = {}
     for row in rows:
