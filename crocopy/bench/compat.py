@@ -235,14 +235,15 @@ def run_child(library: str, job: str, result_file: str) -> int:
 
 
 # ---------------------------------------------------------------------------------- in the parent
-def run_job(library: str, job: str, timeout: float = TIMEOUT) -> RunResult:
-    """Run ``job`` with ``library`` in a subprocess (own folder, no display, one BLAS thread)."""
+def run_in_subprocess(module: str, args: Sequence[str], timeout: float = TIMEOUT) -> RunResult:
+    """``python -m module --child *args RESULT`` in a subprocess (own working folder, no display, one BLAS thread);
+    the child writes its :class:`RunResult` as JSON to ``RESULT``."""
     env = dict(os.environ, MPLBACKEND="Agg", OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1")
     for flag in ("DISPLAY", "CROCODDYL_DISPLAY", "CROCODDYL_PLOT"):
         env.pop(flag, None)
-    with tempfile.TemporaryDirectory(prefix="crocopy-compat-") as work:
+    with tempfile.TemporaryDirectory(prefix="crocopy-child-") as work:
         result_file = os.path.join(work, "result.json")
-        command = [sys.executable, "-m", "crocopy.bench.compat", "--child", library, job, result_file]
+        command = [sys.executable, "-m", module, "--child", *args, result_file]
         start = time.perf_counter()
         try:
             done = subprocess.run(command, cwd=work, env=env, capture_output=True, text=True, timeout=timeout)
@@ -253,6 +254,11 @@ def run_job(library: str, job: str, timeout: float = TIMEOUT) -> RunResult:
         tail = [line for line in done.stderr.strip().splitlines() if line.strip()]
         return RunResult(ok=False, error=f"exit code {done.returncode}: {tail[-1] if tail else 'no output'}",
                          seconds=time.perf_counter() - start)
+
+
+def run_job(library: str, job: str, timeout: float = TIMEOUT) -> RunResult:
+    """Run ``job`` with ``library`` in a subprocess (:func:`run_in_subprocess`)."""
+    return run_in_subprocess("crocopy.bench.compat", (library, job), timeout)
 
 
 def run_compat(names: Sequence[str] | None = None, timeout: float = TIMEOUT,

@@ -34,7 +34,6 @@ import json
 import os
 import pathlib
 import runpy
-import subprocess
 import sys
 import tarfile
 import tempfile
@@ -281,25 +280,8 @@ def run_child(library: str, job: str, folder: str, result_file: str) -> int:
 
 # ---------------------------------------------------------------------------------- in the parent
 def run_job(library: str, job: str, folder: pathlib.Path, timeout: float = TIMEOUT) -> RunResult:
-    """Run ``job`` (its script in ``folder``) with ``library`` in a subprocess (own working folder, no
-    display, one BLAS thread)."""
-    env = dict(os.environ, MPLBACKEND="Agg", OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1")
-    for flag in ("DISPLAY", "CROCODDYL_DISPLAY", "CROCODDYL_PLOT"):
-        env.pop(flag, None)
-    with tempfile.TemporaryDirectory(prefix="crocopy-mim-examples-") as work:
-        result_file = os.path.join(work, "result.json")
-        command = [sys.executable, "-m", "crocopy.bench.mim_examples", "--child", library, job, str(folder),
-                   result_file]
-        start = time.perf_counter()
-        try:
-            done = subprocess.run(command, cwd=work, env=env, capture_output=True, text=True, timeout=timeout)
-        except subprocess.TimeoutExpired:
-            return RunResult(ok=False, error=f"timeout after {timeout:.0f} s", seconds=timeout)
-        if os.path.exists(result_file):
-            return RunResult(**json.loads(pathlib.Path(result_file).read_text(encoding="utf-8")))
-        tail = [line for line in done.stderr.strip().splitlines() if line.strip()]
-        return RunResult(ok=False, error=f"exit code {done.returncode}: {tail[-1] if tail else 'no output'}",
-                         seconds=time.perf_counter() - start)
+    """Run ``job`` (its script in ``folder``) with ``library`` in a subprocess (:func:`.compat.run_in_subprocess`)."""
+    return compat.run_in_subprocess("crocopy.bench.mim_examples", (library, job, str(folder)), timeout)
 
 
 def require_mim_solvers() -> None:
