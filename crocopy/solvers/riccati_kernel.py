@@ -75,18 +75,32 @@ def _cholesky_lower(A, idx, n, L):
 cholesky_lower = compiled(_cholesky_lower)
 
 
-def _cholesky_solve(L, n, x):
-    """``x[:n] ← (L Lᵀ)⁻¹ x[:n]`` with the lower factor ``L[:n, :n]`` of :func:`cholesky_lower`."""
-    for r in range(n):
+def _forward_substitution(L, n, x, start):
+    """``x[:n] ← L⁻¹ x[:n]`` for an ``x`` whose entries before ``start`` are zero (they stay zero)."""
+    for r in range(start, n):
         acc = x[r]
-        for k in range(r):
+        for k in range(start, r):
             acc -= L[r, k] * x[k]
         x[r] = acc / L[r, r]
+
+
+def _back_substitution(L, n, x):
+    """``x[:n] ← L⁻ᵀ x[:n]``."""
     for r in range(n - 1, -1, -1):
         acc = x[r]
         for k in range(r + 1, n):
             acc -= L[k, r] * x[k]
         x[r] = acc / L[r, r]
+
+
+forward_substitution = compiled(_forward_substitution)
+back_substitution = compiled(_back_substitution)
+
+
+def _cholesky_solve(L, n, x):
+    """``x[:n] ← (L Lᵀ)⁻¹ x[:n]`` with the lower factor ``L[:n, :n]`` of :func:`cholesky_lower`."""
+    forward_substitution(L, n, x, 0)
+    back_substitution(L, n, x)
 
 
 cholesky_solve = compiled(_cholesky_solve)
