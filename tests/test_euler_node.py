@@ -172,7 +172,8 @@ def test_parameters_are_read_again_at_each_refresh():
 
 def test_the_kernel_rebuilds_the_lowered_model_and_workspace_from_the_table():
     """Entry by entry, the arrays the kernel views are the node's own and its model's shared workspace (same
-    memory, shapes and values)."""
+    memory, shapes and values), the workspace fields the node keeps of its own (:data:`node_table.OWN_WORKSPACE`)
+    excepted."""
     from crocopy.models.rbd import node_table as table
 
     iam, state = node("anymal", ("state", "control"))
@@ -185,9 +186,12 @@ def test_the_kernel_rebuilds_the_lowered_model_and_workspace_from_the_table():
     for name in rb._fields[4:]:
         expected = evaluator.armature if name == "armature" else getattr(reference, name)
         np.testing.assert_array_equal(getattr(rb, name), expected, err_msg=name)
+    own = dict(zip(table.OWN_WORKSPACE, evaluator._own[3]))
     for name in ws._fields:
         mine, theirs = getattr(ws, name), getattr(evaluator._lowered.workspace, name)
-        assert mine.shape == theirs.shape and mine.ctypes.data == theirs.ctypes.data, name
+        expected = own.get(name, theirs)
+        assert mine.shape == theirs.shape and mine.ctypes.data == expected.ctypes.data, name
+        assert (name in own) == (mine.ctypes.data != theirs.ctypes.data), name
 
 
 def test_a_changed_pinocchio_model_is_read_again_at_the_next_solve():
@@ -206,7 +210,8 @@ def test_a_changed_pinocchio_model_is_read_again_at_the_next_solve():
 
 
 def test_nodes_of_one_model_share_their_scratch_and_keep_their_own_arrays():
-    """Only the scratch and the (empty) constraint-row arrays of a node without constraints are shared."""
+    """Only the scratch (but what each node keeps of its own, :data:`node_table.OWN`) and the (empty) constraint-row
+    arrays of a node without constraints are shared."""
     from crocopy.models.rbd import node_table as table
 
     iam, state = node("kinova", ("state", "translation", "control"))
@@ -214,7 +219,10 @@ def test_nodes_of_one_model_share_their_scratch_and_keep_their_own_arrays():
     memo: dict = {}
     a, b = iam._compiled_node(first, False, memo), iam._compiled_node(second, False, memo)
     shared = table.NODE + len(table.NODE_ARRAYS)
-    assert np.array_equal(a.tbl[shared:], b.tbl[shared:])
+    scratch = np.arange(shared, a.tbl.shape[0])
+    kept = np.isin(scratch, table.OWN)
+    assert kept.any() and np.array_equal(a.tbl[scratch[~kept]], b.tbl[scratch[~kept]])
+    assert not np.intersect1d(a.tbl[table.OWN], b.tbl[table.OWN]).size
     own = np.array([e.owner != "constraint rows" for e in table.NODE_ARRAYS])  # no constraints: empty, shared
     assert not np.intersect1d(a.tbl[table.NODE:shared][own], b.tbl[table.NODE:shared][own]).size
     x, u = point(state, iam.nu, 6)

@@ -234,6 +234,8 @@ class EulerNode:
         self.rows = ConstraintRows(iam.nu, iam.state.ndx)
         self.python = PythonResiduals(iam.state.pinocchio, data.differential.pinocchio, [])
         self._lowered: Lowered | None = None
+        self.stamp = np.zeros(0)
+        self._own: tuple = (None, None, np.zeros(0, dtype=np.int64), [])
         self._seen = -1
         self._n_parameters = 0
         self.shared_minv = False
@@ -344,8 +346,13 @@ class EulerNode:
         by the model's nodes of the same sizes, :meth:`Lowered.scratch`).  Made again only when the items changed
         (``changed``) or the lowered model is another one: the arrays a data or a stack owns never move
         (:mod:`crocopy.stored`), and a new data gets a new node."""
+        self.forget()
         if not changed and low is self._lowered and self._data_arrays:
             return
+        state = self.model.state
+        n_stamp = 0 if self.python.items else state.nx + self.model.nu + 2
+        if self.stamp.shape[0] != n_stamp:
+            self.stamp = np.zeros(n_stamp)
         fields = {
             "xnext": data.xnext, "dx": data.dx, "Fx": data.Fx, "Fu": data.Fu, "Lx": data.Lx, "Lu": data.Lu,
             "Lxx": data.Lxx, "Lxu": data.Lxu, "Luu": data.Luu,
@@ -354,7 +361,8 @@ class EulerNode:
             "r": stack.r, "lb": stack.lb, "ub": stack.ub, "act_weights": stack.act_weights,
             "item_costs": stack.item_costs, "item_weights": stack.item_weights, "weights": stack.weights,
             "Ar": stack.Ar, "Arr": stack.Arr, "Jx": stack.Jx, "Ju": stack.Ju, "Jc": stack.Jc, "HJx": stack.HJx,
-            "Juc": stack.Juc, "HJu": stack.HJu, **self.parameters, **self.rows.fields(data, ddata),
+            "Juc": stack.Juc, "HJu": stack.HJu, "stamp": self.stamp, **self.parameters,
+            **self.rows.fields(data, ddata),
         }
         n = table.NODE + len(table.NODE_ARRAYS) + len(table.SCRATCH_ARRAYS)
         self.rows.allocate(n, table.SHAPES + 3 * n + len(self._items) + len(stack.starts) + len(self.contacts.ints))
@@ -365,11 +373,10 @@ class EulerNode:
         arrays = [fields[e.name] for e in table.NODE_ARRAYS]
         known = self._data_arrays
         if len(known) != len(arrays) or any(a is not b for a, b in zip(arrays, known)):
-            state = self.model.state
             sizes = {"nx": state.nx, "ndx": state.ndx, "nv": state.nv, "nu": self.model.nu, "nr": stack.r.shape[0],
                      "nr_u": stack.r.shape[0] - stack.u_start, "n_stack": stack.item_costs.shape[0],
                      "n_contacts": len(self.contacts.models), "n_kin": kinematics_size(state.nv),
-                     "nr_user": self.parameters["user_Ru"].shape[0], **self.rows.sizes(data)}
+                     "nr_user": self.parameters["user_Ru"].shape[0], "n_stamp": n_stamp, **self.rows.sizes(data)}
             table.check_arrays(table.NODE_ARRAYS, arrays, sizes)
             self._data_entries = table_entries(arrays)
             self._data_arrays = arrays
@@ -382,6 +389,7 @@ class EulerNode:
                  (low.addresses[armature + 1:], low.shapes[3 * armature + 3:]), low.workspace_entries,
                  self._data_entries, scratch_entries]
         addresses = np.concatenate([p[0] for p in parts])
+        addresses[table.OWN] = self._own_addresses(low, scratch)
         shapes = np.concatenate([p[1] for p in parts])
         n = addresses.shape[0]
         header = np.zeros(table.SHAPES, dtype=np.int64)
@@ -401,6 +409,25 @@ class EulerNode:
         self.rows.constraint_ints(self.ints)
         self._lowered = low
 
+    def _own_addresses(self, low: Lowered, scratch: dict) -> np.ndarray:
+        """The addresses of this node's own workspace and scratch arrays (:data:`.node_table.OWN`), shaped as the
+        model's shared ones (made again for another lowered model or other sizes)."""
+        key = (self.model.nu, self.contacts.nc)
+        owner, sizes, addresses, _ = self._own
+        if owner is not low or sizes != key:
+            arrays = ([np.zeros_like(getattr(low.workspace, name)) for name in table.OWN_WORKSPACE]
+                      + [np.zeros_like(scratch[name]) for name in table.OWN_SCRATCH])
+            addresses = table_entries(arrays)[0]
+            self._own = (low, key, addresses, arrays)
+        return addresses
+
+    def forget(self) -> None:
+        """Spend the stamp of the last values (:func:`.euler_node_kernel.node_calc_diff` evaluates them again): at
+        every refresh (a solve's start: parameters may have changed since) and after the Python path wrote the
+        data."""
+        if self.stamp.shape[0]:
+            self.stamp[0] = 0.0
+
     def calc(self, x: np.ndarray, u: np.ndarray | None) -> None:
         if self.python.items:
             self.python.evaluate(x, u, False)
@@ -414,6 +441,7 @@ class EulerNode:
         """Evaluate the node on its Python path (where the kernel's acceleration is not finite: a contact set whose
         KKT system is singular at this state takes least squares there, as with kernels off); returns its cost."""
         model, data = self.model, self._data()
+        self.forget()
         model._raw_calc(data, x, u)
         if derivatives:
             model._raw_calcDiff(data, x, u)

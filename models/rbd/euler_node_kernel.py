@@ -106,6 +106,7 @@ from .node_table import (
     E_REF_R,
     E_ROWS,
     E_S,
+    E_STAMP,
     E_TAU,
     E_UB,
     E_USER_RU,
@@ -417,16 +418,53 @@ def _singular(tbl, ints):
 
 
 @uncounted
+def _same(a, b):
+    """Whether ``a`` and ``b`` hold the same numbers to the bit (a signed zero included; NaN is never the same)."""
+    for i in range(a.shape[0]):
+        if a[i] != b[i] or math.copysign(1.0, a[i]) != math.copysign(1.0, b[i]):
+            return False
+    return True
+
+
+@uncounted
+def _remember(stamp, x, u, value):
+    """Stamp the node's values as those of ``(x, u)`` (``value``: the stack's)."""
+    if stamp.shape[0] == 0:
+        return
+    nx = x.shape[0]
+    stamp[1] = value
+    for i in range(nx):
+        stamp[2 + i] = x[i]
+    for i in range(u.shape[0]):
+        stamp[2 + nx + i] = u[i]
+    stamp[0] = 1.0
+
+
+@uncounted
+def _current(stamp, x, u):
+    """Whether the node's values (its own arrays, :data:`.node_table.OWN`) are those of ``(x, u)``."""
+    if stamp.shape[0] == 0 or stamp[0] != 1.0:
+        return False
+    nx = x.shape[0]
+    return _same(stamp[2: 2 + nx], x) and _same(stamp[2 + nx: 2 + nx + u.shape[0]], u)
+
+
+@uncounted
 def node_calc(tbl, ints, par, x, u):
     """``xnext`` of the node at ``(x, u)``; returns its cost (``dt`` times the stack's for a running node), NaN when
-    the acceleration is not finite (:func:`_singular`: the caller evaluates the node on the Python path)."""
+    the acceleration is not finite (:func:`_singular`: the caller evaluates the node on the Python path).  A finite
+    evaluation is stamped with ``(x, u)`` (:func:`_remember`)."""
     rb, ws = entry_model(tbl, ints), entry_workspace(tbl, ints)
+    stamp = vec(tbl, ints, E_STAMP)
+    if stamp.shape[0]:
+        stamp[0] = 0.0
     cost = _values(tbl, ints, par, x, u, rb, ws)
     _step(tbl, ints, par, x, rb)
     if _singular(tbl, ints):
         return math.nan
     if has_rows(ints):
         _constraints(tbl, ints, par, rb, ws, x, u, False)
+    _remember(stamp, x, u, cost)
     return cost if ints[TERMINAL] else par[0] * cost
 
 
@@ -509,13 +547,21 @@ def _integrate_chain(tbl, ints, x, rb):
 
 @uncounted
 def node_calc_diff(tbl, ints, par, x, u):
-    """Values and derivatives of the node at ``(x, u)`` (self-contained); returns its cost, NaN when the acceleration
-    is not finite (as :func:`node_calc`)."""
+    """Values and derivatives of the node at ``(x, u)``; returns its cost, NaN when the acceleration is not finite (as
+    :func:`node_calc`).  The values are those of the last :func:`node_calc` when its stamp is ``(x, u)`` to the bit
+    (:func:`_current`: the node's own arrays still hold what they left), else evaluated here; the stamp is then
+    spent (the derivatives overwrite some of those arrays)."""
     rb, ws = entry_model(tbl, ints), entry_workspace(tbl, ints)
-    cost = _values(tbl, ints, par, x, u, rb, ws)
-    _step(tbl, ints, par, x, rb)
-    if _singular(tbl, ints):
-        return math.nan
+    stamp = vec(tbl, ints, E_STAMP)
+    if _current(stamp, x, u):
+        cost = stamp[1]
+    else:
+        cost = _values(tbl, ints, par, x, u, rb, ws)
+        _step(tbl, ints, par, x, rb)
+        if _singular(tbl, ints):
+            return math.nan
+    if stamp.shape[0]:
+        stamp[0] = 0.0
     terminal = ints[TERMINAL] != 0
     if not terminal:
         _dynamics_jacobians(tbl, ints, x, rb, ws)

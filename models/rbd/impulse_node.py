@@ -110,8 +110,8 @@ class ImpulseNode:
                     "Minv": np.zeros((nv, nv)), "dLx": np.zeros(ndx), "dLu": np.zeros(0),
                     "dLxx": np.zeros((ndx, ndx)), "dLxu": np.zeros((ndx, 0)), "dLuu": np.zeros((0, 0)),
                     "S": np.zeros((nv, 0)), "gains": np.zeros((n, 2)), "ref_R": np.zeros((n, 3, 3)),
-                    "ref_p": np.zeros((n, 3)), "kin": np.zeros(1), "user_dims": np.zeros(5, dtype=np.int64),
-                    "user_Ru": np.zeros((1, 0))}
+                    "ref_p": np.zeros((n, 3)), "kin": np.zeros(1), "stamp": np.zeros(0),
+                    "user_dims": np.zeros(5, dtype=np.int64), "user_Ru": np.zeros((1, 0))}
         """The table's entries the impulse node does not use or keeps for itself (``dFx``: ``∂v⁺/∂x``)."""
         self.rows = ConstraintRows(0, ndx)
         self.no_control = np.zeros(0)
@@ -207,7 +207,7 @@ class ImpulseNode:
             state = self.model.state
             sizes = {"nx": state.nx, "ndx": state.ndx, "nv": state.nv, "nu": 0, "nr": stack.r.shape[0],
                      "nr_u": stack.r.shape[0] - stack.u_start, "n_stack": stack.item_costs.shape[0],
-                     "n_contacts": len(self.impulses) // table.CONTACT_FIELDS, "n_kin": 1, "nr_user": 1,
+                     "n_contacts": len(self.impulses) // table.CONTACT_FIELDS, "n_kin": 1, "nr_user": 1, "n_stamp": 0,
                      **self.rows.sizes(data)}
             table.check_arrays(table.NODE_ARRAYS, arrays, sizes)
             self._data_entries = table_entries(arrays)

@@ -76,7 +76,7 @@ NODE_ARRAYS = (
     Entry("S", ("nv", "nu"), _NODE), Entry("gains", ("n_contacts", 2), _CONTACTS),
     Entry("ref_R", ("n_contacts", 3, 3), _CONTACTS), Entry("ref_p", ("n_contacts", 3), _CONTACTS),
     Entry("kin", ("n_kin",), _NODE), Entry("user_dims", (5,), _NODE, np.int64),
-    Entry("user_Ru", ("nr_user", "nu"), _NODE),
+    Entry("user_Ru", ("nr_user", "nu"), _NODE), Entry("stamp", ("n_stamp",), _NODE),
     Entry("c_tbl", ("n_tbl",), _ROWS, np.int64), Entry("c_ints", ("n_c_ints",), _ROWS, np.int64),
     Entry("c_rows", ("n_c_rows",), _ROWS, np.int64), Entry("cr", ("nrc",), _ROWS),
     Entry("cJx", ("nrc", "ndx"), _ROWS), Entry("cJu", ("nrc", "nu"), _ROWS),
@@ -86,7 +86,8 @@ NODE_ARRAYS = (
     Entry("dh", ("nh",), _DIFF), Entry("dHx", ("nh", "ndx"), _DIFF), Entry("dHu", ("nh", "nu"), _DIFF),
 )
 """The node's own arrays (its data's, its differential data's, its cost stack's, its actuation matrix ``S`` and
-contacts, the kinematics its users' residuals read; its constraint manager's rows, :mod:`.constraint_rows`: the
+contacts, the kinematics its users' residuals read, the stamp of its last values (:data:`OWN`); its constraint
+manager's rows, :mod:`.constraint_rows`: the
 constraint table and program, the constraint residuals ``cr`` and Jacobians ``cJx``, ``cJu``, and the rows ``g``,
 ``h`` and Jacobians of the action data and of the differential data), in table order."""
 SCRATCH_ARRAYS = (
@@ -112,14 +113,27 @@ ENTRIES = {e.name: NODE + k for k, e in enumerate(NODE_ARRAYS + SCRATCH_ARRAYS)}
 kernels' name for it), made here from the declaration."""
 globals().update({"E_" + name.upper(): k for name, k in ENTRIES.items()})
 
+OWN_WORKSPACE = ("oR", "op", "oS", "ov", "ow", "oI", "L", "dinv")
+"""The workspace fields an Euler node keeps of its own (not the model's shared workspace): what its values leave
+(the kinematics, the factor of ``M``) and its derivatives read before writing."""
+OWN_SCRATCH = ("Jcs", "a0", "lam", *("c" + name for name in CONTACT_WORKSPACE))
+"""The scratch an Euler node keeps of its own for the same reason (the contacts' Jacobian, drift, forces and
+workspace)."""
+OWN = np.array([N_RB + RigidBodyWorkspace._fields.index(name) for name in OWN_WORKSPACE]
+               + [ENTRIES[name] for name in OWN_SCRATCH], dtype=np.int64)
+"""The entries of an Euler node's table that are its own arrays (:data:`OWN_WORKSPACE`, :data:`OWN_SCRATCH`):
+with them and its ``stamp`` (``[valid, stack value, x, u]``, empty where the node may not skip), a ``calcDiff`` at
+the point of the node's last ``calc`` skips the values (:func:`.euler_node_kernel.node_calc_diff`).  The extra
+threads' tables keep these entries (:mod:`.node_threads`)."""
+
 
 def entry_shapes(entries: tuple, sizes: dict[str, int]) -> list[tuple[int, ...]]:
     """The shapes of ``entries`` for a node of ``sizes`` (``nv, nx, ndx, nu``; the cost stack's rows ``nr``, rows
     that depend on ``u`` ``nr_u``, items ``n_stack``; contact rows ``nc`` and contacts ``n_contacts``; the users'
-    kinematics ``n_kin`` and their largest ``u`` rows ``nr_user``, at least 1; the constraint rows ``ng``, ``nh``,
-    their residual rows ``nrc``, the lengths ``n_tbl``, ``n_c_ints``, ``n_c_rows`` of the constraint table, integers
-    and program; ``ncm = max(nc, 1)`` is added): an expression is evaluated over those names.  The shapes are kept
-    per declaration and sizes (the nodes of a problem mostly share theirs)."""
+    kinematics ``n_kin`` and their largest ``u`` rows ``nr_user``, at least 1; the stamp's length ``n_stamp``; the
+    constraint rows ``ng``, ``nh``, their residual rows ``nrc``, the lengths ``n_tbl``, ``n_c_ints``, ``n_c_rows`` of
+    the constraint table, integers and program; ``ncm = max(nc, 1)`` is added): an expression is evaluated over
+    those names.  The shapes are kept per declaration and sizes (the nodes of a problem mostly share theirs)."""
     key = (entries, tuple(sorted(sizes.items())))
     if key not in _SHAPES:
         if len(_SHAPES) > 256:

@@ -6,7 +6,8 @@ one compiled call, which releases the GIL (:func:`.horizon_kernel.horizon_calc_d
 and a pool of ``k - 1`` threads the others, at once.  The nodes of one Pinocchio model share a workspace and a
 scratch (:meth:`.euler_node.Lowered.scratch`), so each extra thread ``c`` reads tables of its own
 (:class:`ThreadTables`): every node's table with the addresses of the workspace and scratch replaced by those of
-thread ``c``'s copies (:meth:`.euler_node.Lowered.thread_entries`).  A node's result does not depend on which thread
+thread ``c``'s copies (:meth:`.euler_node.Lowered.thread_entries`), except the node's own arrays
+(:data:`.node_table.OWN`: one thread evaluates a node at a time).  A node's result does not depend on which thread
 evaluated it (a kernel call reads nothing a previous call left in the scratch), each writes only its own arrays and
 ``costs[t]``, and the total is then added in node order (:func:`.horizon_kernel.fold`): the results are
 bit-identical to one thread's.  Rollouts stay on one thread (each node starts where the previous one ended).
@@ -55,6 +56,7 @@ class ThreadTables:
                 tbls_c[t, start:] = scratch[:-1]
                 if node.shared_minv:
                     tbls_c[t, minv] = scratch[-1]
+                tbls_c[t, table.OWN] = tbls[t, table.OWN]
             self.tables.append(tbls_c)
 
     def run(self, call: Callable, tbls: np.ndarray, t0: int, t1: int) -> None:
