@@ -27,7 +27,7 @@ it).
 from __future__ import annotations
 
 from crocopy.costs.stack_kernel import activation_values, derivatives_and_sums
-from crocopy.kernels import compiled
+from crocopy.kernels import uncounted
 from crocopy.solvers.riccati_kernel import cholesky_solve
 
 from .constraint_rows_kernel import has_rows
@@ -96,7 +96,7 @@ from .node_table import (
 )
 
 
-@compiled
+@uncounted
 def _impulse_jacobian(tbl, ints, rb, ws, Jcs):
     """The impulses' stacked ``Jc`` into ``Jcs`` (after the kinematics at ``q``)."""
     J6, nv = mat(tbl, ints, E_J6), ints[NV]
@@ -113,7 +113,7 @@ def _impulse_jacobian(tbl, ints, rb, ws, Jcs):
                     Jcs[row + r, k] = R[i, 0] * J6[b, k] + R[i, 1] * J6[b + 1, k] + R[i, 2] * J6[b + 2, k]
 
 
-@compiled
+@uncounted
 def _impulse_velocity(rb, ws, cw, Jc, nc, e, damping, v, vnext, lam):
     """``vnext = v⁺`` and ``lam[:nc] = Λ`` (see the module docstring); leaves ``cw.Y`` and ``cw.G`` as
     :func:`~.contact_kernel.contact_forward_dynamics` does.  Needs the factor of ``M`` in ``ws``.  Not a number
@@ -133,7 +133,7 @@ def _impulse_velocity(rb, ws, cw, Jc, nc, e, damping, v, vnext, lam):
             vnext[k] += Y[r, k] * lam[r]
 
 
-@compiled
+@uncounted
 def _values(tbl, ints, par, x, u, rb, ws):
     """``xnext`` and the impulses at ``x``, the residuals; returns the cost stack's weighted sum.  Leaves the
     kinematics at ``x`` in ``ws``."""
@@ -154,7 +154,7 @@ def _values(tbl, ints, par, x, u, rb, ws):
     )
 
 
-@compiled
+@uncounted
 def impulse_calc(tbl, ints, par, x, u):
     """``xnext`` of the impulse node at ``x`` (``u`` has no entries) and its constraint rows; returns its cost."""
     rb, ws = entry_model(tbl, ints), entry_workspace(tbl, ints)
@@ -164,7 +164,7 @@ def impulse_calc(tbl, ints, par, x, u):
     return cost
 
 
-@compiled
+@uncounted
 def _velocity_rows(tbl, ints, rb, ws, da0_dx):
     """``dv0_dq`` of every impulse into the first ``nv`` columns of ``da0_dx`` (after the kinematics at ``(q, w)``)."""
     nv = ints[NV]
@@ -188,7 +188,7 @@ def _velocity_rows(tbl, ints, rb, ws, da0_dx):
                     da0_dx[row + s + i, k] = R[i, 0] * c0 + R[i, 1] * c1 + R[i, 2] * c2
 
 
-@compiled
+@uncounted
 def _impulse_derivatives(tbl, ints, par, x, rb, ws):
     """``dFx = ∂v⁺/∂x`` and ``df_dx = ∂Λ/∂x`` (see the module docstring), after :func:`_values` at ``x``."""
     nq, nv, nc = ints[NQ], ints[NV], ints[NC]
@@ -218,7 +218,7 @@ def _impulse_derivatives(tbl, ints, par, x, rb, ws):
                                  mat(tbl, ints, E_DF_DX), mat(tbl, ints, E_DF_DU))
 
 
-@compiled
+@uncounted
 def impulse_calc_diff(tbl, ints, par, x, u):
     """Values and derivatives of the impulse node at ``x`` (self-contained); returns its cost."""
     rb, ws = entry_model(tbl, ints), entry_workspace(tbl, ints)
