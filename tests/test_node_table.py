@@ -16,7 +16,8 @@ KERNELS = sorted(Path(table.__file__).parent.glob("*.py"))
 ACCESSOR = re.compile(r"\b(vec|mat|cube|ivec)\(\s*tbl\s*,\s*ints\s*,\s*(E_[A-Z0-9_]+)\s*\)")
 DIMENSION = {"vec": (1, np.float64), "mat": (2, np.float64), "cube": (3, np.float64), "ivec": (1, np.int64)}
 SIZES = {"nq": 7, "nv": 6, "nx": 13, "ndx": 12, "nu": 4, "nr": 9, "nr_u": 4, "n_stack": 3, "nc": 6, "n_contacts": 2,
-         "n_kin": 40, "nr_user": 1, "n_stamp": 19, "ng": 5, "nh": 3, "nrc": 8, "n_tbl": 120, "n_c_ints": 500, "n_c_rows": 6}
+         "n_kin": 40, "nr_user": 1, "n_stamp": 19, "ng": 5, "nh": 3, "nrc": 8, "n_tbl": 120, "n_c_ints": 500,
+         "n_c_rows": 6}
 
 
 def test_every_entry_has_one_generated_index():
@@ -42,7 +43,7 @@ def test_every_accessor_a_kernel_applies_has_the_entry_dimension_and_dtype():
 def test_the_scratch_is_made_from_the_declaration():
     arrays = table.make_arrays(table.SCRATCH_ARRAYS, SIZES)
     assert arrays["rows"].shape == (6, 16) and arrays["cY"].shape == (6, 6) and arrays["cG"].shape == (6, 6)
-    assert table.make_arrays(table.SCRATCH_ARRAYS, {**SIZES, "nc": 0})["cw"].shape == (1,)
+    assert table.make_arrays(table.SCRATCH_ARRAYS, {**SIZES, "nc": 0})["cG"].shape == (1, 1)
     table.check_arrays(table.SCRATCH_ARRAYS, [arrays[e.name] for e in table.SCRATCH_ARRAYS], SIZES)
 
 

@@ -81,22 +81,19 @@ class ContactWorkspace(NamedTuple):
 
     ``J6 (6, nv)``: the LOCAL Jacobian of the last contact frame.  ``Y (nc_max, nv)``: rows of ``M⁻¹ Jcᵀ``;
     ``G (nc_max, nc_max)``: lower Cholesky factor of ``Jc M⁻¹ Jcᵀ + damping I`` (both from the last
-    :func:`contact_forward_dynamics`).  ``z (nv,)``, ``w (nc_max,)``, ``m6 (6,)``, ``J66 (6, 6)``, ``R3 (3, 3)``,
-    ``p3 (3,)``: scratch.
+    :func:`contact_forward_dynamics`).  ``m6 (6,)``, ``J66 (6, 6)``, ``R3 (3, 3)``, ``p3 (3,)``: scratch.
     """
 
     J6: np.ndarray
     Y: np.ndarray
     G: np.ndarray
-    z: np.ndarray
-    w: np.ndarray
     m6: np.ndarray
     J66: np.ndarray
     R3: np.ndarray
     p3: np.ndarray
 
 
-CONTACT_WORKSPACE = {"J6": (6, "nv"), "Y": ("ncm", "nv"), "G": ("ncm", "ncm"), "z": ("nv",), "w": ("ncm",),
+CONTACT_WORKSPACE = {"J6": (6, "nv"), "Y": ("ncm", "nv"), "G": ("ncm", "ncm"),
                      "m6": (6,), "J66": (6, 6), "R3": (3, 3), "p3": (3,)}
 """The shapes of :class:`ContactWorkspace`'s fields (in their order; ``ncm = max(nc_max, 1)``)."""
 
@@ -406,32 +403,94 @@ def contact_dynamics_derivatives(
     :func:`contact_calc_diff` at ``a``.  Uses the factors left by :func:`contact_forward_dynamics` (``ws.L``,
     ``cw.Y``, ``cw.G``); ``O((2 nv + nu) (nv · depth + nc nv))``.
     """
-    nv, z, w, Y, dof_parent, L, dinv = rb.nv, cw.z, cw.w, cw.Y, rb.dof_parent, ws.L, ws.dinv
-    for c in range(2 * nv + S.shape[1]):
+    nv, nu, dof_parent, L, dinv = rb.nv, S.shape[1], rb.dof_parent, ws.L, ws.dinv
+    W = df_dx_out[:nc]
+    for k in range(nv):
+        for c in range(nv):
+            Fx_out[k, c] = -did_dq[k, c]
+            Fx_out[k, nv + c] = -did_dv[k, c]
+    for r in range(nc):
+        for c in range(2 * nv):
+            W[r, c] = da0_dx[r, c]
+    _kkt_columns(dof_parent, L, dinv, Jc, cw.Y, cw.G, nc, Fx_out, W)
+    W = df_du_out[:nc]
+    for k in range(nv):
+        for c in range(nu):
+            Fu_out[k, c] = S[k, c]
+    for r in range(nc):
+        for c in range(nu):
+            W[r, c] = 0.0
+    _kkt_columns(dof_parent, L, dinv, Jc, cw.Y, cw.G, nc, Fu_out, W)
+
+
+@uncounted
+def _kkt_columns(dof_parent, L, dinv, Jc, Y, G, nc, Z, W):
+    """Each column ``(z, w)`` of ``Z (nv, m)``, ``W (nc, m)`` (right-hand sides ``r`` and ``∂c/∂x`` terms ``e``) ←
+    the contact KKT solution ``z = M⁻¹ (r - Jcᵀ w')``, ``w = -w'`` with ``w' = G⁻ᵀ G⁻¹ (Jc M⁻¹ r + e)``, by the
+    factors of :func:`contact_forward_dynamics`.  Every column goes through the operations a single right-hand side
+    would, in the same order (the same numbers to the bit), with the loop over the columns innermost (vectorised)."""
+    nv, m = Z.shape[0], Z.shape[1]
+    _factor_solve_columns(dof_parent, L, dinv, Z)
+    for r in range(nc):
         for k in range(nv):
-            if c < nv:
-                z[k] = -did_dq[k, c]
-            elif c < 2 * nv:
-                z[k] = -did_dv[k, c - nv]
-            else:
-                z[k] = S[k, c - 2 * nv]
-        factor_solve(dof_parent, L, dinv, z)
-        for r in range(nc):  # w = G⁻¹ (Jc z + ∂c/∂x_c), z -= Yᵀ w
-            acc = da0_dx[r, c] if c < 2 * nv else 0.0
-            for k in range(nv):
-                acc += Jc[r, k] * z[k]
-            w[r] = acc
-        cholesky_solve(cw.G, nc, w)
-        for r in range(nc):
-            for k in range(nv):
-                z[k] -= Y[r, k] * w[r]
-        if c < 2 * nv:
-            for k in range(nv):
-                Fx_out[k, c] = z[k]
-            for r in range(nc):
-                df_dx_out[r, c] = -w[r]
-        else:
-            for k in range(nv):
-                Fu_out[k, c - 2 * nv] = z[k]
-            for r in range(nc):
-                df_du_out[r, c - 2 * nv] = -w[r]
+            j = Jc[r, k]
+            for c in range(m):
+                W[r, c] += j * Z[k, c]
+    _cholesky_solve_columns(G, nc, W)
+    for r in range(nc):
+        for k in range(nv):
+            y = Y[r, k]
+            for c in range(m):
+                Z[k, c] -= y * W[r, c]
+    for r in range(nc):
+        for c in range(m):
+            W[r, c] = -W[r, c]
+
+
+@uncounted
+def _factor_solve_columns(lam, L, dinv, X):
+    """:func:`~.dynamics_kernel.factor_solve` on every column of ``X (nv, m)``, the columns innermost."""
+    n, m = X.shape[0], X.shape[1]
+    for k in range(n - 1, -1, -1):
+        d = dinv[k]
+        for c in range(m):
+            X[k, c] *= d
+        i = lam[k]
+        while i >= 0:
+            f = L[k, i]
+            for c in range(m):
+                X[i, c] -= f * X[k, c]
+            i = lam[i]
+    for k in range(n):
+        i = lam[k]
+        while i >= 0:
+            f = L[k, i]
+            for c in range(m):
+                X[k, c] -= f * X[i, c]
+            i = lam[i]
+        d = dinv[k]
+        for c in range(m):
+            X[k, c] *= d
+
+
+@uncounted
+def _cholesky_solve_columns(G, n, X):
+    """``cholesky_solve`` (``(G Gᵀ)⁻¹``, lower ``G[:n, :n]``) on every column of ``X (n, m)``, the columns
+    innermost."""
+    m = X.shape[1]
+    for r in range(n):
+        for k in range(r):
+            f = G[r, k]
+            for c in range(m):
+                X[r, c] -= f * X[k, c]
+        d = G[r, r]
+        for c in range(m):
+            X[r, c] /= d
+    for r in range(n - 1, -1, -1):
+        for k in range(r + 1, n):
+            f = G[k, r]
+            for c in range(m):
+                X[r, c] -= f * X[k, c]
+        d = G[r, r]
+        for c in range(m):
+            X[r, c] /= d

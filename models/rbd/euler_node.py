@@ -344,8 +344,8 @@ class EulerNode:
         Entries: the lowered model's arrays (the armature is this node's, model's plus dynamics'), its shared
         workspace, then :data:`.node_table.NODE_ARRAYS` (the node's own) and ``SCRATCH_ARRAYS`` (shared
         by the model's nodes of the same sizes, :meth:`Lowered.scratch`), except the workspace and scratch entries
-        the node keeps of its own (:data:`.node_table.OWN`, :meth:`_own_addresses`).  Made again only when the items changed
-        (``changed``) or the lowered model is another one: the arrays a data or a stack owns never move
+        the node keeps of its own (:data:`.node_table.OWN`, :meth:`_own_addresses`).  Made again only when the items
+        changed (``changed``) or the lowered model is another one: the arrays a data or a stack owns never move
         (:mod:`crocopy.stored`), and a new data gets a new node."""
         self.forget()
         if not changed and low is self._lowered and self._data_arrays:

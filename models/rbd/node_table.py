@@ -238,8 +238,7 @@ def entry_contact_workspace(tbl, ints):
     k = CONTACT_WORKSPACE_ENTRY
     return ContactWorkspace(
         mat(tbl, ints, k), mat(tbl, ints, k + 1), mat(tbl, ints, k + 2), vec(tbl, ints, k + 3),
-        vec(tbl, ints, k + 4), vec(tbl, ints, k + 5), mat(tbl, ints, k + 6), mat(tbl, ints, k + 7),
-        vec(tbl, ints, k + 8),
+        mat(tbl, ints, k + 4), mat(tbl, ints, k + 5), vec(tbl, ints, k + 6),
     )
 
 
