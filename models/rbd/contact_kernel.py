@@ -79,7 +79,7 @@ __all__ = [
 class ContactWorkspace(NamedTuple):
     """Scratch of the contact kernels, for at most ``nc_max`` stacked contact rows.
 
-    ``J6 (6, nv)``: the LOCAL Jacobian of the last contact frame.  ``Y (nc_max, nv)``: rows of ``M⁻¹ Jcᵀ``;
+    ``J6 (6, nv)``: the LOCAL Jacobian of the last contact frame.  ``Y (nv, nc_max)``: ``M⁻¹ Jcᵀ``;
     ``G (nc_max, nc_max)``: lower Cholesky factor of ``Jc M⁻¹ Jcᵀ + damping I`` (both from the last
     :func:`contact_forward_dynamics`).  ``m6 (6,)``, ``J66 (6, 6)``, ``R3 (3, 3)``, ``p3 (3,)``: scratch.
     """
@@ -93,7 +93,7 @@ class ContactWorkspace(NamedTuple):
     p3: np.ndarray
 
 
-CONTACT_WORKSPACE = {"J6": (6, "nv"), "Y": ("ncm", "nv"), "G": ("ncm", "ncm"),
+CONTACT_WORKSPACE = {"J6": (6, "nv"), "Y": ("nv", "ncm"), "G": ("ncm", "ncm"),
                      "m6": (6,), "J66": (6, 6), "R3": (3, 3), "p3": (3,)}
 """The shapes of :class:`ContactWorkspace`'s fields (in their order; ``ncm = max(nc_max, 1)``)."""
 
@@ -327,19 +327,24 @@ def contact_force_derivatives(
 @uncounted
 def schur_factor(rb: RigidBodyModel, ws: RigidBodyWorkspace, cw: ContactWorkspace, Jc: np.ndarray, nc: int,
                  damping: float) -> None:
-    """``cw.Y[:nc] = (M⁻¹ Jcᵀ)ᵀ`` and ``cw.G``, the lower Cholesky factor of ``Jc M⁻¹ Jcᵀ + damping I`` (first ``nc``
+    """``cw.Y[:, :nc] = M⁻¹ Jcᵀ`` and ``cw.G``, the lower Cholesky factor of ``Jc M⁻¹ Jcᵀ + damping I`` (first ``nc``
     rows of ``Jc``), with the factor of ``M`` in ``ws``; ``G`` holds NaN (never a division by zero) where the
-    matrix is not positive definite."""
+    matrix is not positive definite.  The ``nc`` solves run at once, the contact rows innermost."""
     nv, Y, G = rb.nv, cw.Y, cw.G
-    for r in range(nc):
-        for k in range(nv):
-            Y[r, k] = Jc[r, k]
-        factor_solve(rb.dof_parent, ws.L, ws.dinv, Y[r])
+    for k in range(nv):
+        for r in range(nc):
+            Y[k, r] = Jc[r, k]
+    _factor_solve_columns(rb.dof_parent, ws.L, ws.dinv, Y, nc)
     for r in range(nc):
         for c in range(r + 1):
-            acc = damping if r == c else 0.0
-            for k in range(nv):
-                acc += Jc[r, k] * Y[c, k]
+            G[r, c] = 0.0
+        G[r, r] = damping
+        for k in range(nv):
+            j = Jc[r, k]
+            for c in range(r + 1):
+                G[r, c] += j * Y[k, c]
+        for c in range(r + 1):
+            acc = G[r, c]
             for k in range(c):
                 acc -= G[r, k] * G[c, k]
             G[r, c] = (math.sqrt(acc) if acc > 0.0 else math.nan) if r == c else acc / G[c, c]
@@ -376,7 +381,7 @@ def contact_forward_dynamics(
     cholesky_solve(cw.G, nc, lam_out)
     for r in range(nc):
         for k in range(nv):
-            a_out[k] += Y[r, k] * lam_out[r]
+            a_out[k] += Y[k, r] * lam_out[r]
 
 
 @uncounted
@@ -430,7 +435,7 @@ def _kkt_columns(dof_parent, L, dinv, Jc, Y, G, nc, Z, W):
     factors of :func:`contact_forward_dynamics`.  Every column goes through the operations a single right-hand side
     would, in the same order (the same numbers to the bit), with the loop over the columns innermost (vectorised)."""
     nv, m = Z.shape[0], Z.shape[1]
-    _factor_solve_columns(dof_parent, L, dinv, Z)
+    _factor_solve_columns(dof_parent, L, dinv, Z, m)
     for r in range(nc):
         for k in range(nv):
             j = Jc[r, k]
@@ -439,7 +444,7 @@ def _kkt_columns(dof_parent, L, dinv, Jc, Y, G, nc, Z, W):
     _cholesky_solve_columns(G, nc, W)
     for r in range(nc):
         for k in range(nv):
-            y = Y[r, k]
+            y = Y[k, r]
             for c in range(m):
                 Z[k, c] -= y * W[r, c]
     for r in range(nc):
@@ -448,9 +453,9 @@ def _kkt_columns(dof_parent, L, dinv, Jc, Y, G, nc, Z, W):
 
 
 @uncounted
-def _factor_solve_columns(lam, L, dinv, X):
-    """:func:`~.dynamics_kernel.factor_solve` on every column of ``X (nv, m)``, the columns innermost."""
-    n, m = X.shape[0], X.shape[1]
+def _factor_solve_columns(lam, L, dinv, X, m):
+    """:func:`~.dynamics_kernel.factor_solve` on the first ``m`` columns of ``X (nv, ·)``, the columns innermost."""
+    n = X.shape[0]
     for k in range(n - 1, -1, -1):
         d = dinv[k]
         for c in range(m):

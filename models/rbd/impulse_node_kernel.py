@@ -130,7 +130,7 @@ def _impulse_velocity(rb, ws, cw, Jc, nc, e, damping, v, vnext, lam):
         vnext[k] = v[k]
     for r in range(nc):
         for k in range(nv):
-            vnext[k] += Y[r, k] * lam[r]
+            vnext[k] += Y[k, r] * lam[r]
 
 
 @uncounted
