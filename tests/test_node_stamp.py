@@ -11,6 +11,8 @@ from test_constraint_rows import arm_node, random_point, solo_node
 from test_contact_node import contact_node
 from test_contact_node import point as contact_point
 from test_euler_node import KINDS, node, point
+from test_residual_numba import NAMES as USER_NAMES
+from test_residual_numba import NODES as USER_NODES
 
 import crocopy
 
@@ -43,7 +45,21 @@ def _solo_rows(terminal):
     return iam, lambda seed: random_point(iam, np.random.default_rng(seed), x0)
 
 
-CASES = {"kinova": _free("kinova"), "iris": _free("iris"), "anymal-contacts": _contact("anymal-lwa"),
+def _user(robot, name):
+    def make(terminal):
+        iam = USER_NODES[robot](name, terminal)
+        state = iam.state
+        reference = iam.differential.costs.costs["state"].cost.residual.reference
+
+        def draw(seed):
+            rng = np.random.default_rng(seed)
+            return state.integrate(reference, 0.05 * rng.standard_normal(state.ndx)), 0.1 * rng.standard_normal(iam.nu)
+        return iam, draw
+    return make
+
+
+CASES = {**{f"user {name} ({robot})": _user(robot, name) for robot in USER_NODES for name in USER_NAMES},
+         "kinova": _free("kinova"), "iris": _free("iris"), "anymal-contacts": _contact("anymal-lwa"),
          "talos-6d": _contact("talos-6d"), "arm-constraints": _arm_rows, "solo-constraints": _solo_rows}
 
 
