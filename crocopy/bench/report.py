@@ -183,7 +183,8 @@ def format_report(results: Sequence[ProblemResult], meta: dict) -> str:
         " backward = `solver.computeDirection(False)`, forward = `solver.tryStep(α)` (the rollout, which"
         " evaluates every node; α the largest of 1, 1/2, ... whose rollout is finite), total = calcDiff"
         " + backward + forward (one iteration with one line-search trial). crocopy's phases run as its solve"
-        " runs them: on compiled nodes where they apply (its calcDiff then also evaluates the nodes).",
+        " runs them: on compiled nodes where they apply (its calcDiff then also evaluates the nodes, which inside"
+        " a solve it reuses from the accepted trial).",
         f"- Full solves: wall time / iterations, median over up to {meta.get('repeats')} solves per library"
         f" (alternating), fewer where the next round would pass the {meta.get('solve_budget', 0):g} s budget"
         " (column *solves*); the first solve of each library runs in a fresh process that measures memory.",
