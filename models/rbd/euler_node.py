@@ -56,6 +56,7 @@ from . import trial_kernel
 from .constraint_rows import ConstraintRows
 from .contact_lowering import ContactSet
 from .joint_types import NotLowerable
+from .live_parameters import actuation_live, contacts_live, frozen, read_parameters
 from .lowering import RigidBodyModel, declaring, lower_model, make_workspace
 from .node_threads import ThreadTables
 from .python_residuals import PythonResiduals
@@ -108,6 +109,11 @@ class Lowered:
     """A lowered Pinocchio model with the addresses and dimensions of its arrays (the first entries of every
     node's table, see :mod:`.euler_node_kernel`; the armature's entry is each node's own)."""
 
+    version = 0
+    """How many times :meth:`update` rewrote the arrays (a node compares it with the one it read them at)."""
+    source: tuple = ()
+    """``(model, copy)``: the Pinocchio model lowered and a copy of it taken then (:meth:`current`)."""
+
     def __init__(self, rb: RigidBodyModel) -> None:
         self.rb = rb
         self.addresses, self.shapes = table_entries([getattr(rb, name) for name in rb._fields[4:]])
@@ -147,7 +153,19 @@ class Lowered:
             return False
         for name in names:
             np.copyto(getattr(self.rb, name), getattr(rb, name))
+        self.version += 1
         return True
+
+    def current(self, memo: dict) -> bool:
+        """Whether the Pinocchio model still equals the copy taken when it was lowered (Pinocchio's own ``==``, which
+        compares every field in C++: about 1 µs for an arm, 4 µs for a humanoid), once per ``memo`` (one solve)."""
+        key = ("current", id(self))
+        if key not in memo:
+            try:
+                memo[key] = bool(self.source and self.source[0] == self.source[1])
+            except Exception:  # noqa: BLE001 - a model Pinocchio cannot compare: lowered again
+                memo[key] = False
+        return memo[key]
 
 
 _LOWERED: dict[int, tuple[pin.Model, Lowered]] = {}
@@ -156,17 +174,21 @@ _LOWERED: dict[int, tuple[pin.Model, Lowered]] = {}
 
 def lowered(model: pin.Model, memo: dict) -> Lowered | None:
     """The lowered ``model``, its values read once per ``memo`` (one solve) into arrays that keep their
-    addresses from solve to solve; None if it does not lower."""
+    addresses from solve to solve (read again only when the model no longer equals the copy kept when it was last
+    lowered, :meth:`Lowered.current`); None if it does not lower."""
     key = id(model)
     if key in memo:
         return memo[key]
+    cached = _LOWERED.get(key)
+    if cached is not None and cached[0] is model and cached[1].current(memo):
+        memo[key] = cached[1]
+        return cached[1]
     try:
         rb = lower_model(model)
     except NotLowerable as exc:
         memo[key] = None
         memo[key, NotLowerable] = exc.reason
         return None
-    cached = _LOWERED.get(key)
     if cached is not None and cached[0] is model and cached[1].update(rb):
         low = cached[1]
     else:
@@ -174,6 +196,8 @@ def lowered(model: pin.Model, memo: dict) -> Lowered | None:
             _LOWERED.clear()
         low = Lowered(rb)
         _LOWERED[key] = (model, low)
+    low.source = (model, model.copy())
+    memo["current", id(low)] = True
     memo[key] = low
     return low
 
@@ -214,6 +238,9 @@ class EulerNode:
     ``Lx``, ``Lu``, ``Lxx``, ``Lxu``, ``Luu`` (and the cost stack's residuals, Jacobians and activation
     derivatives, which the stack shares with the residual and activation datas).
     """
+
+    refreshes = 0
+    """How many times :meth:`refresh` ran (a selection of compiled nodes made before the last one is stale)."""
 
     def __init__(self, iam, data, terminal: bool, nv: int, contacts: list = ()) -> None:
         self.model = iam
@@ -260,8 +287,7 @@ class EulerNode:
             self._seen = ParametersVersion.value
         self.contacts.refresh()
         par = [float(iam.dt), float(getattr(dam, "_damping", 0.0))]
-        for kind, residual in self._residuals:
-            par += self._parameters(kind, residual)
+        live = read_parameters(self._residuals, par, self._parameters)
         if len(par) != self._n_parameters:  # a user residual's parameters() changed length: read the items again
             self._residuals = None
             return self.refresh(low, memo)
@@ -269,6 +295,32 @@ class EulerNode:
         np.add(low.rb.armature, dam.armature, out=self.armature)
         self._actuation_matrix(dam, memo)
         self._table(low, data, ddata, stack, changed)
+        self._live = (live, contacts_live(self.contacts.models), not frozen(dam.armature),
+                      not self.terminal and actuation_live(dam.actuation, memo["S", id(dam.actuation)]))
+        self._low_version = low.version
+        self.refreshes += 1
+        return True
+
+    def refresh_live(self, memo: dict) -> bool:
+        """Re-read, in place, what :meth:`refresh` read that may have changed without moving the parameter clock
+        (:mod:`.live_parameters`: ``pin.SE3`` references, cones, a user residual's ``parameters()``, writeable
+        arrays); False when the node must be refreshed instead: its Pinocchio model changed
+        (:meth:`Lowered.current`), its cost stack was evaluated for the other node kind since, or a user residual's
+        number of parameters changed.  Only for a node refreshed since the parameter clock last moved."""
+        low = self._lowered
+        if low.version != self._low_version or not low.current(memo):
+            return False
+        data = self._data()
+        live, contacts, armature, actuation = self._live
+        if data is None or data.differential.costs.stack.refresh_if_stale(self.terminal) or not live.reread(self.par):
+            self._residuals = None  # read the items again
+            return False
+        if contacts:
+            self.contacts.refresh()
+        if armature:
+            np.add(low.rb.armature, self.model.differential.armature, out=self.armature)
+        if actuation:
+            self._actuation_matrix(self.model.differential, memo)
         return True
 
     def _read_items(self, stack, ddata) -> str | None:
@@ -480,6 +532,9 @@ class EulerHorizon:
         self.poff = np.cumsum([0] + [0 if n is None else n.par.shape[0] for n in nodes], dtype=np.int64)
         self.ints = np.concatenate([n.ints for n in nodes if n is not None])
         self.par = np.concatenate([n.par for n in nodes if n is not None])
+        for t, n in enumerate(nodes):
+            if n is not None:  # the node's parameters are now the horizon's: re-read in place, both see them
+                n.par = self.par[self.poff[t]:self.poff[t + 1]]
         self.nus = np.array(nus, dtype=np.int64)
         self.nx, self.ndx = first.model.state.nx, first.model.state.ndx
         self.costs = np.zeros(len(nodes))

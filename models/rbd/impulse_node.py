@@ -42,6 +42,7 @@ from . import node_table as table
 from .constraint_rows import ConstraintRows
 from .euler_node import Lowered, generic_reason, lowered, residual_kind, table_entries
 from .joint_types import NotLowerable
+from .live_parameters import frozen, read_parameters
 from .lowering import RigidBodyModel
 
 IMPULSES = (ImpulseModel3D, ImpulseModel6D)
@@ -77,6 +78,11 @@ def impulse_node(model, data, terminal: bool, memo: dict) -> ImpulseNode | None:
     return node if node.refresh(low, memo) else None
 
 
+def _compiled_parameters(kind: int, residual) -> list[float]:
+    """A residual's parameters in the layout the kernels read (every kind an impulse node takes has them)."""
+    return residual.compiled_parameters()
+
+
 def _ints(impulses: list) -> list[int]:
     """``(frame, rows, reference frame, first row)`` of each impulse, flat (:data:`.node_table.CONTACT_FIELDS`)."""
     ints, row = [], 0
@@ -94,6 +100,9 @@ class ImpulseNode:
     ``Lxx`` (``Fu``, ``Lu``, ``Lxu``, ``Luu`` have no entries) and the cost stack's residuals, Jacobians and
     activation derivatives.
     """
+
+    refreshes = 0
+    """How many times :meth:`refresh` ran (a selection of compiled nodes made before the last one is stale)."""
 
     def __init__(self, model, data, terminal: bool, nv: int, impulses: list) -> None:
         self.model = model
@@ -143,11 +152,29 @@ class ImpulseNode:
                 return False
             self._seen = ParametersVersion.value
         par = [float(model.r_coeff), float(model._damping)]
-        for residual in self._residuals:
-            par += residual.compiled_parameters()
+        live = read_parameters([(0, r) for r in self._residuals], par, _compiled_parameters)
         self.par = np.array(par)
         np.add(low.rb.armature, model.armature, out=self.armature)
         self._table(low, data, stack, changed)
+        self._live = (live, not frozen(model.armature))
+        self._low_version = low.version
+        self.refreshes += 1
+        return True
+
+    def refresh_live(self, memo: dict) -> bool:
+        """Re-read, in place, what :meth:`refresh` read that may have changed without moving the parameter clock
+        (:mod:`.live_parameters`); False when the node must be refreshed instead (its Pinocchio model changed, or its
+        cost stack was evaluated for the other node kind since)."""
+        low = self._lowered
+        if low.version != self._low_version or not low.current(memo):
+            return False
+        data = self._data()
+        live, armature = self._live
+        if data is None or data.costs.stack.refresh_if_stale(self.stack_terminal) or not live.reread(self.par):
+            self._items = None  # read the items again
+            return False
+        if armature:
+            np.add(low.rb.armature, self.model.armature, out=self.armature)
         return True
 
     def _read_items(self, stack, data) -> str | None:
