@@ -232,14 +232,17 @@ class SolverAbstract:
     def _close_gaps(self) -> float:
         """``fs[0] = x0 ⊖ xs[0]`` and ``ffeas``, the norm of all the gaps (``fs[1:]`` filled by the caller)."""
         problem = self.problem
-        self.fs[0][:] = problem.runningModels[0].state.diff(self.xs[0], problem.x0) if problem.T else 0.0
+        if problem.T:
+            problem.runningModels[0].state._diff_into(self.xs[0], problem.x0, self.fs[0])
+        else:
+            self.fs[0][:] = 0.0
         self.ffeas = self._norm(self.fs)
         return self.ffeas
 
     def computeEqualityFeasibility(self) -> float:
         """Norm of the equality-constraint values ``h`` over all nodes."""
-        datas = [*self.problem.runningDatas, self.problem.terminalData]
-        self.hfeas = self._norm([d.h for d in datas])
+        problem = self.problem
+        self.hfeas = self._norm([d.h for d in (*problem.runningDatas, problem.terminalData) if d.h.size])
         return self.hfeas
 
     def computeInequalityFeasibility(self) -> float:
