@@ -17,6 +17,7 @@ from ..enums import FeasibilityNorm
 from ..guards import trusted_path
 from ..shooting import ShootingProblem
 from ..validation import as_bool, as_count, as_number, check_bounds
+from ..versioning import STRUCTURE
 from .std_vector import StdVecAttribute, allocate
 from .stopwatch import profiled
 
@@ -236,21 +237,38 @@ class SolverAbstract:
             problem.runningModels[0].state._diff_into(self.xs[0], problem.x0, self.fs[0])
         else:
             self.fs[0][:] = 0.0
-        self.ffeas = self._norm(self.fs)
+        self.ffeas = self._gaps_norm()
         return self.ffeas
+
+    def _gaps_norm(self) -> float:
+        """The norm of all the gaps ``fs`` (``feasNorm``)."""
+        return self._norm(self.fs)
+
+    def _rows(self) -> tuple[list, list]:
+        """``(nodes, hs)``: the nodes ``(model, data)`` whose data has inequality rows and the equality rows ``h`` that
+        are not empty.  Which nodes have them is found again when the problem, its nodes (node version) or a
+        registry's item set (:data:`~crocopy.versioning.STRUCTURE`) changed."""
+        problem = self.problem
+        key = (id(problem), problem._nodes_version, STRUCTURE[0])
+        rows = self.__dict__.get("_row_nodes")
+        if rows is None or rows[0] != key:
+            datas = [*problem.runningDatas, problem.terminalData]
+            rows = self.__dict__["_row_nodes"] = (key, [t for t, d in enumerate(datas) if d.g.size],
+                                                  [t for t, d in enumerate(datas) if d.h.size])
+        models, datas, T = problem.runningModels, problem.runningDatas, problem.T
+        nodes = [(models[t], datas[t]) if t < T else (problem.terminalModel, problem.terminalData) for t in rows[1]]
+        return nodes, [(datas[t] if t < T else problem.terminalData).h for t in rows[2]]
 
     def computeEqualityFeasibility(self) -> float:
         """Norm of the equality-constraint values ``h`` over all nodes."""
-        problem = self.problem
-        self.hfeas = self._norm([d.h for d in (*problem.runningDatas, problem.terminalData) if d.h.size])
+        self.hfeas = self._norm(self._rows()[1])
         return self.hfeas
 
     def computeInequalityFeasibility(self) -> float:
         """Norm of the inequality-constraint violations ``max(g_lb - g, 0, g - g_ub)`` over all nodes."""
-        problem = self.problem
         viol = []
-        for m, d in zip([*problem.runningModels, problem.terminalModel], [*problem.runningDatas, problem.terminalData]):
-            if d.g.size and m.ng:
+        for m, d in self._rows()[0]:
+            if m.ng:
                 g = d.g[: m.ng]
                 viol.append(np.maximum(np.maximum(m.g_lb - g, 0.0), g - m.g_ub))
         self.gfeas = self._norm(viol)

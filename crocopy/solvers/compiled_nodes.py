@@ -25,9 +25,9 @@ that has re-read the model's parameters (references, weights, time step) and has
   SolverCSQP's trial point of a range (:meth:`CompiledNodes.trial`).  The calls cover each maximal range of such
   nodes (:attr:`CompiledNodes.segments`); the other nodes keep their Python step in between;
 
-and optionally ``refreshes`` (how many times it re-read everything) with ``refresh_live(memo) -> bool`` (re-read in place
-what may change without moving the parameter clock; False when it must be made again): a problem whose evaluators all
-have them keeps its selection from one solve to the next while it is current (:class:`Selection`);
+and optionally ``refreshes`` (how many times it re-read everything) with ``refresh_live(memo) -> bool`` (re-read in
+place what may change without moving the parameter clock; False when it must be made again): a problem whose
+evaluators all have them keeps its selection from one solve to the next while it is current (:class:`Selection`);
 
 or ``None`` (models without the method, or nodes it cannot compile).  ``terminal`` tells whether the node is the
 problem's terminal node; ``memo`` is a dictionary shared by the nodes of one solve (for what they
