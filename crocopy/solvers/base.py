@@ -9,6 +9,7 @@ NaN in ``xs``/``us``: a divergent iterate is never accepted.
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -90,6 +91,14 @@ class Setting:
 
     def __set__(self, obj: object, value: object) -> None:
         obj.__dict__[self.name] = as_number(value, self.name, self.minimum, self.strict, allow_inf=self.allow_inf)
+
+
+def _nx(model) -> int:
+    return model.state.nx
+
+
+def _nu(model) -> int:
+    return model.nu
 
 
 def _same_shape(a: np.ndarray, b: np.ndarray) -> bool:
@@ -208,10 +217,32 @@ class SolverAbstract:
                 xs = problem.rollout(us)
             else:
                 xs = [m.state.zero() for m in models]
-        xs, us = problem.check_trajectories(xs, us, "init_xs", "init_us")
-        self._store("xs", xs)
-        self._store("us", us)
+        flats = [self._plain(name, given, [f(m) for m in nodes]) for name, given, nodes, f in
+                 (("xs", xs, models, _nx), ("us", us, problem.runningModels, _nu))]
+        if flats[0] is not None and flats[1] is not None:
+            for name, flat in zip(("xs", "us"), flats):
+                start = 0
+                for h in self.__dict__[name]:
+                    stop = start + h.shape[0]
+                    h[:] = flat[start:stop]
+                    start = stop
+        else:
+            xs, us = problem.check_trajectories(xs, us, "init_xs", "init_us")
+            self._store("xs", xs)
+            self._store("us", us)
         self.isFeasible = bool(isFeasible)
+
+    def _plain(self, name: str, arrays: list, sizes: list[int]) -> np.ndarray | None:
+        """``arrays`` stacked (a copy: they may be the solver's own), when they are what the checks let through
+        unchanged (float64 vectors of ``sizes``, all finite) and the trajectory ``name`` has entries of those sizes;
+        else None (the caller checks them one by one)."""
+        held = self.__dict__.get(name)
+        if held is None or len(held) != len(arrays) or len(sizes) != len(arrays) or not all(
+                type(a) is np.ndarray and a.dtype == np.float64 and a.shape == h.shape == (n,)
+                for a, h, n in zip(arrays, held, sizes)):
+            return None
+        flat = np.concatenate(arrays) if arrays else np.zeros(0)
+        return flat if math.isfinite(flat.sum()) or np.isfinite(flat).all() else None
 
     def _store(self, name: str, arrays: list[np.ndarray]) -> None:
         """Copy ``arrays`` (checked against the problem) into the trajectory ``name``, or give the solver new
