@@ -20,9 +20,10 @@ exact classes (a subclass may override a step, so it keeps the Python path):
   ``ResidualModelNumba`` (kind ``USER``: C callbacks, :mod:`crocopy.models.residual_numba`); in a node without
   active contacts, a user's Python residual runs in Python around the compiled call (:mod:`.python_residuals`).
 
-:meth:`EulerNode.refresh` (at the start of every solve) re-reads everything the kernels take from the
-models: the lowered Pinocchio model, the armature (the Pinocchio model's, which Pinocchio's own
-``crba``/``aba`` add, plus the dynamics model's ``armature``), ``S``, the time step, the damping, the
+:meth:`EulerNode.refresh` (when a solve makes its selection of compiled nodes; a solve that reuses the last one
+calls :meth:`EulerNode.refresh_live` instead, :class:`crocopy.solvers.compiled_nodes.Selection`) re-reads everything
+the kernels take from the models: the lowered Pinocchio model, the armature (the Pinocchio model's, which
+Pinocchio's own ``crba``/``aba`` add, plus the dynamics model's ``armature``), ``S``, the time step, the damping, the
 contacts' gains and references, the cost stack's weights and activation bounds, the residuals' references;
 and the addresses of the data arrays the kernels write (``xnext``, ``Fx``, ... of the node's data, the
 stack's arrays).  Evaluators are cached per node data

@@ -18,10 +18,11 @@ classes (a subclass may override a step):
 
 The costs are those of a node without control when the costs were built with ``nu > 0`` (as the Python model
 evaluates them) or at the terminal node.  The node has no rollout step: the rollout calls its ``calc``, and it
-stays out of the Euler nodes' horizon (whose ranges stop at it).  :meth:`ImpulseNode.refresh` (at the start of
-every solve) re-reads the lowered Pinocchio model, the armature (the Pinocchio model's plus the impulse model's),
-``r_coeff``, the damping, the cost stack's items, weights and bounds, the residuals' references and the data arrays'
-addresses.  Evaluators are cached per node data (weakly).
+stays out of the Euler nodes' horizon (whose ranges stop at it).  :meth:`ImpulseNode.refresh` (when a solve makes its
+selection of compiled nodes; :meth:`ImpulseNode.refresh_live` when it reuses it) re-reads the lowered Pinocchio model,
+the armature (the Pinocchio model's plus the impulse model's), ``r_coeff``, the damping, the cost stack's items,
+weights and bounds, the residuals' references and the data arrays' addresses.  Evaluators are cached per node data
+(weakly).
 """
 
 from __future__ import annotations
