@@ -230,8 +230,9 @@ def select(solver) -> CompiledNodes | None:
     if any(not type(c).__module__.startswith("crocopy.") for c in solver.getCallbacks()):
         return None
     problem = solver.problem
-    last = _SELECTIONS.get(problem)
+    last = _SELECTIONS.pop(problem, None)
     if last is not None and last.current(problem):
+        _SELECTIONS[problem] = last
         return last.nodes
     calcs, calc_diffs, steps, evaluators = [], [], [], []
     found = False
@@ -250,7 +251,6 @@ def select(solver) -> CompiledNodes | None:
             calcs.append(evaluator.calc)
             calc_diffs.append(evaluator.calcDiff)
             steps.append(getattr(evaluator, "rollout_step", None) if model.nu else None)
-    _SELECTIONS.pop(problem, None)
     if not found:
         return None
     running = evaluators[:-1]

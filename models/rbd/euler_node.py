@@ -162,15 +162,12 @@ class Lowered:
         compares every field in C++: about 1 µs for an arm, 4 µs for a humanoid), once per ``memo`` (one solve)."""
         key = ("current", id(self))
         if key not in memo:
-            try:
-                memo[key] = bool(self.source and self.source[0] == self.source[1])
-            except Exception:  # noqa: BLE001 - a model Pinocchio cannot compare: lowered again
-                memo[key] = False
+            memo[key] = bool(self.source and self.source[0] == self.source[1])
         return memo[key]
 
 
 _LOWERED: dict[int, tuple[pin.Model, Lowered]] = {}
-"""``id(model)`` → the model and its :class:`Lowered`, whose arrays are rewritten at each solve."""
+"""``id(model)`` → the model and its :class:`Lowered`, whose arrays are rewritten when the model changed."""
 
 
 def lowered(model: pin.Model, memo: dict) -> Lowered | None:
