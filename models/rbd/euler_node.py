@@ -277,15 +277,17 @@ class EulerNode:
         stack = ddata.costs.stack
         changed = stack.refresh_if_stale(self.terminal)
         changed = changed or self._residuals is None or self._seen != ParametersVersion.value
+        read: dict | None = None
         if changed:
-            why = self._read_items(stack, ddata)
+            read = {}
+            why = self._read_items(stack, ddata, read)
             if why is not None:
                 decline(memo, why)
                 return False
             self._seen = ParametersVersion.value
         self.contacts.refresh()
         par = [float(iam.dt), float(getattr(dam, "_damping", 0.0))]
-        live = read_parameters(self._residuals, par, self._parameters)
+        live = read_parameters(self._residuals, par, self._parameters, read)
         if len(par) != self._n_parameters:  # a user residual's parameters() changed length: read the items again
             self._residuals = None
             return self.refresh(low, memo)
@@ -321,9 +323,17 @@ class EulerNode:
             self._actuation_matrix(self.model.differential, memo)
         return True
 
-    def _read_items(self, stack, ddata) -> str | None:
+    def _read_items(self, stack, ddata, read: dict) -> str | None:
         """Read the compiled items of the cost stack (kind, rows, frame, reference frame, parameter offset); returns
-        None, or why the node cannot compile (:mod:`crocopy.not_compiled`)."""
+        None, or why the node cannot compile (:mod:`crocopy.not_compiled`).  ``read`` receives the parameters it read,
+        by residual (``id``): each residual's are read once per refresh."""
+
+        def parameters(kind: int, residual) -> list[float]:
+            key = id(residual)
+            if key not in read:
+                read[key] = self._parameters(kind, residual)
+            return read[key]
+
         self._residuals = None
         if stack.unfused:
             return class_reason(stack.unfused[0][0], "activation")
@@ -348,7 +358,7 @@ class EulerNode:
             user = [0, 0, 0, 0]
             if kind == table.USER:
                 frame, reference = residual.frame, int(residual.frame_reference)
-                user = [residual.flags, *residual.callbacks(), len(self._parameters(kind, residual))]
+                user = [residual.flags, *residual.callbacks(), len(parameters(kind, residual))]
                 rows_u = max(rows_u, rows.stop - rows.start)
             if kind == table.CONE:
                 row, nc = self.contacts.rows.get(frame, (0, 0))
@@ -357,14 +367,14 @@ class EulerNode:
                 frame, reference = row, residual.ncf
             items += [kind, rows.start, rows.stop - rows.start, frame, reference, offset, *user]
             residuals.append((kind, residual))
-            offset += len(self._parameters(kind, residual))
+            offset += len(parameters(kind, residual))
         manager = self.model.differential.constraints
         why = ConstraintRows.sized(manager, self._data(), ddata) or self.rows.read(
-            manager, self.terminal, residual_kind, offset, self._parameters, self.contacts.rows)
+            manager, self.terminal, residual_kind, offset, parameters, self.contacts.rows)
         if why is not None:
             return why
         self._items, self._residuals = items, residuals + self.rows.residuals
-        self._n_parameters = offset + sum(len(self._parameters(*r)) for r in self.rows.residuals)
+        self._n_parameters = offset + sum(len(parameters(*r)) for r in self.rows.residuals)
         self.python = PythonResiduals(self.model.state.pinocchio, ddata.pinocchio, python)
         rows_u = max(rows_u, self.rows.user_rows)
         if self.parameters["user_Ru"].shape[0] < rows_u:

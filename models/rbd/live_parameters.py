@@ -57,12 +57,13 @@ def actuation_live(actuation: object, matrix: np.ndarray) -> bool:
     return type(actuation) not in CONSTANT_ACTUATIONS and not frozen(matrix)
 
 
-def read_parameters(residuals: list, par: list, parameters: Callable) -> LiveParameters:
+def read_parameters(residuals: list, par: list, parameters: Callable, read: dict | None = None) -> LiveParameters:
     """Append the parameters of ``residuals`` (``(kind, residual)`` in ``par`` order; ``parameters(kind, residual)``
-    their values) to the list ``par``; returns which of them are live."""
+    their values, or ``read[id(residual)]`` where the caller has just read them) to the list ``par``; returns which of
+    them are live."""
     slices = []
     for kind, residual in residuals:
-        values = parameters(kind, residual)
+        values = parameters(kind, residual) if read is None else read[id(residual)]
         if residual_live(residual):
             slices.append((len(par), len(par) + len(values), kind, residual))
         par += values
