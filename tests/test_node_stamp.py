@@ -165,3 +165,24 @@ def test_a_warm_started_solve_after_a_mutation_reads_the_new_parameters():
     assert (solver.iter, solver.cost) == (fresh.iter, fresh.cost)
     for a, b in zip(solver.xs, fresh.xs):
         assert np.array_equal(a, b)
+
+
+def test_a_selection_reused_by_the_next_solve_spends_the_stamps():
+    """Every node stamped at exactly the next solve's warm start: the next solve's selection (which reuses the
+    problem's, :class:`crocopy.solvers.compiled_nodes.Selection`) spends the stamps, so that a value the Python path
+    or an in-place change left in between is never taken for current."""
+    from crocopy.solvers import compiled_nodes
+
+    problem = _reach(10.0, np.array([0.4, 0.2, 0.5]))
+    solver = crocopy.SolverFDDP(problem)
+    solver.solve([], [], 6)
+    xs, us = solver.xs, solver.us
+    selection = compiled_nodes._SELECTIONS[problem]
+    evaluators = [e for e, _ in selection.evaluators]
+    assert len(evaluators) == problem.T + 1
+    for t, e in enumerate(evaluators):
+        e.calc(xs[t], us[t] if t < problem.T else None)
+    assert all(e.stamp[0] == 1.0 for e in evaluators)
+    compiled_nodes.select(solver)
+    assert compiled_nodes._SELECTIONS[problem] is selection  # reused
+    assert not any(e.stamp[0] for e in evaluators)

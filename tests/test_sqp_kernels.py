@@ -359,3 +359,21 @@ def test_row_spans_cover_every_nonzero_entry():
     assert spans[0, :3].tolist() == [[1, 3, 0, 0], [3, 4, 0, 1], [0, 0, 2, 3]]
     assert spans[1, :2].tolist() == [[0, 0, 1, 2], [0, 4, 0, 0]]
     assert spans[2, 0].tolist() == [0, 1, 0, 0]
+
+
+@pytest.mark.parametrize("bad", [None, np.inf, -np.inf, np.nan], ids=["finite", "inf", "-inf", "nan"])
+def test_ffeas_infinity_norm_compiled_equals_numpy(bad):
+    """The DDP family's ``ffeas`` (∞-norm of the gaps): one compiled call on the horizon buffer with kernels on, numpy's
+    ``max`` of the stacked gaps with them off, NaN/inf included."""
+    solver = crocopy.SolverFDDP(_unicycle())
+    rng = np.random.default_rng(3)
+    for f in solver.fs:
+        f[:] = rng.normal(size=f.shape)
+    if bad is not None:
+        solver.fs[4][1] = bad
+    expected = float(np.abs(np.concatenate(solver.fs)).max())
+    with crocopy.use_kernels(True):
+        compiled = solver._gaps_norm()
+    with crocopy.use_kernels(False):
+        plain = solver._gaps_norm()
+    assert compiled == plain == expected or (np.isnan(expected) and np.isnan(compiled) and np.isnan(plain))

@@ -9,6 +9,7 @@ NaN in ``xs``/``us``: a divergent iterate is never accepted.
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -17,6 +18,7 @@ from ..enums import FeasibilityNorm
 from ..guards import trusted_path
 from ..shooting import ShootingProblem
 from ..validation import as_bool, as_count, as_number, check_bounds
+from ..versioning import STRUCTURE
 from .std_vector import StdVecAttribute, allocate
 from .stopwatch import profiled
 
@@ -89,6 +91,14 @@ class Setting:
 
     def __set__(self, obj: object, value: object) -> None:
         obj.__dict__[self.name] = as_number(value, self.name, self.minimum, self.strict, allow_inf=self.allow_inf)
+
+
+def _nx(model) -> int:
+    return model.state.nx
+
+
+def _nu(model) -> int:
+    return model.nu
 
 
 def _same_shape(a: np.ndarray, b: np.ndarray) -> bool:
@@ -207,10 +217,32 @@ class SolverAbstract:
                 xs = problem.rollout(us)
             else:
                 xs = [m.state.zero() for m in models]
-        xs, us = problem.check_trajectories(xs, us, "init_xs", "init_us")
-        self._store("xs", xs)
-        self._store("us", us)
+        flats = [self._plain(name, given, [f(m) for m in nodes]) for name, given, nodes, f in
+                 (("xs", xs, models, _nx), ("us", us, problem.runningModels, _nu))]
+        if flats[0] is not None and flats[1] is not None:
+            for name, flat in zip(("xs", "us"), flats):
+                start = 0
+                for h in self.__dict__[name]:
+                    stop = start + h.shape[0]
+                    h[:] = flat[start:stop]
+                    start = stop
+        else:
+            xs, us = problem.check_trajectories(xs, us, "init_xs", "init_us")
+            self._store("xs", xs)
+            self._store("us", us)
         self.isFeasible = bool(isFeasible)
+
+    def _plain(self, name: str, arrays: list, sizes: list[int]) -> np.ndarray | None:
+        """``arrays`` stacked (a copy: they may be the solver's own), when they are what the checks let through
+        unchanged (float64 vectors of ``sizes``, all finite) and the trajectory ``name`` has entries of those sizes;
+        else None (the caller checks them one by one)."""
+        held = self.__dict__.get(name)
+        if held is None or len(held) != len(arrays) or len(sizes) != len(arrays) or not all(
+                type(a) is np.ndarray and a.dtype == np.float64 and a.shape == h.shape == (n,)
+                for a, h, n in zip(arrays, held, sizes)):
+            return None
+        flat = np.concatenate(arrays) if arrays else np.zeros(0)
+        return flat if math.isfinite(flat.sum()) or np.isfinite(flat).all() else None
 
     def _store(self, name: str, arrays: list[np.ndarray]) -> None:
         """Copy ``arrays`` (checked against the problem) into the trajectory ``name``, or give the solver new
@@ -232,22 +264,42 @@ class SolverAbstract:
     def _close_gaps(self) -> float:
         """``fs[0] = x0 ⊖ xs[0]`` and ``ffeas``, the norm of all the gaps (``fs[1:]`` filled by the caller)."""
         problem = self.problem
-        self.fs[0][:] = problem.runningModels[0].state.diff(self.xs[0], problem.x0) if problem.T else 0.0
-        self.ffeas = self._norm(self.fs)
+        if problem.T:
+            problem.runningModels[0].state._diff_into(self.xs[0], problem.x0, self.fs[0])
+        else:
+            self.fs[0][:] = 0.0
+        self.ffeas = self._gaps_norm()
         return self.ffeas
+
+    def _gaps_norm(self) -> float:
+        """The norm of all the gaps ``fs`` (``feasNorm``)."""
+        return self._norm(self.fs)
+
+    def _rows(self) -> tuple[list, list]:
+        """``(nodes, hs)``: the nodes ``(model, data)`` whose data has inequality rows and the equality rows ``h`` that
+        are not empty.  Which nodes have them is found again when the problem, its nodes (node version) or a
+        registry's item set (:data:`~crocopy.versioning.STRUCTURE`) changed."""
+        problem = self.problem
+        key = (id(problem), problem._nodes_version, STRUCTURE[0])
+        rows = self.__dict__.get("_row_nodes")
+        if rows is None or rows[0] != key:
+            datas = [*problem.runningDatas, problem.terminalData]
+            rows = self.__dict__["_row_nodes"] = (key, [t for t, d in enumerate(datas) if d.g.size],
+                                                  [t for t, d in enumerate(datas) if d.h.size])
+        models, datas, T = problem.runningModels, problem.runningDatas, problem.T
+        nodes = [(models[t], datas[t]) if t < T else (problem.terminalModel, problem.terminalData) for t in rows[1]]
+        return nodes, [(datas[t] if t < T else problem.terminalData).h for t in rows[2]]
 
     def computeEqualityFeasibility(self) -> float:
         """Norm of the equality-constraint values ``h`` over all nodes."""
-        datas = [*self.problem.runningDatas, self.problem.terminalData]
-        self.hfeas = self._norm([d.h for d in datas])
+        self.hfeas = self._norm(self._rows()[1])
         return self.hfeas
 
     def computeInequalityFeasibility(self) -> float:
         """Norm of the inequality-constraint violations ``max(g_lb - g, 0, g - g_ub)`` over all nodes."""
-        problem = self.problem
         viol = []
-        for m, d in zip([*problem.runningModels, problem.terminalModel], [*problem.runningDatas, problem.terminalData]):
-            if d.g.size and m.ng:
+        for m, d in self._rows()[0]:
+            if m.ng:
                 g = d.g[: m.ng]
                 viol.append(np.maximum(np.maximum(m.g_lb - g, 0.0), g - m.g_ub))
         self.gfeas = self._norm(viol)

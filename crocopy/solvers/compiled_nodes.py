@@ -1,7 +1,7 @@
 """Compiled node evaluations inside a solve of the DDP family.
 
 A node whose model can be evaluated by one compiled call offers an *evaluator*:
-``model._compiled_node(data, terminal, memo)``, called at the start of every solve, returns an object
+``model._compiled_node(data, terminal, memo)``, called at the start of a solve, returns an object
 that has re-read the model's parameters (references, weights, time step) and has
 
 * ``calc(x, u)``: writes ``data.xnext`` and ``data.cost`` (``u = None`` for the terminal node);
@@ -26,6 +26,10 @@ that has re-read the model's parameters (references, weights, time step) and has
   SolverCSQP's trial point of a range (:meth:`CompiledNodes.trial`).  The calls cover each maximal range of such
   nodes (:attr:`CompiledNodes.segments`); the other nodes keep their Python step in between;
 
+and optionally ``refreshes`` (how many times it re-read everything) with ``refresh_live(memo) -> bool`` (re-read in
+place what may change without moving the parameter clock; False when it must be made again): a problem whose
+evaluators all have them keeps its selection from one solve to the next while it is current (:class:`Selection`);
+
 or ``None`` (models without the method, or nodes it cannot compile).  ``terminal`` tells whether the node is the
 problem's terminal node; ``memo`` is a dictionary shared by the nodes of one solve (for what they
 derive once from shared models).  Today the Euler-integrated free and contact forward dynamics of
@@ -49,12 +53,15 @@ callback may read nested datas).
 from __future__ import annotations
 
 import contextlib
+import weakref
 from collections.abc import Callable
 from itertools import groupby, islice
+from operator import is_
 
 import numpy as np
 
 from .. import kernels
+from ..versioning import STRUCTURE, ParametersVersion
 from .trajectories import TrajectoryAddresses, addresses
 
 
@@ -217,12 +224,17 @@ class CompiledNodes:
 
 def select(solver) -> CompiledNodes | None:
     """The compiled nodes of ``solver.problem`` for this solve, or None (no node has one, or the
-    solver, a callback or the kernel switch rules them out; see the module docstring)."""
+    solver, a callback or the kernel switch rules them out; see the module docstring).  The problem's last selection
+    is reused while it is current (:class:`Selection`)."""
     if not kernels.active or not type(solver).__dict__.get("_nodes_compiled", False):
         return None
     if any(not type(c).__module__.startswith("crocopy.") for c in solver.getCallbacks()):
         return None
     problem = solver.problem
+    last = _SELECTIONS.pop(problem, None)
+    if last is not None and last.current(problem):
+        _SELECTIONS[problem] = last
+        return last.nodes
     calcs, calc_diffs, steps, evaluators = [], [], [], []
     found = False
     memo: dict = {}
@@ -251,7 +263,55 @@ def select(solver) -> CompiledNodes | None:
         if make_horizon is not None:
             horizon = make_horizon([e if step is not None else None for e, step in zip(running, steps)],
                                    [m.nu for m in problem.runningModels], problem.nthreads)
-    return CompiledNodes(calcs, calc_diffs, steps[:-1], horizon, problem)
+            steps = [None if step is None else e.rollout_step for e, step in zip(running, steps)]  # its arrays
+    selected = CompiledNodes(calcs, calc_diffs, steps[:problem.T], horizon, problem)
+    if all(e is None or hasattr(e, "refresh_live") for e in evaluators):
+        _SELECTIONS[problem] = Selection(problem, selected, evaluators)
+    return selected
+
+
+class Selection:
+    """A problem's compiled nodes kept from one solve to the next.
+
+    It is current while the parameter clock (:class:`~crocopy.versioning.ParametersVersion`: no setter called
+    anywhere), the structure clock (:data:`~crocopy.versioning.STRUCTURE`), the problem's node version, its
+    ``nthreads``, its models and datas (the same objects) have not changed, no evaluator was refreshed by another
+    selection since (``evaluator.refreshes``), every evaluator's ``refresh_live(memo)`` re-read in place what may
+    change unannounced (Pinocchio's objects, a user residual's ``parameters()``; False if it cannot: its Pinocchio
+    model changed, ...), and the nodes without an evaluator, offered again, still decline (their refusals are class
+    checks, except those that depend on a Pinocchio model).  Otherwise :func:`select` makes the selection again.
+    """
+
+    def __init__(self, problem, nodes: CompiledNodes, evaluators: list) -> None:
+        self.nodes = nodes
+        self.clocks = self._clocks(problem)
+        self.models = (*problem.runningModels, problem.terminalModel)
+        self.datas = (*problem.runningDatas, problem.terminalData)
+        self.evaluators = [(e, e.refreshes) for e in evaluators if e is not None]
+        self.declined = [(t, m, d) for t, (m, d, e) in enumerate(zip(self.models, self.datas, evaluators))
+                         if e is None and hasattr(m, "_compiled_node")]
+
+    @staticmethod
+    def _clocks(problem) -> tuple:
+        return ParametersVersion.value, STRUCTURE[0], problem._nodes_version, problem.nthreads
+
+    def current(self, problem) -> bool:
+        """Whether the selection still holds (see the class docstring); re-reads the live parameters in place."""
+        if self.clocks != self._clocks(problem):
+            return False
+        models, datas = problem.runningModels, problem.runningDatas
+        if len(models) + 1 != len(self.models) or not all(map(is_, models, self.models)) \
+                or not all(map(is_, datas, self.datas)) or problem.terminalModel is not self.models[-1] \
+                or problem.terminalData is not self.datas[-1]:
+            return False
+        memo: dict = {}
+        T = problem.T
+        return all(e.refreshes == n and e.refresh_live(memo) for e, n in self.evaluators) and \
+            all(m._compiled_node(d, t == T, memo) is None for t, m, d in self.declined)
+
+
+_SELECTIONS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+"""Problem → its last :class:`Selection`."""
 
 
 def attach(solver) -> CompiledNodes | None:
@@ -265,7 +325,7 @@ def attach(solver) -> CompiledNodes | None:
 def prepare(solver) -> None:
     """Make the compiled evaluators of ``solver.problem``'s nodes now (their tables of addresses, checked), which the
     first solve would otherwise make, as Crocoddyl's and mim-solvers' solvers allocate their workspace when they are
-    made.  Every solve still re-reads the models' parameters (:func:`select`).  An array a node cannot list
-    (ValueError) is left for the solve to report."""
+    made.  A solve reuses them while they are current (:class:`Selection`: the parameters that may change unannounced
+    are re-read).  An array a node cannot list (ValueError) is left for the solve to report."""
     with contextlib.suppress(ValueError):
         select(solver)

@@ -37,9 +37,10 @@ import numpy as np
 from scipy.linalg.lapack import dpotrf, dpotrs
 
 from .. import kernels
+from ..enums import FeasibilityNorm
 from ..kernels import log_fallback, overridden
 from ..shooting import ShootingProblem
-from . import compiled_nodes, horizon, riccati_kernel, rollout
+from . import compiled_nodes, horizon, riccati_kernel, rollout, sqp_kernel
 from .base import BackwardPassError, ForwardPassError, SolverAbstract
 from .horizon import Horizon, NodeDerivatives
 from .nonfinite import (
@@ -380,6 +381,13 @@ class SolverDDP(SolverAbstract):
         self.computeInequalityFeasibility()
         self.computeEqualityFeasibility()
         return self.cost
+
+    def _gaps_norm(self) -> float:
+        """The norm of all the gaps (``feasNorm``): the ∞-norm in one compiled call on the horizon's buffer
+        (:func:`.sqp_kernel.gap_linf`) while :func:`crocopy.kernels_enabled`."""
+        if kernels.active and self.feasNorm == FeasibilityNorm.LInf:
+            return sqp_kernel.gap_linf(self._horizon.dims, self._horizon.addr)
+        return self._norm(self.fs)
 
     def _reports_feasible_gaps(self) -> bool:
         """Whether ``ffeas`` reports the gaps of a feasible iterate (whose ``fs`` the backward pass sees as zero)."""

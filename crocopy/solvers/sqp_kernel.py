@@ -12,7 +12,8 @@ each node's ``(ndx, nu, nc)`` and ``C (T+1, c, n)``, ``D (T+1, c, m)``, ``y (T+1
   f_{t+1}``, then ``λ_t = Vxx_t (δx_t - f_t) + Vx_t``;
 * :func:`kkt`: ``max(‖Lx_t + Fx_tᵀ λ_{t+1} - λ_t + [t >= 1] C_tᵀ y_t‖∞, ‖Lu_t + Fu_tᵀ λ_{t+1} + D_tᵀ y_t‖∞,
   ‖Lx_T - λ_T + C_Tᵀ y_T‖∞, max_t ‖f_t‖∞)``;
-* :func:`gap_l1`: ``Σ_t ‖f_t‖₁`` (:func:`stack_l1` for gaps in a stack, summed in the same order);
+* :func:`gap_l1`: ``Σ_t ‖f_t‖₁`` (:func:`stack_l1` for gaps in a stack, summed in the same order); :func:`gap_linf`:
+  ``max_t ‖f_t‖∞`` (the DDP family's ``ffeas``);
 * :func:`all_finite`: whether the vectors at some addresses are finite (a trial's states and controls).
 """
 
@@ -142,7 +143,22 @@ def _stack_l1(dims, f):
     return total
 
 
+def _gap_linf(dims, haddr):
+    """``max_t ‖f_t‖∞``: NaN as soon as an entry is NaN (as numpy's ``max``), 0 without entries."""
+    worst = 0.0
+    for t in range(dims.shape[0]):
+        f = vector_at(haddr[t, FS], dims[t, 0])
+        for i in range(dims[t, 0]):
+            a = abs(f[i])
+            if a != a:
+                return a
+            if a > worst:
+                worst = a
+    return worst
+
+
 gap_l1 = compiled(_gap_l1)
+gap_linf = compiled(_gap_linf)
 stack_l1 = compiled(_stack_l1)
 
 

@@ -20,9 +20,10 @@ exact classes (a subclass may override a step, so it keeps the Python path):
   ``ResidualModelNumba`` (kind ``USER``: C callbacks, :mod:`crocopy.models.residual_numba`); in a node without
   active contacts, a user's Python residual runs in Python around the compiled call (:mod:`.python_residuals`).
 
-:meth:`EulerNode.refresh` (at the start of every solve) re-reads everything the kernels take from the
-models: the lowered Pinocchio model, the armature (the Pinocchio model's, which Pinocchio's own
-``crba``/``aba`` add, plus the dynamics model's ``armature``), ``S``, the time step, the damping, the
+:meth:`EulerNode.refresh` (when a solve makes its selection of compiled nodes; a solve that reuses the last one
+calls :meth:`EulerNode.refresh_live` instead, :class:`crocopy.solvers.compiled_nodes.Selection`) re-reads everything
+the kernels take from the models: the lowered Pinocchio model, the armature (the Pinocchio model's, which
+Pinocchio's own ``crba``/``aba`` add, plus the dynamics model's ``armature``), ``S``, the time step, the damping, the
 contacts' gains and references, the cost stack's weights and activation bounds, the residuals' references;
 and the addresses of the data arrays the kernels write (``xnext``, ``Fx``, ... of the node's data, the
 stack's arrays).  Evaluators are cached per node data
@@ -56,6 +57,7 @@ from . import trial_kernel
 from .constraint_rows import ConstraintRows
 from .contact_lowering import ContactSet
 from .joint_types import NotLowerable
+from .live_parameters import actuation_live, contacts_live, frozen, read_parameters
 from .lowering import RigidBodyModel, declaring, lower_model, make_workspace
 from .node_threads import ThreadTables
 from .python_residuals import PythonResiduals
@@ -108,6 +110,11 @@ class Lowered:
     """A lowered Pinocchio model with the addresses and dimensions of its arrays (the first entries of every
     node's table, see :mod:`.euler_node_kernel`; the armature's entry is each node's own)."""
 
+    version = 0
+    """How many times :meth:`update` rewrote the arrays (a node compares it with the one it read them at)."""
+    source: tuple = ()
+    """``(model, copy)``: the Pinocchio model lowered and a copy of it taken then (:meth:`current`)."""
+
     def __init__(self, rb: RigidBodyModel) -> None:
         self.rb = rb
         self.addresses, self.shapes = table_entries([getattr(rb, name) for name in rb._fields[4:]])
@@ -147,26 +154,39 @@ class Lowered:
             return False
         for name in names:
             np.copyto(getattr(self.rb, name), getattr(rb, name))
+        self.version += 1
         return True
+
+    def current(self, memo: dict) -> bool:
+        """Whether the Pinocchio model still equals the copy taken when it was lowered (Pinocchio's own ``==``, which
+        compares every field in C++: about 1 µs for an arm, 4 µs for a humanoid), once per ``memo`` (one solve)."""
+        key = ("current", id(self))
+        if key not in memo:
+            memo[key] = bool(self.source and self.source[0] == self.source[1])
+        return memo[key]
 
 
 _LOWERED: dict[int, tuple[pin.Model, Lowered]] = {}
-"""``id(model)`` → the model and its :class:`Lowered`, whose arrays are rewritten at each solve."""
+"""``id(model)`` → the model and its :class:`Lowered`, whose arrays are rewritten when the model changed."""
 
 
 def lowered(model: pin.Model, memo: dict) -> Lowered | None:
     """The lowered ``model``, its values read once per ``memo`` (one solve) into arrays that keep their
-    addresses from solve to solve; None if it does not lower."""
+    addresses from solve to solve (read again only when the model no longer equals the copy kept when it was last
+    lowered, :meth:`Lowered.current`); None if it does not lower."""
     key = id(model)
     if key in memo:
         return memo[key]
+    cached = _LOWERED.get(key)
+    if cached is not None and cached[0] is model and cached[1].current(memo):
+        memo[key] = cached[1]
+        return cached[1]
     try:
         rb = lower_model(model)
     except NotLowerable as exc:
         memo[key] = None
         memo[key, NotLowerable] = exc.reason
         return None
-    cached = _LOWERED.get(key)
     if cached is not None and cached[0] is model and cached[1].update(rb):
         low = cached[1]
     else:
@@ -174,6 +194,8 @@ def lowered(model: pin.Model, memo: dict) -> Lowered | None:
             _LOWERED.clear()
         low = Lowered(rb)
         _LOWERED[key] = (model, low)
+    low.source = (model, model.copy())
+    memo["current", id(low)] = True
     memo[key] = low
     return low
 
@@ -215,6 +237,9 @@ class EulerNode:
     derivatives, which the stack shares with the residual and activation datas).
     """
 
+    refreshes = 0
+    """How many times :meth:`refresh` ran (a selection of compiled nodes made before the last one is stale)."""
+
     def __init__(self, iam, data, terminal: bool, nv: int, contacts: list = ()) -> None:
         self.model = iam
         self.terminal = terminal
@@ -254,16 +279,17 @@ class EulerNode:
         stack = ddata.costs.stack
         changed = stack.refresh_if_stale(self.terminal)
         changed = changed or self._residuals is None or self._seen != ParametersVersion.value
+        read: dict | None = None
         if changed:
-            why = self._read_items(stack, ddata)
+            read = {}
+            why = self._read_items(stack, ddata, read)
             if why is not None:
                 decline(memo, why)
                 return False
             self._seen = ParametersVersion.value
         self.contacts.refresh()
         par = [float(iam.dt), float(getattr(dam, "_damping", 0.0))]
-        for kind, residual in self._residuals:
-            par += self._parameters(kind, residual)
+        live = read_parameters(self._residuals, par, self._parameters, read)
         if len(par) != self._n_parameters:  # a user residual's parameters() changed length: read the items again
             self._residuals = None
             return self.refresh(low, memo)
@@ -271,11 +297,47 @@ class EulerNode:
         np.add(low.rb.armature, dam.armature, out=self.armature)
         self._actuation_matrix(dam, memo)
         self._table(low, data, ddata, stack, changed)
+        self._live = (live, contacts_live(self.contacts.models), not frozen(dam.armature),
+                      not self.terminal and actuation_live(dam.actuation, memo["S", id(dam.actuation)]))
+        self._low_version = low.version
+        self.refreshes += 1
         return True
 
-    def _read_items(self, stack, ddata) -> str | None:
+    def refresh_live(self, memo: dict) -> bool:
+        """Re-read, in place, what :meth:`refresh` read that may have changed without moving the parameter clock
+        (:mod:`.live_parameters`: ``pin.SE3`` references, cones, a user residual's ``parameters()``, writeable
+        arrays); False when the node must be refreshed instead: its Pinocchio model changed
+        (:meth:`Lowered.current`), its cost stack was evaluated for the other node kind since, or a user residual's
+        number of parameters changed.  Only for a node refreshed since the parameter clock last moved.  Spends the
+        stamp of the last values (:meth:`forget`) either way."""
+        self.forget()
+        low = self._lowered
+        if low.version != self._low_version or not low.current(memo):
+            return False
+        data = self._data()
+        live, contacts, armature, actuation = self._live
+        if data is None or data.differential.costs.stack.refresh_if_stale(self.terminal) or not live.reread(self.par):
+            self._residuals = None  # read the items again
+            return False
+        if contacts:
+            self.contacts.refresh()
+        if armature:
+            np.add(low.rb.armature, self.model.differential.armature, out=self.armature)
+        if actuation:
+            self._actuation_matrix(self.model.differential, memo)
+        return True
+
+    def _read_items(self, stack, ddata, read: dict) -> str | None:
         """Read the compiled items of the cost stack (kind, rows, frame, reference frame, parameter offset); returns
-        None, or why the node cannot compile (:mod:`crocopy.not_compiled`)."""
+        None, or why the node cannot compile (:mod:`crocopy.not_compiled`).  ``read`` receives the parameters it read,
+        by residual (``id``): each residual's are read once per refresh."""
+
+        def parameters(kind: int, residual) -> list[float]:
+            key = id(residual)
+            if key not in read:
+                read[key] = self._parameters(kind, residual)
+            return read[key]
+
         self._residuals = None
         if stack.unfused:
             return class_reason(stack.unfused[0][0], "activation")
@@ -300,7 +362,7 @@ class EulerNode:
             user = [0, 0, 0, 0]
             if kind == table.USER:
                 frame, reference = residual.frame, int(residual.frame_reference)
-                user = [residual.flags, *residual.callbacks(), len(self._parameters(kind, residual))]
+                user = [residual.flags, *residual.callbacks(), len(parameters(kind, residual))]
                 rows_u = max(rows_u, rows.stop - rows.start)
             if kind == table.CONE:
                 row, nc = self.contacts.rows.get(frame, (0, 0))
@@ -309,14 +371,14 @@ class EulerNode:
                 frame, reference = row, residual.ncf
             items += [kind, rows.start, rows.stop - rows.start, frame, reference, offset, *user]
             residuals.append((kind, residual))
-            offset += len(self._parameters(kind, residual))
+            offset += len(parameters(kind, residual))
         manager = self.model.differential.constraints
         why = ConstraintRows.sized(manager, self._data(), ddata) or self.rows.read(
-            manager, self.terminal, residual_kind, offset, self._parameters, self.contacts.rows)
+            manager, self.terminal, residual_kind, offset, parameters, self.contacts.rows)
         if why is not None:
             return why
         self._items, self._residuals = items, residuals + self.rows.residuals
-        self._n_parameters = offset + sum(len(self._parameters(*r)) for r in self.rows.residuals)
+        self._n_parameters = offset + sum(len(parameters(*r)) for r in self.rows.residuals)
         self.python = PythonResiduals(self.model.state.pinocchio, ddata.pinocchio, python)
         rows_u = max(rows_u, self.rows.user_rows)
         if self.parameters["user_Ru"].shape[0] < rows_u:
@@ -509,6 +571,9 @@ class EulerHorizon:
         self.poff = np.cumsum([0] + [0 if n is None else n.par.shape[0] for n in nodes], dtype=np.int64)
         self.ints = np.concatenate([n.ints for n in nodes if n is not None])
         self.par = np.concatenate([n.par for n in nodes if n is not None])
+        for t, n in enumerate(nodes):
+            if n is not None:  # the node's parameters are now the horizon's: re-read in place, both see them
+                n.par = self.par[self.poff[t]:self.poff[t + 1]]
         self.nus = np.array(nus, dtype=np.int64)
         self.nx, self.ndx = first.model.state.nx, first.model.state.ndx
         self.costs = np.zeros(len(nodes))

@@ -18,10 +18,11 @@ classes (a subclass may override a step):
 
 The costs are those of a node without control when the costs were built with ``nu > 0`` (as the Python model
 evaluates them) or at the terminal node.  The node has no rollout step: the rollout calls its ``calc``, and it
-stays out of the Euler nodes' horizon (whose ranges stop at it).  :meth:`ImpulseNode.refresh` (at the start of
-every solve) re-reads the lowered Pinocchio model, the armature (the Pinocchio model's plus the impulse model's),
-``r_coeff``, the damping, the cost stack's items, weights and bounds, the residuals' references and the data arrays'
-addresses.  Evaluators are cached per node data (weakly).
+stays out of the Euler nodes' horizon (whose ranges stop at it).  :meth:`ImpulseNode.refresh` (when a solve makes its
+selection of compiled nodes; :meth:`ImpulseNode.refresh_live` when it reuses it) re-reads the lowered Pinocchio model,
+the armature (the Pinocchio model's plus the impulse model's), ``r_coeff``, the damping, the cost stack's items,
+weights and bounds, the residuals' references and the data arrays' addresses.  Evaluators are cached per node data
+(weakly).
 """
 
 from __future__ import annotations
@@ -42,6 +43,7 @@ from . import node_table as table
 from .constraint_rows import ConstraintRows
 from .euler_node import Lowered, generic_reason, lowered, residual_kind, table_entries
 from .joint_types import NotLowerable
+from .live_parameters import frozen, read_parameters
 from .lowering import RigidBodyModel
 
 IMPULSES = (ImpulseModel3D, ImpulseModel6D)
@@ -77,6 +79,11 @@ def impulse_node(model, data, terminal: bool, memo: dict) -> ImpulseNode | None:
     return node if node.refresh(low, memo) else None
 
 
+def _compiled_parameters(kind: int, residual) -> list[float]:
+    """A residual's parameters in the layout the kernels read (every kind an impulse node takes has them)."""
+    return residual.compiled_parameters()
+
+
 def _ints(impulses: list) -> list[int]:
     """``(frame, rows, reference frame, first row)`` of each impulse, flat (:data:`.node_table.CONTACT_FIELDS`)."""
     ints, row = [], 0
@@ -94,6 +101,9 @@ class ImpulseNode:
     ``Lxx`` (``Fu``, ``Lu``, ``Lxu``, ``Luu`` have no entries) and the cost stack's residuals, Jacobians and
     activation derivatives.
     """
+
+    refreshes = 0
+    """How many times :meth:`refresh` ran (a selection of compiled nodes made before the last one is stale)."""
 
     def __init__(self, model, data, terminal: bool, nv: int, impulses: list) -> None:
         self.model = model
@@ -143,11 +153,29 @@ class ImpulseNode:
                 return False
             self._seen = ParametersVersion.value
         par = [float(model.r_coeff), float(model._damping)]
-        for residual in self._residuals:
-            par += residual.compiled_parameters()
+        live = read_parameters([(0, r) for r in self._residuals], par, _compiled_parameters)
         self.par = np.array(par)
         np.add(low.rb.armature, model.armature, out=self.armature)
         self._table(low, data, stack, changed)
+        self._live = (live, not frozen(model.armature))
+        self._low_version = low.version
+        self.refreshes += 1
+        return True
+
+    def refresh_live(self, memo: dict) -> bool:
+        """Re-read, in place, what :meth:`refresh` read that may have changed without moving the parameter clock
+        (:mod:`.live_parameters`); False when the node must be refreshed instead (its Pinocchio model changed, or its
+        cost stack was evaluated for the other node kind since)."""
+        low = self._lowered
+        if low.version != self._low_version or not low.current(memo):
+            return False
+        data = self._data()
+        live, armature = self._live
+        if data is None or data.costs.stack.refresh_if_stale(self.stack_terminal) or not live.reread(self.par):
+            self._items = None  # read the items again
+            return False
+        if armature:
+            np.add(low.rb.armature, self.model.armature, out=self.armature)
         return True
 
     def _read_items(self, stack, data) -> str | None:

@@ -1,0 +1,99 @@
+"""Which parameters of a compiled node may change in place, unannounced, and their re-reading.
+
+A compiled node (:mod:`.euler_node`, :mod:`.impulse_node`) copies its models' parameters into its own arrays when it
+is refreshed.  Most of them change only through a setter, which moves the parameter clock
+(:mod:`crocopy.versioning`): while the clock stands still they are current.  Some do not (``DEVELOPING.md``,
+"What keeps caches and compiled copies fresh"): the ``pin.SE3``/``pin.Motion`` references of frame residuals and 6D
+contacts, a friction or wrench cone's matrix, a user's ``ResidualModelNumba.parameters()``, and any numpy parameter
+that is writeable (a deep-copied or unpickled model's references are).  :class:`LiveParameters` lists those of one
+node, so that a solve whose clocks did not move re-reads only them (:meth:`LiveParameters.reread`); the Pinocchio model
+is compared with a copy instead (:meth:`.euler_node.Lowered.current`).
+
+Whatever this module does not know as announced is live: a residual class outside :data:`REFERENCE_ONLY`, a contact
+whose reference or gains are not read-only arrays, an actuation outside :data:`CONSTANT_ACTUATIONS` whose matrix is
+writeable, a writeable armature.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from crocopy.residuals import ResidualModelControl, ResidualModelState
+
+from ..actuations import ActuationModelFloatingBase, ActuationModelFull
+from ..residuals_contact import ResidualModelContactFrictionCone, ResidualModelContactWrenchCone
+from ..residuals_dynamics import ResidualModelCoMPosition
+from ..residuals_frame import ResidualModelFrameRotation, ResidualModelFrameTranslation
+
+REFERENCE_ONLY = (ResidualModelState, ResidualModelControl, ResidualModelFrameTranslation, ResidualModelFrameRotation,
+                  ResidualModelCoMPosition)
+"""Residual classes (exact) whose ``compiled_parameters()`` are their ``reference`` array alone."""
+CONSTANT_ACTUATIONS = (ActuationModelFull, ActuationModelFloatingBase)
+CONE_MATRIX = (ResidualModelContactFrictionCone, ResidualModelContactWrenchCone)
+"""Residual classes (exact) whose ``compiled_parameters()`` are their cone's matrix ``reference.A``, row-major (read
+here straight into ``par``: the cones of a legged gait are most of its live parameters)."""
+"""Actuation classes (exact) whose ``compiled_matrix()`` depends on the state's sizes alone."""
+
+
+def frozen(value: object) -> bool:
+    """Whether ``value`` is a read-only numpy array (its owner's setter is then the only way to change it)."""
+    return isinstance(value, np.ndarray) and not value.flags.writeable
+
+
+def residual_live(residual: object) -> bool:
+    """Whether ``residual``'s compiled parameters may change without moving the parameter clock."""
+    return type(residual) not in REFERENCE_ONLY or not frozen(residual.reference)
+
+
+def contacts_live(contacts: list) -> bool:
+    """Whether a contact's lowered reference or gains may change without moving the parameter clock."""
+    return any(not frozen(m.reference) or not frozen(m.gains) for m in contacts)
+
+
+def actuation_live(actuation: object, matrix: np.ndarray) -> bool:
+    """Whether the actuation matrix ``matrix`` (``actuation.compiled_matrix()``) may change without moving the clock."""
+    return type(actuation) not in CONSTANT_ACTUATIONS and not frozen(matrix)
+
+
+def read_parameters(residuals: list, par: list, parameters: Callable, read: dict | None = None) -> LiveParameters:
+    """Append the parameters of ``residuals`` (``(kind, residual)`` in ``par`` order; ``parameters(kind, residual)``
+    their values, or ``read[id(residual)]`` where the caller has just read them) to the list ``par``; returns which of
+    them are live."""
+    slices = []
+    for kind, residual in residuals:
+        values = parameters(kind, residual) if read is None else read[id(residual)]
+        if residual_live(residual):
+            slices.append((len(par), len(par) + len(values), kind, residual))
+        par += values
+    return LiveParameters(slices, parameters)
+
+
+class LiveParameters:
+    """The entries of a node's ``par`` read from live sources (see the module docstring).
+
+    Parameters
+    ----------
+    slices : list of (start, stop, kind, residual)
+        Where the live residuals' parameters are in ``par``.
+    parameters : callable
+        ``parameters(kind, residual) -> list of float``, the values the node reads.
+    """
+
+    def __init__(self, slices: list, parameters: Callable) -> None:
+        self.slices = slices
+        self.parameters = parameters
+
+    def reread(self, par: np.ndarray) -> bool:
+        """Write the live residuals' current parameters into ``par``; False (``par`` partly written) if one changed
+        its number of parameters (the node must be refreshed)."""
+        for start, stop, kind, residual in self.slices:
+            if type(residual) in CONE_MATRIX:
+                values = np.asarray(residual.reference.A, dtype=float).reshape(-1)
+            else:
+                values = self.parameters(kind, residual)
+            if len(values) != stop - start:
+                return False
+            par[start:stop] = values
+        return True
