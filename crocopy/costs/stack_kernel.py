@@ -8,10 +8,7 @@ Both compute (rows ``i``, items ``k``)::
 
 :func:`derivatives_and_sums` runs the last two in one call (the stack's ``calcDiff`` when every
 activation is fused).  One call replaces a dozen small numpy calls, and rows whose weighted curvature is zero (a barrier
-row inside its bounds, an inactive item) are left out of the products; each row's products run between its first and
-last nonzero entry (a control row has no ``Jx``, a Euclidean state row one entry), on the upper triangle of ``Lxx``
-and ``Luu`` (then mirrored).  The compiled kernels keep no reference counts (:func:`crocopy.kernels.uncounted`).
-Each kernel has a
+row inside its bounds, an inactive item) are left out of the matrix products.  Each kernel has a
 numpy twin (``*_numpy``, same arguments) giving the same numbers to round-off (tested);
 :mod:`crocopy.kernels` chooses.
 """
@@ -20,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kernels import uncounted
+from ..kernels import compiled
 
 
 def _excess(r, lb, ub):
@@ -92,75 +89,53 @@ def _activation_derivatives(r, lb, ub, act_w, Ar, Arr):
         Arr[i] = act_w[i] if (ri <= lb[i] or ri >= ub[i]) else 0.0
 
 
-def _support(A, i, n):
-    """``(lo, hi)``: the first and one past the last nonzero column of ``A[i, :n]`` (``lo == hi`` when it is zero)."""
-    lo = 0
-    while lo < n and A[i, lo] == 0.0:
-        lo += 1
-    hi = n
-    while hi > lo and A[i, hi - 1] == 0.0:
-        hi -= 1
-    return lo, hi
-
-
 def _accumulate(weights, Ar, Arr, Jx, Ju, u_start, with_u, Jc, Hx, Juc, Hu, Lx, Lu, Lxx, Lxu, Luu):
-    """Weighted Gauss-Newton sums, one row at a time over the columns between its first and last nonzero
-    (``Jc``/``Hx``/``Juc``/``Hu`` are unused scratch of the shapes of ``Jx``/``Ju``, kept for the twin's signature).
-    ``Lxx`` and ``Luu`` are summed on their upper triangle and mirrored."""
+    """Weighted Gauss-Newton sums; ``Jc``/``Hx``/``Juc``/``Hu`` are scratch of the shapes of ``Jx``/``Ju``."""
     nr, ndx = Jx.shape
     nu = Ju.shape[1]
     if nu == 0:
         with_u = False
-    for j in range(ndx):
-        Lx[j] = 0.0
-        for k in range(ndx):
-            Lxx[j, k] = 0.0
+    Lx[:] = 0.0
     if with_u:
-        for j in range(nu):
-            Lu[j] = 0.0
-            for k in range(nu):
-                Luu[j, k] = 0.0
-        for j in range(ndx):
-            for k in range(nu):
-                Lxu[j, k] = 0.0
+        Lu[:] = 0.0
+    k = 0
+    ku = 0
     for i in range(nr):
         g = weights[i] * Ar[i]
         h = weights[i] * Arr[i]
-        if g == 0.0 and h == 0.0:
-            continue
-        lo, hi = _support(Jx, i, ndx)
         u_row = with_u and i >= u_start
-        iu = i - u_start
-        ulo, uhi = _support(Ju, iu, nu) if u_row else (0, 0)
         if g != 0.0:
-            for j in range(lo, hi):
+            for j in range(ndx):
                 Lx[j] += g * Jx[i, j]
-            for j in range(ulo, uhi):
-                Lu[j] += g * Ju[iu, j]
+            if u_row:
+                for j in range(nu):
+                    Lu[j] += g * Ju[i - u_start, j]
         if h != 0.0:
-            for j in range(lo, hi):
-                hj = h * Jx[i, j]
-                for k in range(j, hi):
-                    Lxx[j, k] += hj * Jx[i, k]
-                for k in range(ulo, uhi):
-                    Lxu[j, k] += hj * Ju[iu, k]
-            for j in range(ulo, uhi):
-                hj = h * Ju[iu, j]
-                for k in range(j, uhi):
-                    Luu[j, k] += hj * Ju[iu, k]
-    for j in range(ndx):
-        for k in range(j):
-            Lxx[j, k] = Lxx[k, j]
+            for j in range(ndx):
+                Jc[k, j] = Jx[i, j]
+                Hx[k, j] = h * Jx[i, j]
+            k += 1
+            if u_row:
+                for j in range(nu):
+                    Juc[ku, j] = Ju[i - u_start, j]
+                    Hu[ku, j] = h * Ju[i - u_start, j]
+                ku += 1
+    if k > 0:
+        np.dot(Jc[:k].T, Hx[:k], Lxx)
+    else:
+        Lxx[:, :] = 0.0
     if with_u:
-        for j in range(nu):
-            for k in range(j):
-                Luu[j, k] = Luu[k, j]
+        if ku > 0:
+            np.dot(Jc[k - ku : k].T, Hu[:ku], Lxu)
+            np.dot(Juc[:ku].T, Hu[:ku], Luu)
+        else:
+            Lxu[:, :] = 0.0
+            Luu[:, :] = 0.0
 
 
-activation_values = uncounted(_activation_values)
-activation_derivatives = uncounted(_activation_derivatives)
-_support = uncounted(_support)
-accumulate = uncounted(_accumulate)
+activation_values = compiled(_activation_values)
+activation_derivatives = compiled(_activation_derivatives)
+accumulate = compiled(_accumulate)
 
 
 def _derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, with_u, Jc, Hx, Juc, Hu,
@@ -170,4 +145,4 @@ def _derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, w
     accumulate(weights, Ar, Arr, Jx, Ju, u_start, with_u, Jc, Hx, Juc, Hu, Lx, Lu, Lxx, Lxu, Luu)
 
 
-derivatives_and_sums = uncounted(_derivatives_and_sums)
+derivatives_and_sums = compiled(_derivatives_and_sums)
