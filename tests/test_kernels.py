@@ -216,6 +216,36 @@ def test_stack_kernels_equal_their_twins_on_random_rows():
         np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-14)
 
 
+
+@pytest.mark.parametrize("seed", range(3))
+def test_stack_accumulate_on_rows_with_zero_ends_equals_the_dense_sums(seed):
+    """Rows that are zero, zero at one end or nonzero at one entry only (control rows, Euclidean state rows): the
+    kernel's per-row support gives the dense Gauss-Newton sums."""
+    rng = np.random.default_rng(seed)
+    nr, ndx, nu, u_start = 14, 8, 4, 6
+    Jx, Ju = rng.standard_normal((nr, ndx)), rng.standard_normal((nr - u_start, nu))
+    Jx[10:] = 0.0  # control rows
+    Jx[0, :] = 0.0
+    Jx[0, 3] = 1.5  # one entry
+    Jx[1, :2] = Jx[1, 6:] = 0.0
+    Jx[2, 0] = Jx[2, ndx - 1] = 0.0
+    Ju[:2] = 0.0  # force rows' Ju zero, control rows with one entry
+    Ju[4:] = 0.0
+    Ju[4:, :] = np.eye(nu)[: nr - u_start - 4]
+    Ju[3, 0] = 0.0
+    Ar, Arr = rng.standard_normal(nr), rng.uniform(0.0, 2.0, nr)
+    Arr[5] = 0.0
+    weights = rng.uniform(0.5, 3.0, nr)
+    L = [np.zeros(ndx), np.zeros(nu), np.full((ndx, ndx), 7.0), np.full((ndx, nu), 7.0), np.full((nu, nu), 7.0)]
+    stack_kernel.accumulate(weights, Ar, Arr, Jx, Ju, u_start, True, np.zeros_like(Jx), np.zeros_like(Jx),
+                            np.zeros_like(Ju), np.zeros_like(Ju), *L)
+    g, h = weights * Ar, weights * Arr
+    Hx = h[:, None] * Jx
+    expected = [Jx.T @ g, Ju.T @ g[u_start:], Jx.T @ Hx, Jx[u_start:].T @ (h[u_start:, None] * Ju),
+                Ju.T @ (h[u_start:, None] * Ju)]
+    for a, b in zip(L, expected, strict=True):
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-13)
+
 # ------------------------------------------------------------------------------------- numba is missing
 def test_forcing_the_availability_flag_off_uses_the_twins(monkeypatch):
     with crocopy.use_kernels(True):

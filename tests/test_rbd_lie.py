@@ -254,9 +254,17 @@ def test_configuration_space_equals_pinocchio(robot, seed, near):
     x0, x1, Jx = np.r_[q0, np.zeros(nv)], np.r_[q1, np.zeros(nv)], np.full((2 * nv, 2 * nv), np.nan)
     lie.difference(jtype, idx_q, idx_v, q0, q1, v_out)
     close(v_out, state.diff(x0, x1)[:nv])
+    blocks = np.zeros((nv, nv), dtype=bool)
+    for j in range(1, len(jtype)):
+        first, last = idx_v[j], idx_v[j] + model.joints[j].nv
+        blocks[first:last, first:last] = True
     for arg, pin_arg in ((0, pin.ARG0), (1, pin.ARG1)):
         lie.dintegrate(jtype, idx_q, idx_v, q0, v, arg, J)
         close(J, pin.dIntegrate(model, q0, v, pin_arg))
+        Jb = np.full((nv, nv), 7.0)
+        lie.dintegrate_blocks(jtype, idx_q, idx_v, v, arg, Jb)  # the joints' diagonal blocks only
+        np.testing.assert_array_equal(Jb[blocks], J[blocks])
+        assert np.all(Jb[~blocks] == 7.0)
         lie.state_jdiff(jtype, idx_q, idx_v, nq, nv, x0, x1, arg == 0, Jx)  # its q block is dDifference
         close(Jx[:nv, :nv], pin.dDifference(model, q0, q1, pin_arg))
 

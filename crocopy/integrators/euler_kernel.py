@@ -17,14 +17,14 @@ carried through ``Jintegrate`` (transport of the rows, plus ``∂(x ⊕ dx)/∂x
     Fx[:nv] = rows[:, :ndx] + [Jq 0],   Fx[nv:, nv:] += I,   Fu[:nv] = rows[:, ndx:]
 
 Each kernel has a numpy twin (``*_numpy``) giving the same numbers (tested); :mod:`crocopy.kernels`
-chooses.
+chooses.  The kernels keep no reference counts (:func:`crocopy.kernels.uncounted`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..kernels import compiled
+from ..kernels import uncounted
 
 
 def euler_step_numpy(a, x, dt, dx) -> None:
@@ -91,8 +91,8 @@ def _euler_chain(dFx, dFu, dLx, dLu, dLxx, dLxu, dLuu, dt, euclidean, Fx, Fu, Lx
             Luu[i, j] = dt * dLuu[i, j]
 
 
-euler_step = compiled(_euler_step)
-euler_chain = compiled(_euler_chain)
+euler_step = uncounted(_euler_step)
+euler_chain = uncounted(_euler_chain)
 
 
 def add_integrate_jacobian_numpy(rows, Jq, Fx, Fu) -> None:
@@ -117,4 +117,4 @@ def _add_integrate_jacobian(rows, Jq, Fx, Fu):
         Fx[nv + i, nv + i] += 1.0
 
 
-add_integrate_jacobian = compiled(_add_integrate_jacobian)
+add_integrate_jacobian = uncounted(_add_integrate_jacobian)

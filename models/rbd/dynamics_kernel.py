@@ -328,18 +328,24 @@ def mass_inverse(rb: RigidBodyModel, ws: RigidBodyWorkspace, Minv_out: np.ndarra
 @uncounted
 def _composite_coriolis(rb, ws):
     """``ws.oIc``, ``ws.oBc``: composite inertias and composite ``B_i = ov_i ×* oI_i - oI_i (ov_i ×) + (· ×* h_i)``."""
-    oI, oIc, oBc, ov, oh, Mx = ws.oI, ws.oIc, ws.oBc, ws.ov, ws.oh, ws.tmp
+    oI, oIc, oBc, ov, oh, T = ws.oI, ws.oIc, ws.oBc, ws.ov, ws.oh, ws.tmp
     for i in range(1, rb.njoints):
         ovi, h = get6(ov, i), get6(oh, i)
-        for c in range(6):  # Mx: the matrix of ovi ×, row c holding its column c
-            set6(Mx, c, mcross(ovi, unit(c)))
+        for c in range(6):  # T: the matrix of ovi ×
+            m = mcross(ovi, unit(c))
+            for k in range(6):
+                T[k, c] = m[k]
         for c in range(6):
             hx = fcross(unit(c), h)
-            for r in range(6):  # (ovi ×*) = -(Mx)ᵀ
-                x = hx[r]
-                for k in range(6):
-                    x -= Mx[r, k] * oI[i, k, c] + oI[i, r, k] * Mx[c, k]
-                oBc[i, r, c] = x
+            for r in range(6):
+                oBc[i, r, c] = hx[r]
+        for r in range(6):  # (ovi ×*) = -Tᵀ; row r gets -(T[k, r] oI[k] + oI[r, k] T[k]) for k = 0..5 in turn
+            for k in range(6):
+                s1 = T[k, r]
+                s2 = oI[i, r, k]
+                for c in range(6):
+                    oBc[i, r, c] -= s1 * oI[i, k, c] + s2 * T[k, c]
+            for c in range(6):
                 oIc[i, r, c] = oI[i, r, c]
     parent = rb.parent
     for i in range(rb.njoints - 1, 0, -1):

@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 
 from crocopy.costs.stack_kernel import activation_values, derivatives_and_sums
-from crocopy.integrators.euler_kernel import add_integrate_jacobian, euler_chain
+from crocopy.integrators.euler_kernel import euler_chain
 from crocopy.kernels import compiled, uncounted
 from crocopy.solvers.riccati_kernel import feedback_control
 
@@ -48,7 +48,7 @@ from .dynamics_kernel import (
     mass_inverse,
     rnea_derivatives,
 )
-from .lie_kernel import dintegrate, jlog3, jlog6, log3, log6, state_diff, state_integrate, state_jdiff
+from .lie_kernel import dintegrate_blocks, jlog3, jlog6, log3, log6, state_diff, state_integrate, state_jdiff
 from .node_table import (
     COM,
     CONE,
@@ -518,31 +518,64 @@ def _dynamics_jacobians(tbl, ints, x, rb, ws):
                 sv += Minv[i, k] * dv[k, j]
             dFx[i, j] = -sq
             dFx[i, nv + j] = -sv
+    if _identity(Sm, nv, nu):  # full actuation: the product is M⁻¹ itself
+        for i in range(nv):
+            for j in range(nu):
+                dFu[i, j] = Minv[i, j]
+        return
     _matmul(Minv, Sm, dFu, nv, nu, nv)
 
 
 @uncounted
+def _identity(A, rows, cols):
+    """Whether ``A[:rows, :cols]`` is the identity."""
+    if rows != cols:
+        return False
+    for i in range(rows):
+        for j in range(cols):
+            if A[i, j] != (1.0 if i == j else 0.0):
+                return False
+    return True
+
+
+@uncounted
 def _integrate_chain(tbl, ints, x, rb):
-    """Lie-group end of the Euler chain rule: ``rows = Jv [Fx Fu][:nv]`` (the transport), then
-    :func:`~crocopy.integrators.euler_kernel.add_integrate_jacobian` with ``Jq``.  ``Jv`` is block diagonal, one
-    block per joint, so each row sums over its joint's block only (the terms a dense product adds are zeros)."""
-    nq, nv, nu = ints[NQ], ints[NV], ints[NU]
+    """Lie-group end of the Euler chain rule, in place on the configuration rows ``[Fx Fu][:nv]`` of
+    :func:`~crocopy.integrators.euler_kernel.euler_chain`: ``[Fx Fu][:nv] ← Jv [Fx Fu][:nv] + [Jq 0]`` and
+    ``Fx[nv:, nv:] += I`` (as :func:`~crocopy.integrators.euler_kernel.add_integrate_jacobian` after the transport).
+    ``Jq`` and ``Jv`` are block diagonal, one block per joint (only the blocks are written and read): each row sums
+    over its joint's block, from a copy of the block's rows in ``E_ROWS``; a one-dof joint's blocks are ``1``, its
+    rows stay and only ``Jq``'s ``1`` is added."""
+    nv, nu = ints[NV], ints[NU]
     Fx, Fu, dx = mat(tbl, ints, E_FX), mat(tbl, ints, E_FU), vec(tbl, ints, E_DX)
     Jq, Jv, rows = mat(tbl, ints, E_JQ), mat(tbl, ints, E_JV), mat(tbl, ints, E_ROWS)
-    q = x[:nq]
-    dintegrate(rb.jtype, rb.idx_q, rb.idx_v, q, dx[:nv], 0, Jq)
-    dintegrate(rb.jtype, rb.idx_q, rb.idx_v, q, dx[:nv], 1, Jv)
+    dintegrate_blocks(rb.jtype, rb.idx_q, rb.idx_v, dx[:nv], 0, Jq)
+    dintegrate_blocks(rb.jtype, rb.idx_q, rb.idx_v, dx[:nv], 1, Jv)
     ndx = 2 * nv
     for joint in range(1, ints[NJOINTS]):
         first = rb.idx_v[joint]
         last = first + rb.nvj[joint]
+        if last - first == 1:
+            Fx[first, first] += Jq[first, first]
+            continue
         for i in range(first, last):
-            for j in range(ndx + nu):
+            for j in range(ndx):
+                rows[i, j] = Fx[i, j]
+            for j in range(nu):
+                rows[i, ndx + j] = Fu[i, j]
+        for i in range(first, last):
+            for j in range(ndx):
                 acc = 0.0
                 for k in range(first, last):
-                    acc += Jv[i, k] * (Fx[k, j] if j < ndx else Fu[k, j - ndx])
-                rows[i, j] = acc
-    add_integrate_jacobian(rows, Jq, Fx, Fu)
+                    acc += Jv[i, k] * rows[k, j]
+                Fx[i, j] = acc + Jq[i, j] if first <= j < last else acc
+            for j in range(nu):
+                acc = 0.0
+                for k in range(first, last):
+                    acc += Jv[i, k] * rows[k, ndx + j]
+                Fu[i, j] = acc
+    for i in range(nv):
+        Fx[nv + i, nv + i] += 1.0
 
 
 @uncounted

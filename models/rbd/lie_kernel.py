@@ -3,7 +3,8 @@
 Every public function is compiled with :func:`crocopy.kernels.compiled`, callable from Python and from
 other compiled functions, and writes into its ``out`` argument(s) (float64, C-contiguous); nothing is
 allocated.  Conventions are Pinocchio's.  Public kernels: ``log3``, ``jlog3``, ``log6``, ``jlog6``;
-``integrate``, ``difference``, ``dintegrate``; ``state_diff``, ``state_integrate``, ``state_jdiff``.
+``integrate``, ``difference``, ``dintegrate`` (``dintegrate_blocks``: its diagonal blocks only); ``state_diff``,
+``state_integrate``, ``state_jdiff``.
 
 SO(3) and SE(3)
 ---------------
@@ -153,14 +154,20 @@ def _store(a, out, r0, c0):
 
 @uncounted
 def _series(t2, m, weighted):
-    """``Σ_k (-t2)^k w_k/(2k + m)!`` with ``w_k = k + 1`` (``weighted``) or 1, to round-off for ``t2 < 1``."""
+    """``Σ_k (-t2)^k w_k/(2k + m)!`` with ``w_k = k + 1`` (``weighted``) or 1, to round-off for ``t2 < 1``.
+
+    The terms decrease; the sum stops at the first one below a quarter of the last bit of the (positive) sum, which
+    adding it and every later one would leave unchanged."""
     term = 1.0
     for i in range(2, m + 1):
         term /= i
     total = term
     for k in range(1, 12):
         term *= -t2 / ((2 * k + m - 1) * (2 * k + m))
-        total += term * (k + 1) if weighted else term
+        step = term * (k + 1) if weighted else term
+        if abs(step) < 2.7e-17 * total:
+            break
+        total += step
     return total
 
 
@@ -473,8 +480,9 @@ def _ddifference_blocks(jtype, idx_q, idx_v, q0, q1, arg, J):
 
 
 @uncounted
-def _dintegrate_blocks(jtype, idx_q, idx_v, v, arg, J):
-    """The diagonal blocks of ``∂(q ⊕ v)/∂(q or v)`` into ``J`` at ``(idx_v, idx_v)`` (independent of ``q``)."""
+def dintegrate_blocks(jtype, idx_q, idx_v, v, arg, J):
+    """The diagonal blocks of ``∂(q ⊕ v)/∂(q or v)`` into ``J`` at ``(idx_v, idx_v)`` (independent of ``q``); the
+    entries outside the blocks are not written."""
     for j in range(1, jtype.shape[0]):
         kind, iv = jtype[j], idx_v[j]
         if kind != FREEFLYER:
@@ -498,7 +506,7 @@ def _zero(J):
 def dintegrate(jtype, idx_q, idx_v, q, v, arg, J_out):
     """``J_out (nv, nv) = ∂(q ⊕ v)/∂q`` (``arg = 0``) or ``∂(q ⊕ v)/∂v`` (``arg = 1``) (``pinocchio.dIntegrate``)."""
     _zero(J_out)
-    _dintegrate_blocks(jtype, idx_q, idx_v, v, arg, J_out)
+    dintegrate_blocks(jtype, idx_q, idx_v, v, arg, J_out)
 
 
 # --- multibody state x = [q, v] ---------------------------------------------------------------------------
