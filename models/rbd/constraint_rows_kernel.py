@@ -5,7 +5,7 @@ the node's integers whose residual items are the constraints' residuals (rows in
 ``cJu``, every row with its ``u`` columns: ``U_START = 0``) and whose entries ``E_R``, ``E_JX``, ``E_JU`` have those
 arrays' dimensions; and ``c_tbl``, the node's own buffer that :func:`constraint_table` fills with the node's
 addresses, those three entries replaced by ``cr``, ``cJx``, ``cJu``.  The residual kernels of the cost items
-(:func:`.euler_node_kernel.residual_rows`, ``residual_jacobians``) then evaluate the constraints' residuals on that
+(:func:`.residual_kernel.residual_rows`, ``residual_jacobians``) then evaluate the constraints' residuals on that
 table, and :func:`stack_rows` stacks them as the manager does: the program ``c_rows`` (three integers per constraint,
 in the manager's order of names: equality or not, first row in ``cr``, rows) puts each constraint's rows at the next
 rows of ``g`` (inequality) or ``h`` (equality), the rows after the last zero; ``Gx, Gu`` and ``Hx, Hu`` likewise,

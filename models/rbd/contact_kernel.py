@@ -56,7 +56,7 @@ from typing import NamedTuple
 import numpy as np
 
 from crocopy.kernels import uncounted
-from crocopy.solvers.riccati_kernel import cholesky_solve
+from crocopy.solvers.riccati_kernel import cholesky_solve, triangular_solve
 
 from .dynamics_kernel import LOCAL, LOCAL_WORLD_ALIGNED, factor_solve, frame_jacobian, frame_pose, to_reference
 from .lie_kernel import jlog6, log6
@@ -441,7 +441,8 @@ def _kkt_columns(dof_parent, L, dinv, Jc, Y, G, nc, Z, W):
             j = Jc[r, k]
             for c in range(m):
                 W[r, c] += j * Z[k, c]
-    _cholesky_solve_columns(G, nc, W)
+    triangular_solve(G, W, False)  # W has nc rows: (G Gᵀ)⁻¹ on each column, the columns innermost
+    triangular_solve(G, W, True)
     for r in range(nc):
         for k in range(nv):
             y = Y[k, r]
@@ -476,26 +477,3 @@ def _factor_solve_columns(lam, L, dinv, X, m):
         d = dinv[k]
         for c in range(m):
             X[k, c] *= d
-
-
-@uncounted
-def _cholesky_solve_columns(G, n, X):
-    """``cholesky_solve`` (``(G Gᵀ)⁻¹``, lower ``G[:n, :n]``) on every column of ``X (n, m)``, the columns
-    innermost."""
-    m = X.shape[1]
-    for r in range(n):
-        for k in range(r):
-            f = G[r, k]
-            for c in range(m):
-                X[r, c] -= f * X[k, c]
-        d = G[r, r]
-        for c in range(m):
-            X[r, c] /= d
-    for r in range(n - 1, -1, -1):
-        for k in range(r + 1, n):
-            f = G[k, r]
-            for c in range(m):
-                X[r, c] -= f * X[k, c]
-        d = G[r, r]
-        for c in range(m):
-            X[r, c] /= d

@@ -51,15 +51,13 @@ from ..actuations import ActuationModelAbstract
 from ..residual_numba import ResidualModelNumba, kinematics_size
 from ..state_multibody import StateMultibody
 from . import euler_node_kernel as kernel
-from . import horizon_kernel as horizons
 from . import node_table as table
-from . import trial_kernel
 from .constraint_rows import ConstraintRows
 from .contact_lowering import ContactSet
+from .euler_horizon import EulerHorizon
 from .joint_types import NotLowerable
 from .live_parameters import actuation_live, contacts_live, frozen, read_parameters
 from .lowering import RigidBodyModel, declaring, lower_model, make_workspace
-from .node_threads import ThreadTables
 from .python_residuals import PythonResiduals
 
 ACTUATIONS = declaring(ActuationModelAbstract, "compiled_matrix")
@@ -547,119 +545,6 @@ class EulerNode:
     @staticmethod
     def horizon(nodes: list[EulerNode | None], nus: list[int], nthreads: int = 1) -> EulerHorizon:
         """The rollout of the running nodes (``None`` where a node is not of this class; ``nus`` their controls) in
-        one compiled call per range of nodes of this class, their evaluations on ``nthreads`` threads."""
+        one compiled call per range of nodes of this class, their evaluations on ``nthreads`` threads
+        (:class:`.euler_horizon.EulerHorizon`)."""
         return EulerHorizon(nodes, nus, nthreads)
-
-
-class EulerHorizon:
-    """The rollout of the DDP family over the running Euler nodes (:func:`.horizon_kernel.horizon_rollout`) and
-    their derivatives with the gaps (:func:`.horizon_kernel.horizon_calc_diff`), a range ``t0 <= t < t1`` of
-    compiled nodes per call; the other nodes' entries are never read.
-
-    ``rollout(addresses, xs_try, us_try, alpha, gaps, gap_at, t0, t1)`` (``addresses``: of ``xs, us, xs_try, us_try,
-    dxs, ks, Ks, fs, lbs, ubs``, :func:`crocopy.solvers.rollout.horizon_addresses`) and ``calc_diff(xs, us, fs, xs_at,
-    us_at, fs_at, t0, t1)`` (with the addresses of ``xs``, ``us`` and of the gaps ``fs`` it writes, or None) return
-    the total cost of the range, each node's in :attr:`costs`.  A node whose acceleration is not finite (a contact
-    set singular at that state) is evaluated again on its Python path by ``calc``/``calc_diff``; a rollout stops
-    there (its cost NaN) and the caller goes on node by node (:func:`crocopy.solvers.rollout.trial_rollout`)."""
-
-    def __init__(self, nodes: list[EulerNode | None], nus: list[int], nthreads: int = 1) -> None:
-        first = next(n for n in nodes if n is not None)
-        empty = np.zeros_like(first.tbl)
-        self.tbls = np.stack([empty if n is None else n.tbl for n in nodes])
-        self.ioff = np.cumsum([0] + [0 if n is None else n.ints.shape[0] for n in nodes], dtype=np.int64)
-        self.poff = np.cumsum([0] + [0 if n is None else n.par.shape[0] for n in nodes], dtype=np.int64)
-        self.ints = np.concatenate([n.ints for n in nodes if n is not None])
-        self.par = np.concatenate([n.par for n in nodes if n is not None])
-        for t, n in enumerate(nodes):
-            if n is not None:  # the node's parameters are now the horizon's: re-read in place, both see them
-                n.par = self.par[self.poff[t]:self.poff[t + 1]]
-        self.nus = np.array(nus, dtype=np.int64)
-        self.nx, self.ndx = first.model.state.nx, first.model.state.ndx
-        self.costs = np.zeros(len(nodes))
-        self.python = [(t, n) for t, n in enumerate(nodes) if n is not None and n.python.items]
-        """The nodes with Python residuals (:mod:`.python_residuals`): their rows are evaluated before a compiled
-        ``calc_diff`` and their costs again after a compiled rollout."""
-        self._python_ranges: dict[tuple[int, int], np.ndarray] = {}
-        self.no_gaps = np.zeros(len(nodes) + 1, dtype=np.int64)
-        self.nodes = nodes
-        self.threads = ThreadTables(nodes, self.tbls, nthreads) if nthreads > 1 else None
-        """The extra threads' tables (:mod:`.node_threads`), or None on one thread."""
-
-    def calc_diff(self, xs, us, fs, xs_at: np.ndarray, us_at: np.ndarray, fs_at: np.ndarray | None, t0: int,
-                  t1: int) -> float:
-        """Values and derivatives of the nodes ``t0 <= t < t1`` (and their gaps ``fs[t+1]`` when ``fs_at``, the
-        addresses of the list ``fs``)."""
-        for t, node in self.python:
-            if t0 <= t < t1:
-                node.python.evaluate(xs[t], us[t], True)
-        ints, ioff, par, poff, nus, costs = self.ints, self.ioff, self.par, self.poff, self.nus, self.costs
-        nx, ndx, gaps, gap_at = self.nx, self.ndx, fs_at is not None, self.no_gaps if fs_at is None else fs_at
-
-        def call(tbls, a, b):
-            return horizons.horizon_calc_diff(tbls, ints, ioff, par, poff, xs_at, us_at, nus, nx, ndx, gaps, gap_at, a,
-                                            b, costs)
-
-        total = self._run(call, t0, t1)
-        return total if math.isfinite(total) else self._python_path(xs, us, fs if gaps else None, t0, t1, True)
-
-    def calc(self, xs, us, xs_at: np.ndarray, us_at: np.ndarray, t0: int, t1: int) -> float:
-        """Values of the nodes ``t0 <= t < t1``."""
-        for t, node in self.python:
-            if t0 <= t < t1:
-                node.python.evaluate(xs[t], us[t], False)
-        ints, ioff, par, poff, nus, nx, costs = self.ints, self.ioff, self.par, self.poff, self.nus, self.nx, self.costs
-
-        def call(tbls, a, b):
-            return horizons.horizon_calc(tbls, ints, ioff, par, poff, xs_at, us_at, nus, nx, a, b, costs)
-
-        total = self._run(call, t0, t1)
-        return total if math.isfinite(total) else self._python_path(xs, us, None, t0, t1, False)
-
-    def fold(self, t0: int, t1: int) -> float:
-        """The sum of :attr:`costs` ``[t0:t1]`` in node order."""
-        return horizons.fold(self.costs, t0, t1)
-
-    def _python_path(self, xs, us, fs, t0: int, t1: int, derivatives: bool) -> float:
-        """After a range whose total is not finite: the nodes whose cost is not finite again on their Python path
-        (:meth:`EulerNode.python_path`), with their gaps when ``fs``; returns the range's total."""
-        for t in range(t0, t1):
-            if not math.isfinite(self.costs[t]):
-                node = self.nodes[t]
-                self.costs[t] = node.python_path(xs[t], us[t], derivatives)
-                if fs is not None:
-                    node.model.state._diff_into(xs[t + 1], node._data().xnext, fs[t + 1])
-        return horizons.fold(self.costs, t0, t1)
-
-    def _run(self, call: Callable, t0: int, t1: int) -> float:
-        """``call(tbls, a, b)`` over ``[t0, t1)``, on the extra threads too (then the costs added in node order, as
-        one call adds them)."""
-        if self.threads is None or t1 - t0 < 2:
-            return call(self.tbls, t0, t1)
-        self.threads.run(call, self.tbls, t0, t1)
-        return horizons.fold(self.costs, t0, t1)
-
-    def rollout(self, addresses: tuple, xs_try: list, us_try: list, alpha: float, gaps: bool, gap_at: int, t0: int,
-                t1: int) -> float:
-        """The rollout steps of the nodes ``t0 <= t < t1`` (the Python residuals' rows and costs after them)."""
-        total = horizons.horizon_rollout(
-            self.tbls, self.ints, self.ioff, self.par, self.poff, *addresses, self.nus, self.nx, self.ndx, alpha,
-            gaps, gap_at, t0, t1, self.costs,
-        )
-        if self.python:
-            for t, node in self.python:
-                if t0 <= t < t1:
-                    node.python.evaluate(xs_try[t], us_try[t])
-            total += horizons.horizon_recost(self.tbls, self.ints, self.ioff, self.par, self.poff,
-                                           self._python_in(t0, t1), self.costs)
-        return total
-
-    trial = trial_kernel.trial
-    """SolverSQP/SolverCSQP's trial point of the nodes ``t0 <= t < t1`` (:func:`.trial_kernel.trial`)."""
-
-    def _python_in(self, t0: int, t1: int) -> np.ndarray:
-        """The nodes ``t0 <= t < t1`` with Python residuals (made once per range)."""
-        key = (t0, t1)
-        if key not in self._python_ranges:
-            self._python_ranges[key] = np.array([t for t, _ in self.python if t0 <= t < t1], dtype=np.int64)
-        return self._python_ranges[key]

@@ -29,7 +29,6 @@ from crocopy.integrators.euler_kernel import euler_chain
 from crocopy.kernels import compiled, uncounted
 from crocopy.solvers.riccati_kernel import feedback_control
 
-from .com_kernel import center_of_mass
 from .constraint_rows_kernel import constraint_table, has_rows, stack_rows
 from .contact_kernel import (
     contact_calc,
@@ -41,24 +40,16 @@ from .contact_kernel import (
 from .dynamics_kernel import (
     forward_dynamics,
     forward_kinematics,
-    frame_jacobian,
-    frame_placement,
-    frame_velocity,
-    frame_velocity_derivatives,
     mass_inverse,
     rnea_derivatives,
 )
-from .lie_kernel import dintegrate_blocks, jlog3, jlog6, log3, log6, state_diff, state_integrate, state_jdiff
+from .lie_kernel import dintegrate_blocks, state_diff, state_integrate
 from .node_table import (
-    COM,
-    CONE,
-    CONTROL,
     E_A,
     E_A0,
     E_ACT_WEIGHTS,
     E_AR,
     E_ARR,
-    E_COM,
     E_DA0_DX,
     E_DF_DU,
     E_DF_DX,
@@ -80,16 +71,13 @@ from .node_table import (
     E_HJX,
     E_ITEM_COSTS,
     E_ITEM_WEIGHTS,
-    E_J6,
     E_JC,
-    E_JCOM,
     E_JCS,
     E_JQ,
     E_JU,
     E_JUC,
     E_JV,
     E_JX,
-    E_K6,
     E_LAM,
     E_LB,
     E_LU,
@@ -97,11 +85,8 @@ from .node_table import (
     E_LX,
     E_LXU,
     E_LXX,
-    E_M6,
     E_MINV,
-    E_P3,
     E_R,
-    E_R3,
     E_REF_P,
     E_REF_R,
     E_ROWS,
@@ -109,34 +94,19 @@ from .node_table import (
     E_STAMP,
     E_TAU,
     E_UB,
-    E_USER_RU,
-    E_V6,
     E_WEIGHTS,
     E_XNEXT,
     EUCLIDEAN,
-    FLAGS,
-    ITEM_FIELDS,
-    ITEMS,
-    LOCAL,
-    LOCAL_WORLD_ALIGNED,
     N_CONTACTS,
-    N_ITEMS,
     N_STACK,
     NC,
     NJOINTS,
     NQ,
     NU,
     NV,
-    PLACEMENT,
-    RESIDUAL_ADDRESS,
-    ROTATION,
     STARTS,
-    STATE,
     TERMINAL,
-    TRANSLATION,
     U_START,
-    USER,
-    VELOCITY,
     contact_fields,
     cube,
     entry_contact_workspace,
@@ -145,194 +115,7 @@ from .node_table import (
     mat,
     vec,
 )
-from .user_residual_kernel import user_call, user_jacobians, user_kinematics
-
-
-@uncounted
-def _matmul(A, B, out, rows, cols, inner):
-    """``out[:rows, :cols] = A[:rows, :inner] B[:inner, :cols]``."""
-    for i in range(rows):
-        for j in range(cols):
-            acc = 0.0
-            for k in range(inner):
-                acc += A[i, k] * B[k, j]
-            out[i, j] = acc
-
-
-@uncounted
-def _rotation_error(rb, ws, fid, par, o, R3):
-    """``Rrefᵀ oRf`` into ``R3``; ``par[o:o+9]`` is ``Rrefᵀ`` (row-major); leaves ``oMf`` in ``ws.Rf, ws.pf``."""
-    frame_placement(rb, ws, fid, ws.Rf, ws.pf)
-    for i in range(3):
-        for j in range(3):
-            acc = 0.0
-            for k in range(3):
-                acc += par[o + 3 * i + k] * ws.Rf[k, j]
-            R3[i, j] = acc
-
-
-@uncounted
-def _relative_frame(rb, ws, fid, par, o, R3, p3):
-    """``pref⁻¹ oMf`` into ``(R3, p3)``; ``par[o:o+9]`` is ``pref⁻¹``'s rotation (row-major), then its translation."""
-    _rotation_error(rb, ws, fid, par, o, R3)
-    for i in range(3):
-        acc = par[o + 9 + i]
-        for k in range(3):
-            acc += par[o + 3 * i + k] * ws.pf[k]
-        p3[i] = acc
-
-
-@uncounted
-def _residuals(tbl, ints, par, rb, ws, x, u):
-    """Every compiled item's residual rows of the stack."""
-    nq, nv = ints[NQ], ints[NV]
-    r, R3, p3, v6 = vec(tbl, ints, E_R), mat(tbl, ints, E_R3), vec(tbl, ints, E_P3), vec(tbl, ints, E_V6)
-    for n in range(ints[N_ITEMS]):
-        b = ints[ITEMS] + ITEM_FIELDS * n
-        kind, start, nr, fid, ref, o = ints[b], ints[b + 1], ints[b + 2], ints[b + 3], ints[b + 4], ints[b + 5]
-        rows = r[start: start + nr]
-        if kind == STATE:
-            state_diff(rb.jtype, rb.idx_q, rb.idx_v, nq, nv, par[o: o + nq + nv], x, rows)
-        elif kind == CONTROL:
-            for i in range(nr):
-                rows[i] = u[i] - par[o + i]
-        elif kind == PLACEMENT:
-            _relative_frame(rb, ws, fid, par, o, R3, p3)
-            log6(R3, p3, rows)
-        elif kind == TRANSLATION:
-            frame_placement(rb, ws, fid, ws.Rf, ws.pf)
-            for i in range(3):
-                rows[i] = ws.pf[i] - par[o + i]
-        elif kind == ROTATION:
-            _rotation_error(rb, ws, fid, par, o, R3)
-            log3(R3, rows)
-        elif kind == VELOCITY:
-            frame_velocity(rb, ws, fid, ref, v6)
-            for i in range(6):
-                rows[i] = v6[i] - par[o + i]
-        elif kind == CONE:
-            lam = vec(tbl, ints, E_LAM)
-            for i in range(nr):
-                acc = 0.0
-                for j in range(ref):
-                    acc += par[o + ref * i + j] * lam[fid + j]
-                rows[i] = acc
-        elif kind == COM:
-            com = vec(tbl, ints, E_COM)
-            center_of_mass(rb, ws, com, mat(tbl, ints, E_JCOM))
-            for i in range(3):
-                rows[i] = com[i] - par[o + i]
-        elif kind == USER:
-            user_kinematics(tbl, ints, rb, ws, fid, ref, ints[b + FLAGS], False)
-            user_call(tbl, ints, par, b, x, u, ints[b + RESIDUAL_ADDRESS], rows, mat(tbl, ints, E_USER_RU))
-        else:
-            raise ValueError("compiled node: unknown residual kind")
-
-
-@uncounted
-def _force_jacobians(tbl, ints, par, nr, row, ncf, o, Jx_rows, start):
-    """``A ∂λ/∂x`` into ``Jx_rows`` and, at a running node, ``A ∂λ/∂u`` into the stacked ``Ju`` rows of stack row
-    ``start`` (``A (nr, ncf)`` row-major at ``par[o]``, ``λ`` from stacked row ``row``)."""
-    df_dx, nv = mat(tbl, ints, E_DF_DX), ints[NV]
-    for i in range(nr):
-        for c in range(2 * nv):
-            acc = 0.0
-            for j in range(ncf):
-                acc += par[o + ncf * i + j] * df_dx[row + j, c]
-            Jx_rows[i, c] = acc
-    if ints[TERMINAL]:
-        return
-    df_du, Ju, nu, u0 = mat(tbl, ints, E_DF_DU), mat(tbl, ints, E_JU), ints[NU], start - ints[U_START]
-    for i in range(nr):
-        for c in range(nu):
-            acc = 0.0
-            for j in range(ncf):
-                acc += par[o + ncf * i + j] * df_du[row + j, c]
-            Ju[u0 + i, c] = acc
-
-
-@uncounted
-def _jacobians(tbl, ints, par, rb, ws, x, u):
-    """Every compiled item's rows of the stacked ``Jx`` (a control residual's are zero and stay so) and the force
-    residuals' rows of ``Ju`` (after :func:`_dynamics_jacobians` at a running node)."""
-    nq, nv = ints[NQ], ints[NV]
-    Jx, J6, K6, m6 = mat(tbl, ints, E_JX), mat(tbl, ints, E_J6), mat(tbl, ints, E_K6), mat(tbl, ints, E_M6)
-    R3, p3, v6 = mat(tbl, ints, E_R3), vec(tbl, ints, E_P3), vec(tbl, ints, E_V6)
-    ndx = 2 * nv
-    for n in range(ints[N_ITEMS]):
-        b = ints[ITEMS] + ITEM_FIELDS * n
-        kind, start, nr, fid, ref, o = ints[b], ints[b + 1], ints[b + 2], ints[b + 3], ints[b + 4], ints[b + 5]
-        if kind == CONTROL:
-            continue
-        rows = Jx[start: start + nr]
-        if kind == STATE:
-            state_jdiff(rb.jtype, rb.idx_q, rb.idx_v, nq, nv, par[o: o + nq + nv], x, False, rows)
-            continue
-        if kind == VELOCITY:
-            _velocity_jacobian(rb, ws, fid, ref, J6, K6, m6, v6, rows, nv)
-            continue
-        if kind == CONE:
-            _force_jacobians(tbl, ints, par, nr, fid, ref, o, rows, start)
-            continue
-        if kind == USER:
-            user_jacobians(tbl, ints, par, rb, ws, b, x, u, rows)
-            continue
-        for i in range(nr):
-            for j in range(nv, ndx):
-                rows[i, j] = 0.0
-        if kind == TRANSLATION:
-            frame_jacobian(rb, ws, fid, LOCAL_WORLD_ALIGNED, J6)
-            for i in range(3):
-                for j in range(nv):
-                    rows[i, j] = J6[i, j]
-        elif kind == PLACEMENT:
-            frame_jacobian(rb, ws, fid, LOCAL, J6)
-            _relative_frame(rb, ws, fid, par, o, R3, p3)
-            jlog6(R3, p3, m6)
-            _matmul(m6, J6, rows, 6, nv, 6)
-        elif kind == COM:
-            Jcom = mat(tbl, ints, E_JCOM)
-            center_of_mass(rb, ws, vec(tbl, ints, E_COM), Jcom)
-            for i in range(3):
-                for j in range(nv):
-                    rows[i, j] = Jcom[i, j]
-        else:
-            frame_jacobian(rb, ws, fid, LOCAL, J6)
-            _rotation_error(rb, ws, fid, par, o, R3)
-            jlog3(R3, m6[:3, :3])
-            for i in range(3):
-                for j in range(nv):
-                    acc = 0.0
-                    for k in range(3):
-                        acc += m6[i, k] * J6[3 + k, j]
-                    rows[i, j] = acc
-
-
-@uncounted
-def _velocity_jacobian(rb, ws, fid, ref, dq, dv, m6, v6, rows, nv):
-    """``(∂v_f/∂q, ∂v_f/∂v)`` in frame ``ref``; LOCAL_WORLD_ALIGNED as ``R (∂v_l/∂q - [v_l]× J_ω)`` (see
-    :class:`~crocopy.models.ResidualModelFrameVelocity`), ``R`` the frame rotation."""
-    if ref != LOCAL_WORLD_ALIGNED:
-        frame_velocity_derivatives(rb, ws, fid, ref, dq, dv)
-        for i in range(6):
-            for j in range(nv):
-                rows[i, j] = dq[i, j]
-                rows[i, nv + j] = dv[i, j]
-        return
-    frame_velocity_derivatives(rb, ws, fid, LOCAL, dq, dv)
-    frame_velocity(rb, ws, fid, LOCAL, v6)
-    frame_placement(rb, ws, fid, ws.Rf, ws.pf)
-    R = ws.Rf
-    for half in range(2):
-        s = 3 * half
-        for j in range(nv):
-            # (∂v_l/∂q - [v_l]× J_ω) column j for rows s..s+2, J_ω = dv[3:6] (the LOCAL Jacobian)
-            c0 = dq[s, j] - (v6[s + 1] * dv[5, j] - v6[s + 2] * dv[4, j])
-            c1 = dq[s + 1, j] - (v6[s + 2] * dv[3, j] - v6[s] * dv[5, j])
-            c2 = dq[s + 2, j] - (v6[s] * dv[4, j] - v6[s + 1] * dv[3, j])
-            for i in range(3):
-                rows[s + i, j] = R[i, 0] * c0 + R[i, 1] * c1 + R[i, 2] * c2
-                rows[s + i, nv + j] = R[i, 0] * dv[s, j] + R[i, 1] * dv[s + 1, j] + R[i, 2] * dv[s + 2, j]
+from .residual_kernel import matmul, residual_jacobians, residual_rows
 
 
 @uncounted
@@ -355,7 +138,7 @@ def _values(tbl, ints, par, x, u, rb, ws):
         forward_dynamics(rb, ws, q, v, tau, a)
         if ints[N_CONTACTS]:
             _contact_dynamics(tbl, ints, par, rb, ws, tau, a)
-    _residuals(tbl, ints, par, rb, ws, x, u)
+    residual_rows(tbl, ints, par, rb, ws, x, u)
     starts = ints[ints[STARTS]: ints[STARTS] + ints[N_STACK]]
     return activation_values(
         vec(tbl, ints, E_R), vec(tbl, ints, E_LB), vec(tbl, ints, E_UB), vec(tbl, ints, E_ACT_WEIGHTS), starts,
@@ -369,9 +152,9 @@ def _constraints(tbl, ints, par, rb, ws, x, u, derivatives):
     node's constraint table, stacked into ``g``, ``h`` (and their Jacobians, if ``derivatives``)."""
     ctbl, cints = constraint_table(tbl, ints)
     if cints.shape[0]:
-        _residuals(ctbl, cints, par, rb, ws, x, u)
+        residual_rows(ctbl, cints, par, rb, ws, x, u)
         if derivatives:
-            _jacobians(ctbl, cints, par, rb, ws, x, u)
+            residual_jacobians(ctbl, cints, par, rb, ws, x, u)
     stack_rows(tbl, ints, derivatives)
 
 
@@ -523,7 +306,7 @@ def _dynamics_jacobians(tbl, ints, x, rb, ws):
             for j in range(nu):
                 dFu[i, j] = Minv[i, j]
         return
-    _matmul(Minv, Sm, dFu, nv, nu, nv)
+    matmul(Minv, Sm, dFu, nv, nu, nv)
 
 
 @uncounted
@@ -603,7 +386,7 @@ def node_calc_diff(tbl, ints, par, x, u):
         for i in range(ints[NC]):
             for j in range(df_dx.shape[1]):
                 df_dx[i, j] = 0.0
-    _jacobians(tbl, ints, par, rb, ws, x, u)
+    residual_jacobians(tbl, ints, par, rb, ws, x, u)
     if has_rows(ints):
         _constraints(tbl, ints, par, rb, ws, x, u, True)
     Lx, Lu, Lxx = vec(tbl, ints, E_LX), vec(tbl, ints, E_LU), mat(tbl, ints, E_LXX)
@@ -636,6 +419,6 @@ def node_calc_diff(tbl, ints, par, x, u):
 
 
 
-residual_rows, residual_jacobians, constraint_values = _residuals, _jacobians, _constraints
-"""The cost stack's residual rows and their ``Jx`` rows of a node's table (:func:`_residuals`, :func:`_jacobians`),
-and its constraint rows (:func:`_constraints`), for the other compiled nodes (:mod:`.impulse_node_kernel`)."""
+constraint_values = _constraints
+"""The constraint rows of a node's table (:func:`_constraints`), for the other compiled nodes
+(:mod:`.impulse_node_kernel`)."""

@@ -1,4 +1,4 @@
-"""The compiled Euler nodes of a range ``t0 <= t < t1`` in one call each (:class:`.euler_node.EulerHorizon`).
+"""The compiled Euler nodes of a range ``t0 <= t < t1`` in one call each (:class:`.euler_horizon.EulerHorizon`).
 
 The node tables are stacked (``tbls[t]``), their integers and parameters concatenated (``ints[ioff[t]:ioff[t+1]]``,
 ``par[poff[t]:poff[t+1]]``), and the trajectories arrive as address arrays (``xs[t]`` the address of state t).

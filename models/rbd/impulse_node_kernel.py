@@ -40,7 +40,7 @@ from .dynamics_kernel import (
     frame_velocity,
     frame_velocity_derivatives,
 )
-from .euler_node_kernel import constraint_values, residual_jacobians, residual_rows
+from .euler_node_kernel import constraint_values
 from .node_table import (
     E_A,
     E_ACT_WEIGHTS,
@@ -94,6 +94,7 @@ from .node_table import (
     mat,
     vec,
 )
+from .residual_kernel import residual_jacobians, residual_rows
 
 
 @uncounted

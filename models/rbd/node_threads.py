@@ -1,6 +1,6 @@
 """The running nodes' values and derivatives on several threads (``problem.nthreads``).
 
-A horizon of compiled nodes (:class:`.euler_node.EulerHorizon`) evaluates the nodes ``t0 <= t < t1`` of a range in
+A horizon of compiled nodes (:class:`.euler_horizon.EulerHorizon`) evaluates the nodes ``t0 <= t < t1`` of a range in
 one compiled call, which releases the GIL (:func:`.horizon_kernel.horizon_calc_diff`, ``horizon_calc``).  With
 ``k`` threads the range is cut into ``k`` contiguous chunks of nearly equal length; the calling thread runs the first
 and a pool of ``k - 1`` threads the others, at once.  The nodes of one Pinocchio model share a workspace and a

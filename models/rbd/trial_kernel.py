@@ -1,5 +1,5 @@
 """The trial point of SolverSQP/SolverCSQP over a range of compiled Euler nodes, in one call
-(:class:`.euler_node.EulerHorizon` ``.trial``; :meth:`crocopy.solvers.compiled_nodes.CompiledNodes.trial`).
+(:class:`.euler_horizon.EulerHorizon` ``.trial``; :meth:`crocopy.solvers.compiled_nodes.CompiledNodes.trial`).
 
 On the straight line of the QP step ``(δx, δu)`` at step length ``α``, for the running nodes ``t0 <= t < t1`` ::
 
@@ -79,8 +79,8 @@ def trial(horizon, addresses: tuple, x0: np.ndarray, dx: np.ndarray, du: np.ndar
     ``addresses``: of ``xs, us, xs_try, us_try``; ``dx``, ``du``, ``fs``: the solver's stacks; ``step``: scratch of at
     least ``ndx`` entries; ``trajectories``: the lists ``(xs_try, us_try, fs)`` (views of the same arrays) for the
     Python paths.  One compiled call on one thread without Python residuals in the range; otherwise the states and
-    controls, then :meth:`~.euler_node.EulerHorizon.calc` (which runs those residuals and the threads), then the gaps.
-    A node whose acceleration is not finite is evaluated again on its Python path, its gap from there."""
+    controls, then :meth:`~.euler_horizon.EulerHorizon.calc` (which runs those residuals and the threads), then the
+    gaps.  A node whose acceleration is not finite is evaluated again on its Python path, its gap from there."""
     xs, us, xs_at, us_at = addresses
     xs_try, us_try, fs_list = trajectories
     tables = horizon.tbls, horizon.ints, horizon.ioff

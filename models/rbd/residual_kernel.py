@@ -1,0 +1,256 @@
+"""The residual rows of a compiled node's cost stack (or constraint table) and their Jacobians, item by item.
+
+Each item of ``ints`` (``ITEM_FIELDS`` integers from ``ints[ITEMS]``: kind, first row, rows, frame, reference,
+parameter offset, and a user residual's fields, :mod:`.node_table`) writes its rows of the stacked residual ``r``
+(:func:`residual_rows`) and of the stacked ``Jx`` (and, for the force residuals of a running node, ``Ju``;
+:func:`residual_jacobians`), from the kinematics in the workspace ``ws`` (a forward kinematics at the node's ``(q,
+v)``), the contact forces ``λ`` and their derivatives, and the residuals' parameters in ``par``:
+
+* state ``r = x ⊖ x_ref``; control ``r = u - u_ref``;
+* frame placement ``r = log6(M_ref⁻¹ oMf)``, translation ``r = p_f - p_ref``, rotation ``r = log3(R_refᵀ R_f)``,
+  velocity ``r = v_f - v_ref`` in the item's reference frame;
+* cones ``r = A λ_c`` (friction and wrench cones of an active contact), centre of mass ``r = c - c_ref``;
+* a user's :class:`~crocopy.models.residual_numba.ResidualModelNumba` through its callbacks
+  (:mod:`.user_residual_kernel`).
+"""
+
+from __future__ import annotations
+
+from crocopy.kernels import uncounted
+
+from .com_kernel import center_of_mass
+from .dynamics_kernel import (
+    frame_jacobian,
+    frame_placement,
+    frame_velocity,
+    frame_velocity_derivatives,
+)
+from .lie_kernel import jlog3, jlog6, log3, log6, state_diff, state_jdiff
+from .node_table import (
+    COM,
+    CONE,
+    CONTROL,
+    E_COM,
+    E_DF_DU,
+    E_DF_DX,
+    E_J6,
+    E_JCOM,
+    E_JU,
+    E_JX,
+    E_K6,
+    E_LAM,
+    E_M6,
+    E_P3,
+    E_R,
+    E_R3,
+    E_USER_RU,
+    E_V6,
+    FLAGS,
+    ITEM_FIELDS,
+    ITEMS,
+    LOCAL,
+    LOCAL_WORLD_ALIGNED,
+    N_ITEMS,
+    NQ,
+    NU,
+    NV,
+    PLACEMENT,
+    RESIDUAL_ADDRESS,
+    ROTATION,
+    STATE,
+    TERMINAL,
+    TRANSLATION,
+    U_START,
+    USER,
+    VELOCITY,
+    mat,
+    vec,
+)
+from .user_residual_kernel import user_call, user_jacobians, user_kinematics
+
+
+@uncounted
+def matmul(A, B, out, rows, cols, inner):
+    """``out[:rows, :cols] = A[:rows, :inner] B[:inner, :cols]``."""
+    for i in range(rows):
+        for j in range(cols):
+            acc = 0.0
+            for k in range(inner):
+                acc += A[i, k] * B[k, j]
+            out[i, j] = acc
+
+
+@uncounted
+def _rotation_error(rb, ws, fid, par, o, R3):
+    """``Rrefᵀ oRf`` into ``R3``; ``par[o:o+9]`` is ``Rrefᵀ`` (row-major); leaves ``oMf`` in ``ws.Rf, ws.pf``."""
+    frame_placement(rb, ws, fid, ws.Rf, ws.pf)
+    for i in range(3):
+        for j in range(3):
+            acc = 0.0
+            for k in range(3):
+                acc += par[o + 3 * i + k] * ws.Rf[k, j]
+            R3[i, j] = acc
+
+
+@uncounted
+def _relative_frame(rb, ws, fid, par, o, R3, p3):
+    """``pref⁻¹ oMf`` into ``(R3, p3)``; ``par[o:o+9]`` is ``pref⁻¹``'s rotation (row-major), then its translation."""
+    _rotation_error(rb, ws, fid, par, o, R3)
+    for i in range(3):
+        acc = par[o + 9 + i]
+        for k in range(3):
+            acc += par[o + 3 * i + k] * ws.pf[k]
+        p3[i] = acc
+
+
+@uncounted
+def residual_rows(tbl, ints, par, rb, ws, x, u):
+    """Every compiled item's residual rows of the stack."""
+    nq, nv = ints[NQ], ints[NV]
+    r, R3, p3, v6 = vec(tbl, ints, E_R), mat(tbl, ints, E_R3), vec(tbl, ints, E_P3), vec(tbl, ints, E_V6)
+    for n in range(ints[N_ITEMS]):
+        b = ints[ITEMS] + ITEM_FIELDS * n
+        kind, start, nr, fid, ref, o = ints[b], ints[b + 1], ints[b + 2], ints[b + 3], ints[b + 4], ints[b + 5]
+        rows = r[start: start + nr]
+        if kind == STATE:
+            state_diff(rb.jtype, rb.idx_q, rb.idx_v, nq, nv, par[o: o + nq + nv], x, rows)
+        elif kind == CONTROL:
+            for i in range(nr):
+                rows[i] = u[i] - par[o + i]
+        elif kind == PLACEMENT:
+            _relative_frame(rb, ws, fid, par, o, R3, p3)
+            log6(R3, p3, rows)
+        elif kind == TRANSLATION:
+            frame_placement(rb, ws, fid, ws.Rf, ws.pf)
+            for i in range(3):
+                rows[i] = ws.pf[i] - par[o + i]
+        elif kind == ROTATION:
+            _rotation_error(rb, ws, fid, par, o, R3)
+            log3(R3, rows)
+        elif kind == VELOCITY:
+            frame_velocity(rb, ws, fid, ref, v6)
+            for i in range(6):
+                rows[i] = v6[i] - par[o + i]
+        elif kind == CONE:
+            lam = vec(tbl, ints, E_LAM)
+            for i in range(nr):
+                acc = 0.0
+                for j in range(ref):
+                    acc += par[o + ref * i + j] * lam[fid + j]
+                rows[i] = acc
+        elif kind == COM:
+            com = vec(tbl, ints, E_COM)
+            center_of_mass(rb, ws, com, mat(tbl, ints, E_JCOM))
+            for i in range(3):
+                rows[i] = com[i] - par[o + i]
+        elif kind == USER:
+            user_kinematics(tbl, ints, rb, ws, fid, ref, ints[b + FLAGS], False)
+            user_call(tbl, ints, par, b, x, u, ints[b + RESIDUAL_ADDRESS], rows, mat(tbl, ints, E_USER_RU))
+        else:
+            raise ValueError("compiled node: unknown residual kind")
+
+
+@uncounted
+def _force_jacobians(tbl, ints, par, nr, row, ncf, o, Jx_rows, start):
+    """``A ∂λ/∂x`` into ``Jx_rows`` and, at a running node, ``A ∂λ/∂u`` into the stacked ``Ju`` rows of stack row
+    ``start`` (``A (nr, ncf)`` row-major at ``par[o]``, ``λ`` from stacked row ``row``)."""
+    df_dx, nv = mat(tbl, ints, E_DF_DX), ints[NV]
+    for i in range(nr):
+        for c in range(2 * nv):
+            acc = 0.0
+            for j in range(ncf):
+                acc += par[o + ncf * i + j] * df_dx[row + j, c]
+            Jx_rows[i, c] = acc
+    if ints[TERMINAL]:
+        return
+    df_du, Ju, nu, u0 = mat(tbl, ints, E_DF_DU), mat(tbl, ints, E_JU), ints[NU], start - ints[U_START]
+    for i in range(nr):
+        for c in range(nu):
+            acc = 0.0
+            for j in range(ncf):
+                acc += par[o + ncf * i + j] * df_du[row + j, c]
+            Ju[u0 + i, c] = acc
+
+
+@uncounted
+def residual_jacobians(tbl, ints, par, rb, ws, x, u):
+    """Every compiled item's rows of the stacked ``Jx`` (a control residual's are zero and stay so) and the force
+    residuals' rows of ``Ju`` (after :func:`.euler_node_kernel._dynamics_jacobians` at a running node)."""
+    nq, nv = ints[NQ], ints[NV]
+    Jx, J6, K6, m6 = mat(tbl, ints, E_JX), mat(tbl, ints, E_J6), mat(tbl, ints, E_K6), mat(tbl, ints, E_M6)
+    R3, p3, v6 = mat(tbl, ints, E_R3), vec(tbl, ints, E_P3), vec(tbl, ints, E_V6)
+    ndx = 2 * nv
+    for n in range(ints[N_ITEMS]):
+        b = ints[ITEMS] + ITEM_FIELDS * n
+        kind, start, nr, fid, ref, o = ints[b], ints[b + 1], ints[b + 2], ints[b + 3], ints[b + 4], ints[b + 5]
+        if kind == CONTROL:
+            continue
+        rows = Jx[start: start + nr]
+        if kind == STATE:
+            state_jdiff(rb.jtype, rb.idx_q, rb.idx_v, nq, nv, par[o: o + nq + nv], x, False, rows)
+            continue
+        if kind == VELOCITY:
+            _velocity_jacobian(rb, ws, fid, ref, J6, K6, m6, v6, rows, nv)
+            continue
+        if kind == CONE:
+            _force_jacobians(tbl, ints, par, nr, fid, ref, o, rows, start)
+            continue
+        if kind == USER:
+            user_jacobians(tbl, ints, par, rb, ws, b, x, u, rows)
+            continue
+        for i in range(nr):
+            for j in range(nv, ndx):
+                rows[i, j] = 0.0
+        if kind == TRANSLATION:
+            frame_jacobian(rb, ws, fid, LOCAL_WORLD_ALIGNED, J6)
+            for i in range(3):
+                for j in range(nv):
+                    rows[i, j] = J6[i, j]
+        elif kind == PLACEMENT:
+            frame_jacobian(rb, ws, fid, LOCAL, J6)
+            _relative_frame(rb, ws, fid, par, o, R3, p3)
+            jlog6(R3, p3, m6)
+            matmul(m6, J6, rows, 6, nv, 6)
+        elif kind == COM:
+            Jcom = mat(tbl, ints, E_JCOM)
+            center_of_mass(rb, ws, vec(tbl, ints, E_COM), Jcom)
+            for i in range(3):
+                for j in range(nv):
+                    rows[i, j] = Jcom[i, j]
+        else:
+            frame_jacobian(rb, ws, fid, LOCAL, J6)
+            _rotation_error(rb, ws, fid, par, o, R3)
+            jlog3(R3, m6[:3, :3])
+            for i in range(3):
+                for j in range(nv):
+                    acc = 0.0
+                    for k in range(3):
+                        acc += m6[i, k] * J6[3 + k, j]
+                    rows[i, j] = acc
+
+
+@uncounted
+def _velocity_jacobian(rb, ws, fid, ref, dq, dv, m6, v6, rows, nv):
+    """``(∂v_f/∂q, ∂v_f/∂v)`` in frame ``ref``; LOCAL_WORLD_ALIGNED as ``R (∂v_l/∂q - [v_l]× J_ω)`` (see
+    :class:`~crocopy.models.ResidualModelFrameVelocity`), ``R`` the frame rotation."""
+    if ref != LOCAL_WORLD_ALIGNED:
+        frame_velocity_derivatives(rb, ws, fid, ref, dq, dv)
+        for i in range(6):
+            for j in range(nv):
+                rows[i, j] = dq[i, j]
+                rows[i, nv + j] = dv[i, j]
+        return
+    frame_velocity_derivatives(rb, ws, fid, LOCAL, dq, dv)
+    frame_velocity(rb, ws, fid, LOCAL, v6)
+    frame_placement(rb, ws, fid, ws.Rf, ws.pf)
+    R = ws.Rf
+    for half in range(2):
+        s = 3 * half
+        for j in range(nv):
+            # (∂v_l/∂q - [v_l]× J_ω) column j for rows s..s+2, J_ω = dv[3:6] (the LOCAL Jacobian)
+            c0 = dq[s, j] - (v6[s + 1] * dv[5, j] - v6[s + 2] * dv[4, j])
+            c1 = dq[s + 1, j] - (v6[s + 2] * dv[3, j] - v6[s] * dv[5, j])
+            c2 = dq[s + 2, j] - (v6[s] * dv[4, j] - v6[s + 1] * dv[3, j])
+            for i in range(3):
+                rows[s + i, j] = R[i, 0] * c0 + R[i, 1] * c1 + R[i, 2] * c2
+                rows[s + i, nv + j] = R[i, 0] * dv[s, j] + R[i, 1] * dv[s + 1, j] + R[i, 2] * dv[s + 2, j]
