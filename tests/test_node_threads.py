@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import crocopy
 from crocopy.problems import registry
@@ -68,3 +70,25 @@ def test_the_bench_reports_both_thread_counts_and_identical_solves(monkeypatch):
     cells = [c.strip() for c in row.strip("|").split("|")]
     assert float(cells[1]) > 0 and float(cells[2]) > 0 and cells[3].endswith("×")
     assert cells[5] == "yes (3 iterations)"
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 6), st.integers(0, 12)), min_size=1, max_size=6), st.integers(1, 4))
+def test_shares_cover_every_node_once_in_order_and_evenly(gaps_and_lengths, k):
+    """The threads' shares of several ranges (:func:`node_threads.shares`): every node of the ranges exactly once, in
+    node order, each piece inside one range, share sizes differing by at most one."""
+    from crocopy.models.rbd.node_threads import shares
+
+    ranges, t = [], 0
+    for gap, length in gaps_and_lengths:
+        t += gap
+        ranges.append((t, t + length))
+        t += length + 1
+    parts = shares(ranges, k)
+    assert len(parts) == k
+    nodes = [n for a, b in ranges for n in range(a, b)]
+    covered = [n for part in parts for a, b in part for n in range(a, b)]
+    assert covered == nodes
+    assert all(any(a0 <= a and b <= b0 for a0, b0 in ranges) and a < b for part in parts for a, b in part)
+    sizes = [sum(b - a for a, b in part) for part in parts]
+    assert max(sizes) - min(sizes) <= 1

@@ -19,9 +19,10 @@ that has re-read the model's parameters (references, weights, time step) and has
   gaps, gap_at, t0, t1) -> total`` runs the rollout steps of the nodes ``t0 <= t < t1`` in one call (``addresses``:
   of the solver's arrays, :func:`.rollout.horizon_addresses`; ``gap_at``: the one node whose gap stays open
   besides ``gaps``, -1 for none; a non-finite total: ``horizon.costs`` says from which node on, and
-  ``horizon.fold(t0, t) -> total`` adds the costs before it), and ``horizon.calc_diff(xs, us, fs, xs_at, us_at,
-  fs_at, t0, t1) -> total`` their ``calcDiff`` (and their gaps ``fs[t+1]`` when ``fs_at``, the gaps' addresses);
-  each node's cost is in
+  ``horizon.fold(t0, t) -> total`` adds the costs before it), ``horizon.calc_diff_ranges(xs, us, fs, xs_at, us_at,
+  fs_at, ranges) -> totals`` the ``calcDiff`` of the nodes of each range ``(t0, t1)`` (and their gaps ``fs[t+1]``
+  when ``fs_at``, the gaps' addresses) and ``horizon.calc_ranges(xs, us, xs_at, us_at, ranges) -> totals`` their
+  ``calc``, all the ranges in one go (several threads share their nodes out at once); each node's cost is in
   ``horizon.costs[t]``, which the caller stores in the datas; optionally ``horizon.trial(...)``, SolverSQP/
   SolverCSQP's trial point of a range (:meth:`CompiledNodes.trial`).  The calls cover each maximal range of such
   nodes (:attr:`CompiledNodes.segments`); the other nodes keep their Python step in between;
@@ -129,8 +130,9 @@ class CompiledNodes:
         if self.horizon is not None:
             horizon = self.horizon
             xa, ua = (addresses(xs), addresses(us)) if at is None else (at.xs, at.us)
-            for t0, t1 in self.segments.items():
-                cost += horizon.calc(xs, us, xa, ua, t0, t1)
+            ranges = list(self.segments.items())
+            for (t0, t1), total in zip(ranges, horizon.calc_ranges(xs, us, xa, ua, ranges)):
+                cost += total
                 for d, c in zip(islice(datas, t0, t1), horizon.costs[t0:t1].tolist()):
                     d.cost = c
             for t in self.python_nodes:
@@ -158,8 +160,9 @@ class CompiledNodes:
                 xa, ua, fa = addresses(xs), addresses(us), None if fs is None else addresses(fs)
             else:
                 xa, ua, fa = at.xs, at.us, at.fs
-            for t0, t1 in self.segments.items():
-                cost += horizon.calc_diff(xs, us, fs, xa, ua, fa, t0, t1)
+            ranges = list(self.segments.items())
+            for (t0, t1), total in zip(ranges, horizon.calc_diff_ranges(xs, us, fs, xa, ua, fa, ranges)):
+                cost += total
                 for d, c in zip(islice(datas, t0, t1), horizon.costs[t0:t1].tolist()):
                     d.cost = c
             for t in self.python_nodes:

@@ -56,9 +56,13 @@ class EulerHorizon:
                   t1: int) -> float:
         """Values and derivatives of the nodes ``t0 <= t < t1`` (and their gaps ``fs[t+1]`` when ``fs_at``, the
         addresses of the list ``fs``)."""
-        for t, node in self.python:
-            if t0 <= t < t1:
-                node.python.evaluate(xs[t], us[t], True)
+        return self.calc_diff_ranges(xs, us, fs, xs_at, us_at, fs_at, [(t0, t1)])[0]
+
+    def calc_diff_ranges(self, xs, us, fs, xs_at: np.ndarray, us_at: np.ndarray, fs_at: np.ndarray | None,
+                         ranges: list) -> list[float]:
+        """:meth:`calc_diff` of each range ``(t0, t1)`` of ``ranges``; returns their totals.  On several threads the
+        nodes of all the ranges are shared out at once (one dispatch, :meth:`.node_threads.ThreadTables.run`)."""
+        self._python_rows(xs, us, ranges, True)
         ints, ioff, par, poff, nus, costs = self.ints, self.ioff, self.par, self.poff, self.nus, self.costs
         nx, ndx, gaps, gap_at = self.nx, self.ndx, fs_at is not None, self.no_gaps if fs_at is None else fs_at
 
@@ -66,21 +70,31 @@ class EulerHorizon:
             return horizons.horizon_calc_diff(tbls, ints, ioff, par, poff, xs_at, us_at, nus, nx, ndx, gaps, gap_at, a,
                                             b, costs)
 
-        total = self._run(call, t0, t1)
-        return total if math.isfinite(total) else self._python_path(xs, us, fs if gaps else None, t0, t1, True)
+        totals = self._run(call, ranges)
+        return [total if math.isfinite(total) else self._python_path(xs, us, fs if gaps else None, t0, t1, True)
+                for (t0, t1), total in zip(ranges, totals)]
 
     def calc(self, xs, us, xs_at: np.ndarray, us_at: np.ndarray, t0: int, t1: int) -> float:
         """Values of the nodes ``t0 <= t < t1``."""
-        for t, node in self.python:
-            if t0 <= t < t1:
-                node.python.evaluate(xs[t], us[t], False)
+        return self.calc_ranges(xs, us, xs_at, us_at, [(t0, t1)])[0]
+
+    def calc_ranges(self, xs, us, xs_at: np.ndarray, us_at: np.ndarray, ranges: list) -> list[float]:
+        """:meth:`calc` of each range of ``ranges`` (shared out at once on several threads); returns their totals."""
+        self._python_rows(xs, us, ranges, False)
         ints, ioff, par, poff, nus, nx, costs = self.ints, self.ioff, self.par, self.poff, self.nus, self.nx, self.costs
 
         def call(tbls, a, b):
             return horizons.horizon_calc(tbls, ints, ioff, par, poff, xs_at, us_at, nus, nx, a, b, costs)
 
-        total = self._run(call, t0, t1)
-        return total if math.isfinite(total) else self._python_path(xs, us, None, t0, t1, False)
+        totals = self._run(call, ranges)
+        return [total if math.isfinite(total) else self._python_path(xs, us, None, t0, t1, False)
+                for (t0, t1), total in zip(ranges, totals)]
+
+    def _python_rows(self, xs, us, ranges: list, derivatives: bool) -> None:
+        """The rows of the Python residuals of the nodes in ``ranges`` (before the compiled calls)."""
+        for t, node in self.python:
+            if any(t0 <= t < t1 for t0, t1 in ranges):
+                node.python.evaluate(xs[t], us[t], derivatives)
 
     def fold(self, t0: int, t1: int) -> float:
         """The sum of :attr:`costs` ``[t0:t1]`` in node order."""
@@ -97,13 +111,13 @@ class EulerHorizon:
                     node.model.state._diff_into(xs[t + 1], node._data().xnext, fs[t + 1])
         return horizons.fold(self.costs, t0, t1)
 
-    def _run(self, call: Callable, t0: int, t1: int) -> float:
-        """``call(tbls, a, b)`` over ``[t0, t1)``, on the extra threads too (then the costs added in node order, as
-        one call adds them)."""
-        if self.threads is None or t1 - t0 < 2:
-            return call(self.tbls, t0, t1)
-        self.threads.run(call, self.tbls, t0, t1)
-        return horizons.fold(self.costs, t0, t1)
+    def _run(self, call: Callable, ranges: list) -> list[float]:
+        """``call(tbls, a, b)`` over each range ``[a, b)``, on the extra threads too (then each range's costs added in
+        node order, as one call adds them); the ranges' totals."""
+        if self.threads is None or sum(b - a for a, b in ranges) < 2:
+            return [call(self.tbls, a, b) for a, b in ranges]
+        self.threads.run(call, self.tbls, ranges)
+        return [horizons.fold(self.costs, a, b) for a, b in ranges]
 
     def rollout(self, addresses: tuple, xs_try: list, us_try: list, alpha: float, gaps: bool, gap_at: int, t0: int,
                 t1: int) -> float:

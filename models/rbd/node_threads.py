@@ -2,7 +2,8 @@
 
 A horizon of compiled nodes (:class:`.euler_horizon.EulerHorizon`) evaluates the nodes ``t0 <= t < t1`` of a range in
 one compiled call, which releases the GIL (:func:`.horizon_kernel.horizon_calc_diff`, ``horizon_calc``).  With
-``k`` threads the range is cut into ``k`` contiguous chunks of nearly equal length; the calling thread runs the first
+``k`` threads the nodes of a solve's ranges (those of one call of the solver, all at once) are cut into ``k``
+contiguous shares of nearly equal length; the calling thread runs the first
 and a pool of ``k - 1`` threads the others, at once.  The nodes of one Pinocchio model share a workspace and a
 scratch (:meth:`.euler_node.Lowered.scratch`), so each extra thread ``c`` reads tables of its own
 (:class:`ThreadTables`): every node's table with the addresses of the workspace and scratch replaced by those of
@@ -32,12 +33,6 @@ def pool(workers: int) -> ThreadPoolExecutor:
     return _POOLS[workers]
 
 
-def chunks(t0: int, t1: int, k: int) -> list[tuple[int, int]]:
-    """``[t0, t1)`` cut into ``k`` contiguous chunks whose lengths differ by at most one (empty ones dropped)."""
-    edges = [t0 + (t1 - t0) * c // k for c in range(k + 1)]
-    return [(a, b) for a, b in zip(edges, edges[1:]) if b > a]
-
-
 class ThreadTables:
     """The node tables of the extra threads ``1 .. k-1`` (``tables[c - 1]``, shape of ``tbls``) for the running
     ``nodes`` (None where a node is not compiled) whose own tables are ``tbls`` (thread 0's)."""
@@ -59,14 +54,36 @@ class ThreadTables:
                 tbls_c[t, table.OWN] = tbls[t, table.OWN]
             self.tables.append(tbls_c)
 
-    def run(self, call: Callable, tbls: np.ndarray, t0: int, t1: int) -> None:
-        """``call(tables, a, b)`` on the chunks ``[a, b)`` of ``[t0, t1)``: the first here with ``tbls``, the others
-        at once on the pool with the extra threads' tables; returns when all are done (re-raising their errors)."""
-        parts = chunks(t0, t1, len(self.tables) + 1)
-        futures = [pool(len(self.tables)).submit(call, tables, a, b)
-                   for tables, (a, b) in zip(self.tables, parts[1:])]
+    def run(self, call: Callable, tbls: np.ndarray, ranges: list) -> None:
+        """``call(tables, a, b)`` over the nodes of ``ranges`` (``(t0, t1)`` pairs, in order), cut into one contiguous
+        share per thread (:func:`shares`): the first here with ``tbls``, the others at once on the pool with the extra
+        threads' tables; returns when all are done (re-raising their errors)."""
+        parts = shares(ranges, len(self.tables) + 1)
+        futures = [pool(len(self.tables)).submit(_each, call, tables, part)
+                   for tables, part in zip(self.tables, parts[1:])]
         try:
-            call(tbls, *parts[0])
+            _each(call, tbls, parts[0])
         finally:
             for f in futures:
                 f.result()
+
+
+def _each(call: Callable, tables: np.ndarray, part: list) -> None:
+    for a, b in part:
+        call(tables, a, b)
+
+
+def shares(ranges: list, k: int) -> list[list[tuple[int, int]]]:
+    """The nodes of ``ranges`` cut into ``k`` shares whose sizes differ by at most one, each a list of pieces of the
+    ranges (in node order)."""
+    total = sum(b - a for a, b in ranges)
+    edges = [total * c // k for c in range(k + 1)]
+    parts: list[list[tuple[int, int]]] = [[] for _ in range(k)]
+    seen = 0
+    for a, b in ranges:
+        for c in range(k):
+            lo, hi = max(a, a + edges[c] - seen), min(b, a + edges[c + 1] - seen)
+            if hi > lo:
+                parts[c].append((lo, hi))
+        seen += b - a
+    return parts
