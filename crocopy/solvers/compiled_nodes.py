@@ -105,6 +105,8 @@ class CompiledNodes:
             if inside:
                 self.segments[t] = end
             t = end
+        self.ranges = list(self.segments.items())
+        """The same ranges as ``(first, one past the last)`` pairs, in node order (what the horizon's calls take)."""
         self.in_horizon = in_horizon
         self.inside = np.array(in_horizon + [False], dtype=np.int64)
         """1 at the running nodes inside the horizon's ranges, 0 elsewhere and at the terminal node."""
@@ -130,7 +132,7 @@ class CompiledNodes:
         if self.horizon is not None:
             horizon = self.horizon
             xa, ua = (addresses(xs), addresses(us)) if at is None else (at.xs, at.us)
-            ranges = list(self.segments.items())
+            ranges = self.ranges
             for (t0, t1), total in zip(ranges, horizon.calc_ranges(xs, us, xa, ua, ranges)):
                 cost += total
                 for d, c in zip(islice(datas, t0, t1), horizon.costs[t0:t1].tolist()):
@@ -160,7 +162,7 @@ class CompiledNodes:
                 xa, ua, fa = addresses(xs), addresses(us), None if fs is None else addresses(fs)
             else:
                 xa, ua, fa = at.xs, at.us, at.fs
-            ranges = list(self.segments.items())
+            ranges = self.ranges
             for (t0, t1), total in zip(ranges, horizon.calc_diff_ranges(xs, us, fs, xa, ua, fa, ranges)):
                 cost += total
                 for d, c in zip(islice(datas, t0, t1), horizon.costs[t0:t1].tolist()):
