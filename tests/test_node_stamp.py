@@ -11,6 +11,7 @@ from test_constraint_rows import arm_node, random_point, solo_node
 from test_contact_node import contact_node
 from test_contact_node import point as contact_point
 from test_euler_node import KINDS, node, point
+from test_python_residual_node import arm_node as python_residual_node
 from test_residual_numba import NAMES as USER_NAMES
 from test_residual_numba import NODES as USER_NODES
 
@@ -45,6 +46,13 @@ def _solo_rows(terminal):
     return iam, lambda seed: random_point(iam, np.random.default_rng(seed), x0)
 
 
+def _python(kind):
+    def make(terminal):
+        iam = python_residual_node(kind, terminal)
+        return iam, lambda seed: random_point(iam, np.random.default_rng(seed))
+    return make
+
+
 def _user(robot, name):
     def make(terminal):
         iam = USER_NODES[robot](name, terminal)
@@ -60,7 +68,8 @@ def _user(robot, name):
 
 CASES = {**{f"user {name} ({robot})": _user(robot, name) for robot in USER_NODES for name in USER_NAMES},
          "kinova": _free("kinova"), "iris": _free("iris"), "anymal-contacts": _contact("anymal-lwa"),
-         "talos-6d": _contact("talos-6d"), "arm-constraints": _arm_rows, "solo-constraints": _solo_rows}
+         "talos-6d": _contact("talos-6d"), "arm-constraints": _arm_rows, "solo-constraints": _solo_rows,
+         **{f"python {kind}": _python(kind) for kind in ("translation", "velocity")}}
 
 
 def _evaluators(iam, terminal: bool, n: int):
@@ -116,6 +125,57 @@ def test_the_values_are_reused_only_at_the_stamped_point_to_the_bit():
     nudged[0] = np.nextafter(u[0], np.inf)
     planted().calcDiff(x, nudged, True)
     assert data.cost != iam.dt * sentinel
+
+
+@pytest.mark.parametrize("horizon", [False, True], ids=["node", "horizon"])
+def test_a_python_residual_node_reuses_its_rollout_values(horizon):
+    """The rollout step of a node with a Python residual evaluates that residual's rows after the compiled step (which
+    stamped a stack value without them): the stamp then holds the value with them, and a ``calcDiff`` there equals an
+    evaluation from scratch, to the bit (one node's step, and the horizon's rollout with its recost)."""
+    iam = python_residual_node("velocity", False)
+    (kept, fresh), (e_kept, e_fresh) = _evaluators(iam, False, 2)
+    x, u = random_point(iam, np.random.default_rng(5))
+    nu, ndx = iam.nu, iam.state.ndx
+    xs, us = [x.copy(), x.copy()], [u.copy()]
+    xs_try, us_try = [x.copy(), np.zeros_like(x)], [np.zeros(nu)]
+    ks, Ks, dxs = [np.zeros(nu)], [np.zeros((nu, ndx))], [np.zeros(ndx)]
+    fs = [np.zeros(ndx), np.zeros(ndx)]
+    lbs, ubs = [np.full(nu, -np.inf)], [np.full(nu, np.inf)]
+    if horizon:
+        from crocopy.solvers.trajectories import addresses
+
+        rollout = type(e_kept).horizon([e_kept], [nu])
+        at = tuple(addresses(a) for a in (xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs))
+        cost = rollout.rollout(at, xs_try, us_try, 1.0, False, -1, 0, 1)
+    else:
+        cost = e_kept.rollout_step(xs[0], xs_try[0], us[0], ks[0], Ks[0], 1.0, lbs[0], ubs[0], us_try[0], dxs[0],
+                                   xs_try[1], fs[1], False)
+    assert e_kept.stamp[0] == 1.0 and np.array_equal(us_try[0], u)
+    e_fresh.calc(x, u)
+    assert cost == fresh.cost
+    e_kept.calcDiff(x, u, True)
+    e_fresh.forget()
+    e_fresh.calcDiff(x, u, True)
+    mine, expected = _fields(kept), _fields(fresh)
+    for name in expected:
+        assert np.array_equal(mine[name], expected[name]), name
+
+
+@pytest.mark.parametrize("case", ["kinova", "python velocity", "anymal-contacts"])
+def test_a_python_calc_of_the_data_in_between_spends_the_stamp(case):
+    """The model's own ``calc`` on the node's data at another point, between the compiled ``calc`` and ``calcDiff`` at
+    one point, writes the data's values (residuals, Pinocchio data): the ``calcDiff`` evaluates them again."""
+    iam, draw = CASES[case](False)
+    (kept, fresh), (e_kept, e_fresh) = _evaluators(iam, False, 2)
+    (x, u), (y, w) = draw(1), draw(2)
+    e_kept.calc(x, u)
+    iam.calc(kept, y, w)
+    assert e_kept.stamp[0] == 0.0
+    e_kept.calcDiff(x, u, True)
+    e_fresh.calcDiff(x, u, False)
+    mine, expected = _fields(kept), _fields(fresh)
+    for name in expected:
+        assert np.array_equal(mine[name], expected[name]), name
 
 
 def test_a_refresh_and_the_python_path_spend_the_stamp():

@@ -61,6 +61,8 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
 
     def calc(self, data: "IntegratedActionDataEuler", x: np.ndarray, u: np.ndarray | None = None) -> None:
         ddata = data.differential
+        if data.compiled_stamp is not None:
+            data.compiled_stamp[0] = 0.0
         if u is None:
             self._terminal_calc(data, ddata, x)
             return
@@ -136,4 +138,8 @@ class IntegratedActionDataEuler(IntegratedActionDataAbstract):
         self.ddx_dx = np.zeros((ndx, ndx))
         self.ddx_du = np.zeros((ndx, nu))
         self.qv_diagonal = slice(ndx - nv, (ndx - nv) + nv * (ndx + 1), ndx + 1)
+        self.compiled_stamp: np.ndarray | None = None
+        """The stamp of a compiled evaluation of this data's node (``stamp[0] = 1`` while the node's own arrays hold
+        its last values, :mod:`crocopy.solvers.compiled_nodes`), or None: :meth:`IntegratedActionModelEuler.calc`
+        spends it, since it writes the data at another point."""
 

@@ -8,7 +8,7 @@ that has re-read the model's parameters (references, weights, time step) and has
 * ``calcDiff(x, u, synced)``: writes ``data.xnext``, ``data.cost``, ``Fx``, ``Fu``, ``Lx``, ``Lu``, ``Lxx``,
   ``Lxu`` and ``Luu``; it evaluates the node's values again unless its own last ``calc`` was at ``(x, u)`` to the
   bit (it never relies on the ``synced`` hint, nor on a ``model.calc`` that wrote the data in between: that one
-  spends the stamp, as every refresh does);
+  spends the stamp, ``data.compiled_stamp``, as every refresh does);
 * optionally ``rollout_step(x_ref, x, u_ref, k, K, alpha, lb, ub, u, dx, x_next, f, gap) -> cost``: one
   node of the rollout (``dx = x ⊖ x_ref``, the clamped feedback control ``u``, ``calc``, and
   ``x_next = xnext``, or ``xnext ⊕ ((alpha - 1) f)`` when ``gap``) in one call; the caller stores the

@@ -46,7 +46,8 @@ class EulerHorizon:
         self.python = [(t, n) for t, n in enumerate(nodes) if n is not None and n.python.items]
         """The nodes with Python residuals (:mod:`.python_residuals`): their rows are evaluated before a compiled
         ``calc_diff`` and their costs again after a compiled rollout."""
-        self._python_ranges: dict[tuple[int, int], np.ndarray] = {}
+        self._python_ranges: dict[tuple[int, int], list] = {}
+        self._python_indices: dict[tuple[int, int], np.ndarray] = {}
         self.no_gaps = np.zeros(len(nodes) + 1, dtype=np.int64)
         self.nodes = nodes
         self.threads = ThreadTables(nodes, self.tbls, nthreads) if nthreads > 1 else None
@@ -91,10 +92,16 @@ class EulerHorizon:
                 for (t0, t1), total in zip(ranges, totals)]
 
     def _python_rows(self, xs, us, ranges: list, derivatives: bool) -> None:
-        """The rows of the Python residuals of the nodes in ``ranges`` (before the compiled calls)."""
-        for t, node in self.python:
-            if any(t0 <= t < t1 for t0, t1 in ranges):
-                node.python.evaluate(xs[t], us[t], derivatives)
+        """The rows of the Python residuals of the nodes in ``ranges`` (before the compiled calls), and their
+        Jacobians with ``derivatives`` (:meth:`EulerNode.python_derivatives`)."""
+        if not self.python:
+            return
+        for t0, t1 in ranges:
+            for t, evaluate, derive in self._python_nodes(t0, t1):
+                if derivatives:
+                    derive(xs[t], us[t])
+                else:
+                    evaluate(xs[t], us[t])
 
     def fold(self, t0: int, t1: int) -> float:
         """The sum of :attr:`costs` ``[t0:t1]`` in node order."""
@@ -127,9 +134,8 @@ class EulerHorizon:
             gaps, gap_at, t0, t1, self.costs,
         )
         if self.python:
-            for t, node in self.python:
-                if t0 <= t < t1:
-                    node.python.evaluate(xs_try[t], us_try[t])
+            for t, evaluate, _ in self._python_nodes(t0, t1):
+                evaluate(xs_try[t], us_try[t])
             total += horizons.horizon_recost(self.tbls, self.ints, self.ioff, self.par, self.poff,
                                            self._python_in(t0, t1), self.costs)
         return total
@@ -137,9 +143,19 @@ class EulerHorizon:
     trial = trial_kernel.trial
     """SolverSQP/SolverCSQP's trial point of the nodes ``t0 <= t < t1`` (:func:`.trial_kernel.trial`)."""
 
-    def _python_in(self, t0: int, t1: int) -> np.ndarray:
-        """The nodes ``t0 <= t < t1`` with Python residuals (made once per range)."""
+    def _python_nodes(self, t0: int, t1: int) -> list:
+        """The nodes ``t0 <= t < t1`` with Python residuals, as ``(t, evaluate, derive)``: their rows'
+        :meth:`.python_residuals.PythonResiduals.evaluate` and :meth:`EulerNode.python_derivatives` (made once per
+        range)."""
         key = (t0, t1)
         if key not in self._python_ranges:
-            self._python_ranges[key] = np.array([t for t, _ in self.python if t0 <= t < t1], dtype=np.int64)
+            self._python_ranges[key] = [(t, node.python.evaluate, node.python_derivatives) for t, node in self.python
+                                        if t0 <= t < t1]
         return self._python_ranges[key]
+
+    def _python_in(self, t0: int, t1: int) -> np.ndarray:
+        """The indices of :meth:`_python_nodes` (made once per range)."""
+        key = (t0, t1)
+        if key not in self._python_indices:
+            self._python_indices[key] = np.array([t for t, _, _ in self._python_nodes(t0, t1)], dtype=np.int64)
+        return self._python_indices[key]

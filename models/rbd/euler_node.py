@@ -411,9 +411,10 @@ class EulerNode:
         if not changed and low is self._lowered and self._data_arrays:
             return
         state = self.model.state
-        n_stamp = 0 if self.python.items else state.nx + self.model.nu + 2
+        n_stamp = state.nx + self.model.nu + 2
         if self.stamp.shape[0] != n_stamp:
             self.stamp = np.zeros(n_stamp)
+        data.compiled_stamp = self.stamp
         fields = {
             "xnext": data.xnext, "dx": data.dx, "Fx": data.Fx, "Fu": data.Fu, "Lx": data.Lx, "Lu": data.Lu,
             "Lxx": data.Lxx, "Lxu": data.Lxu, "Luu": data.Luu,
@@ -531,11 +532,22 @@ class EulerNode:
         stack = self._data().differential.costs.stack
         value = activation_values(stack.r, stack.lb, stack.ub, stack.act_weights, stack.starts, stack.item_costs,
                                   stack.item_weights)
+        if self.stamp[0] == 1.0:
+            self.stamp[1] = value
         return self.par[0] * value
+
+    def python_derivatives(self, x: np.ndarray, u: np.ndarray | None) -> None:
+        """Before a compiled ``calcDiff`` at ``(x, u)``: the Python residuals' Jacobians, and their rows again unless
+        the stamp is at ``(x, u)`` (every compiled evaluation that stamps a point has their rows at that point: they
+        are evaluated before it, or after it by the rollout)."""
+        if kernel.stamp_current(self.stamp, x, self.no_control if u is None else u):
+            self.python.jacobians(x, u)
+        else:
+            self.python.evaluate(x, u, True)
 
     def calcDiff(self, x: np.ndarray, u: np.ndarray | None, synced: bool) -> None:
         if self.python.items:
-            self.python.evaluate(x, u, True)
+            self.python_derivatives(x, u)
         cost = kernel.node_calc_diff(self.tbl, self.ints, self.par, x, self.no_control if u is None else u)
         if math.isfinite(cost):
             self._data().cost = cost

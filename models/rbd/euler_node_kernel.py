@@ -224,7 +224,7 @@ def _remember(stamp, x, u, value):
 
 
 @uncounted
-def _current(stamp, x, u):
+def stamp_current(stamp, x, u):
     """Whether the node's values (its own arrays, :data:`.node_table.OWN`) are those of ``(x, u)``."""
     if stamp.shape[0] == 0 or stamp[0] != 1.0:
         return False
@@ -365,11 +365,11 @@ def _integrate_chain(tbl, ints, x, rb):
 def node_calc_diff(tbl, ints, par, x, u):
     """Values and derivatives of the node at ``(x, u)``; returns its cost, NaN when the acceleration is not finite (as
     :func:`node_calc`).  The values are those of the last :func:`node_calc` when its stamp is ``(x, u)`` to the bit
-    (:func:`_current`: the node's own arrays still hold what they left), else evaluated here; the stamp is then
+    (:func:`stamp_current`: the node's own arrays still hold what they left), else evaluated here; the stamp is then
     spent (the derivatives overwrite some of those arrays)."""
     rb, ws = entry_model(tbl, ints), entry_workspace(tbl, ints)
     stamp = vec(tbl, ints, E_STAMP)
-    if _current(stamp, x, u):
+    if stamp_current(stamp, x, u):
         cost = stamp[1]
     else:
         cost = _values(tbl, ints, par, x, u, rb, ws)

@@ -20,6 +20,7 @@ from .node_table import (
     E_ITEM_WEIGHTS,
     E_LB,
     E_R,
+    E_STAMP,
     E_UB,
     E_XNEXT,
     N_STACK,
@@ -60,7 +61,8 @@ def horizon_rollout(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, ks
 @uncounted
 def horizon_recost(tbls, ints, ioff, par, poff, nodes, costs):
     """The costs of the running ``nodes`` again from their cost stacks as they stand (after the rows of their Python
-    residuals were written, :mod:`.python_residuals`), into ``costs[t]``; returns the change of their sum."""
+    residuals were written, :mod:`.python_residuals`), into ``costs[t]`` and the stack value of their stamps (a
+    ``calcDiff`` at the same point reuses it); returns the change of their sum."""
     change = 0.0
     for t in nodes:
         tbl, node_ints = tbls[t], ints[ioff[t]: ioff[t + 1]]
@@ -70,6 +72,9 @@ def horizon_recost(tbls, ints, ioff, par, poff, nodes, costs):
             vec(tbl, node_ints, E_ACT_WEIGHTS), starts, vec(tbl, node_ints, E_ITEM_COSTS),
             vec(tbl, node_ints, E_ITEM_WEIGHTS),
         )
+        stamp = vec(tbl, node_ints, E_STAMP)
+        if stamp.shape[0] and stamp[0] == 1.0:
+            stamp[1] = value
         cost = par[poff[t]] * value
         change += cost - costs[t]
         costs[t] = cost

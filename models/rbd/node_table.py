@@ -122,7 +122,7 @@ workspace)."""
 OWN = np.array([N_RB + RigidBodyWorkspace._fields.index(name) for name in OWN_WORKSPACE]
                + [ENTRIES[name] for name in OWN_SCRATCH], dtype=np.int64)
 """The entries of an Euler node's table that are its own arrays (:data:`OWN_WORKSPACE`, :data:`OWN_SCRATCH`):
-with them and its ``stamp`` (``[valid, stack value, x, u]``, empty where the node may not skip), a ``calcDiff`` at
+with them and its ``stamp`` (``[valid, stack value, x, u]``; empty in the impulse node's table), a ``calcDiff`` at
 the point of the node's last ``calc`` skips the values (:func:`.euler_node_kernel.node_calc_diff`).  The extra
 threads' tables keep these entries (:mod:`.node_threads`)."""
 

@@ -44,3 +44,14 @@ class PythonResiduals:
             residual._raw_calc(rdata, x, u)
             if derivatives:
                 residual._raw_calcDiff(rdata, x, u)
+
+    def jacobians(self, x: np.ndarray, u: np.ndarray | None) -> None:
+        """The residuals' Jacobians at ``(x, u)``, where their rows were evaluated last (their ``calc`` is not
+        called again, as a Crocoddyl ``calcDiff`` follows a ``calc`` at the same point)."""
+        model, pdata, nq = self.model, self.pdata, self.nq
+        if self.velocities:
+            pin.computeForwardKinematicsDerivatives(model, pdata, x[:nq], x[nq:], self.zero_a)
+        else:
+            pin.computeJointJacobians(model, pdata, x[:nq])
+        for residual, rdata in self.items:
+            residual._raw_calcDiff(rdata, x, u)
