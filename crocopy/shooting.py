@@ -18,7 +18,7 @@ import numpy as np
 
 from .action_base import ActionDataAbstract, ActionModelAbstract
 from .guards import Guard, Guarded
-from .validation import ArgumentTypeError, as_count, as_vector
+from .validation import ArgumentTypeError, as_count, as_vector, finite_vectors, plain_vectors
 from .versioning import STRUCTURE, holds_stale_data
 
 
@@ -208,10 +208,23 @@ class ShootingProblem(Guarded):
             raise ValueError(f"{xs_name} has {len(xs)} items, expected T + 1 = {T + 1}")
         if len(us) != T:
             raise ValueError(f"{us_name} has {len(us)} items, expected T = {T}")
+        x_shapes, u_shapes = self._trajectory_shapes()
+        if plain_vectors(xs, x_shapes) and plain_vectors(us, u_shapes) and finite_vectors([*xs, *us]):
+            return list(xs), list(us)
         models = [*self._runningModels, self._terminalModel]
         xs = [as_vector(x, m.state.nx, f"{xs_name}[{t}]") for t, (x, m) in enumerate(zip(xs, models))]
         us = [as_vector(u, m.nu, f"{us_name}[{t}]") for t, (u, m) in enumerate(zip(us, self._runningModels))]
         return xs, us
+
+    def _trajectory_shapes(self) -> tuple[list, list]:
+        """The shapes ``(nx,)`` of the nodes' states and ``(nu,)`` of their controls (read again after a node
+        changed)."""
+        kept = self.__dict__.get("_shapes_seen")
+        if kept is None or kept[0] != self._nodes_version:
+            models = [*self._runningModels, self._terminalModel]
+            kept = self.__dict__["_shapes_seen"] = (self._nodes_version, [(m.state.nx,) for m in models],
+                                                    [(m.nu,) for m in self._runningModels])
+        return kept[1], kept[2]
 
     def refresh_datas(self) -> list[int]:
         """Replace the node datas made before a registry in their model changed its item set (a cost, constraint,

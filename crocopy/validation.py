@@ -75,6 +75,26 @@ def as_vector(value: Any, size: int | None, name: str, allow_nonfinite: bool = F
     return arr
 
 
+_FLOAT64 = np.dtype(np.float64)
+
+
+def plain_vectors(values: Any, shapes: list[tuple[int]]) -> bool:
+    """Whether ``values`` are ``len(shapes)`` float64 arrays of exactly these shapes (what :func:`as_vector` returns
+    unchanged when they are finite, :func:`finite_vectors`)."""
+    return len(values) == len(shapes) and all(
+        type(v) is np.ndarray and v.dtype is _FLOAT64 and v.shape == s for v, s in zip(values, shapes))
+
+
+def finite_vectors(values: list[np.ndarray]) -> bool:
+    """Whether every entry of the 1-D float64 arrays ``values`` is finite, in one sum (a NaN or inf entry makes it
+    NaN or inf; False may also mean that the sum of finite entries overflowed: the caller then checks each)."""
+    if not values:
+        return True
+    with np.errstate(over="ignore", invalid="ignore"):
+        total = np.concatenate(values).sum()
+    return bool(total == total) and abs(total) != np.inf
+
+
 def as_matrix(value: Any, shape: tuple[int, int], name: str) -> np.ndarray:
     """Return ``value`` as a finite float matrix of ``shape`` or raise (``ValueError``/:class:`ArgumentTypeError`)."""
     arr = _as_float_array(value, name, f"a matrix of shape {tuple(shape)}")

@@ -5,10 +5,13 @@ from __future__ import annotations
 import functools
 import inspect
 import pickle
+import re
 import warnings
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import crocopy
 from crocopy import guards
@@ -523,3 +526,27 @@ def test_index_and_rotation_checkers():
         as_rotation(R @ np.diag([1.0, 1.0, -1.0]), "R")
     with pytest.raises(ValueError, match=r"R must be a rotation matrix .* \|RᵀR - I\| = 0.002 of determinant 1.003"):
         as_rotation(1.001 * R, "R")
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 10), st.integers(0, 2),
+                          st.sampled_from([np.nan, np.inf, -np.inf, 1e308, -1e308, 0.5])), max_size=4))
+def test_trajectory_check_refuses_exactly_the_non_finite_entries(writes):
+    """The one-sum check of a problem's plain trajectories (float64 arrays of the nodes' shapes) agrees with the
+    entry-by-entry check: a NaN or inf anywhere is refused naming its vector; finite entries whose sum overflows are
+    accepted; the arrays come back unchanged."""
+    p = unicycle_problem()
+    xs, us = [np.ones(3) for _ in range(6)], [np.zeros(2) for _ in range(5)]
+    for t, i, value in writes:
+        if t <= 5:
+            xs[t][i] = value
+        else:
+            us[t - 6][min(i, 1)] = value
+    bad = [f"xs[{t}]" for t, x in enumerate(xs) if not np.isfinite(x).all()]
+    bad += [f"us[{t}]" for t, u in enumerate(us) if not np.isfinite(u).all()]
+    if bad:
+        with pytest.raises(ValueError, match=re.escape(bad[0]) + " contains NaN or inf"):
+            p.check_trajectories(xs, us)
+    else:
+        checked_xs, checked_us = p.check_trajectories(xs, us)
+        assert all(a is b for a, b in zip(checked_xs + checked_us, xs + us))
