@@ -188,18 +188,28 @@ def test_the_actuation_and_contact_rows_are_equalities_of_the_node():
     assert_as_python(iam, data, x, u, False, RTOL)
 
 
-def test_values_after_another_node_are_those_from_scratch():
-    """A ``calc`` here, another node's evaluation (same lowered model, shared workspace), then ``calcDiff`` here at
-    the same point: the numbers, to the bit, of a ``calcDiff`` of a node evaluated nowhere else."""
-    iam = contact_node("talos-6d")
+@pytest.mark.parametrize("build", [lambda: contact_node("talos-6d"), lambda: free_node("anymal")],
+                         ids=["contact", "free"])
+def test_values_after_another_node_are_those_from_scratch(build):
+    """A ``calc`` here, another node's evaluation (same lowered model: shared workspace and scratch), then
+    ``calcDiff`` here at the same point (which skips the values: its stamp): the numbers, to the bit, of a
+    ``calcDiff`` of a node evaluated nowhere else; then a ``calcDiff`` at another point evaluates its values."""
+    iam = build()
     x, u = point(iam, 2)
     y, w = point(iam, 3)
     data, other, fresh = iam.createData(), iam.createData(), iam.createData()
     node, between, alone = (iam._compiled_node(d, False, {}) for d in (data, other, fresh))
     node.calc(x, u)
+    assert node.stamp[0] == 1.0
     between.calcDiff(y, w, False)
     node.calcDiff(x, u, True)
+    assert node.stamp[0] == 0.0
     alone.calcDiff(x, u, False)
+    for name in (*FIELDS, "cost"):
+        np.testing.assert_array_equal(getattr(data, name), getattr(fresh, name), err_msg=name)
+    node.calc(x, u)
+    node.calcDiff(y, w, False)
+    alone.calcDiff(y, w, False)
     for name in (*FIELDS, "cost"):
         np.testing.assert_array_equal(getattr(data, name), getattr(fresh, name), err_msg=name)
 

@@ -20,8 +20,9 @@ It is an :class:`.euler_node.EulerNode` (the same table, refreshing and constrai
 inverse-dynamics residuals are items of their own (:mod:`.invdyn_node_kernel`), split from the cost stack's and
 the constraint manager's items when they are read.  :meth:`InvDynNode.refresh` re-reads the lowered model, the time
 step, the contacts' gains and references, the residuals' references and the actuation's ``P`` and unactuated rows;
-:meth:`InvDynNode.refresh_live` what may change unannounced.  Its ``calcDiff`` evaluates the values again (the node
-keeps no stamp).  It has no horizon: the rollout calls its :attr:`~InvDynNode.rollout_step` node by node.
+:meth:`InvDynNode.refresh_live` what may change unannounced.  As the Euler node, it keeps its kinematics and contacts
+in arrays of its own (:data:`.node_table.OWN`) and stamps each ``calc``: a ``calcDiff`` at that point skips the
+values.  It has no horizon: the rollout calls its :attr:`~InvDynNode.rollout_step` node by node.
 """
 
 from __future__ import annotations

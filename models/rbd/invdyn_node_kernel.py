@@ -38,8 +38,8 @@ from crocopy.solvers.riccati_kernel import feedback_control
 
 from .constraint_rows_kernel import constraint_table, has_rows, stack_rows
 from .contact_kernel import contact_calc, contact_calc_diff, contact_force_derivatives
-from .dynamics_kernel import _crba, _rnea_pass, forward_kinematics, rnea_derivatives
-from .euler_node_kernel import _integrate_chain, _step
+from .dynamics_kernel import crba, forward_kinematics, rnea_derivatives, rnea_pass
+from .euler_node_kernel import euler_step, integrate_chain, remember_values, stamp_current
 from .lie_kernel import state_diff, state_integrate
 from .node_table import (
     E_A,
@@ -85,6 +85,7 @@ from .node_table import (
     E_R,
     E_REF_P,
     E_REF_R,
+    E_STAMP,
     E_TAU,
     E_UB,
     E_WEIGHTS,
@@ -211,7 +212,7 @@ def _values(tbl, ints, par, iints, x, u, rb, ws):
             a[i] = u[i]
         for i in range(nc):
             lam[i] = u[nv + i]
-        _rnea_pass(rb, ws, a, tau)  # leaves the accelerations at a in ws.oa
+        rnea_pass(rb, ws, a, tau)  # leaves the accelerations at a in ws.oa
         if ints[N_CONTACTS]:
             cw, Jcs, c = entry_contact_workspace(tbl, ints), mat(tbl, ints, E_JCS), vec(tbl, ints, E_A0)
             gains, ref_R, ref_p = mat(tbl, ints, E_GAINS), cube(tbl, ints, E_REF_R), mat(tbl, ints, E_REF_P)
@@ -250,12 +251,16 @@ def _constraints(tbl, ints, par, iints, rb, ws, x, u, derivatives):
 @uncounted
 def invdyn_calc(tbl, ints, par, iints, x, u):
     """``xnext`` and the constraint rows of the node at ``(x, u)``; returns its cost (``dt`` times the stack's at a
-    running node)."""
+    running node).  The evaluation is stamped with ``(x, u)`` (:func:`.euler_node_kernel.remember_values`)."""
     rb, ws = entry_model(tbl, ints), entry_workspace(tbl, ints)
+    stamp = vec(tbl, ints, E_STAMP)
+    if stamp.shape[0]:
+        stamp[0] = 0.0
     cost = _values(tbl, ints, par, iints, x, u, rb, ws)
-    _step(tbl, ints, par, x, rb)
+    euler_step(tbl, ints, par, x, rb)
     if has_rows(ints):
         _constraints(tbl, ints, par, iints, rb, ws, x, u, False)
+    remember_values(stamp, x, u, cost)
     return cost if ints[TERMINAL] else par[0] * cost
 
 
@@ -284,11 +289,21 @@ def invdyn_rollout_step(tbl, ints, par, iints, x_ref, x, u_ref, k, K, alpha, lb,
 @uncounted
 def _torque_derivatives(tbl, ints, par, rb, ws):
     """``∂τ/∂(q, v)`` into ``dtau_dq``/``dtau_dv``, ``M`` into the workspace, the contacts' ``∂c/∂x`` and the forces'
-    ``∂λ``, the differential ``Fx = 0``, ``Fu = (I, 0)`` (after :func:`_values` at a running node)."""
+    ``∂λ``, the differential ``Fx = 0``, ``Fu = (I, 0)`` (after :func:`_values` at a running node, whose kinematics,
+    contacts and forces are the node's own arrays); ``τ`` again into the shared scratch (the constraint rows read it),
+    by the same operations as :func:`_values`."""
     nv, nu, nc = ints[NV], ints[NU], ints[NC]
     dq, dv, a = mat(tbl, ints, E_DTAU_DQ), mat(tbl, ints, E_DTAU_DV), vec(tbl, ints, E_A)
     rnea_derivatives(rb, ws, a, dq, dv)  # the kinematics of _values at (q, v) are still in ws
-    _crba(rb, ws)
+    crba(rb, ws)
+    tau, lam, Jcs = vec(tbl, ints, E_TAU), vec(tbl, ints, E_LAM), mat(tbl, ints, E_JCS)
+    for k in range(nv):
+        tau[k] = ws.tau[k]
+        if nc:
+            acc = 0.0
+            for i in range(nc):
+                acc += Jcs[i, k] * lam[i]
+            tau[k] -= acc
     if ints[N_CONTACTS]:
         cw, lam, dc = entry_contact_workspace(tbl, ints), vec(tbl, ints, E_LAM), mat(tbl, ints, E_DA0_DX)
         gains, ref_R, ref_p = mat(tbl, ints, E_GAINS), cube(tbl, ints, E_REF_R), mat(tbl, ints, E_REF_P)
@@ -312,10 +327,18 @@ def _torque_derivatives(tbl, ints, par, rb, ws):
 
 @uncounted
 def invdyn_calc_diff(tbl, ints, par, iints, x, u):
-    """Values and derivatives of the node at ``(x, u)`` (self-contained); returns its cost."""
+    """Values and derivatives of the node at ``(x, u)``; returns its cost.  The values are those of the last
+    :func:`invdyn_calc` when its stamp is ``(x, u)`` to the bit (:func:`.euler_node_kernel.stamp_current`), else
+    evaluated here; the stamp is then spent."""
     rb, ws = entry_model(tbl, ints), entry_workspace(tbl, ints)
-    cost = _values(tbl, ints, par, iints, x, u, rb, ws)
-    _step(tbl, ints, par, x, rb)
+    stamp = vec(tbl, ints, E_STAMP)
+    if stamp_current(stamp, x, u):
+        cost = stamp[1]
+    else:
+        cost = _values(tbl, ints, par, iints, x, u, rb, ws)
+        euler_step(tbl, ints, par, x, rb)
+    if stamp.shape[0]:
+        stamp[0] = 0.0
     terminal = ints[TERMINAL] != 0
     if not terminal:
         _torque_derivatives(tbl, ints, par, rb, ws)
@@ -354,5 +377,5 @@ def invdyn_calc_diff(tbl, ints, par, iints, x, u):
         mat(tbl, ints, E_FX), mat(tbl, ints, E_FU), Lx, Lu, Lxx, Lxu, Luu,
     )
     if not euclidean:
-        _integrate_chain(tbl, ints, x, rb)
+        integrate_chain(tbl, ints, x, rb)
     return par[0] * cost
