@@ -214,6 +214,22 @@ def test_values_after_another_node_are_those_from_scratch(build):
         np.testing.assert_array_equal(getattr(data, name), getattr(fresh, name), err_msg=name)
 
 
+def test_a_live_reread_spends_the_stamp():
+    """An in-place write to a writeable reference (no setter: read again by ``refresh_live``, as a solve that keeps its
+    compiled nodes does) between a ``calc`` and a ``calcDiff`` at the same point: the new values, not the stamped
+    ones."""
+    iam = free_node("talos_arm")
+    x, u = point(iam, 6)
+    data = iam.createData()
+    node = iam._compiled_node(data, False, {})
+    node.calc(x, u)
+    effort = iam.differential.costs.costs["effort"].cost.residual
+    effort.reference[:] = 2.0
+    assert node.refresh_live({})
+    node.calcDiff(x, u, True)
+    assert_as_python(iam, data, x, u, False, RTOL)
+
+
 def test_the_rollout_step_is_the_feedback_control_then_calc():
     iam = free_node("anymal")
     data = iam.createData()

@@ -140,6 +140,9 @@ class InvDynNode(EulerNode):
         self.contacts.refresh()
         par = [float(iam.dt), 0.0]
         live = read_parameters(self._residuals, par, self._parameters, read)
+        if len(par) != self._n_parameters:  # a user residual's parameters() changed length: read the items again
+            self._residuals = None
+            return self.refresh(low, memo)
         self.par = np.array(par)
         self.armature[:] = low.rb.armature
         self._table(low, data, ddata, stack, changed)
@@ -151,7 +154,9 @@ class InvDynNode(EulerNode):
     def refresh_live(self, memo: dict) -> bool:
         """Re-read, in place, what :meth:`refresh` read that may have changed without moving the parameter clock
         (:mod:`.live_parameters`); False when the node must be refreshed instead (its Pinocchio model changed, its
-        cost stack was evaluated for the other node kind since, or a residual's number of parameters changed)."""
+        cost stack was evaluated for the other node kind since, or a residual's number of parameters changed).  Spends
+        the stamp of the last values either way."""
+        self.forget()
         low = self._lowered
         if low.version != self._low_version or not low.current(memo):
             return False
@@ -269,6 +274,7 @@ class InvDynNode(EulerNode):
             constraint_items += found
         self.rows.items = general
         self._items, self._residuals = items, residuals + self.rows.residuals
+        self._n_parameters = offset + sum(len(parameters(*r)) for r in self.rows.residuals)
         n = kernel.ITEM_FIELDS
         self.iints = np.array([len(inv) // n, len(constraint_items) // n, *inv, *constraint_items], dtype=np.int64)
         rows_u = max(rows_u, self.rows.user_rows)
