@@ -19,6 +19,7 @@ import pytest
 from node_checks import make_solver
 from robots import frame, load
 from test_invdyn import _thrusters
+from test_residual_numba import user_residuals
 
 import crocopy
 from crocopy.solvers import compiled_nodes
@@ -175,6 +176,21 @@ def test_contact_node_equals_the_python_node(case, terminal):
     iam = contact_node(case, terminal)
     for seed in range(2):
         _compare(iam, terminal, seed)
+
+
+@pytest.mark.parametrize("name", ["translation", "up axis", "com height"])
+def test_a_users_numba_residual_stays_compiled(name):
+    """A user's ``ResidualModelNumba`` (C callbacks, kind ``USER``) as a cost and as an inequality."""
+    for robot in ("talos_arm", "anymal-lwa"):
+        for terminal in (False, True):
+            iam = free_node(robot, terminal) if robot == "talos_arm" else contact_node(robot, terminal)
+            dam = iam.differential
+            state, frame = dam.state, dam.state.pinocchio.nframes - 1
+            dam.costs.addCost("user", crocopy.CostModelResidual(state, user_residuals(state, frame, dam.nu)[name]), 3.0)
+            bound = user_residuals(state, frame, dam.nu)[name]
+            dam.constraints.addConstraint("user", crocopy.ConstraintModelResidual(
+                state, bound, -np.ones(bound.nr), np.ones(bound.nr)))
+            _compare(iam, terminal)
 
 
 def test_the_actuation_and_contact_rows_are_equalities_of_the_node():
