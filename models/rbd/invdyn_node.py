@@ -59,22 +59,20 @@ RUNNING_ONLY = (kernel.ACTUATION, kernel.CONTACT)
 
 _NODES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 """Node data → its :class:`InvDynNode`."""
-_COMMANDS: dict[int, tuple] = {}
-"""``id(actuation)`` → ``(actuation, parameter clock, P, unactuated rows)`` (:func:`commands`)."""
+_COMMANDS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+"""Actuation → ``(parameter clock, P, unactuated rows)`` (:func:`commands`)."""
 
 
 def commands(actuation, state) -> tuple[np.ndarray, np.ndarray]:
     """``(P, rows)`` of a constant actuation: the commands ``P τ`` of the torques ``τ`` (its ``Mtau``) and the rows
     of ``τ`` it cannot set; kept while the parameter clock stands still."""
-    cached = _COMMANDS.get(id(actuation))
-    if cached is not None and cached[0] is actuation and cached[1] == ParametersVersion.value:
-        return cached[2], cached[3]
+    cached = _COMMANDS.get(actuation)
+    if cached is not None and cached[0] == ParametersVersion.value:
+        return cached[1], cached[2]
     adata = actuation.createData()
     actuation.torqueTransform(adata, state.zero(), np.zeros(actuation.nu))
     P, rows = np.array(adata.Mtau, dtype=float), np.flatnonzero(~np.asarray(adata.tau_set, dtype=bool))
-    if len(_COMMANDS) > 64:
-        _COMMANDS.clear()
-    _COMMANDS[id(actuation)] = (actuation, ParametersVersion.value, P, rows)
+    _COMMANDS[actuation] = (ParametersVersion.value, P, rows)
     return P, rows
 
 
