@@ -2,11 +2,12 @@
 node: values, every derivative and the constraint rows; solves with and without kernels; mutations between solves;
 the reasons a node keeps its Python path.
 
-Factories cross actuations (full: the arm; floating base: ANYmal, whose ``"tau"`` equality has six rows; thrusters:
-the quadrotor), 3D contacts (LOCAL and LOCAL_WORLD_ALIGNED, Baumgarte gains) and 6D contacts (Talos legs), with every
-residual kind the scripts use (state, control, frame placement and velocity, centre of mass, friction and wrench
-cones, joint effort, also with ``fwddyn=True``, joint acceleration, the actuation and contact-acceleration residuals
-as costs) and a frame-translation inequality beside the models' own equalities.  The Python derivatives are checked
+Factories cross actuations (full: the arm; linear with an unactuated joint: kinova; floating base: ANYmal, whose
+``"tau"`` equality has six rows; thrusters: the quadrotor), 3D contacts (LOCAL and LOCAL_WORLD_ALIGNED, Baumgarte
+gains) and 6D contacts (Talos legs), with every residual kind the scripts use (state, control, frame placement and
+velocity, centre of mass, friction and wrench cones, joint effort, also with ``fwddyn=True``, joint acceleration,
+the actuation and contact-acceleration residuals as costs) and a frame-translation inequality beside the models' own
+equalities.  The Python derivatives are checked
 against finite differences in ``tests/test_invdyn.py``; here the compiled ones equal them to ``1e-10`` relative to
 each field's largest entry.
 """
@@ -28,7 +29,7 @@ pytestmark = pytest.mark.skipif(not crocopy.kernels_enabled(), reason="compiled 
 
 FIELDS = ("xnext", "Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu", "g", "Gx", "Gu", "h", "Hx", "Hu")
 TERMINAL_FIELDS = ("xnext", "Fx", "Lx", "Lxx", "g", "Gx", "h", "Hx")
-FREE = ("talos_arm", "anymal", "iris")
+FREE = ("talos_arm", "kinova", "anymal", "iris")
 CONTACT = ("anymal-local", "anymal-lwa", "talos-6d", "talos-6d-lwa")
 RTOL = 1e-10
 FEET = {"anymal": ("LF_FOOT", "RF_FOOT", "LH_FOOT"), "talos_legs": ("left_sole_link", "right_sole_link")}
@@ -39,6 +40,10 @@ def _actuation(robot: str, state):
         return _thrusters(state)
     if robot == "talos_arm":
         return crocopy.ActuationModelFull(state)
+    if robot == "kinova":  # a linear actuation that leaves the first joint unactuated: one "tau" row
+        S = np.eye(state.nv)[:, 1:] + 0.1 * np.eye(state.nv, state.nv - 1, -1)
+        S[0] = 0.0
+        return crocopy.ActuationModelLinear(state, S)
     return crocopy.ActuationModelFloatingBase(state)
 
 
