@@ -36,6 +36,7 @@ from crocopy.actuation_base import ActuationModelAbstract, JointDataAbstract
 from crocopy.constraints.manager import ConstraintModelManager
 from crocopy.costs.sum import CostModelSum
 from crocopy.diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
+from crocopy.not_compiled import class_reason, decline
 
 from .contact_fwd_dynamics import link_cost_data
 from .contact_multiple import ContactModelMultiple
@@ -198,6 +199,15 @@ class DifferentialActionModelContactInvDynamics(DifferentialActionModelAbstract)
             joint_commands_diff(self.actuation, mb.actuation, mb.joint, x, data.dtau_dx, data.dtau_du)
         self.costs.calcDiff(data.costs, x, u)
         self.constraints.calcDiff(data.constraints, x, u)
+
+    def _compiled_euler_node(self, iam, data, terminal: bool, memo: dict) -> object | None:
+        """The compiled evaluator of the Euler node ``(iam, data)`` over this model
+        (:func:`.rbd.invdyn_node.invdyn_node`), or None for a subclass or a node it cannot compile."""
+        if type(self) is not DifferentialActionModelContactInvDynamics:
+            return decline(memo, class_reason(self, "differential model"))
+        from .rbd.invdyn_node import invdyn_node
+
+        return invdyn_node(iam, data, terminal, memo)
 
     def quasiStatic(
         self, data: "DifferentialActionDataContactInvDynamics", x: np.ndarray, maxiter: int = 100, tol: float = 1e-9

@@ -30,6 +30,7 @@ from crocopy.constraints.base import ConstraintModelResidual
 from crocopy.constraints.manager import ConstraintModelManager
 from crocopy.costs.sum import CostModelSum
 from crocopy.diff_action_base import DifferentialActionDataAbstract, DifferentialActionModelAbstract
+from crocopy.not_compiled import class_reason, decline
 from crocopy.validation import as_vector
 
 from .data_collectors import DataCollectorJointActMultibody
@@ -154,6 +155,15 @@ class DifferentialActionModelFreeInvDynamics(DifferentialActionModelAbstract):
             joint_commands_diff(self.actuation, mb.actuation, mb.joint, x, data.dtau_dx, pd.M)
         self.costs.calcDiff(data.costs, x, u)
         self.constraints.calcDiff(data.constraints, x, u)
+
+    def _compiled_euler_node(self, iam, data, terminal: bool, memo: dict) -> object | None:
+        """The compiled evaluator of the Euler node ``(iam, data)`` over this model
+        (:func:`.rbd.invdyn_node.invdyn_node`), or None for a subclass or a node it cannot compile."""
+        if type(self) is not DifferentialActionModelFreeInvDynamics:
+            return decline(memo, class_reason(self, "differential model"))
+        from .rbd.invdyn_node import invdyn_node
+
+        return invdyn_node(iam, data, terminal, memo)
 
     def quasiStatic(
         self, data: "DifferentialActionDataFreeInvDynamics", x: np.ndarray, maxiter: int = 100, tol: float = 1e-9

@@ -148,7 +148,7 @@ def test_shipped_scripts_run_with_crocopy_and_report_their_nodes():
     assert len(forward.reasons) > 1 and forward.compiled == len(forward.reasons)
     inverse = coverage.job_row("arm_manipulation_invdyn")
     assert inverse.error is None and inverse.solvers == ["SolverIntro"] and len(inverse.reasons) > 1
-    assert set(inverse.reasons) == {"differential model DifferentialActionModelFreeInvDynamics"}
+    assert inverse.compiled == len(inverse.reasons)
 
 
 def test_a_node_whose_constraint_manager_has_no_rows_compiles_and_solves_as_without():

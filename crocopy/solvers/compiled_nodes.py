@@ -35,7 +35,9 @@ or ``None`` (models without the method, or nodes it cannot compile).  ``terminal
 problem's terminal node; ``memo`` is a dictionary shared by the nodes of one solve (for what they
 derive once from shared models).  Today the Euler-integrated free and contact forward dynamics of
 a multibody system with residual costs have one (:mod:`crocopy.models.rbd.euler_node`), which also writes the
-constraint rows ``g, Gx, Gu, h, Hx, Hu`` of its constraint manager (:mod:`crocopy.models.rbd.constraint_rows`).
+constraint rows ``g, Gx, Gu, h, Hx, Hu`` of its constraint manager (:mod:`crocopy.models.rbd.constraint_rows`), and so
+do their inverse-dynamics twins (:mod:`crocopy.models.rbd.invdyn_node`) and impulse nodes
+(:mod:`crocopy.models.rbd.impulse_node`).
 
 Inside ``solve`` those evaluators replace ``model.calc``/``model.calcDiff`` in the derivatives and the
 rollout.  They write the action data fields above, and the arrays the nested datas share with them (the

@@ -543,3 +543,8 @@ def frame_velocity_derivatives(
             for r in range(6):
                 dv_dq_out[r, jv + d] = col[r]
         j = par
+
+
+rnea_pass, crba = _rnea_pass, _crba
+"""RNEA on the kinematics in ``ws`` (:func:`_rnea_pass`) and ``ws.M`` from them (:func:`_crba`), for the compiled
+inverse-dynamics nodes (:mod:`.invdyn_node_kernel`)."""

@@ -422,3 +422,7 @@ def node_calc_diff(tbl, ints, par, x, u):
 constraint_values = _constraints
 """The constraint rows of a node's table (:func:`_constraints`), for the other compiled nodes
 (:mod:`.impulse_node_kernel`)."""
+
+euler_step, integrate_chain, remember_values = _step, _integrate_chain, _remember
+"""The Euler step (:func:`_step`), the Lie-group end of the chain rule (:func:`_integrate_chain`) and the stamp
+(:func:`_remember`) of a node's table, for the other compiled nodes (:mod:`.invdyn_node_kernel`)."""
