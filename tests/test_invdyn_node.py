@@ -251,6 +251,22 @@ def test_a_live_reread_spends_the_stamp():
     assert_as_python(iam, data, x, u, False, RTOL)
 
 
+@pytest.mark.parametrize("build", [lambda: contact_node("talos-6d"), lambda: free_node("anymal")],
+                         ids=["contact", "free"])
+def test_a_python_calc_of_the_data_in_between_spends_the_stamp(build):
+    """The model's own ``calc`` on the node's data at another point between the compiled ``calc`` and ``calcDiff`` at
+    one point (``data.compiled_stamp``): the ``calcDiff`` evaluates the values again."""
+    iam = build()
+    (x, u), (y, w) = point(iam, 7), point(iam, 8)
+    data = iam.createData()
+    node = iam._compiled_node(data, False, {})
+    node.calc(x, u)
+    iam.calc(data, y, w)
+    assert node.stamp[0] == 0.0
+    node.calcDiff(x, u, True)
+    assert_as_python(iam, data, x, u, False, RTOL)
+
+
 def test_the_rollout_step_is_the_feedback_control_then_calc():
     iam = free_node("anymal")
     data = iam.createData()
