@@ -138,6 +138,22 @@ def test_zero_upsilon_resets_the_penalty():
     assert solver.upsilon == 0.0
 
 
+@pytest.mark.parametrize("kernels", [True, False], ids=["kernels", "python"])
+def test_a_reused_solver_with_zero_upsilon_solves_as_a_fresh_one(kernels):
+    """A solver that converged (its ``hfeas`` tiny) solves again from the same guess with ``zero_upsilon``: the first
+    iteration of the new solve leaves ``upsilon`` alone (as a fresh solver's does), so both solves are the same."""
+    problem, xs, us = nonlinear_equality_problem(crocopy, T=12, seed=3, a=0.5, b=0.1)
+    with crocopy.use_kernels(kernels):
+        reused = crocopy.SolverIntro(problem)
+        assert reused.solve(list(xs), list(us), 100)
+        assert 0.0 < reused.hfeas < 1e-6
+        reused.zero_upsilon = True
+        reused.solve(list(xs), list(us), 100)
+        fresh = crocopy.SolverIntro(problem)
+        fresh.solve(list(xs), list(us), 100)
+    assert (reused.iter, reused.cost, reused.upsilon) == (fresh.iter, fresh.cost, fresh.upsilon)
+
+
 def test_kkt_solves_lqr_in_one_iteration_like_fddp():
     problem = lq_equality_problem(crocopy, nh=0)
     kkt, fddp = crocopy.SolverKKT(problem), crocopy.SolverFDDP(problem)

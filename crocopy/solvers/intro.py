@@ -28,8 +28,9 @@ Globalisation (FDDP's rollout and expected improvement ``d``, plus a merit on th
 feasibility ``hfeas``, all measured against Crocoddyl 3.2.1):
 
 * after the backward pass the penalty grows to ``upsilon = max(upsilon, (d₀ + ½ d₁) / ((1 - rho) h))``
-  with ``h`` the ``hfeas`` held before the derivatives (the last accepted iterate's; 0, no update, on
-  a fresh solver's first iteration);
+  with ``h`` the ``hfeas`` held before the derivatives (the last accepted iterate's); no update on the
+  first iteration of a solve (``iter = 0``), a reused solver's too, whose ``hfeas`` is its last solve's
+  (``upsilon`` itself persists from solve to solve unless ``zero_upsilon``);
 * a trial step ``α`` changes the merit ``merit = cost + upsilon hfeas`` by ``dPhi = dV + upsilon dfeas``
   (``dfeas = hfeas - hfeas_try``), predicted as ``dPhiexp = dVexp + α upsilon dfeas``; it is accepted
   when ``dPhi > th_acceptStep dPhiexp`` if ``dPhiexp >= 0``, else when ``dV > th_acceptNegStep dVexp``
@@ -201,9 +202,9 @@ class SolverIntro(SolverFDDP):
         """Derivatives (if ``recalc``), constrained backward pass, and the penalty update.
 
         The update divides by the equality feasibility held before the derivatives refreshed it:
-        the previous accepted iterate's (0 before a fresh solver's first iteration).
+        the previous accepted iterate's; none at a solve's first iteration (``iter = 0``).
         """
-        hfeas = self.hfeas
+        hfeas = self.hfeas if self.iter else 0.0
         super().computeDirection(recalc)
         if hfeas > 0.0:
             self._upsilon = max(self._upsilon, (self._dg + 0.5 * self._dq) / ((1.0 - self.rho) * hfeas))

@@ -121,6 +121,32 @@ def test_nonlinear_equality_problem_same_iterations_and_cost(case):
             assert rm[k] == pytest.approx(rc[k], rel=REL.get(k, 1e-6), abs=1e-9), f"iteration {i}: {k}"
 
 
+def test_a_reused_solver_solves_again_as_crocoddyls():
+    """One solver solving the same problem again (as a script calling ``solve()`` twice): ``upsilon`` persists, the
+    first iteration of each solve does not update it (its held ``hfeas`` is the last solve's), so the second solve
+    (not the first's again: ``upsilon`` counts from its first iteration) traces as Crocoddyl's; a solve with
+    ``maxiter = 0`` leaves the figures as they were."""
+    out = {}
+    case = dict(NONLINEAR[1])
+    for lib in (crocoddyl, crocopy):
+        problem, xs, us = ip.nonlinear_equality_problem(lib, **case)
+        s = lib.SolverIntro(problem)
+        first = _trace(lib, s, xs, us, 100)
+        s.solve(list(xs), list(us), 0)
+        idle = (float(s.hfeas), float(s.merit), float(s.upsilon))
+        second = _trace(lib, s, xs, us, 100)
+        out[lib] = (first, idle, second, s.iter, s.cost)
+    (first_c, idle_c, (ok_c, rows_c), it_c, cost_c) = out[crocoddyl]
+    (first_m, idle_m, (ok_m, rows_m), it_m, cost_m) = out[crocopy]
+    assert first_c[0] and first_m[0]
+    assert ok_c and ok_m and it_m == it_c and len(rows_c) > 2
+    assert cost_m == pytest.approx(cost_c, rel=1e-6)
+    assert idle_m == pytest.approx(idle_c, rel=1e-4, abs=1e-9)
+    for i, (rc, rm) in enumerate(zip(rows_c, rows_m)):
+        for k in FIGURES:
+            assert rm[k] == pytest.approx(rc[k], rel=REL.get(k, 1e-6), abs=1e-9), f"iteration {i}: {k}"
+
+
 @pytest.mark.parametrize("eq", EQ)
 def test_arm_acceleration_rows_same_as_crocoddyl(eq):
     """Talos' arm, free forward dynamics, joint accelerations as equality rows on every running node."""
