@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from intro_problems import arm_problem, lq_equality_problem, nonlinear_equality_problem
 
 import crocopy
@@ -271,3 +273,31 @@ def test_rows_the_controls_cannot_reach_are_left_to_hfeas():
     schur, converged = _solve_intro(problem, crocopy.Schur, maxiter=5)
     assert converged is False
     assert "reg_max" in schur.reason
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.integers(1, 5), st.integers(1, 7), st.integers(0, 2**32 - 1), st.sampled_from(["random", "dependent", "zeros",
+                                                                                       "ties", "nan"]))
+def test_compiled_full_pivot_lu_equals_its_numpy_twin(m, n, seed, kind):
+    """The compiled fully pivoted LU (:mod:`crocopy.solvers.intro_kernel`) against its numpy steps, to the bit: the
+    same pivots (first largest in column-major order, ties and NaN included), factor, permutations and rank."""
+    from crocopy.solvers.intro import full_pivot_lu
+
+    rng = np.random.default_rng(seed)
+    A = rng.standard_normal((m, n))
+    if kind == "dependent" and m > 1:
+        A[-1] = 2.0 * A[0] - A[m // 2]
+    elif kind == "zeros":
+        A[:, rng.integers(0, n)] = 0.0
+        A[rng.integers(0, m)] = 0.0
+    elif kind == "ties":
+        A = np.round(A)
+    elif kind == "nan":
+        A[rng.integers(0, m), rng.integers(0, n)] = np.nan
+    with crocopy.use_kernels(True):
+        compiled = full_pivot_lu(A, 1e-12)
+    with crocopy.use_kernels(False):
+        twin = full_pivot_lu(A, 1e-12)
+    assert compiled[3] == twin[3]
+    for a, b in zip(compiled[:3], twin[:3]):
+        np.testing.assert_array_equal(a, b)

@@ -47,7 +47,10 @@ import enum
 import numpy as np
 import scipy.linalg
 
+from .. import kernels
 from ..shooting import ShootingProblem
+from ..versioning import STRUCTURE
+from . import intro_kernel
 from .base import BackwardPassError
 from .fddp import SolverFDDP
 
@@ -66,7 +69,8 @@ class EqualitySolverType(enum.IntEnum):
 
 
 def full_pivot_lu(A: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-    """``P A Q = L U`` with full pivoting (largest remaining entry first).
+    """``P A Q = L U`` with full pivoting (largest remaining entry first; compiled while
+    :func:`crocopy.kernels_enabled`, :mod:`.intro_kernel`, else these numpy steps: the same numbers).
 
     Returns ``(U, rows, cols, rank)``: ``U`` the upper factor (same shape as ``A``), ``rows``/``cols``
     the permutations (``A[rows][:, cols] = L U``) and the number of pivots above ``rtol`` times the
@@ -75,6 +79,9 @@ def full_pivot_lu(A: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray, n
     U = np.array(A, dtype=float)
     m, n = U.shape
     rows, cols = np.arange(m), np.arange(n)
+    if kernels.active:
+        rank = intro_kernel.full_pivot_lu_kernel(U, rows, cols, float(rtol))
+        return np.triu(U), rows, cols, rank
     rank, first = 0, 0.0
     for k in range(min(m, n)):
         block = np.abs(U[k:, k:])
@@ -104,7 +111,7 @@ def lu_range_kernel(Hu: np.ndarray, rtol: float) -> tuple[np.ndarray, int]:
     Z = np.zeros((nu, nu - r))
     if nu > r:
         free = np.zeros((nu, nu - r))
-        free[:r] = -scipy.linalg.solve_triangular(U[:r, :r], U[:r, r:]) if r else 0.0
+        free[:r] = -scipy.linalg.solve_triangular(U[:r, :r], U[:r, r:], check_finite=False) if r else 0.0
         free[r:] = np.eye(nu - r)
         Z[cols] = free
     Y = Hu[rows[:r]].T
@@ -266,7 +273,11 @@ class SolverIntro(SolverFDDP):
 
     # ------------------------------------------------------------------ backward pass
     def backwardPass(self) -> None:
-        """Riccati recursion with each node's equality rows enforced by ``eq_solver``."""
+        """Riccati recursion with each node's equality rows enforced by ``eq_solver``; without equality rows on a
+        node with controls, FDDP's (compiled where it applies: the same node steps)."""
+        if not self._equality_nodes():
+            super().backwardPass()
+            return
         problem = self.problem
         self._terminal_value_function()
         for t in range(problem.T - 1, -1, -1):
@@ -281,6 +292,16 @@ class SolverIntro(SolverFDDP):
                 self.computeValueFunction(t, model)
             if not (np.isfinite(self.Vx[t]).all() and np.isfinite(self.Vxx[t]).all()):
                 raise BackwardPassError(f"non-finite value function at node {t}")
+
+    def _equality_nodes(self) -> bool:
+        """Whether a running node with controls has equality rows (found again when the problem, its nodes or a
+        registry's item set changed)."""
+        problem = self.problem
+        key = (id(problem), problem._nodes_version, STRUCTURE[0])
+        held = self.__dict__.get("_equality_seen")
+        if held is None or held[0] != key:
+            held = self.__dict__["_equality_seen"] = (key, any(m.nu and m.nh for m in problem.runningModels))
+        return held[1]
 
     def _constrained_gains(self, t: int, h: np.ndarray, Hx: np.ndarray, Hu: np.ndarray) -> None:
         Quu, Qu, Qxu = self.Quu[t], self.Qu[t], self.Qxu[t]
@@ -304,9 +325,9 @@ class SolverIntro(SolverFDDP):
             chol, info = scipy.linalg.lapack.dpotrf(Qzz, lower=0, clean=1)
             if info != 0:
                 raise BackwardPassError(f"the reduced Hessian Qzz is not positive definite at node {t}")
-            kz = scipy.linalg.cho_solve((chol, False), kz)
-            Kz = scipy.linalg.cho_solve((chol, False), Kz)
-            Quz = scipy.linalg.cho_solve((chol, False), QuuZ.T).T
+            kz = scipy.linalg.cho_solve((chol, False), kz, check_finite=False)
+            Kz = scipy.linalg.cho_solve((chol, False), Kz, check_finite=False)
+            Quz = scipy.linalg.cho_solve((chol, False), QuuZ.T, check_finite=False).T
         self.k[t][:] = Yks + Z @ kz
         self.K[t][:] = YKs + Z @ Kz
         self.Hu_rank[t], self.YZ[t], self.Hy[t] = r, YZ, Hy
@@ -317,9 +338,9 @@ class SolverIntro(SolverFDDP):
         chol, info = scipy.linalg.lapack.dpotrf(Quu, lower=0, clean=1)
         if info != 0:
             raise BackwardPassError(f"Quu is not positive definite at node {t}")
-        QuuinvHuT = scipy.linalg.cho_solve((chol, False), Hu.T)
+        QuuinvHuT = scipy.linalg.cho_solve((chol, False), Hu.T, check_finite=False)
         Qzz = Hu @ QuuinvHuT
-        kq = scipy.linalg.cho_solve((chol, False), np.column_stack([Qu, Qxu.T]))
+        kq = scipy.linalg.cho_solve((chol, False), np.column_stack([Qu, Qxu.T]), check_finite=False)
         rhs = np.column_stack([h, Hx]) - Hu @ kq
         try:
             lam = scipy.linalg.solve(Qzz, rhs, assume_a="pos")
