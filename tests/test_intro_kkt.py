@@ -301,3 +301,20 @@ def test_compiled_full_pivot_lu_equals_its_numpy_twin(m, n, seed, kind):
     assert compiled[3] == twin[3]
     for a, b in zip(compiled[:3], twin[:3]):
         np.testing.assert_array_equal(a, b)
+
+
+def test_non_finite_equality_rows_fail_the_backward_pass_quietly(capfd):
+    """NaN in a node's equality rows: BackwardPassError from the least squares (nothing printed by LAPACK)."""
+    from crocopy.solvers.base import BackwardPassError
+    from crocopy.solvers.intro import _least_squares
+
+    A = np.array([[np.nan, 1.0], [2.0, 3.0], [1.0, 1.0]])
+    with pytest.raises(BackwardPassError, match="non-finite equality rows"):
+        _least_squares(A, np.ones(3), np.ones((3, 2)))
+    with pytest.raises(BackwardPassError, match="non-finite equality rows"):
+        _least_squares(np.eye(2), np.array([np.inf, 0.0]), np.ones((2, 2)))
+    big = np.full((2, 2), 1e308)
+    with np.errstate(over="ignore"):  # finite rows whose sum overflows: checked entry by entry, then solved
+        sol, _ = _least_squares(big + np.diag([1e308, 0.0]) * 0.5, np.ones(2), np.ones((2, 1)))
+    assert np.isfinite(sol).all()
+    assert capfd.readouterr().err == ""

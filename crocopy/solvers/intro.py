@@ -43,6 +43,7 @@ feasibility ``hfeas``, all measured against Crocoddyl 3.2.1):
 from __future__ import annotations
 
 import enum
+import math
 
 import numpy as np
 import scipy.linalg
@@ -111,7 +112,7 @@ def lu_range_kernel(Hu: np.ndarray, rtol: float) -> tuple[np.ndarray, int]:
     Z = np.zeros((nu, nu - r))
     if nu > r:
         free = np.zeros((nu, nu - r))
-        free[:r] = -scipy.linalg.solve_triangular(U[:r, :r], U[:r, r:], check_finite=False) if r else 0.0
+        free[:r] = -_triangular_solve(U[:r, :r], U[:r, r:]) if r else 0.0
         free[r:] = np.eye(nu - r)
         Z[cols] = free
     Y = Hu[rows[:r]].T
@@ -325,9 +326,9 @@ class SolverIntro(SolverFDDP):
             chol, info = scipy.linalg.lapack.dpotrf(Qzz, lower=0, clean=1)
             if info != 0:
                 raise BackwardPassError(f"the reduced Hessian Qzz is not positive definite at node {t}")
-            kz = scipy.linalg.cho_solve((chol, False), kz, check_finite=False)
-            Kz = scipy.linalg.cho_solve((chol, False), Kz, check_finite=False)
-            Quz = scipy.linalg.cho_solve((chol, False), QuuZ.T, check_finite=False).T
+            kz = _cholesky_solve(chol, kz)
+            Kz = _cholesky_solve(chol, Kz)
+            Quz = _cholesky_solve(chol, QuuZ.T).T
         self.k[t][:] = Yks + Z @ kz
         self.K[t][:] = YKs + Z @ Kz
         self.Hu_rank[t], self.YZ[t], self.Hy[t] = r, YZ, Hy
@@ -338,9 +339,9 @@ class SolverIntro(SolverFDDP):
         chol, info = scipy.linalg.lapack.dpotrf(Quu, lower=0, clean=1)
         if info != 0:
             raise BackwardPassError(f"Quu is not positive definite at node {t}")
-        QuuinvHuT = scipy.linalg.cho_solve((chol, False), Hu.T, check_finite=False)
+        QuuinvHuT = _cholesky_solve(chol, Hu.T)
         Qzz = Hu @ QuuinvHuT
-        kq = scipy.linalg.cho_solve((chol, False), np.column_stack([Qu, Qxu.T]), check_finite=False)
+        kq = _cholesky_solve(chol, np.column_stack([Qu, Qxu.T]))
         rhs = np.column_stack([h, Hx]) - Hu @ kq
         try:
             lam = scipy.linalg.solve(Qzz, rhs, assume_a="pos")
@@ -365,9 +366,28 @@ class SolverIntro(SolverFDDP):
         self._finish_value_function(t)
 
 
+def _cholesky_solve(chol: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """``A⁻¹ B`` from the upper Cholesky factor of ``A`` (LAPACK's ``dpotrs``, as ``scipy.linalg.cho_solve`` calls it,
+    without its input checks: non-finite values reach the backward pass's own check)."""
+    return scipy.linalg.lapack.dpotrs(chol, B, lower=0)[0]
+
+
+def _triangular_solve(U: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """``U⁻¹ B`` for an upper triangular ``U`` (LAPACK's ``dtrtrs``, as ``scipy.linalg.solve_triangular`` calls it)."""
+    return scipy.linalg.lapack.dtrtrs(U, B, lower=0)[0]
+
+
 def _least_squares(A: np.ndarray, b: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``A⁺ b`` and ``A⁺ B`` (A of full column rank; least squares when it has more rows)."""
+    """``A⁺ b`` and ``A⁺ B`` (A of full column rank; least squares when it has more rows); BackwardPassError on
+    non-finite rows (before LAPACK sees them) or where LAPACK fails."""
     if not A.shape[1]:
         return np.zeros(0), np.zeros((0, B.shape[1]))
-    sol = scipy.linalg.lstsq(A, np.column_stack([b, B]))[0]
+    rhs = np.column_stack([b, B])
+    total = A.sum() + rhs.sum()
+    if not math.isfinite(total) and not (np.isfinite(A).all() and np.isfinite(rhs).all()):
+        raise BackwardPassError("non-finite equality rows")
+    try:
+        sol = np.linalg.lstsq(A, rhs, rcond=None)[0]
+    except np.linalg.LinAlgError as exc:
+        raise BackwardPassError(f"the equality rows' least squares failed ({exc})") from exc
     return sol[:, 0], sol[:, 1:]
