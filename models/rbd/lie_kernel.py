@@ -260,15 +260,28 @@ def _q_t(rx, ry, rz, x, y, z):
         c2 = (t - s) / (t2 * t)
         c3 = (t2 + 2.0 * c - 2.0) / (2.0 * t2 * t2)
         c4 = (2.0 * t - 3.0 * s + t * c) / (2.0 * t2 * t2 * t)
+    # with W = [φ], P = [ρ], d = φ·ρ and n = φ × ρ: WP = ρφᵀ - d I, PW = φρᵀ - d I, WPW = -d W,
+    # WWP + PWW = nφᵀ - φnᵀ - 2d W, WPWW = WWPW = -d (φφᵀ - θ² I)
+    d = x * rx + y * ry + z * rz
+    n = (y * rz - z * ry, z * rx - x * rz, x * ry - y * rx)
+    f = (x, y, z)
+    r = (rx, ry, rz)
     P = _skew(rx, ry, rz)
     W = _skew(x, y, z)
-    WP, PW = _mm(W, P), _mm(P, W)
-    WPW = _mm(WP, W)
-    WWP, PWW = _mm(W, WP), _mm(PW, W)
-    WPWW, WWPW = _mm(WPW, W), _mm(W, WPW)
-    first = _lin(0.5, P, c2, WP, c2, PW, c2 - 3.0 * c3, WPW)
-    second = _lin(c3, WWP, c3, PWW, c4, WPWW, c4, WWPW)
-    return _add(first, second)
+    dw = (c2 - c3) * d
+    ff = 2.0 * c4 * d
+    diag = 2.0 * d * (c4 * t2 - c2)
+    return (
+        0.5 * P[0] + c2 * 2.0 * r[0] * f[0] - ff * f[0] * f[0] + diag,
+        0.5 * P[1] + c2 * (r[0] * f[1] + f[0] * r[1]) + c3 * (n[0] * f[1] - f[0] * n[1]) - dw * W[1] - ff * f[0] * f[1],
+        0.5 * P[2] + c2 * (r[0] * f[2] + f[0] * r[2]) + c3 * (n[0] * f[2] - f[0] * n[2]) - dw * W[2] - ff * f[0] * f[2],
+        0.5 * P[3] + c2 * (r[1] * f[0] + f[1] * r[0]) + c3 * (n[1] * f[0] - f[1] * n[0]) - dw * W[3] - ff * f[1] * f[0],
+        0.5 * P[4] + c2 * 2.0 * r[1] * f[1] - ff * f[1] * f[1] + diag,
+        0.5 * P[5] + c2 * (r[1] * f[2] + f[1] * r[2]) + c3 * (n[1] * f[2] - f[1] * n[2]) - dw * W[5] - ff * f[1] * f[2],
+        0.5 * P[6] + c2 * (r[2] * f[0] + f[2] * r[0]) + c3 * (n[2] * f[0] - f[2] * n[0]) - dw * W[6] - ff * f[2] * f[0],
+        0.5 * P[7] + c2 * (r[2] * f[1] + f[2] * r[1]) + c3 * (n[2] * f[1] - f[2] * n[1]) - dw * W[7] - ff * f[2] * f[1],
+        0.5 * P[8] + c2 * 2.0 * r[2] * f[2] - ff * f[2] * f[2] + diag,
+    )
 
 
 # --- public SO(3) -------------------------------------------------------------------------------------
