@@ -313,7 +313,10 @@ def _exp6_t(vx, vy, vz, x, y, z):
 def _log6_t(R, px, py, pz):
     """``log6(R, p)`` as ``(ρx, ρy, ρz, φx, φy, φz)``."""
     x, y, z = _log3_t(R)
-    rx, ry, rz = _mv(_jr_inv_t(x, y, z, -1.0), px, py, pz)
+    k = _inv_coef(math.sqrt(x * x + y * y + z * z))
+    cx, cy, cz = y * pz - z * py, z * px - x * pz, x * py - y * px  # Jl(ω)⁻¹ p = p - ω × p / 2 + k ω × (ω × p)
+    dx, dy, dz = y * cz - z * cy, z * cx - x * cz, x * cy - y * cx
+    rx, ry, rz = px - 0.5 * cx + k * dx, py - 0.5 * cy + k * dy, pz - 0.5 * cz + k * dz
     return rx, ry, rz, x, y, z
 
 
