@@ -1,11 +1,11 @@
 """One body on a free flyer (a quadrotor): the dynamics kernels' joint-frame path gives Pinocchio's numbers.
 
-``dynamics_kernel.forward_dynamics`` and ``rnea_derivatives`` take the joint frame (``S = I``, constant ``M``) when
-the model is a single body on a free flyer.  The robots of ``tests/test_rbd_dynamics.py`` cover iris (identity joint
-placement, standard gravity, no armature); here the cases that path must carry besides: a joint placement that is
-not the identity, an armature, a gravity with an angular part (in the forward dynamics: Pinocchio's derivatives
-take a linear one), and the workspace fields the contact kernels read
-afterwards (``oa`` at zero joint acceleration, ``tau = b``), generated from Hypothesis seeds.
+``dynamics_kernel.forward_dynamics`` and ``rnea_derivatives`` take the joint frame (``free_body_kernel``: ``S = I``,
+constant ``M``) when the model is a single body on a free flyer.  The robots of ``tests/test_rbd_dynamics.py`` cover
+iris (identity joint placement, standard gravity, no armature); here the cases that path must carry besides: a joint
+placement that is not the identity, an armature, a gravity with an angular part (in the forward dynamics: Pinocchio's
+derivatives take a linear one), and the workspace fields the contact kernels read afterwards (``oa`` at zero joint
+acceleration, ``tau = b``), generated from Hypothesis seeds.
 """
 
 from __future__ import annotations
@@ -16,10 +16,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from crocopy.models.rbd import dynamics_kernel as K
+from crocopy.models.rbd import free_body_kernel
 from crocopy.models.rbd.lowering import lower_model, make_workspace
 
 
-def free_body(seed: int):
+def random_body(seed: int):
     """A random single body on a free flyer: joint placement, inertia, armature and 6D gravity from ``seed``."""
     rng = np.random.default_rng(seed)
     model = pin.Model()
@@ -43,11 +44,11 @@ def close(x, ref, tol=1e-9):
 @settings(max_examples=20, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1))
 def test_free_body_dynamics_and_derivatives_equal_pinocchio(seed):
-    model, q, v, a, tau = free_body(seed)
+    model, q, v, a, tau = random_body(seed)
     data = model.createData()
     rb = lower_model(model)
     ws = make_workspace(rb)
-    assert K._free_body(rb)
+    assert free_body_kernel.free_body(rb)
     acc, Minv = np.zeros(6), np.zeros((6, 6))
     K.forward_dynamics(rb, ws, q, v, tau, acc)
     K.mass_inverse(rb, ws, Minv)

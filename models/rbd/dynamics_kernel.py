@@ -27,6 +27,8 @@ ov_λ(j) × ψ̇`` (configuration) and ``φ = ψ̇ + ov_j × s`` (velocity), so 
 inertias ``Ic`` and composite ``Bc = Σ (ov ×* oI - oI ov× + (·) ×* oI ov)`` over subtrees: ``O(nv)`` 6x6
 products, then ``O(nv · depth)`` 6-vector dot products; the ancestors of ``j`` see ``d τ_l = oS_lᵀ dF_j``.
 
+One body on a free flyer (a quadrotor) takes the joint frame instead (:mod:`.free_body_kernel`).
+
 Inner 6x6 loops are written out; the 6-vector helpers (:mod:`.spatial`) work on tuples and are inlined.  The
 kernels keep no reference counts (:func:`crocopy.kernels.uncounted`): numba would otherwise count a reference to
 every array of ``rb`` and ``ws`` around each call that passes them on (about 90 calls of its runtime).
@@ -45,6 +47,7 @@ import numpy as np
 
 from crocopy.kernels import uncounted
 
+from .free_body_kernel import free_body, free_body_bias, free_body_derivatives
 from .joint_types import FREEFLYER, PRISMATIC, REVOLUTE
 from .lowering import RigidBodyModel, RigidBodyWorkspace
 from .spatial import dot, fcross, get6, mcross, minus, plus, set6, times
@@ -281,85 +284,14 @@ def factor_solve(lam: np.ndarray, L: np.ndarray, dinv: np.ndarray, x: np.ndarray
 
 
 @uncounted
-def _free_body(rb):
-    """Whether the model is one body on a free flyer (a quadrotor): its dynamics are then written in the joint frame."""
-    return rb.njoints == 2 and rb.jtype[1] == FREEFLYER
-
-
-@uncounted
-def _body_inertia(rb, I):
-    """``I (6, 6)``: the spatial inertia of body 1 in its joint frame, ``[[m, -m[c]x], [m[c]x, Ic - m [c]x [c]x]]``."""
-    m, com, Ic = rb.mass[1], rb.com, rb.inertia
-    cx, cy, cz = com[1, 0], com[1, 1], com[1, 2]
-    for r in range(3):
-        for c in range(3):
-            I[r, c] = m if r == c else 0.0
-            I[3 + r, 3 + c] = Ic[1, r, c]
-    I[3, 0], I[3, 1], I[3, 2] = 0.0, -m * cz, m * cy
-    I[4, 0], I[4, 1], I[4, 2] = m * cz, 0.0, -m * cx
-    I[5, 0], I[5, 1], I[5, 2] = -m * cy, m * cx, 0.0
-    for r in range(3):
-        for c in range(3):
-            I[c, 3 + r] = I[3 + r, c]
-    I[3, 3] += m * (cy * cy + cz * cz)
-    I[4, 4] += m * (cx * cx + cz * cz)
-    I[5, 5] += m * (cx * cx + cy * cy)
-    I[3, 4] -= m * cx * cy
-    I[4, 3] -= m * cx * cy
-    I[3, 5] -= m * cx * cz
-    I[5, 3] -= m * cx * cz
-    I[4, 5] -= m * cy * cz
-    I[5, 4] -= m * cy * cz
-
-
-@uncounted
-def _in_body(ws, m):
-    """The world motion ``m`` (6-tuple) read in body 1's frame ``oM_1``: ``X⁻¹ m``."""
-    return to_reference(ws.oR[1], ws.op[1], m, LOCAL)
-
-
-@uncounted
-def _free_body_bias(rb, ws, v):
-    """One body on a free flyer, in its joint frame (``S = I``, ``v`` its twist there): ``ws.M = I + diag(armature)``
-    (constant), ``ws.tau = b = I ag + v ×* (I v)`` with ``ag = X⁻¹ (-g)``, and ``ws.oa = -g`` (the world acceleration at
-    zero joint acceleration, ``ov × ow = 0`` for the root); what :func:`_rnea_pass` and :func:`_crba` leave that later
-    kernels read."""
-    I, M, tau, oa, g = ws.tmp, ws.M, ws.tau, ws.oa, rb.gravity
-    _body_inertia(rb, I)
-    ag = _in_body(ws, (-g[0], -g[1], -g[2], -g[3], -g[4], -g[5]))
-    vv = (v[0], v[1], v[2], v[3], v[4], v[5])
-    b = plus(_times6(I, ag), fcross(vv, _times6(I, vv)))
-    for r in range(6):
-        for c in range(6):
-            M[r, c] = I[r, c]
-        M[r, r] += rb.armature[r]
-        tau[r] = b[r]
-        oa[0, r] = -g[r]
-        oa[1, r] = -g[r]
-
-
-@uncounted
-def _times6(A, t):
-    """``A (6, 6) t`` of a 6-tuple ``t``, as a 6-tuple."""
-    return (
-        A[0, 0] * t[0] + A[0, 1] * t[1] + A[0, 2] * t[2] + A[0, 3] * t[3] + A[0, 4] * t[4] + A[0, 5] * t[5],
-        A[1, 0] * t[0] + A[1, 1] * t[1] + A[1, 2] * t[2] + A[1, 3] * t[3] + A[1, 4] * t[4] + A[1, 5] * t[5],
-        A[2, 0] * t[0] + A[2, 1] * t[1] + A[2, 2] * t[2] + A[2, 3] * t[3] + A[2, 4] * t[4] + A[2, 5] * t[5],
-        A[3, 0] * t[0] + A[3, 1] * t[1] + A[3, 2] * t[2] + A[3, 3] * t[3] + A[3, 4] * t[4] + A[3, 5] * t[5],
-        A[4, 0] * t[0] + A[4, 1] * t[1] + A[4, 2] * t[2] + A[4, 3] * t[3] + A[4, 4] * t[4] + A[4, 5] * t[5],
-        A[5, 0] * t[0] + A[5, 1] * t[1] + A[5, 2] * t[2] + A[5, 3] * t[3] + A[5, 4] * t[4] + A[5, 5] * t[5],
-    )
-
-
-@uncounted
 def forward_dynamics(
     rb: RigidBodyModel, ws: RigidBodyWorkspace, q: np.ndarray, v: np.ndarray, tau: np.ndarray, a_out: np.ndarray
 ) -> None:
     """``a_out = M⁻¹ (tau - RNEA(q, v, 0))``; leaves ``ws.M``, ``ws.L`` and the kinematics
     (``ws.oa`` holds the accelerations at zero joint acceleration)."""
     forward_kinematics(rb, ws, q, v)
-    if _free_body(rb):
-        _free_body_bias(rb, ws, v)
+    if free_body(rb):
+        free_body_bias(rb, ws, v)
     else:
         _rnea_pass(rb, ws, ws.zero, ws.tau)
         _crba(rb, ws)
@@ -475,8 +407,8 @@ def rnea_derivatives(
     """:func:`dynamics_derivatives` on the kinematics already in ``ws`` (a :func:`forward_kinematics` at the same
     ``(q, v)``, e.g. the one of :func:`forward_dynamics`)."""
     _rnea_pass(rb, ws, a, ws.tau)
-    if _free_body(rb):
-        _free_body_derivatives(rb, ws, dtau_dq_out, dtau_dv_out)
+    if free_body(rb):
+        free_body_derivatives(rb, ws, dtau_dq_out, dtau_dv_out)
         return
     _composite_coriolis(rb, ws)
     oS, ov, oa, of, oIc, oBc, Y, Z = ws.oS, ws.ov, ws.oa, ws.of, ws.oIc, ws.oBc, ws.IcS, ws.BcS
@@ -529,32 +461,6 @@ def rnea_derivatives(
                 dtau_dq_out[idx_v[i] + d, k] = dot(col, gq)
                 dtau_dv_out[idx_v[i] + d, k] = dot(col, gv)
             i = parent[i]
-
-
-@uncounted
-def _free_body_derivatives(rb, ws, dtau_dq_out, dtau_dv_out):
-    """:func:`rnea_derivatives` of one body on a free flyer, in its joint frame: ``τ = I (a + ag) + v ×* (I v)`` with
-    ``ag = X⁻¹ (-g)``, ``v = X⁻¹ ov`` and a tangent ``δ`` moving ``X`` to ``X exp(δ)``, so ``δag = ag × δ``:
-    ``∂τ/∂q = I (ag ×)``, column ``j`` of ``∂τ/∂v`` is ``e_j ×* (I v) + v ×* (I e_j)``."""
-    I, g = ws.tmp, rb.gravity
-    _body_inertia(rb, I)
-    ag = _in_body(ws, (-g[0], -g[1], -g[2], -g[3], -g[4], -g[5]))
-    v = _in_body(ws, get6(ws.ov, 1))
-    h = _times6(I, v)
-    for j in range(6):
-        e = (1.0 if j == 0 else 0.0, 1.0 if j == 1 else 0.0, 1.0 if j == 2 else 0.0,
-             1.0 if j == 3 else 0.0, 1.0 if j == 4 else 0.0, 1.0 if j == 5 else 0.0)
-        dq = _times6(I, mcross(ag, e))
-        dv = plus(fcross(e, h), fcross(v, _column6(I, j)))
-        for r in range(6):
-            dtau_dq_out[r, j] = dq[r]
-            dtau_dv_out[r, j] = dv[r]
-
-
-@uncounted
-def _column6(A, j):
-    """Column ``j`` of a ``(6, 6)`` array as a tuple."""
-    return A[0, j], A[1, j], A[2, j], A[3, j], A[4, j], A[5, j]
 
 
 @uncounted
