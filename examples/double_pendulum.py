@@ -1,8 +1,9 @@
 """Double-pendulum swing-up with one actuated joint (±5 N m, 1 s, 100 nodes): Box-FDDP vs Box-DDP.
 
 Both box solvers start from the same guess; Box-FDDP converges (92 iterations) while Box-DDP, whose
-first rollout must already be feasible, stops at its 500-iteration limit far from the swing-up.
-The animation ``pend.html`` shows Box-FDDP's converged swing-up.
+first rollout must already be feasible, does not find the swing-up: it ends far from it, either at its
+500-iteration limit or converged to a worse minimum (which one is round-off sensitive; each solver's line
+prints its actual outcome).  The animation ``pend.html`` shows Box-FDDP's converged swing-up.
 """
 
 import example_robot_data

@@ -50,8 +50,10 @@ def test_datas_after_the_solve_are_those_a_solve_without_compiled_nodes_leaves()
     for a, b in zip([*fast_problem.runningDatas, fast_problem.terminalData],
                     [*slow_problem.runningDatas, slow_problem.terminalData]):
         assert a.cost == pytest.approx(b.cost, rel=1e-7, abs=1e-10)
-        for name in ("xnext", "Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu"):
-            np.testing.assert_allclose(getattr(a, name), getattr(b, name), rtol=1e-6, atol=1e-7, err_msg=name)
+        for name in ("xnext", "Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu"):  # atol: 1e-10 of the largest entry
+            want = getattr(b, name)  # (Lx reaches 2e3: its near-zero entries move by ~1e-7 with 2e-9 in xs)
+            np.testing.assert_allclose(getattr(a, name), want, rtol=1e-6, atol=max(1e-7, 1e-10 * np.abs(want).max()),
+                                       err_msg=name)
         da, db = a.differential, b.differential
         np.testing.assert_allclose(da.xout, db.xout, rtol=1e-6, atol=1e-7)
         np.testing.assert_allclose(da.pinocchio.oMf[fid].translation, db.pinocchio.oMf[fid].translation, atol=1e-8)

@@ -346,17 +346,19 @@ def _integrate_chain(tbl, ints, x, rb):
                 rows[i, j] = Fx[i, j]
             for j in range(nu):
                 rows[i, ndx + j] = Fu[i, j]
-        for i in range(first, last):
+        for i in range(first, last):  # row i of Jv rows, accumulated along contiguous rows (k in order)
             for j in range(ndx):
-                acc = 0.0
-                for k in range(first, last):
-                    acc += Jv[i, k] * rows[k, j]
-                Fx[i, j] = acc + Jq[i, j] if first <= j < last else acc
+                Fx[i, j] = 0.0
             for j in range(nu):
-                acc = 0.0
-                for k in range(first, last):
-                    acc += Jv[i, k] * rows[k, ndx + j]
-                Fu[i, j] = acc
+                Fu[i, j] = 0.0
+            for k in range(first, last):
+                s = Jv[i, k]
+                for j in range(ndx):
+                    Fx[i, j] += s * rows[k, j]
+                for j in range(nu):
+                    Fu[i, j] += s * rows[k, ndx + j]
+            for j in range(first, last):
+                Fx[i, j] += Jq[i, j]
     for i in range(nv):
         Fx[nv + i, nv + i] += 1.0
 

@@ -209,16 +209,9 @@ def _jr_t(x, y, z, sign):
 
 
 @uncounted
-def _jr_inv_t(x, y, z, sign):
-    """``Jr(ω)⁻¹`` (``sign = 1``) or ``Jl(ω)⁻¹`` (``sign = -1``)."""
-    t = math.sqrt(x * x + y * y + z * z)
-    w = _skew(x, y, z)
-    return _poly(0.5 * sign, _inv_coef(t), w, _mm(w, w))
-
-
-@uncounted
-def _log3_t(R):
-    """``log3(R)`` as ``(x, y, z)``."""
+def _log3_k_t(R):
+    """``log3(R)`` as ``(x, y, z)`` and the ``[ω]²`` coefficient of ``Jr(ω)⁻¹`` at its angle (:func:`_inv_coef`); below
+    ``θ = 2π/3`` from ``R``'s own ``sin θ, cos θ``: ``1/θ² - (1 + cos θ)/(2 θ sin θ)`` (no trigonometric call)."""
     ax, ay, az = 0.5 * (R[7] - R[5]), 0.5 * (R[2] - R[6]), 0.5 * (R[3] - R[1])
     s = math.sqrt(ax * ax + ay * ay + az * az)
     c = 0.5 * (R[0] + R[4] + R[8] - 1.0)
@@ -226,10 +219,12 @@ def _log3_t(R):
     if c > -0.5:
         if t < _SMALL:
             t2 = t * t
-            k = 1.0 + t2 / 6.0 + 7.0 * t2 * t2 / 360.0
+            f = 1.0 + t2 / 6.0 + 7.0 * t2 * t2 / 360.0
+            k = 1.0 / 12.0 + t2 / 720.0 + t2 * t2 / 30240.0
         else:
-            k = t / s
-        return (k * ax, k * ay, k * az)
+            f = t / s
+            k = 1.0 / (t * t) - (1.0 + c) / (2.0 * t * s)
+        return f * ax, f * ay, f * az, k
     # near π: θ² k kᵀ = θ² (sym(R) - c I)/(1 - c); the largest diagonal entry fixes the axis, ``a`` its sign
     i = 0
     if R[4] > R[0]:
@@ -245,7 +240,14 @@ def _log3_t(R):
     k0 = ki if i == 0 else 0.5 * (R[i] + R[3 * i]) * f
     k1 = ki if i == 1 else 0.5 * (R[3 + i] + R[3 * i + 1]) * f
     k2 = ki if i == 2 else 0.5 * (R[6 + i] + R[3 * i + 2]) * f
-    return (t * k0, t * k1, t * k2)
+    return t * k0, t * k1, t * k2, _inv_coef(t)
+
+
+@uncounted
+def _log3_t(R):
+    """``log3(R)`` as ``(x, y, z)``."""
+    x, y, z, _ = _log3_k_t(R)
+    return x, y, z
 
 
 @uncounted
@@ -260,15 +262,28 @@ def _q_t(rx, ry, rz, x, y, z):
         c2 = (t - s) / (t2 * t)
         c3 = (t2 + 2.0 * c - 2.0) / (2.0 * t2 * t2)
         c4 = (2.0 * t - 3.0 * s + t * c) / (2.0 * t2 * t2 * t)
+    # with W = [φ], P = [ρ], d = φ·ρ and n = φ × ρ: WP = ρφᵀ - d I, PW = φρᵀ - d I, WPW = -d W,
+    # WWP + PWW = nφᵀ - φnᵀ - 2d W, WPWW = WWPW = -d (φφᵀ - θ² I)
+    d = x * rx + y * ry + z * rz
+    n = (y * rz - z * ry, z * rx - x * rz, x * ry - y * rx)
+    f = (x, y, z)
+    r = (rx, ry, rz)
     P = _skew(rx, ry, rz)
     W = _skew(x, y, z)
-    WP, PW = _mm(W, P), _mm(P, W)
-    WPW = _mm(WP, W)
-    WWP, PWW = _mm(W, WP), _mm(PW, W)
-    WPWW, WWPW = _mm(WPW, W), _mm(W, WPW)
-    first = _lin(0.5, P, c2, WP, c2, PW, c2 - 3.0 * c3, WPW)
-    second = _lin(c3, WWP, c3, PWW, c4, WPWW, c4, WWPW)
-    return _add(first, second)
+    dw = (c2 - c3) * d
+    ff = 2.0 * c4 * d
+    diag = 2.0 * d * (c4 * t2 - c2)
+    return (
+        0.5 * P[0] + c2 * 2.0 * r[0] * f[0] - ff * f[0] * f[0] + diag,
+        0.5 * P[1] + c2 * (r[0] * f[1] + f[0] * r[1]) + c3 * (n[0] * f[1] - f[0] * n[1]) - dw * W[1] - ff * f[0] * f[1],
+        0.5 * P[2] + c2 * (r[0] * f[2] + f[0] * r[2]) + c3 * (n[0] * f[2] - f[0] * n[2]) - dw * W[2] - ff * f[0] * f[2],
+        0.5 * P[3] + c2 * (r[1] * f[0] + f[1] * r[0]) + c3 * (n[1] * f[0] - f[1] * n[0]) - dw * W[3] - ff * f[1] * f[0],
+        0.5 * P[4] + c2 * 2.0 * r[1] * f[1] - ff * f[1] * f[1] + diag,
+        0.5 * P[5] + c2 * (r[1] * f[2] + f[1] * r[2]) + c3 * (n[1] * f[2] - f[1] * n[2]) - dw * W[5] - ff * f[1] * f[2],
+        0.5 * P[6] + c2 * (r[2] * f[0] + f[2] * r[0]) + c3 * (n[2] * f[0] - f[2] * n[0]) - dw * W[6] - ff * f[2] * f[0],
+        0.5 * P[7] + c2 * (r[2] * f[1] + f[2] * r[1]) + c3 * (n[2] * f[1] - f[2] * n[1]) - dw * W[7] - ff * f[2] * f[1],
+        0.5 * P[8] + c2 * 2.0 * r[2] * f[2] - ff * f[2] * f[2] + diag,
+    )
 
 
 # --- public SO(3) -------------------------------------------------------------------------------------
@@ -283,8 +298,9 @@ def log3(R, w_out):
 @uncounted
 def jlog3(R, J_out):
     """``J_out (3, 3) = Jlog3(R) = Jexp3(log3 R)⁻¹``."""
-    x, y, z = _log3_t(_load(R))
-    _store(_jr_inv_t(x, y, z, 1.0), J_out, 0, 0)
+    x, y, z, k = _log3_k_t(_load(R))
+    w = _skew(x, y, z)
+    _store(_poly(0.5, k, w, _mm(w, w)), J_out, 0, 0)
 
 
 # --- SE(3) ---------------------------------------------------------------------------------------------
@@ -298,10 +314,12 @@ def _exp6_t(vx, vy, vz, x, y, z):
 
 @uncounted
 def _log6_t(R, px, py, pz):
-    """``log6(R, p)`` as ``(ρx, ρy, ρz, φx, φy, φz)``."""
-    x, y, z = _log3_t(R)
-    rx, ry, rz = _mv(_jr_inv_t(x, y, z, -1.0), px, py, pz)
-    return rx, ry, rz, x, y, z
+    """``log6(R, p)`` as ``(ρx, ρy, ρz, φx, φy, φz)``, then ``Jr(φ)⁻¹``'s coefficient ``k`` (:func:`_log3_k_t`)."""
+    x, y, z, k = _log3_k_t(R)
+    cx, cy, cz = y * pz - z * py, z * px - x * pz, x * py - y * px  # Jl(ω)⁻¹ p = p - ω × p / 2 + k ω × (ω × p)
+    dx, dy, dz = y * cz - z * cy, z * cx - x * cz, x * cy - y * cx
+    rx, ry, rz = px - 0.5 * cx + k * dx, py - 0.5 * cy + k * dy, pz - 0.5 * cz + k * dz
+    return rx, ry, rz, x, y, z, k
 
 
 @uncounted
@@ -319,8 +337,9 @@ def _jexp6_into(vx, vy, vz, x, y, z, J, r0, c0):
 @uncounted
 def _jlog6_into(R, px, py, pz, J, r0, c0):
     """``J[r0:r0+6, c0:c0+6] = jlog6(R, p)``."""
-    rx, ry, rz, x, y, z = _log6_t(R, px, py, pz)
-    A = _jr_inv_t(x, y, z, 1.0)
+    rx, ry, rz, x, y, z, k = _log6_t(R, px, py, pz)
+    w = _skew(x, y, z)
+    A = _poly(0.5, k, w, _mm(w, w))
     _store(A, J, r0, c0)
     _store(A, J, r0 + 3, c0 + 3)
     B = _mm(_mm(A, _q_t(-rx, -ry, -rz, -x, -y, -z)), A)
