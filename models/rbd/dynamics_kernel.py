@@ -50,7 +50,7 @@ from crocopy.kernels import uncounted
 from .free_body_kernel import free_body, free_body_bias, free_body_derivatives
 from .joint_types import FREEFLYER, PRISMATIC, REVOLUTE
 from .lowering import RigidBodyModel, RigidBodyWorkspace
-from .spatial import dot, fcross, get6, mcross, minus, plus, set6, times
+from .spatial import dot, fcross, get6, mcross, minus, plus, set6, times, unit
 
 WORLD = 0
 LOCAL = 1
@@ -333,42 +333,26 @@ def mass_inverse(rb: RigidBodyModel, ws: RigidBodyWorkspace, Minv_out: np.ndarra
 
 @uncounted
 def _composite_coriolis(rb, ws):
-    """``ws.oIc``, ``ws.oBc``: composite inertias and composite ``B_i = ov_i ×* oI_i - oI_i (ov_i ×) + (· ×* h_i)``.
-
-    With ``P = oI_i (ov_i ×)`` and ``oI_i`` symmetric, ``ov_i ×* oI_i = -Pᵀ``, so ``B_i = -(P + Pᵀ) + (· ×* h_i)``.
-    ``(ov ×) = [[ω×, v×], [0, ω×]]`` and ``aᵀ (ω×) = (a × ω)ᵀ``: row ``r`` of ``P`` (``a, b`` the halves of row ``r`` of
-    ``oI_i``) is ``[a × ω, a × v + b × ω]``; column ``c`` of ``(· ×* h)`` is ``e_c ×* h``."""
-    oI, oIc, oBc, ov, oh, P = ws.oI, ws.oIc, ws.oBc, ws.ov, ws.oh, ws.tmp
+    """``ws.oIc``, ``ws.oBc``: composite inertias and composite ``B_i = ov_i ×* oI_i - oI_i (ov_i ×) + (· ×* h_i)``."""
+    oI, oIc, oBc, ov, oh, T = ws.oI, ws.oIc, ws.oBc, ws.ov, ws.oh, ws.tmp
     for i in range(1, rb.njoints):
-        vx, vy, vz, wx, wy, wz = get6(ov, i)
-        for r in range(6):
-            a0, a1, a2, b0, b1, b2 = oI[i, r, 0], oI[i, r, 1], oI[i, r, 2], oI[i, r, 3], oI[i, r, 4], oI[i, r, 5]
-            P[r, 0] = a1 * wz - a2 * wy
-            P[r, 1] = a2 * wx - a0 * wz
-            P[r, 2] = a0 * wy - a1 * wx
-            P[r, 3] = a1 * vz - a2 * vy + b1 * wz - b2 * wy
-            P[r, 4] = a2 * vx - a0 * vz + b2 * wx - b0 * wz
-            P[r, 5] = a0 * vy - a1 * vx + b0 * wy - b1 * wx
-        for r in range(6):
+        ovi, h = get6(ov, i), get6(oh, i)
+        for c in range(6):  # T: the matrix of ovi ×
+            m = mcross(ovi, unit(c))
+            for k in range(6):
+                T[k, c] = m[k]
+        for c in range(6):
+            hx = fcross(unit(c), h)
+            for r in range(6):
+                oBc[i, r, c] = hx[r]
+        for r in range(6):  # (ovi ×*) = -Tᵀ; row r gets -(T[k, r] oI[k] + oI[r, k] T[k]) for k = 0..5 in turn
+            for k in range(6):
+                s1 = T[k, r]
+                s2 = oI[i, r, k]
+                for c in range(6):
+                    oBc[i, r, c] -= s1 * oI[i, k, c] + s2 * T[k, c]
             for c in range(6):
-                oBc[i, r, c] = -(P[r, c] + P[c, r])
                 oIc[i, r, c] = oI[i, r, c]
-        f0, f1, f2, n0, n1, n2 = get6(oh, i)
-        for half in range(2):  # e_c ×* h: linear e_c → [0; e_c × f], angular e_c → [e_c × f; e_c × n]
-            c = 3 * half
-            o = 3 - c  # the rows of e_c × f: 3..5 for a linear column, 0..2 for an angular one
-            oBc[i, o + 1, c] -= f2
-            oBc[i, o + 2, c] += f1
-            oBc[i, o, c + 1] += f2
-            oBc[i, o + 2, c + 1] -= f0
-            oBc[i, o, c + 2] -= f1
-            oBc[i, o + 1, c + 2] += f0
-        oBc[i, 4, 3] -= n2
-        oBc[i, 5, 3] += n1
-        oBc[i, 3, 4] += n2
-        oBc[i, 5, 4] -= n0
-        oBc[i, 3, 5] -= n1
-        oBc[i, 4, 5] += n0
     parent = rb.parent
     for i in range(rb.njoints - 1, 0, -1):
         par = parent[i]

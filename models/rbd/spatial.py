@@ -43,6 +43,13 @@ def times(m: tuple, x: float) -> tuple:
 
 
 @uncounted
+def unit(c: int) -> tuple:
+    """The ``c``-th unit 6-tuple."""
+    return (1.0 if c == 0 else 0.0, 1.0 if c == 1 else 0.0, 1.0 if c == 2 else 0.0,
+            1.0 if c == 3 else 0.0, 1.0 if c == 4 else 0.0, 1.0 if c == 5 else 0.0)
+
+
+@uncounted
 def dot(m: tuple, n: tuple) -> float:
     """``mᵀ n`` of two 6-tuples."""
     return m[0] * n[0] + m[1] * n[1] + m[2] * n[2] + m[3] * n[3] + m[4] * n[4] + m[5] * n[5]
