@@ -38,9 +38,9 @@ from .side_by_side import require_crocoddyl
 from .timing import limit_threads, loops_for, sample_ms
 
 SHIPPED_JOBS = ("quadruped-walk", "quadruped-trot", "quadruped-jump", "humanoid_taichi", "humanoid_manipulation",
-                "quadrotor_fwddyn", "arm_manipulation_fwddyn")
+                "quadrotor_fwddyn", "arm_manipulation_fwddyn", "quadrotor_invdyn", "arm_manipulation_invdyn")
 """Default jobs: ANYmal walk/trot/jump (the ``utils`` quadruped builder), Talos taichi and manipulation,
-the quadrotor and the arm (shipped examples)."""
+the quadrotor and the arm (shipped examples), with forward and with inverse dynamics (SolverIntro)."""
 
 PHASES = ("calc", "calcDiff", "backward")
 WORKER_TIMEOUT = 1800.0
