@@ -391,6 +391,15 @@ def node_calc_diff(tbl, ints, par, x, u):
     residual_jacobians(tbl, ints, par, rb, ws, x, u)
     if has_rows(ints):
         _constraints(tbl, ints, par, rb, ws, x, u, True)
+    return _sums_and_chain(tbl, ints, par, x, rb, cost, terminal)
+
+
+
+@uncounted
+def _sums_and_chain(tbl, ints, par, x, rb, cost, terminal):
+    """The end of a node's ``calcDiff`` once its cost stack holds its residuals and Jacobians: the stack's sums into
+    the node's cost derivatives, and for a running node the differential ones through the Euler chain rule (and its
+    Lie-group end); returns the node's cost (``cost``, the stack's value, times ``dt`` for a running node)."""
     Lx, Lu, Lxx = vec(tbl, ints, E_LX), vec(tbl, ints, E_LU), mat(tbl, ints, E_LXX)
     Lxu, Luu = mat(tbl, ints, E_LXU), mat(tbl, ints, E_LUU)
     r, lb, ub, act_w = vec(tbl, ints, E_R), vec(tbl, ints, E_LB), vec(tbl, ints, E_UB), vec(tbl, ints, E_ACT_WEIGHTS)
@@ -420,11 +429,10 @@ def node_calc_diff(tbl, ints, par, x, u):
     return par[0] * cost
 
 
-
 constraint_values = _constraints
 """The constraint rows of a node's table (:func:`_constraints`), for the other compiled nodes
 (:mod:`.impulse_node_kernel`)."""
 
-euler_step, integrate_chain, remember_values = _step, _integrate_chain, _remember
-"""The Euler step (:func:`_step`), the Lie-group end of the chain rule (:func:`_integrate_chain`) and the stamp
-(:func:`_remember`) of a node's table, for the other compiled nodes (:mod:`.invdyn_node_kernel`)."""
+euler_step, remember_values, sums_and_chain = _step, _remember, _sums_and_chain
+"""The Euler step (:func:`_step`), the stamp (:func:`_remember`) and the end of a ``calcDiff`` (:func:`_sums_and_chain`)
+of a node's table, for the other compiled nodes (:mod:`.invdyn_node_kernel`)."""

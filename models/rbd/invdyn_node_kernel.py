@@ -31,22 +31,19 @@ The arrays arrive in the Euler node's table (:mod:`.node_table`): ``τ`` in the 
 
 from __future__ import annotations
 
-from crocopy.costs.stack_kernel import activation_values, derivatives_and_sums
-from crocopy.integrators.euler_kernel import euler_chain
+from crocopy.costs.stack_kernel import activation_values
 from crocopy.kernels import uncounted
 from crocopy.solvers.riccati_kernel import feedback_control
 
 from .constraint_rows_kernel import constraint_table, has_rows, stack_rows
 from .contact_kernel import contact_calc, contact_calc_diff, contact_force_derivatives
 from .dynamics_kernel import crba, forward_kinematics, rnea_derivatives, rnea_pass
-from .euler_node_kernel import euler_step, integrate_chain, remember_values, stamp_current
+from .euler_node_kernel import euler_step, remember_values, stamp_current, sums_and_chain
 from .lie_kernel import state_diff, state_integrate
 from .node_table import (
     E_A,
     E_A0,
     E_ACT_WEIGHTS,
-    E_AR,
-    E_ARR,
     E_CJU,
     E_CJX,
     E_CR,
@@ -55,42 +52,24 @@ from .node_table import (
     E_DF_DX,
     E_DFU,
     E_DFX,
-    E_DLU,
-    E_DLUU,
-    E_DLX,
-    E_DLXU,
-    E_DLXX,
     E_DTAU_DQ,
     E_DTAU_DV,
-    E_FU,
-    E_FX,
     E_GAINS,
     E_GAP,
-    E_HJU,
-    E_HJX,
     E_ITEM_COSTS,
     E_ITEM_WEIGHTS,
-    E_JC,
     E_JCS,
     E_JU,
-    E_JUC,
     E_JX,
     E_LAM,
     E_LB,
-    E_LU,
-    E_LUU,
-    E_LX,
-    E_LXU,
-    E_LXX,
     E_R,
     E_REF_P,
     E_REF_R,
     E_STAMP,
     E_TAU,
     E_UB,
-    E_WEIGHTS,
     E_XNEXT,
-    EUCLIDEAN,
     N_CONTACTS,
     N_STACK,
     NC,
@@ -352,30 +331,4 @@ def invdyn_calc_diff(tbl, ints, par, iints, x, u):
                     ints[U_START])
     if has_rows(ints):
         _constraints(tbl, ints, par, iints, rb, ws, x, u, True)
-    Lx, Lu, Lxx = vec(tbl, ints, E_LX), vec(tbl, ints, E_LU), mat(tbl, ints, E_LXX)
-    Lxu, Luu = mat(tbl, ints, E_LXU), mat(tbl, ints, E_LUU)
-    r, lb, ub, act_w = vec(tbl, ints, E_R), vec(tbl, ints, E_LB), vec(tbl, ints, E_UB), vec(tbl, ints, E_ACT_WEIGHTS)
-    weights, Ar, Arr = vec(tbl, ints, E_WEIGHTS), vec(tbl, ints, E_AR), vec(tbl, ints, E_ARR)
-    Jx, Ju, u_start = mat(tbl, ints, E_JX), mat(tbl, ints, E_JU), ints[U_START]
-    Jc, HJx, Juc, HJu = mat(tbl, ints, E_JC), mat(tbl, ints, E_HJX), mat(tbl, ints, E_JUC), mat(tbl, ints, E_HJU)
-    if terminal:
-        derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, False, Jc, HJx, Juc, HJu,
-                             Lx, Lu, Lxx, Lxu, Luu)
-        Fx = mat(tbl, ints, E_FX)
-        n = Fx.shape[0]
-        for i in range(n):
-            for j in range(n):
-                Fx[i, j] = 1.0 if i == j else 0.0
-        return cost
-    dLx, dLu, dLxx, dLxu, dLuu = (vec(tbl, ints, E_DLX), vec(tbl, ints, E_DLU), mat(tbl, ints, E_DLXX),
-                                  mat(tbl, ints, E_DLXU), mat(tbl, ints, E_DLUU))
-    derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, True, Jc, HJx, Juc, HJu,
-                         dLx, dLu, dLxx, dLxu, dLuu)
-    euclidean = ints[EUCLIDEAN] != 0
-    euler_chain(
-        mat(tbl, ints, E_DFX), mat(tbl, ints, E_DFU), dLx, dLu, dLxx, dLxu, dLuu, par[0], euclidean,
-        mat(tbl, ints, E_FX), mat(tbl, ints, E_FU), Lx, Lu, Lxx, Lxu, Luu,
-    )
-    if not euclidean:
-        integrate_chain(tbl, ints, x, rb)
-    return par[0] * cost
+    return sums_and_chain(tbl, ints, par, x, rb, cost, terminal)
