@@ -356,18 +356,12 @@ class EulerNode:
                     return class_reason(residual, "residual") + " in a contact node"
                 python.append((residual, cdata.residual))
                 continue
-            frame, reference = getattr(residual, "id", 0), int(residual.type) if kind == table.VELOCITY else 0
-            user = [0, 0, 0, 0]
+            fields = self._stack_item(kind, residual, rows, offset, parameters)
+            if isinstance(fields, str):
+                return fields
             if kind == table.USER:
-                frame, reference = residual.frame, int(residual.frame_reference)
-                user = [residual.flags, *residual.callbacks(), len(parameters(kind, residual))]
                 rows_u = max(rows_u, rows.stop - rows.start)
-            if kind == table.CONE:
-                row, nc = self.contacts.rows.get(frame, (0, 0))
-                if nc < residual.ncf:
-                    return "cone without its active contact"
-                frame, reference = row, residual.ncf
-            items += [kind, rows.start, rows.stop - rows.start, frame, reference, offset, *user]
+            items += fields
             residuals.append((kind, residual))
             offset += len(parameters(kind, residual))
         manager = self.model.differential.constraints
@@ -382,6 +376,22 @@ class EulerNode:
         if self.parameters["user_Ru"].shape[0] < rows_u:
             self.parameters["user_Ru"] = np.zeros((rows_u, self.model.nu))
         return None
+
+    def _stack_item(self, kind: int, residual, rows: slice, offset: int, parameters: Callable) -> list[int] | str:
+        """The fields of one compiled item of the cost stack: kind, first row, rows, frame, reference frame (a cone's
+        contact row and force count), parameter offset and a user residual's flags, callbacks and parameter count;
+        or why it cannot compile."""
+        frame, reference = getattr(residual, "id", 0), int(residual.type) if kind == table.VELOCITY else 0
+        user = [0, 0, 0, 0]
+        if kind == table.USER:
+            frame, reference = residual.frame, int(residual.frame_reference)
+            user = [residual.flags, *residual.callbacks(), len(parameters(kind, residual))]
+        if kind == table.CONE:
+            row, nc = self.contacts.rows.get(frame, (0, 0))
+            if nc < residual.ncf:
+                return "cone without its active contact"
+            frame, reference = row, residual.ncf
+        return [kind, rows.start, rows.stop - rows.start, frame, reference, offset, *user]
 
     @staticmethod
     def _parameters(kind: int, residual) -> list[float]:

@@ -256,11 +256,25 @@ def node_rollout_step(tbl, ints, par, x_ref, x, u_ref, k, K, alpha, lb, ub, u, d
     """One node of the DDP family's rollout (the node step of ``_trial_rollout``): ``dx = x ⊖ x_ref``,
     ``u = clamp(u_ref - α k - K dx, lb, ub)``, the node at ``(x, u)``, and ``x_next = xnext``, or
     ``xnext ⊕ ((α - 1) f)`` if ``gap``; returns the node's cost."""
+    _step_control(tbl, ints, x_ref, x, u_ref, k, K, alpha, lb, ub, u, dx)
+    cost = node_calc(tbl, ints, par, x, u)
+    _step_next(tbl, ints, alpha, x_next, f, gap)
+    return cost
+
+
+@uncounted
+def _step_control(tbl, ints, x_ref, x, u_ref, k, K, alpha, lb, ub, u, dx):
+    """A rollout step's ``dx = x ⊖ x_ref`` and ``u = clamp(u_ref - α k - K dx, lb, ub)``."""
+    rb = entry_model(tbl, ints)
+    state_diff(rb.jtype, rb.idx_q, rb.idx_v, ints[NQ], ints[NV], x_ref, x, dx)
+    feedback_control(u_ref, k, K, dx, alpha, lb, ub, u)
+
+
+@uncounted
+def _step_next(tbl, ints, alpha, x_next, f, gap):
+    """A rollout step's ``x_next = xnext``, or ``xnext ⊕ ((α - 1) f)`` if ``gap``."""
     rb = entry_model(tbl, ints)
     nq, nv = ints[NQ], ints[NV]
-    state_diff(rb.jtype, rb.idx_q, rb.idx_v, nq, nv, x_ref, x, dx)
-    feedback_control(u_ref, k, K, dx, alpha, lb, ub, u)
-    cost = node_calc(tbl, ints, par, x, u)
     xnext = vec(tbl, ints, E_XNEXT)
     if gap:
         step = vec(tbl, ints, E_GAP)
@@ -270,7 +284,6 @@ def node_rollout_step(tbl, ints, par, x_ref, x, u_ref, k, K, alpha, lb, ub, u, d
     else:
         for i in range(nq + nv):
             x_next[i] = xnext[i]
-    return cost
 
 
 @uncounted
@@ -434,5 +447,7 @@ constraint_values = _constraints
 (:mod:`.impulse_node_kernel`)."""
 
 euler_step, remember_values, sums_and_chain = _step, _remember, _sums_and_chain
-"""The Euler step (:func:`_step`), the stamp (:func:`_remember`) and the end of a ``calcDiff`` (:func:`_sums_and_chain`)
-of a node's table, for the other compiled nodes (:mod:`.invdyn_node_kernel`)."""
+step_control, step_next = _step_control, _step_next
+"""The Euler step (:func:`_step`), the stamp (:func:`_remember`), the end of a ``calcDiff`` (:func:`_sums_and_chain`)
+and the two ends of a rollout step (:func:`_step_control`, :func:`_step_next`) of a node's table, for the other
+compiled nodes (:mod:`.invdyn_node_kernel`)."""

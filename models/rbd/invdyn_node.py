@@ -240,18 +240,12 @@ class InvDynNode(EulerNode):
                     return found
                 inv += found
             else:
-                frame, reference = getattr(residual, "id", 0), int(residual.type) if kind == table.VELOCITY else 0
-                user = [0, 0, 0, 0]
+                fields = self._stack_item(kind, residual, rows, offset, parameters)
+                if isinstance(fields, str):
+                    return fields
                 if kind == table.USER:
-                    frame, reference = residual.frame, int(residual.frame_reference)
-                    user = [residual.flags, *residual.callbacks(), len(parameters(kind, residual))]
                     rows_u = max(rows_u, rows.stop - rows.start)
-                if kind == table.CONE:
-                    row, nc = self.contacts.rows.get(frame, (0, 0))
-                    if nc < residual.ncf:
-                        return "cone without its contact"
-                    frame, reference = row, residual.ncf
-                items += [kind, rows.start, rows.stop - rows.start, frame, reference, offset, *user]
+                items += fields
             residuals.append((kind, residual))
             offset += len(parameters(kind, residual))
         manager = self.model.differential.constraints

@@ -33,13 +33,11 @@ from __future__ import annotations
 
 from crocopy.costs.stack_kernel import activation_values
 from crocopy.kernels import uncounted
-from crocopy.solvers.riccati_kernel import feedback_control
 
 from .constraint_rows_kernel import constraint_table, has_rows, stack_rows
 from .contact_kernel import contact_calc, contact_calc_diff, contact_force_derivatives
 from .dynamics_kernel import crba, forward_kinematics, rnea_derivatives, rnea_pass
-from .euler_node_kernel import euler_step, remember_values, stamp_current, sums_and_chain
-from .lie_kernel import state_diff, state_integrate
+from .euler_node_kernel import euler_step, remember_values, stamp_current, step_control, step_next, sums_and_chain
 from .node_table import (
     E_A,
     E_A0,
@@ -55,7 +53,6 @@ from .node_table import (
     E_DTAU_DQ,
     E_DTAU_DV,
     E_GAINS,
-    E_GAP,
     E_ITEM_COSTS,
     E_ITEM_WEIGHTS,
     E_JCS,
@@ -69,7 +66,6 @@ from .node_table import (
     E_STAMP,
     E_TAU,
     E_UB,
-    E_XNEXT,
     N_CONTACTS,
     N_STACK,
     NC,
@@ -248,20 +244,9 @@ def invdyn_rollout_step(tbl, ints, par, iints, x_ref, x, u_ref, k, K, alpha, lb,
     """One node of the DDP family's rollout (as :func:`.euler_node_kernel.node_rollout_step`): ``dx = x ⊖ x_ref``,
     ``u = clamp(u_ref - α k - K dx, lb, ub)``, the node at ``(x, u)``, and ``x_next = xnext``, or
     ``xnext ⊕ ((α - 1) f)`` if ``gap``; returns the node's cost."""
-    rb = entry_model(tbl, ints)
-    nq, nv = ints[NQ], ints[NV]
-    state_diff(rb.jtype, rb.idx_q, rb.idx_v, nq, nv, x_ref, x, dx)
-    feedback_control(u_ref, k, K, dx, alpha, lb, ub, u)
+    step_control(tbl, ints, x_ref, x, u_ref, k, K, alpha, lb, ub, u, dx)
     cost = invdyn_calc(tbl, ints, par, iints, x, u)
-    xnext = vec(tbl, ints, E_XNEXT)
-    if gap:
-        step = vec(tbl, ints, E_GAP)
-        for i in range(2 * nv):
-            step[i] = (alpha - 1.0) * f[i]
-        state_integrate(rb.jtype, rb.idx_q, rb.idx_v, nq, nv, xnext, step, x_next)
-    else:
-        for i in range(nq + nv):
-            x_next[i] = xnext[i]
+    step_next(tbl, ints, alpha, x_next, f, gap)
     return cost
 
 
