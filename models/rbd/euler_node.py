@@ -286,20 +286,34 @@ class EulerNode:
                 return False
             self._seen = ParametersVersion.value
         self.contacts.refresh()
-        par = [float(iam.dt), float(getattr(dam, "_damping", 0.0))]
+        par = [float(iam.dt), self._damping(dam)]
         live = read_parameters(self._residuals, par, self._parameters, read)
         if len(par) != self._n_parameters:  # a user residual's parameters() changed length: read the items again
             self._residuals = None
             return self.refresh(low, memo)
         self.par = np.array(par)
-        np.add(low.rb.armature, dam.armature, out=self.armature)
-        self._actuation_matrix(dam, memo)
+        self._refresh_dynamics(low, dam, memo)
         self._table(low, data, ddata, stack, changed)
-        self._live = (live, contacts_live(self.contacts.models), not frozen(dam.armature),
-                      not self.terminal and actuation_live(dam.actuation, memo["S", id(dam.actuation)]))
+        self._live = self._live_sources(live, dam, memo)
         self._low_version = low.version
         self.refreshes += 1
         return True
+
+    @staticmethod
+    def _damping(dam) -> float:
+        """The dynamics' KKT damping (the table's second parameter)."""
+        return float(getattr(dam, "_damping", 0.0))
+
+    def _refresh_dynamics(self, low: Lowered, dam, memo: dict) -> None:
+        """The node's armature (the model's plus the dynamics') and its actuation matrix ``S``."""
+        np.add(low.rb.armature, dam.armature, out=self.armature)
+        self._actuation_matrix(dam, memo)
+
+    def _live_sources(self, live, dam, memo: dict) -> tuple:
+        """What :meth:`refresh_live` re-reads: the residuals' live parameters, the contacts, a writeable armature,
+        a live actuation matrix."""
+        return (live, contacts_live(self.contacts.models), not frozen(dam.armature),
+                not self.terminal and actuation_live(dam.actuation, memo["S", id(dam.actuation)]))
 
     def refresh_live(self, memo: dict) -> bool:
         """Re-read, in place, what :meth:`refresh` read that may have changed without moving the parameter clock

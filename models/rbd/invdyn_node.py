@@ -46,7 +46,7 @@ from .constraint_rows import ConstraintRows
 from .contact_lowering import CONTACTS
 from .euler_node import ACTUATIONS, EulerNode, Lowered, generic_reason, lowered, residual_kind
 from .joint_types import NotLowerable
-from .live_parameters import contacts_live, read_parameters
+from .live_parameters import contacts_live
 
 INV = 100
 """Item kinds from ``INV`` on are inverse-dynamics items (kind ``INV + k``, ``k`` of :mod:`.invdyn_node_kernel`)."""
@@ -117,37 +117,18 @@ class InvDynNode(EulerNode):
         super().__init__(iam, data, terminal, nv, contacts)
         self.iints = np.zeros(kernel.HEADER, dtype=np.int64)
 
-    def refresh(self, low: Lowered, memo: dict) -> bool:
-        """Re-read the models' parameters and the data arrays' addresses; False if the node no longer qualifies (the
-        reason recorded in ``memo``).  The items are read again when any parameter was touched since this node last
-        read them (:mod:`crocopy.versioning`), the references, the time step and the contacts at every call."""
-        data = self._data()
-        iam = self.model
-        ddata = data.differential
-        stack = ddata.costs.stack
-        changed = stack.refresh_if_stale(self.terminal)
-        changed = changed or self._residuals is None or self._seen != ParametersVersion.value
-        read: dict | None = None
-        if changed:
-            read = {}
-            why = self._read_items(stack, ddata, read)
-            if why is not None:
-                decline(memo, why)
-                return False
-            self._seen = ParametersVersion.value
-        self.contacts.refresh()
-        par = [float(iam.dt), 0.0]
-        live = read_parameters(self._residuals, par, self._parameters, read)
-        if len(par) != self._n_parameters:  # a user residual's parameters() changed length: read the items again
-            self._residuals = None
-            return self.refresh(low, memo)
-        self.par = np.array(par)
+    @staticmethod
+    def _damping(dam) -> float:
+        """No KKT damping: the table's second parameter is 0."""
+        return 0.0
+
+    def _refresh_dynamics(self, low: Lowered, dam, memo: dict) -> None:
+        """The model's armature (the commands read ``τ``, not ``S``)."""
         self.armature[:] = low.rb.armature
-        self._table(low, data, ddata, stack, changed)
-        self._live = (live, contacts_live(self.contacts.models))
-        self._low_version = low.version
-        self.refreshes += 1
-        return True
+
+    def _live_sources(self, live, dam, memo: dict) -> tuple:
+        """What :meth:`refresh_live` re-reads: the residuals' live parameters and the contacts."""
+        return (live, contacts_live(self.contacts.models))
 
     def refresh_live(self, memo: dict) -> bool:
         """Re-read, in place, what :meth:`refresh` read that may have changed without moving the parameter clock
