@@ -40,7 +40,6 @@ from functools import partial
 import numpy as np
 import pinocchio as pin
 
-from crocopy.costs.base import CostModelResidual
 from crocopy.costs.stack_kernel import activation_values
 from crocopy.kernels import checked_address, overridden
 from crocopy.not_compiled import class_reason, decline
@@ -59,6 +58,7 @@ from .joint_types import NotLowerable
 from .live_parameters import actuation_live, contacts_live, frozen, read_parameters
 from .lowering import RigidBodyModel, declaring, lower_model, make_workspace
 from .python_residuals import PythonResiduals
+from .stack_items import compiled_items
 
 ACTUATIONS = declaring(ActuationModelAbstract, "compiled_matrix")
 """The actuations compiled nodes take: those that declare their constant ``S = ∂τ/∂u`` (``compiled_matrix()``)."""
@@ -88,16 +88,6 @@ def python_residual(residual) -> bool:
     return isinstance(residual, ResidualModelAbstract) and not type(residual).__module__.startswith(
         ("crocopy.models.", "crocopy.residuals.")
     )
-
-
-def generic_reason(cost) -> str:
-    """Why a cost the cost stack does not hold (a cost sum's ``generic`` item, :mod:`crocopy.costs.sum`) keeps its
-    node off the compiled path."""
-    if not isinstance(cost, CostModelResidual):
-        return class_reason(cost, "cost")
-    if not cost.activation.diagonal:
-        return class_reason(cost.activation, "activation")
-    return class_reason(cost.residual, "residual with no rows")
 
 
 _NODES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -344,24 +334,13 @@ class EulerNode:
         None, or why the node cannot compile (:mod:`crocopy.not_compiled`).  ``read`` receives the parameters it read,
         by residual (``id``): each residual's are read once per refresh."""
 
-        def parameters(kind: int, residual) -> list[float]:
-            key = id(residual)
-            if key not in read:
-                read[key] = self._parameters(kind, residual)
-            return read[key]
-
+        parameters = self._reader(read)
         self._residuals = None
-        if stack.unfused:
-            return class_reason(stack.unfused[0][0], "activation")
-        if ddata.costs.generic:
-            return generic_reason(self.model.differential.costs.costs[ddata.costs.generic[0]].cost)
         items, residuals, offset, rows_u, python = [], [], 2, 1, []
-        for (_, item, cdata), rows in zip(stack.items, stack.slices):
-            if type(item.cost) is not CostModelResidual:
-                return class_reason(item.cost, "cost")
-            if not item.active or cdata.zero:
-                continue
-            residual = item.cost.residual
+        for entry in compiled_items(stack, ddata.costs, self.model.differential.costs):
+            if isinstance(entry, str):
+                return entry
+            residual, cdata, rows = entry
             kind = residual_kind(residual)
             if kind is None:
                 if not python_residual(residual):
@@ -390,6 +369,18 @@ class EulerNode:
         if self.parameters["user_Ru"].shape[0] < rows_u:
             self.parameters["user_Ru"] = np.zeros((rows_u, self.model.nu))
         return None
+
+    def _reader(self, read: dict) -> Callable:
+        """``parameters(kind, residual)``: the residual's parameters (:meth:`_parameters`), read once per refresh
+        (kept in ``read`` by the residual's ``id``)."""
+
+        def parameters(kind: int, residual) -> list[float]:
+            key = id(residual)
+            if key not in read:
+                read[key] = self._parameters(kind, residual)
+            return read[key]
+
+        return parameters
 
     def _stack_item(self, kind: int, residual, rows: slice, offset: int, parameters: Callable) -> list[int] | str:
         """The fields of one compiled item of the cost stack: kind, first row, rows, frame, reference frame (a cone's

@@ -32,7 +32,6 @@ import weakref
 
 import numpy as np
 
-from crocopy.costs.base import CostModelResidual
 from crocopy.not_compiled import class_reason, decline
 from crocopy.versioning import ParametersVersion
 
@@ -41,10 +40,11 @@ from ..state_multibody import StateMultibody
 from . import impulse_node_kernel as kernel
 from . import node_table as table
 from .constraint_rows import ConstraintRows
-from .euler_node import Lowered, generic_reason, lowered, residual_kind, table_entries
+from .euler_node import Lowered, lowered, residual_kind, table_entries
 from .joint_types import NotLowerable
 from .live_parameters import frozen, read_parameters
 from .lowering import RigidBodyModel
+from .stack_items import compiled_items
 
 IMPULSES = (ImpulseModel3D, ImpulseModel6D)
 """The impulse classes compiled impulse nodes take (exact classes)."""
@@ -181,17 +181,11 @@ class ImpulseNode:
     def _read_items(self, stack, data) -> str | None:
         """Read the compiled items of the cost stack; returns None, or why the node cannot compile."""
         self._items = None
-        if stack.unfused:
-            return class_reason(stack.unfused[0][0], "activation")
-        if data.costs.generic:
-            return generic_reason(self.model.costs.costs[data.costs.generic[0]].cost)
         items, residuals, offset = [], [], 2
-        for (_, item, cdata), rows in zip(stack.items, stack.slices):
-            if type(item.cost) is not CostModelResidual:
-                return class_reason(item.cost, "cost")
-            if not item.active or cdata.zero:
-                continue
-            residual = item.cost.residual
+        for entry in compiled_items(stack, data.costs, self.model.costs):
+            if isinstance(entry, str):
+                return entry
+            residual, _, rows = entry
             kind = residual_kind(residual)
             if kind not in KINDS:
                 return class_reason(residual, "residual") + " in an impulse node"

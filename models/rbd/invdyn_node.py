@@ -33,7 +33,6 @@ from functools import partial
 
 import numpy as np
 
-from crocopy.costs.base import CostModelResidual
 from crocopy.not_compiled import class_reason, decline
 from crocopy.versioning import ParametersVersion
 
@@ -44,9 +43,10 @@ from . import invdyn_node_kernel as kernel
 from . import node_table as table
 from .constraint_rows import ConstraintRows
 from .contact_lowering import CONTACTS
-from .euler_node import ACTUATIONS, EulerNode, Lowered, generic_reason, lowered, residual_kind
+from .euler_node import ACTUATIONS, EulerNode, Lowered, lowered, residual_kind
 from .joint_types import NotLowerable
 from .live_parameters import contacts_live
+from .stack_items import compiled_items
 
 INV = 100
 """Item kinds from ``INV`` on are inverse-dynamics items (kind ``INV + k``, ``k`` of :mod:`.invdyn_node_kernel`)."""
@@ -194,24 +194,13 @@ class InvDynNode(EulerNode):
         """Read the cost stack's and the constraint manager's items: the Euler node's kinds into the table's items,
         the inverse-dynamics ones into :attr:`iints`; returns None, or why the node cannot compile."""
 
-        def parameters(kind: int, residual) -> list[float]:
-            key = id(residual)
-            if key not in read:
-                read[key] = self._parameters(kind, residual)
-            return read[key]
-
+        parameters = self._reader(read)
         self._residuals = None
-        if stack.unfused:
-            return class_reason(stack.unfused[0][0], "activation")
-        if ddata.costs.generic:
-            return generic_reason(self.model.differential.costs.costs[ddata.costs.generic[0]].cost)
         items, inv, residuals, offset, rows_u = [], [], [], 2, 1
-        for (_, item, cdata), rows in zip(stack.items, stack.slices):
-            if type(item.cost) is not CostModelResidual:
-                return class_reason(item.cost, "cost")
-            if not item.active or cdata.zero:
-                continue
-            residual = item.cost.residual
+        for entry in compiled_items(stack, ddata.costs, self.model.differential.costs):
+            if isinstance(entry, str):
+                return entry
+            residual, _, rows = entry
             kind = self._kind(residual)
             if kind is None:
                 return class_reason(residual, "residual")
