@@ -18,7 +18,7 @@ import numpy as np
 
 from .action_base import ActionDataAbstract, ActionModelAbstract
 from .guards import Guard, Guarded
-from .validation import ArgumentTypeError, as_count, as_vector, finite_vectors, plain_vectors
+from .validation import ArgumentTypeError, as_count, as_vector, finite_stack, plain_vectors
 from .versioning import STRUCTURE, holds_stale_data
 
 
@@ -209,7 +209,7 @@ class ShootingProblem(Guarded):
         if len(us) != T:
             raise ValueError(f"{us_name} has {len(us)} items, expected T = {T}")
         x_shapes, u_shapes = self._trajectory_shapes()
-        if plain_vectors(xs, x_shapes) and plain_vectors(us, u_shapes) and finite_vectors([*xs, *us]):
+        if plain_vectors(xs, x_shapes) and plain_vectors(us, u_shapes) and finite_stack([*xs, *us]) is not None:
             return list(xs), list(us)
         models = [*self._runningModels, self._terminalModel]
         xs = [as_vector(x, m.state.nx, f"{xs_name}[{t}]") for t, (x, m) in enumerate(zip(xs, models))]

@@ -8,6 +8,7 @@ converters have the signature ``convert(owner, value, name)`` of :class:`crocopy
 
 from __future__ import annotations
 
+import math
 import numbers
 import warnings
 from typing import Any
@@ -80,19 +81,20 @@ _FLOAT64 = np.dtype(np.float64)
 
 def plain_vectors(values: Any, shapes: list[tuple[int]]) -> bool:
     """Whether ``values`` are ``len(shapes)`` float64 arrays of exactly these shapes (what :func:`as_vector` returns
-    unchanged when they are finite, :func:`finite_vectors`)."""
+    unchanged when they are finite, :func:`finite_stack`)."""
     return len(values) == len(shapes) and all(
         type(v) is np.ndarray and v.dtype is _FLOAT64 and v.shape == s for v, s in zip(values, shapes))
 
 
-def finite_vectors(values: list[np.ndarray]) -> bool:
-    """Whether every entry of the 1-D float64 arrays ``values`` is finite, in one sum (a NaN or inf entry makes it
-    NaN or inf; False may also mean that the sum of finite entries overflowed: the caller then checks each)."""
+def finite_stack(values: list[np.ndarray]) -> np.ndarray | None:
+    """The 1-D float64 arrays ``values`` stacked (a new array), or None if an entry is NaN or inf: one sum, then an
+    entry-by-entry check only where the sum is not finite (a NaN/inf entry, or finite entries that overflow)."""
     if not values:
-        return True
+        return np.zeros(0)
+    stacked = np.concatenate(values)
     with np.errstate(over="ignore", invalid="ignore"):
-        total = np.concatenate(values).sum()
-    return bool(total == total) and abs(total) != np.inf
+        total = stacked.sum()
+    return stacked if math.isfinite(total) or np.isfinite(stacked).all() else None
 
 
 def as_matrix(value: Any, shape: tuple[int, int], name: str) -> np.ndarray:

@@ -9,7 +9,6 @@ NaN in ``xs``/``us``: a divergent iterate is never accepted.
 from __future__ import annotations
 
 import functools
-import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -17,7 +16,7 @@ import numpy as np
 from ..enums import FeasibilityNorm
 from ..guards import trusted_path
 from ..shooting import ShootingProblem
-from ..validation import as_bool, as_count, as_number, check_bounds
+from ..validation import as_bool, as_count, as_number, check_bounds, finite_stack, plain_vectors
 from ..versioning import STRUCTURE
 from .std_vector import StdVecAttribute, allocate
 from .stopwatch import profiled
@@ -237,12 +236,11 @@ class SolverAbstract:
         unchanged (float64 vectors of ``sizes``, all finite) and the trajectory ``name`` has entries of those sizes;
         else None (the caller checks them one by one)."""
         held = self.__dict__.get(name)
-        if held is None or len(held) != len(arrays) or len(sizes) != len(arrays) or not all(
-                type(a) is np.ndarray and a.dtype == np.float64 and a.shape == h.shape == (n,)
-                for a, h, n in zip(arrays, held, sizes)):
+        shapes = [(n,) for n in sizes]
+        if held is None or len(held) != len(arrays) or not plain_vectors(arrays, shapes) or any(
+                h.shape != s for h, s in zip(held, shapes)):
             return None
-        flat = np.concatenate(arrays) if arrays else np.zeros(0)
-        return flat if math.isfinite(flat.sum()) or np.isfinite(flat).all() else None
+        return finite_stack(arrays)
 
     def _store(self, name: str, arrays: list[np.ndarray]) -> None:
         """Copy ``arrays`` (checked against the problem) into the trajectory ``name``, or give the solver new
