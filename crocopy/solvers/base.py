@@ -16,7 +16,7 @@ import numpy as np
 from ..enums import FeasibilityNorm
 from ..guards import trusted_path
 from ..shooting import ShootingProblem
-from ..validation import as_bool, as_count, as_number, check_bounds, finite_stack, plain_vectors
+from ..validation import ArgumentTypeError, as_bool, as_count, as_number, check_bounds, finite_stack, plain_vectors
 from ..versioning import STRUCTURE
 from .std_vector import StdVecAttribute, allocate
 from .stopwatch import profiled
@@ -69,13 +69,16 @@ def _checked_solve(solve: Callable) -> Callable:
 
 
 class Setting:
-    """A solver setting checked on assignment: a number ``>= minimum`` (``> minimum`` if ``strict``), infinite
-    only if ``allow_inf`` (a bound that may be absent, e.g. ``reg_max``)."""
+    """A solver setting checked on assignment: a number ``>= minimum`` (``> minimum`` if ``strict``; any sign when
+    ``minimum`` is None) and ``< maximum`` when given, infinite only if ``allow_inf`` (a bound that may be absent, e.g.
+    ``reg_max``)."""
 
-    def __init__(self, minimum: float = 0.0, strict: bool = False, allow_inf: bool = True) -> None:
+    def __init__(self, minimum: float | None = 0.0, strict: bool = False, allow_inf: bool = True,
+                 maximum: float | None = None) -> None:
         self.minimum = minimum
         self.strict = strict
         self.allow_inf = allow_inf
+        self.maximum = maximum
 
     def __set_name__(self, owner: type, name: str) -> None:
         self.name = name
@@ -89,7 +92,43 @@ class Setting:
             raise AttributeError(self.name) from None
 
     def __set__(self, obj: object, value: object) -> None:
-        obj.__dict__[self.name] = as_number(value, self.name, self.minimum, self.strict, allow_inf=self.allow_inf)
+        obj.__dict__[self.name] = self.convert(value)
+
+    def convert(self, value: object) -> object:
+        """``value`` as the setting holds it; ValueError or TypeError naming the setting."""
+        out = as_number(value, self.name, self.minimum, self.strict, allow_inf=self.allow_inf)
+        if self.maximum is not None and not out < self.maximum:
+            raise ValueError(f"{self.name} must be < {self.maximum}, got {out}")
+        return out
+
+
+class CountSetting(Setting):
+    """A solver setting that is an integer ``>= minimum`` (mim-solvers' ``max_qp_iters``, ``filter_size``, ...)."""
+
+    def __init__(self, minimum: int = 0) -> None:
+        super().__init__(minimum)
+
+    def convert(self, value: object) -> int:
+        return as_count(value, self.name, self.minimum)
+
+
+class FlagSetting(Setting):
+    """A solver setting that is a bool."""
+
+    def convert(self, value: object) -> bool:
+        return as_bool(value, self.name)
+
+
+class NormSetting(Setting):
+    """``feasNorm``: a :class:`~crocopy.enums.FeasibilityNorm` (or its integer value)."""
+
+    def convert(self, value: object) -> FeasibilityNorm:
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+            raise ArgumentTypeError(f"{self.name} must be a FeasibilityNorm (LInf, L1), got {type(value).__name__}")
+        try:
+            return FeasibilityNorm(int(value))
+        except ValueError:
+            raise ValueError(f"{self.name} must be a FeasibilityNorm (LInf, L1), got {value!r}") from None
 
 
 def _nx(model) -> int:
@@ -137,6 +176,7 @@ class SolverAbstract:
     th_acceptStep = Setting(allow_inf=False)
     th_stepDec = Setting(0.0, strict=True)
     th_stepInc = Setting(0.0, strict=True)
+    feasNorm = NormSetting()
 
     def __init_subclass__(cls, **kwargs) -> None:
         super().__init_subclass__(**kwargs)

@@ -59,7 +59,7 @@ import numpy as np
 
 from .. import kernels
 from ..shooting import ShootingProblem
-from ..validation import check_bounds
+from ..validation import as_bool, check_bounds
 from . import box_kernel, horizon
 from .base import BackwardPassError
 from .box_qp import BoxQP, BoxQPError
@@ -148,7 +148,7 @@ class BoxSolverMixin:
 
     @compat_crocoddyl.setter
     def compat_crocoddyl(self, value: bool) -> None:
-        self._compat = bool(value)
+        self._compat = as_bool(value, "compat_crocoddyl")
         for qp in self._qps.values():
             qp.compat_crocoddyl = self._compat
 

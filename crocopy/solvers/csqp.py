@@ -37,7 +37,7 @@ from ..enums import FeasibilityNorm
 from ..shooting import ShootingProblem
 from ..versioning import STRUCTURE, ParametersVersion
 from . import csqp_kernel
-from .base import BackwardPassError
+from .base import BackwardPassError, CountSetting, FlagSetting, Setting
 from .csqp_admm import StagewiseADMM
 from .horizon import stores
 from .sqp import SolverSQP
@@ -97,6 +97,27 @@ class SolverCSQP(SolverSQP):
 
     # Compiled nodes write the rows CSQP reads (g, h and their Jacobians in the action datas: constraint_rows.py).
     _nodes_compiled = True
+
+    #: Settings checked on assignment (ValueError or TypeError naming the setting, its range and the value given);
+    #: a negative ``mu_dynamic``/``mu_constraint`` selects the merit weighted by the multipliers.
+    mu_constraint = Setting(None, allow_inf=False)
+    lag_mul_inf_norm_coef = Setting(allow_inf=False)
+    max_qp_iters = CountSetting()
+    eps_abs = Setting(allow_inf=False)
+    eps_rel = Setting(allow_inf=False)
+    sigma = Setting(allow_inf=False)
+    alpha = Setting(0.0, strict=True, allow_inf=False, maximum=2.0)
+    rho_min = Setting(0.0, strict=True, allow_inf=False)
+    rho_max = Setting(0.0, strict=True)
+    rho_update_interval = CountSetting(1)
+    adaptive_rho_tolerance = Setting(0.0, strict=True, allow_inf=False)
+    equality_qp_initial_guess = FlagSetting()
+    reset_y = FlagSetting()
+    reset_rho = FlagSetting()
+    update_rho_with_heuristic = FlagSetting()
+    remove_reg = FlagSetting()
+    with_qp_callbacks = FlagSetting()
+    max_solve_time = Setting()
 
     def __init__(self, problem: ShootingProblem) -> None:
         super().__init__(problem)

@@ -14,6 +14,7 @@ import numpy as np
 from .. import kernels
 from ..shooting import ShootingProblem
 from . import horizon, riccati_kernel
+from .base import Setting
 from .ddp import SolverDDP
 
 
@@ -21,6 +22,7 @@ class SolverFDDP(SolverDDP):
     """Crocoddyl's ``SolverFDDP(problem)``."""
 
     _nodes_compiled = True
+    th_acceptNegStep = Setting(allow_inf=False)
 
     def __init__(self, problem: ShootingProblem) -> None:
         super().__init__(problem)

@@ -22,7 +22,7 @@ import numpy as np
 import scipy.linalg
 
 from ..shooting import ShootingProblem
-from .base import SolverAbstract
+from .base import Setting, SolverAbstract
 
 
 class SolverKKT(SolverAbstract):
@@ -39,6 +39,9 @@ class SolverKKT(SolverAbstract):
     dxs, dus, lambdas : list of np.ndarray
         Views of ``primaldual``: T+1 state steps, T control steps, T+1 multipliers.
     """
+
+    x_reg = Setting(allow_inf=False)
+    u_reg = Setting(allow_inf=False)
 
     def __init__(self, problem: ShootingProblem) -> None:
         super().__init__(problem)

@@ -42,7 +42,7 @@ from .. import kernels
 from ..guards import trusted_path
 from ..shooting import ShootingProblem
 from . import compiled_nodes, sqp_kernel
-from .base import check_solve_arguments
+from .base import CountSetting, FlagSetting, Setting, check_solve_arguments
 from .ddp import SolverDDP
 from .horizon import NodeDerivatives
 from .nonfinite import trajectory_finite
@@ -66,6 +66,13 @@ class SolverSQP(SolverDDP):
     du = StdVecAttribute()
     lag_mul = StdVecAttribute()
     fs_try = StdVecAttribute()
+
+    #: Settings checked on assignment (ValueError or TypeError naming the setting, its range and the value given).
+    termination_tolerance = Setting()
+    use_filter_line_search = FlagSetting()
+    filter_size = CountSetting(1)
+    mu_dynamic = Setting(None, allow_inf=False)
+    extra_iteration_for_last_kkt = FlagSetting()
 
     def __init__(self, problem: ShootingProblem) -> None:
         super().__init__(problem)
