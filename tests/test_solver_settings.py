@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from solver_problems import integrator_problem
 from sqp_problems import random_lq
 
 import crocopy
@@ -52,11 +53,22 @@ REFUSED = [
     ("SolverKKT", "u_reg", math.inf, ValueError, "u_reg must be a finite number"),
     ("SolverDDP", "feasNorm", 2, ValueError, "feasNorm must be a FeasibilityNorm (LInf, L1), got 2"),
     ("SolverDDP", "feasNorm", "L1", ArgumentTypeError, "feasNorm must be a FeasibilityNorm"),
+    ("SolverProjection", "th_rank", math.nan, ValueError, "th_rank must be a finite number"),
+    ("SolverProjection", "th_x0", -1e-6, ValueError, "th_x0 must be >= 0.0"),
+    ("SolverProjection", "sigma", -1.0, ValueError, "sigma must be >= 0.0"),
+    ("SolverHDDP", "rank_scale", "global", ValueError, "rank_scale must be one of ('task', 'peak'), got 'global'"),
+    ("SolverHDDP", "th_worse", math.inf, ValueError, "th_worse must be a finite number"),
+    ("SolverHDDP", "max_reg_increases", 1.5, ArgumentTypeError, "max_reg_increases must be an integer"),
+    ("SolverHDDP", "lambda0", -1e-9, ValueError, "lambda0 must be >= 0.0"),
+    ("SolverHDDP", "warm_steps", None, ArgumentTypeError, "warm_steps must be a bool"),
 ]
 
 
 def _solver(name: str, problem=None):
-    return getattr(crocopy, name)(problem if problem is not None else random_lq(seed=1))
+    problem = problem if problem is not None else random_lq(seed=1)
+    if name == "SolverHDDP":
+        return crocopy.SolverHDDP(integrator_problem(), [["state", "goal"], ["control"]])
+    return getattr(crocopy, name)(problem)
 
 
 @pytest.mark.parametrize(("solver", "setting", "value", "error", "words"), REFUSED)

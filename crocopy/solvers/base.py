@@ -119,6 +119,19 @@ class FlagSetting(Setting):
         return as_bool(value, self.name)
 
 
+class ChoiceSetting(Setting):
+    """A solver setting that is one of the strings ``choices``."""
+
+    def __init__(self, *choices: str) -> None:
+        super().__init__()
+        self.choices = choices
+
+    def convert(self, value: object) -> str:
+        if value not in self.choices or not isinstance(value, str):
+            raise ValueError(f"{self.name} must be one of {self.choices}, got {value!r}")
+        return value
+
+
 class NormSetting(Setting):
     """``feasNorm``: a :class:`~crocopy.enums.FeasibilityNorm` (or its integer value)."""
 

@@ -40,7 +40,7 @@ from ..costs.sum import CostModelSum
 from ..integrators.base import IntegratedActionModelAbstract
 from ..integrators.euler import IntegratedActionModelEuler
 from ..shooting import ShootingProblem
-from .base import ForwardPassError
+from .base import ChoiceSetting, CountSetting, FlagSetting, ForwardPassError, Setting
 from .ddp import SolverDDP
 from .hddp_lq import LevelDerivatives, hierarchical_backward_pass
 from .nonfinite import NonFiniteError, locate_in_derivatives, locate_in_rollout, trajectory_finite
@@ -208,6 +208,15 @@ class SolverHDDP(SolverDDP):
     level_costs, level_steps : numpy.ndarray
         Per-level costs of the current iterate and the step ``ν`` of the last accepted iteration.
     """
+
+    th_rank = Setting(allow_inf=False)
+    rank_scale = ChoiceSetting("task", "peak")
+    th_worse = Setting(allow_inf=False)
+    th_model = Setting()
+    max_reg_increases = CountSetting()
+    lambda0 = Setting(allow_inf=False)
+    mu0 = Setting(allow_inf=False)
+    warm_steps = FlagSetting()
 
     def __init__(self, problem: ShootingProblem, levels: Sequence[Sequence[str]]) -> None:
         super().__init__(problem)

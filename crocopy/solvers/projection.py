@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..shooting import ShootingProblem
-from .base import BackwardPassError
+from .base import BackwardPassError, Setting
 from .ddp import SolverDDP
 from .nonfinite import locate_in_derivatives
 from .projection_lq import ConstraintRankError, linear_rollout_model_change, projected_backward_pass
@@ -53,6 +53,9 @@ class SolverProjection(SolverDDP):
     """
 
     _nodes_compiled = True  # reads only the action datas' values, derivatives and rows (compiled nodes write them)
+    sigma = Setting()
+    th_rank = Setting(allow_inf=False)
+    th_x0 = Setting()
 
     def __init__(self, problem: ShootingProblem) -> None:
         super().__init__(problem)
