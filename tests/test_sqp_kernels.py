@@ -39,14 +39,14 @@ def _solve(build, cls, kernels: bool, settings: dict | None = None, maxiter: int
         return solver, converged, out.getvalue()
 
 
-def _assert_same(a, b) -> None:
+def _assert_same(a, b, xs_atol: float = 1e-10) -> None:
     (sa, ca, _), (sb, cb, _) = a, b
     assert ca == cb and sa.iter == sb.iter
     assert sa.cost == pytest.approx(sb.cost, rel=1e-9)
     assert sa.KKT == pytest.approx(sb.KKT, rel=1e-6, abs=1e-12)
     assert sa.gap_norm == pytest.approx(sb.gap_norm, rel=1e-6, abs=1e-12)
     for x, y in zip(sa.xs, sb.xs):
-        np.testing.assert_allclose(x, y, rtol=1e-8, atol=1e-10)
+        np.testing.assert_allclose(x, y, rtol=1e-8, atol=xs_atol)
     for x, y in zip(sa.lag_mul, sb.lag_mul):
         np.testing.assert_allclose(x, y, rtol=1e-6, atol=1e-9)
 
@@ -341,7 +341,7 @@ def test_sqp_on_a_gait_kernels_on_or_off():
                 assert compiled_nodes.select(solver).segments == {0: 3, 4: 7, 8: 11, 12: 15, 16: 17}
             converged = solver.solve(xs, us, 8)
             runs.append((solver, converged, ""))
-    _assert_same(*runs)
+    _assert_same(*runs, xs_atol=1e-9)  # contact dynamics: 4e-10 apart on an AMD EPYC (the host CPU's FMAs)
 
 
 def test_row_spans_cover_every_nonzero_entry():
