@@ -1,0 +1,526 @@
+"""SolverIntro's constrained backward pass in one compiled call (numba), twin of the Python node steps of
+:class:`~crocopy.solvers.intro.SolverIntro` (``computeActionValueFunction``, ``_constrained_gains``,
+``_schur_gains``, ``_constrained_value_function``).
+
+:func:`intro_pass` runs the recursion t = T-1..0 on the arrays listed by address: the solver's stacked
+buffers and the nodes' derivatives (:mod:`.horizon`), the running datas' equality rows ``h, Hx, Hu``
+(``raddr``, ``nh[t]`` rows each) and the per-node read-outs (``oaddr``, columns :data:`YZ` ... :data:`QUZ`,
+laid out by :class:`~crocopy.solvers.intro_buffers.IntroBuffers`; the shapes of the nullspace ones follow the
+rank written into ``ranks[t]``).  A node without rows or without controls takes FDDP's step
+(:func:`~crocopy.solvers.riccati_kernel.node_riccati`); a node with both enforces its rows by ``method``
+(:data:`LU_NULL`, :data:`QR_NULL`, :data:`SCHUR`), each step the twin's (see :mod:`.intro`):
+
+* nullspace: ``[Y Z]`` by the fully pivoted LU of ``Hu`` (:func:`~.intro_kernel.full_pivot_lu_kernel`) or by
+  the column-pivoted Householder QR of ``Huᵀ`` (LAPACK's ``dgeqp3``/``dorgqr`` steps), ``[ks Ks] = Hy⁺ [h Hx]``
+  by Householder least squares, the reduced Hessian ``Qzz`` by Cholesky;
+* Schur: Cholesky of ``Quu`` and of ``Qzz = Hu Quu⁻¹ Huᵀ``.
+
+The value function is the Q-function along the policy, symmetrised, ``preg``-shifted and gap-deflected
+(:func:`~crocopy.solvers.riccati_kernel.finish_value_function`).  The pass returns ``(-1, OK)`` or the first
+node (from the end) that failed and why (:data:`QUU_NOT_PD` ... :data:`NONFINITE_VALUE`): the caller raises
+what the twin raises there.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..kernels import compiled, matrix_at, vector_at
+from .horizon import VX, VXX
+from .intro_kernel import full_pivot_lu_kernel
+from .riccati_kernel import (
+    SMALL,
+    action_value_function,
+    cholesky_lower,
+    cholesky_solve,
+    finish_value_function,
+    node_arrays,
+    node_riccati,
+    q_arrays,
+    q_terms_loops,
+    scratch,
+)
+
+LU_NULL, QR_NULL, SCHUR = 0, 1, 2
+"""``method``: the values of :class:`~crocopy.solvers.intro.EqualitySolverType`."""
+
+OK, QUU_NOT_PD, QZZ_NOT_PD, SCHUR_QUU_NOT_PD, SCHUR_SINGULAR, NONFINITE_ROWS, NONFINITE_VALUE = range(7)
+"""Outcome of a node: FDDP's gains failed (a node without rows), the reduced Hessian is not positive definite,
+Schur's ``Quu`` is not, the Schur complement is singular (or not finite), the equality rows are not finite,
+the value function is not finite."""
+
+YZ, HY, KS, KSM, KZ, KZM, QZ, QZZ, QXZ, QUZ = range(10)
+"""Columns of ``oaddr``: where the read-outs ``YZ, Hy, ks, Ks, kz, Kz, Qz, Qzz, Qxz, Quz`` of a node start."""
+NR = 10
+
+
+def _householder_column(A, j, lo):
+    """LAPACK's ``dlarfg`` on ``A[lo:, j]``: ``A[lo, j] ← β``, ``A[lo+1:, j] ← v[1:]`` (``v[0] = 1``); returns ``τ``
+    (``H = I - τ v vᵀ``, ``H A[lo:, j] = β e₀``)."""
+    m = A.shape[0]
+    alpha = A[lo, j]
+    s = 0.0
+    for i in range(lo + 1, m):
+        s += A[i, j] * A[i, j]
+    if s == 0.0:
+        return 0.0
+    beta = -np.copysign(np.hypot(alpha, np.sqrt(s)), alpha)
+    scale = 1.0 / (alpha - beta)
+    for i in range(lo + 1, m):
+        A[i, j] *= scale
+    A[lo, j] = beta
+    return (beta - alpha) / beta
+
+
+def _apply_householder(A, j, lo, tau, C, c0, c1):
+    """``C[lo:, c0:c1] ← H C[lo:, c0:c1]`` with the reflector of :func:`householder_column` stored in ``A[lo:, j]``."""
+    if tau == 0.0:
+        return
+    m = A.shape[0]
+    for c in range(c0, c1):
+        w = C[lo, c]
+        for i in range(lo + 1, m):
+            w += A[i, j] * C[i, c]
+        w *= tau
+        C[lo, c] -= w
+        for i in range(lo + 1, m):
+            C[i, c] -= w * A[i, j]
+
+
+householder_column = compiled(_householder_column)
+apply_householder = compiled(_apply_householder)
+
+
+def _column_norm(A, j, lo):
+    s = 0.0
+    for i in range(lo, A.shape[0]):
+        s += A[i, j] * A[i, j]
+    return np.sqrt(s)
+
+
+column_norm = compiled(_column_norm)
+
+
+def _pivoted_qr(A, Q, tau, vn1, vn2):
+    """Column-pivoted Householder QR of ``A`` (``(m, n)``, in place: ``R`` on and above the diagonal, the
+    reflectors below), as LAPACK's ``dgeqp3`` (unblocked, ``dlaqp2``: the largest partial column norm first,
+    norms downdated and recomputed on cancellation), and ``Q = H₀ H₁ ... `` (``(m, m)``) as ``dorgqr``."""
+    m, n = A.shape
+    kmax = min(m, n)
+    tol3z = np.sqrt(np.finfo(np.float64).eps)
+    for j in range(n):
+        vn1[j] = column_norm(A, j, 0)
+        vn2[j] = vn1[j]
+    for i in range(kmax):
+        pvt = i
+        for j in range(i + 1, n):
+            if vn1[j] > vn1[pvt]:
+                pvt = j
+        if pvt != i:
+            for r in range(m):
+                A[r, i], A[r, pvt] = A[r, pvt], A[r, i]
+            vn1[pvt] = vn1[i]
+            vn2[pvt] = vn2[i]
+        tau[i] = householder_column(A, i, i)
+        apply_householder(A, i, i, tau[i], A, i + 1, n)
+        for j in range(i + 1, n):
+            if vn1[j] != 0.0:
+                temp = abs(A[i, j]) / vn1[j]
+                temp = max(1.0 - temp * temp, 0.0)
+                ratio = vn1[j] / vn2[j]
+                if temp * ratio * ratio <= tol3z:
+                    if i < m - 1:
+                        vn1[j] = column_norm(A, j, i + 1)
+                        vn2[j] = vn1[j]
+                    else:
+                        vn1[j] = 0.0
+                        vn2[j] = 0.0
+                else:
+                    vn1[j] *= np.sqrt(temp)
+    for i in range(m):
+        for j in range(m):
+            Q[i, j] = 1.0 if i == j else 0.0
+    for i in range(kmax - 1, -1, -1):
+        apply_householder(A, i, i, tau[i], Q, i, m)
+
+
+pivoted_qr = compiled(_pivoted_qr)
+
+
+def _lu_basis(Hu, U, rows, cols, rtol, basis):
+    """``[Y Z]`` of ``Hu`` by fully pivoted LU (``U``: scratch of ``Hu``'s shape); returns the rank ``r``."""
+    p, m = Hu.shape
+    for i in range(p):
+        rows[i] = i
+        for j in range(m):
+            U[i, j] = Hu[i, j]
+    for j in range(m):
+        cols[j] = j
+    r = full_pivot_lu_kernel(U, rows, cols, rtol)
+    for i in range(m):
+        for j in range(r):
+            basis[i, j] = Hu[rows[j], i]
+        for j in range(r, m):
+            basis[i, j] = 0.0
+    for c in range(m - r):
+        for i in range(r - 1, -1, -1):  # x = U[:r, :r]⁻¹ U[:r, r + c], the column's free part is -x
+            acc = U[i, r + c]
+            for j in range(i + 1, r):
+                acc += U[i, j] * basis[cols[j], r + c]
+            basis[cols[i], r + c] = -(acc / U[i, i])
+        basis[cols[r + c], r + c] = 1.0
+    return r
+
+
+def _qr_basis(Hu, A, tau, vn1, vn2, rtol, basis):
+    """``[Y Z]`` of ``Hu`` by column-pivoted QR of ``Huᵀ`` (``A``: scratch of its shape); returns the rank."""
+    p, m = Hu.shape
+    for i in range(m):
+        for j in range(p):
+            A[i, j] = Hu[j, i]
+    pivoted_qr(A, basis, tau, vn1, vn2)
+    first = abs(A[0, 0])
+    r = 0
+    if first > 0.0:
+        for i in range(min(m, p)):
+            if abs(A[i, i]) > rtol * first:
+                r += 1
+    return r
+
+
+lu_basis = compiled(_lu_basis)
+qr_basis = compiled(_qr_basis)
+
+
+def _finite(A):
+    for i in range(A.shape[0]):
+        for j in range(A.shape[1]):
+            if not abs(A[i, j]) < np.inf:
+                return False
+    return True
+
+
+def _finite1(a):
+    for i in range(a.shape[0]):
+        if not abs(a[i]) < np.inf:
+            return False
+    return True
+
+
+finite = compiled(_finite)
+finite1 = compiled(_finite1)
+
+
+def _least_squares(Hy, h, Hx, A, B, ks, Ks):
+    """``ks = Hy⁺ h``, ``Ks = Hy⁺ Hx`` (``Hy`` of full column rank) by Householder QR (scratch ``A`` of ``Hy``'s
+    shape, ``B (p, 1 + ndx)``)."""
+    p, r = Hy.shape
+    n = Hx.shape[1]
+    for i in range(p):
+        for j in range(r):
+            A[i, j] = Hy[i, j]
+        B[i, 0] = h[i]
+        for j in range(n):
+            B[i, 1 + j] = Hx[i, j]
+    for j in range(r):
+        tau = householder_column(A, j, j)
+        apply_householder(A, j, j, tau, A, j + 1, r)
+        apply_householder(A, j, j, tau, B, 0, n + 1)
+    for c in range(n + 1):
+        for i in range(r - 1, -1, -1):
+            acc = B[i, c]
+            for j in range(i + 1, r):
+                acc -= A[i, j] * B[j, c]
+            B[i, c] = acc / A[i, i]
+    for i in range(r):
+        ks[i] = B[i, 0]
+        for j in range(n):
+            Ks[i, j] = B[i, 1 + j]
+
+
+least_squares = compiled(_least_squares)
+
+
+def _nullspace_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, method, rtol, W, rows, cols, idx):
+    """The nullspace step of a node (``o``: its read-out addresses, ``W``: scratch); returns ``(outcome, rank)``."""
+    p, m = Hu.shape
+    n = Hx.shape[1]
+    at = W.ctypes.data
+    basis = matrix_at(o[YZ], m, m)
+    if method == LU_NULL:
+        r = lu_basis(Hu, matrix_at(at, p, m), rows, cols, rtol, basis)
+    else:
+        if not finite(Hu):
+            return NONFINITE_ROWS, 0
+        q = max(m, p)
+        r = qr_basis(
+            Hu,
+            matrix_at(at, m, p),
+            W[m * p : m * p + q],
+            W[m * p + q : m * p + 2 * q],
+            W[m * p + 2 * q : m * p + 3 * q],
+            rtol,
+            basis,
+        )
+    nz = m - r
+    Hy, ks, Ks = matrix_at(o[HY], p, r), vector_at(o[KS], r), matrix_at(o[KSM], r, n)
+    Yks, YKs = vector_at(o[KZ], m), matrix_at(o[KZM], m, n)
+    Qz, Qzz, Qxz, Quz = (
+        vector_at(o[QZ], nz),
+        matrix_at(o[QZZ], nz, nz),
+        matrix_at(o[QXZ], n, nz),
+        matrix_at(o[QUZ], m, nz),
+    )
+    for a in range(p):
+        for j in range(r):
+            acc = 0.0
+            for i in range(m):
+                acc += Hu[a, i] * basis[i, j]
+            Hy[a, j] = acc
+    if r > 0:
+        if not (finite(Hy) and finite1(h) and finite(Hx)):
+            return NONFINITE_ROWS, r
+        least_squares(Hy, h, Hx, matrix_at(at, p, r), matrix_at(at + 8 * p * r, p, n + 1), ks, Ks)
+    for i in range(m):
+        acc = 0.0
+        for j in range(r):
+            acc += basis[i, j] * ks[j]
+        Yks[i] = acc
+        for x in range(n):
+            acc = 0.0
+            for j in range(r):
+                acc += basis[i, j] * Ks[j, x]
+            YKs[i, x] = acc
+    for i in range(m):  # Quz ← Quu Z (solved by Qzz below)
+        for c in range(nz):
+            acc = 0.0
+            for j in range(m):
+                acc += Quu[i, j] * basis[j, r + c]
+            Quz[i, c] = acc
+    for a in range(nz):
+        for c in range(nz):
+            acc = 0.0
+            for i in range(m):
+                acc += basis[i, r + a] * Quz[i, c]
+            Qzz[a, c] = acc
+        acc = 0.0
+        for i in range(m):
+            acc += basis[i, r + a] * Qu[i] - Quz[i, a] * Yks[i]
+        Qz[a] = acc
+        for x in range(n):
+            acc = 0.0
+            for i in range(m):
+                acc += basis[i, r + a] * Qxu[x, i] - Quz[i, a] * YKs[i, x]
+            Qxz[x, a] = acc
+    if nz > 0:
+        L = matrix_at(at, nz, nz)
+        if not cholesky_lower(Qzz, idx, nz, L):
+            return QZZ_NOT_PD, r
+        cholesky_solve(L, nz, Qz)
+        for x in range(n):
+            cholesky_solve(L, nz, Qxz[x])
+        for i in range(m):
+            cholesky_solve(L, nz, Quz[i])
+    for i in range(m):
+        acc = Yks[i]
+        for c in range(nz):
+            acc += basis[i, r + c] * Qz[c]
+        k[i] = acc
+        for x in range(n):
+            acc = YKs[i, x]
+            for c in range(nz):
+                acc += basis[i, r + c] * Qxz[x, c]
+            K[i, x] = acc
+    return OK, r
+
+
+nullspace_gains = compiled(_nullspace_gains)
+
+
+def _schur_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, W, idx):
+    """The Schur-complement step of a node (``o``: its read-out addresses, ``W``: scratch); returns the outcome."""
+    p, m = Hu.shape
+    n = Hx.shape[1]
+    at = W.ctypes.data
+    L = matrix_at(at, m, m)
+    if not cholesky_lower(Quu, idx, m, L):
+        return SCHUR_QUU_NOT_PD
+    at += 8 * m * m
+    HQi = matrix_at(at, p, m)  # rows: Quu⁻¹ Hu[a]
+    at += 8 * p * m
+    KQ = matrix_at(at, n + 1, m)  # rows: Quu⁻¹ Qu, Quu⁻¹ Qxu[x]
+    at += 8 * (n + 1) * m
+    LAM = matrix_at(at, n + 1, p)  # rows: Qzz⁻¹ ks, Qzz⁻¹ Ks[:, x]
+    at += 8 * (n + 1) * p
+    Lz = matrix_at(at, p, p)
+    for a in range(p):
+        for i in range(m):
+            HQi[a, i] = Hu[a, i]
+        cholesky_solve(L, m, HQi[a])
+    for i in range(m):
+        KQ[0, i] = Qu[i]
+        for x in range(n):
+            KQ[1 + x, i] = Qxu[x, i]
+    for x in range(n + 1):
+        cholesky_solve(L, m, KQ[x])
+    ks, Ks, Qzz = vector_at(o[KS], p), matrix_at(o[KSM], p, n), matrix_at(o[QZZ], p, p)
+    for a in range(p):
+        for b in range(p):
+            acc = 0.0
+            for i in range(m):
+                acc += Hu[a, i] * HQi[b, i]
+            Qzz[a, b] = acc
+        acc = 0.0
+        for i in range(m):
+            acc += Hu[a, i] * KQ[0, i]
+        ks[a] = h[a] - acc
+        for x in range(n):
+            acc = 0.0
+            for i in range(m):
+                acc += Hu[a, i] * KQ[1 + x, i]
+            Ks[a, x] = Hx[a, x] - acc
+    if not (finite(Qzz) and finite1(ks) and finite(Ks)) or not cholesky_lower(Qzz, idx, p, Lz):
+        return SCHUR_SINGULAR
+    for a in range(p):
+        LAM[0, a] = ks[a]
+        for x in range(n):
+            LAM[1 + x, a] = Ks[a, x]
+    for x in range(n + 1):
+        cholesky_solve(Lz, p, LAM[x])
+    for i in range(m):
+        acc = KQ[0, i]
+        for a in range(p):
+            acc += HQi[a, i] * LAM[0, a]
+        k[i] = acc
+        for x in range(n):
+            acc = KQ[1 + x, i]
+            for a in range(p):
+                acc += HQi[a, i] * LAM[1 + x, a]
+            K[i, x] = acc
+    for name, rows_, cols_ in ((YZ, m, m), (HY, p, p), (QXZ, n, p), (QUZ, m, p), (KZM, m, n)):
+        Z = matrix_at(o[name], rows_, cols_)
+        for i in range(rows_):
+            for j in range(cols_):
+                Z[i, j] = 0.0
+    for name, size in ((QZ, p), (KZ, m)):
+        z = vector_at(o[name], size)
+        for i in range(size):
+            z[i] = 0.0
+    return OK
+
+
+schur_gains = compiled(_schur_gains)
+
+
+def _constrained_value(Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx, QuuK):
+    """``Vx = Qx - Kᵀ Qu - Qxu k + Kᵀ Quu k``, ``Vxx = Qxx - Qxu K - Kᵀ Qux + Kᵀ Quu K`` (``QuuK``: scratch)."""
+    n, m = Qxu.shape
+    for i in range(m):
+        for x in range(n):
+            acc = 0.0
+            for j in range(m):
+                acc += Quu[i, j] * K[j, x]
+            QuuK[i, x] = acc
+    for x in range(n):
+        acc = Qx[x]
+        for i in range(m):
+            acc += -K[i, x] * Qu[i] - Qxu[x, i] * k[i] + QuuK[i, x] * k[i]
+        Vx[x] = acc
+        for y in range(n):
+            acc = Qxx[x, y]
+            for i in range(m):
+                acc += -Qxu[x, i] * K[i, y] - K[i, x] * Qxu[y, i] + K[i, x] * QuuK[i, y]
+            Vxx[x, y] = acc
+
+
+constrained_value = compiled(_constrained_value)
+
+
+def _node_constrained(daddr, saddr, dims, t, raddr, p, o, preg, gaps, method, rtol, S, W, rows, cols, idx):
+    """Node ``t`` with ``p`` equality rows: Q terms, gains by ``method``, value function; ``(outcome, rank)``."""
+    n, m, n1 = dims[t, 0], dims[t, 1], dims[t + 1, 0]
+    Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, fs = node_arrays(daddr, saddr, dims, t)
+    Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx = q_arrays(saddr, dims, t)
+    if n1 > SMALL:
+        action_value_function(Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, preg, Qxx, Qxu, Quu, Qx, Qu)
+    else:
+        at = S.ctypes.data
+        q_terms_loops(
+            Fx,
+            Fu,
+            Lxx,
+            Lxu,
+            Luu,
+            Lx,
+            Lu,
+            Vxx_n,
+            Vx_n,
+            preg,
+            Qxx,
+            Qxu,
+            Quu,
+            Qx,
+            Qu,
+            matrix_at(at, n, n1),
+            matrix_at(at + 8 * n * n1, m, n1),
+        )
+    h, Hx, Hu = vector_at(raddr[t, 0], p), matrix_at(raddr[t, 1], p, n), matrix_at(raddr[t, 2], p, m)
+    r = 0
+    if method == SCHUR:
+        outcome = schur_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, W, idx)
+    else:
+        outcome, r = nullspace_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, method, rtol, W, rows, cols, idx)
+    if outcome != OK:
+        return outcome, r
+    constrained_value(Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx, matrix_at(W.ctypes.data, m, n))
+    finish_value_function(Vxx, Vx, preg, fs, gaps)
+    return OK, r
+
+
+node_constrained = compiled(_node_constrained)
+
+
+def _work_size(dims, nh):
+    """Scratch for :func:`node_constrained` at every node (the largest of its uses)."""
+    size = 1
+    for t in range(nh.shape[0]):
+        n, m, p = dims[t, 0], dims[t, 1], nh[t]
+        q = max(m, p)
+        size = max(size, m * p + 3 * q, p * q + p * (n + 1), m * m, m * n, m * m + p * m + (n + 1) * (m + p) + p * p)
+    return size
+
+
+def _intro_pass(daddr, saddr, dims, raddr, nh, oaddr, ranks, preg, gaps, method, th_rank):
+    """The whole constrained recursion (t = T-1..0); ``(-1, OK)`` or the first node that failed and why."""
+    S, idx = scratch(dims)
+    T = dims.shape[0] - 1
+    q = 1
+    for t in range(T):
+        q = max(q, dims[t, 1], nh[t])
+    if idx.shape[0] < q:
+        idx = np.arange(q)
+    W = np.empty(work_size(dims, nh))
+    rows = np.empty(q, dtype=np.int64)
+    cols = np.empty(q, dtype=np.int64)
+    for t in range(T - 1, -1, -1):
+        n, m, p = dims[t, 0], dims[t, 1], nh[t]
+        if m > 0 and p > 0:
+            rtol = th_rank * min(p, m)
+            outcome, r = node_constrained(
+                daddr, saddr, dims, t, raddr, p, oaddr[t], preg, gaps, method, rtol, S, W, rows, cols, idx
+            )
+            ranks[t] = r
+            if method == SCHUR and outcome == OK:
+                ranks[t] = np.linalg.matrix_rank(matrix_at(raddr[t, 2], p, m))
+            if outcome != OK:
+                return t, outcome
+        elif not node_riccati(daddr, saddr, dims, t, preg, gaps, S, idx):
+            return t, QUU_NOT_PD
+        o = saddr[t]
+        if not (finite1(vector_at(o[VX], n)) and finite(matrix_at(o[VXX], n, n))):
+            return t, NONFINITE_VALUE
+    return -1, OK
+
+
+work_size = compiled(_work_size)
+intro_pass = compiled(_intro_pass)
