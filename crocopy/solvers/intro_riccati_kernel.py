@@ -283,14 +283,14 @@ def _nullspace_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, method, rtol, W, rows, co
         least_squares(Hy, h, Hx, matrix_at(at, p, r), matrix_at(at + 8 * p * r, p, n + 1), ks, Ks)
     for i in range(m):
         acc = 0.0
-        for j in range(r):
-            acc += basis[i, j] * ks[j]
-        Yks[i] = acc
         for x in range(n):
-            acc = 0.0
-            for j in range(r):
-                acc += basis[i, j] * Ks[j, x]
-            YKs[i, x] = acc
+            YKs[i, x] = 0.0
+        for j in range(r):
+            y = basis[i, j]
+            acc += y * ks[j]
+            for x in range(n):
+                YKs[i, x] += y * Ks[j, x]
+        Yks[i] = acc
     for i in range(m):  # Quz ← Quu Z (solved by Qzz below)
         for c in range(nz):
             acc = 0.0
@@ -307,11 +307,13 @@ def _nullspace_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, method, rtol, W, rows, co
         for i in range(m):
             acc += basis[i, r + a] * Qu[i] - Quz[i, a] * Yks[i]
         Qz[a] = acc
-        for x in range(n):
-            acc = 0.0
-            for i in range(m):
-                acc += basis[i, r + a] * Qxu[x, i] - Quz[i, a] * YKs[i, x]
-            Qxz[x, a] = acc
+    for x in range(n):
+        for c in range(nz):
+            Qxz[x, c] = 0.0
+        for i in range(m):
+            u, v = Qxu[x, i], YKs[i, x]
+            for c in range(nz):
+                Qxz[x, c] += basis[i, r + c] * u - Quz[i, c] * v
     if nz > 0:
         L = matrix_at(at, nz, nz)
         if not cholesky_lower(Qzz, idx, nz, L):
@@ -412,25 +414,31 @@ def _schur_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, W, idx):
 schur_gains = compiled(_schur_gains)
 
 
-def _constrained_value(Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx, QuuK):
-    """``Vx = Qx - Kᵀ Qu - Qxu k + Kᵀ Quu k``, ``Vxx = Qxx - Qxu K - Kᵀ Qux + Kᵀ Quu K`` (``QuuK``: scratch)."""
+def _constrained_value(Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx, G):
+    """``Vx = Qx - Kᵀ Qu - Qxu k + Kᵀ Quu k``, ``Vxx = Qxx - Qxu K - Kᵀ Qux + Kᵀ Quu K``, as
+    ``Vx = Qx - Kᵀ Qu + Gᵀ k``, ``Vxx = Qxx - Qxu K + Kᵀ G`` with ``G = Quu K - Qux`` (scratch ``(nu, ndx)``; rows
+    innermost, so that the loops vectorise)."""
     n, m = Qxu.shape
     for i in range(m):
         for x in range(n):
-            acc = 0.0
-            for j in range(m):
-                acc += Quu[i, j] * K[j, x]
-            QuuK[i, x] = acc
+            G[i, x] = -Qxu[x, i]
+        for j in range(m):
+            a = Quu[i, j]
+            for x in range(n):
+                G[i, x] += a * K[j, x]
     for x in range(n):
-        acc = Qx[x]
-        for i in range(m):
-            acc += -K[i, x] * Qu[i] - Qxu[x, i] * k[i] + QuuK[i, x] * k[i]
-        Vx[x] = acc
+        Vx[x] = Qx[x]
         for y in range(n):
-            acc = Qxx[x, y]
-            for i in range(m):
-                acc += -Qxu[x, i] * K[i, y] - K[i, x] * Qxu[y, i] + K[i, x] * QuuK[i, y]
-            Vxx[x, y] = acc
+            Vxx[x, y] = Qxx[x, y]
+    for i in range(m):
+        a, b = k[i], Qu[i]
+        for x in range(n):
+            Vx[x] += G[i, x] * a - K[i, x] * b
+    for x in range(n):
+        for i in range(m):
+            a, b = Qxu[x, i], K[i, x]
+            for y in range(n):
+                Vxx[x, y] += b * G[i, y] - a * K[i, y]
 
 
 constrained_value = compiled(_constrained_value)
