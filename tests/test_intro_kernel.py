@@ -262,3 +262,32 @@ def test_both_paths_raise_the_same_backward_pass_error(cls, eq_solver, message):
             with pytest.raises(BackwardPassError) as error:
                 solver.backwardPass()
         assert str(error.value) == message
+
+
+@pytest.mark.parametrize("norm", [crocopy.FeasibilityNorm.LInf, crocopy.FeasibilityNorm.L1], ids=str)
+@pytest.mark.parametrize("name", ["lq", "mixed", "arm"])
+def test_equality_norm_in_one_call_equals_the_python_norm(name, norm):
+    """``hfeas`` (every node's ``h``, terminal included) from the compiled call and from numpy; NaN stays NaN."""
+    problem, _, _ = PROBLEMS[name]()
+    r = np.random.RandomState(3)
+    xs = [m.state.rand() for m in (*problem.runningModels, problem.terminalModel)]
+    us = [r.randn(m.nu) for m in problem.runningModels]
+    problem.calc(xs, us)
+    solver = crocopy.SolverIntro(problem)
+    solver.feasNorm = norm
+    values = {}
+    for kernels in (True, False):
+        with crocopy.use_kernels(kernels):
+            values[kernels] = solver._equality_norm()
+    assert values[True] > 0 and values[True] == pytest.approx(values[False], rel=1e-14)
+    problem.runningDatas[1].h[0] = np.nan
+    for kernels in (True, False):
+        with crocopy.use_kernels(kernels):
+            assert np.isnan(solver._equality_norm())
+
+
+def test_equality_norm_without_rows_is_zero():
+    problem = crocopy.ShootingProblem(np.zeros(4), [crocopy.ActionModelLQR(4, 3)] * 3, crocopy.ActionModelLQR(4, 3))
+    for kernels in (True, False):
+        with crocopy.use_kernels(kernels):
+            assert crocopy.SolverIntro(problem)._equality_norm() == 0.0

@@ -49,6 +49,7 @@ import numpy as np
 import scipy.linalg
 
 from .. import kernels
+from ..enums import FeasibilityNorm
 from ..kernels import log_fallback, overridden
 from ..shooting import ShootingProblem
 from ..versioning import STRUCTURE
@@ -222,8 +223,19 @@ class SolverIntro(SolverFDDP):
             self._upsilon = max(self._upsilon, (self._dg + 0.5 * self._dq) / ((1.0 - self.rho) * hfeas))
 
     def _equality_norm(self) -> float:
+        """The norm (``feasNorm``) of every node's ``h``: one compiled call over the datas' rows while
+        :func:`crocopy.kernels_enabled` (:func:`.intro_riccati_kernel.row_norm`)."""
         p = self.problem
+        if kernels.active:
+            tables = self._intro_tables()
+            linf = self.feasNorm == FeasibilityNorm.LInf
+            return intro_riccati_kernel.row_norm(tables.row_addresses(p), tables.h_rows, linf)
         return self._norm([d.h for d in (*p.runningDatas, p.terminalData)])
+
+    def computeEqualityFeasibility(self) -> float:
+        """Norm of the equality-constraint values ``h`` over all nodes (:meth:`_equality_norm`)."""
+        self.hfeas = self._equality_norm()
+        return self.hfeas
 
     def tryStep(self, steplength: float = 1.0) -> float:
         """Roll out with step ``steplength``; returns the cost reduction ``dV``.
@@ -340,7 +352,7 @@ class SolverIntro(SolverFDDP):
             self._derivatives.update(datas, self._node_dims),
             h.addr,
             h.dims,
-            tables.row_addresses(datas),
+            tables.row_addresses(problem),
             tables.nh,
             tables.oaddr,
             tables.ranks,
@@ -374,7 +386,7 @@ class SolverIntro(SolverFDDP):
         key = (id(problem), problem._nodes_version, STRUCTURE[0])
         held = self.__dict__.get("_intro_held")
         if held is None or held[0] != key:
-            held = self.__dict__["_intro_held"] = (key, IntroBuffers(problem.runningModels))
+            held = self.__dict__["_intro_held"] = (key, IntroBuffers(problem.runningModels, problem.terminalModel))
             self._readout_key = None
         return held[1]
 

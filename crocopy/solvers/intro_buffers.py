@@ -41,17 +41,19 @@ class IntroBuffers:
     nh : ndarray
         Rows enforced at each node (its ``nh``; 0 at a node without controls).
     rows : EqualityRows
-        Where each data's ``h, Hx, Hu`` are (:meth:`row_addresses`).
+        Where each data's ``h, Hx, Hu`` are, the terminal one's last (:meth:`row_addresses`).
     oaddr : ndarray
         ``(T, NR)``: where each read-out slot starts (0 at a node without enforced rows).
     ranks : ndarray
         ``Hu_rank`` of each node as the last pass left it.
     """
 
-    def __init__(self, models: Sequence) -> None:
+    def __init__(self, models: Sequence, terminal: object) -> None:
         self.dims = [(m.state.ndx, m.nu, m.nh if m.nu else 0) for m in models]
         self.nh = np.array([p for _, _, p in self.dims], dtype=np.int64)
-        self._row_dims = [(max(m.nh, m.nh_T), m.state.ndx, m.nu) for m in models]
+        self._row_dims = [(max(m.nh, m.nh_T), m.state.ndx, m.nu) for m in (*models, terminal)]
+        self.h_rows = np.array([r for r, _, _ in self._row_dims], dtype=np.int64)
+        """The length of each data's ``h`` (the T running nodes, then the terminal one)."""
         self.rows = EqualityRows()
         sizes = []
         for n, m, p in self.dims:
@@ -65,9 +67,10 @@ class IntroBuffers:
         self.ranks = np.zeros(len(self.dims), dtype=np.int64)
         self.constrained = [t for t, (_, _, p) in enumerate(self.dims) if p]
 
-    def row_addresses(self, datas: list) -> np.ndarray:
-        """``(T, 3)``: where ``h, Hx, Hu`` of ``datas`` are (ValueError if one does not have its node's shape)."""
-        return self.rows.update(datas, self._row_dims)
+    def row_addresses(self, problem: object) -> np.ndarray:
+        """``(T + 1, 3)``: where ``h, Hx, Hu`` of the problem's running and terminal datas are (ValueError if one does
+        not have its node's shape)."""
+        return self.rows.update([*problem.runningDatas, problem.terminalData], self._row_dims)
 
     def shapes(self, t: int, method: int) -> list[tuple]:
         """The shapes of node ``t``'s read-outs after a pass by ``method`` (rank :attr:`ranks` ``[t]``)."""

@@ -19,6 +19,8 @@ The value function is the Q-function along the policy, symmetrised, ``preg``-shi
 (:func:`~crocopy.solvers.riccati_kernel.finish_value_function`).  The pass returns ``(-1, OK)`` or the first
 node (from the end) that failed and why (:data:`QUU_NOT_PD` ... :data:`NONFINITE_VALUE`): the caller raises
 what the twin raises there.
+
+:func:`row_norm` gives ``hfeas``, the norm of every node's ``h`` (twin: ``SolverAbstract._norm`` of them).
 """
 
 from __future__ import annotations
@@ -532,3 +534,23 @@ def _intro_pass(daddr, saddr, dims, raddr, nh, oaddr, ranks, preg, gaps, method,
 
 work_size = compiled(_work_size)
 intro_pass = compiled(_intro_pass)
+
+
+def _row_norm(raddr, rows, linf):
+    """The norm of every listed ``h`` (``rows[t]`` entries at ``raddr[t, 0]``): ``max |h|`` if ``linf`` (NaN if one is
+    NaN, as numpy's), else ``Σ |h|``; 0 when there are none."""
+    total = 0.0
+    for t in range(rows.shape[0]):
+        h = vector_at(raddr[t, 0], rows[t])
+        for i in range(rows[t]):
+            a = abs(h[i])
+            if not linf:
+                total += a
+            elif a > total or a != a:
+                total = a
+                if a != a:
+                    return a
+    return total
+
+
+row_norm = compiled(_row_norm)
