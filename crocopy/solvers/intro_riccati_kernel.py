@@ -27,14 +27,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kernels import compiled, matrix_at, vector_at
+from ..kernels import compiled, matrix_at, uncounted, vector_at
 from .horizon import VX, VXX
 from .intro_kernel import full_pivot_lu_kernel
 from .riccati_kernel import (
     SMALL,
     action_value_function,
-    cholesky_lower,
-    cholesky_solve,
     finish_value_function,
     node_arrays,
     node_riccati,
@@ -89,8 +87,8 @@ def _apply_householder(A, j, lo, tau, C, c0, c1):
             C[i, c] -= w * A[i, j]
 
 
-householder_column = compiled(_householder_column)
-apply_householder = compiled(_apply_householder)
+householder_column = uncounted(_householder_column)
+apply_householder = uncounted(_apply_householder)
 
 
 def _column_norm(A, j, lo):
@@ -100,7 +98,7 @@ def _column_norm(A, j, lo):
     return np.sqrt(s)
 
 
-column_norm = compiled(_column_norm)
+column_norm = uncounted(_column_norm)
 
 
 def _pivoted_qr(A, Q, tau, vn1, vn2):
@@ -146,7 +144,52 @@ def _pivoted_qr(A, Q, tau, vn1, vn2):
         apply_householder(A, i, i, tau[i], Q, i, m)
 
 
-pivoted_qr = compiled(_pivoted_qr)
+pivoted_qr = uncounted(_pivoted_qr)
+
+
+def _cholesky(A, n, L):
+    """Lower Cholesky factor of ``A[:n, :n]`` into ``L[:n, :n]``; False if not positive definite or not finite."""
+    for j in range(n):
+        s = A[j, j]
+        for p in range(j):
+            s -= L[j, p] * L[j, p]
+        if not 0.0 < s < np.inf:
+            return False
+        L[j, j] = np.sqrt(s)
+        for i in range(j + 1, n):
+            s = A[i, j]
+            for p in range(j):
+                s -= L[i, p] * L[j, p]
+            L[i, j] = s / L[j, j]
+            if not abs(L[i, j]) < np.inf:
+                return False
+    return True
+
+
+def _cholesky_solve(L, R):
+    """``R ← (L Lᵀ)⁻¹ R`` (``R (n, c)``, ``L`` the factor of :func:`cholesky`), the columns innermost (they are
+    independent: the substitutions run on all of them at once)."""
+    n, c = R.shape
+    for i in range(n):
+        for p in range(i):
+            a = L[i, p]
+            for j in range(c):
+                R[i, j] -= a * R[p, j]
+        d = L[i, i]
+        for j in range(c):
+            R[i, j] /= d
+    for i in range(n - 1, -1, -1):
+        for p in range(i + 1, n):
+            a = L[p, i]
+            for j in range(c):
+                R[i, j] -= a * R[p, j]
+        d = L[i, i]
+        for j in range(c):
+            R[i, j] /= d
+
+
+cholesky = uncounted(_cholesky)
+cholesky_solve = uncounted(_cholesky_solve)
 
 
 def _lu_basis(Hu, U, rows, cols, rtol, basis):
@@ -190,8 +233,8 @@ def _qr_basis(Hu, A, tau, vn1, vn2, rtol, basis):
     return r
 
 
-lu_basis = compiled(_lu_basis)
-qr_basis = compiled(_qr_basis)
+lu_basis = uncounted(_lu_basis)
+qr_basis = uncounted(_qr_basis)
 
 
 def _finite(A):
@@ -209,8 +252,8 @@ def _finite1(a):
     return True
 
 
-finite = compiled(_finite)
-finite1 = compiled(_finite1)
+finite = uncounted(_finite)
+finite1 = uncounted(_finite1)
 
 
 def _least_squares(Hy, h, Hx, A, B, ks, Ks):
@@ -240,10 +283,10 @@ def _least_squares(Hy, h, Hx, A, B, ks, Ks):
             Ks[i, j] = B[i, 1 + j]
 
 
-least_squares = compiled(_least_squares)
+least_squares = uncounted(_least_squares)
 
 
-def _nullspace_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, method, rtol, W, rows, cols, idx):
+def _nullspace_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, method, rtol, W, rows, cols):
     """The nullspace step of a node (``o``: its read-out addresses, ``W``: scratch); returns ``(outcome, rank)``."""
     p, m = Hu.shape
     n = Hx.shape[1]
@@ -318,13 +361,22 @@ def _nullspace_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, method, rtol, W, rows, co
                 Qxz[x, c] += basis[i, r + c] * u - Quz[i, c] * v
     if nz > 0:
         L = matrix_at(at, nz, nz)
-        if not cholesky_lower(Qzz, idx, nz, L):
+        if not cholesky(Qzz, nz, L):
             return QZZ_NOT_PD, r
-        cholesky_solve(L, nz, Qz)
-        for x in range(n):
-            cholesky_solve(L, nz, Qxz[x])
-        for i in range(m):
-            cholesky_solve(L, nz, Quz[i])
+        R = matrix_at(at + 8 * nz * nz, nz, 1 + n + m)  # [Qz  Qxzᵀ  Quzᵀ], solved at once
+        for a in range(nz):
+            R[a, 0] = Qz[a]
+            for x in range(n):
+                R[a, 1 + x] = Qxz[x, a]
+            for i in range(m):
+                R[a, 1 + n + i] = Quz[i, a]
+        cholesky_solve(L, R)
+        for a in range(nz):
+            Qz[a] = R[a, 0]
+            for x in range(n):
+                Qxz[x, a] = R[a, 1 + x]
+            for i in range(m):
+                Quz[i, a] = R[a, 1 + n + i]
     for i in range(m):
         acc = Yks[i]
         for c in range(nz):
@@ -338,69 +390,58 @@ def _nullspace_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, method, rtol, W, rows, co
     return OK, r
 
 
-nullspace_gains = compiled(_nullspace_gains)
+nullspace_gains = uncounted(_nullspace_gains)
 
 
-def _schur_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, W, idx):
+def _schur_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, W):
     """The Schur-complement step of a node (``o``: its read-out addresses, ``W``: scratch); returns the outcome."""
     p, m = Hu.shape
     n = Hx.shape[1]
     at = W.ctypes.data
     L = matrix_at(at, m, m)
-    if not cholesky_lower(Quu, idx, m, L):
+    if not cholesky(Quu, m, L):
         return SCHUR_QUU_NOT_PD
     at += 8 * m * m
-    HQi = matrix_at(at, p, m)  # rows: Quu⁻¹ Hu[a]
-    at += 8 * p * m
-    KQ = matrix_at(at, n + 1, m)  # rows: Quu⁻¹ Qu, Quu⁻¹ Qxu[x]
-    at += 8 * (n + 1) * m
-    LAM = matrix_at(at, n + 1, p)  # rows: Qzz⁻¹ ks, Qzz⁻¹ Ks[:, x]
-    at += 8 * (n + 1) * p
+    B = matrix_at(at, m, p + 1 + n)  # Quu⁻¹ [Huᵀ  Qu  Qux]
+    at += 8 * m * (p + 1 + n)
+    LAM = matrix_at(at, p, 1 + n)  # Qzz⁻¹ [ks  Ks]
+    at += 8 * p * (1 + n)
     Lz = matrix_at(at, p, p)
-    for a in range(p):
-        for i in range(m):
-            HQi[a, i] = Hu[a, i]
-        cholesky_solve(L, m, HQi[a])
     for i in range(m):
-        KQ[0, i] = Qu[i]
+        for a in range(p):
+            B[i, a] = Hu[a, i]
+        B[i, p] = Qu[i]
         for x in range(n):
-            KQ[1 + x, i] = Qxu[x, i]
-    for x in range(n + 1):
-        cholesky_solve(L, m, KQ[x])
+            B[i, p + 1 + x] = Qxu[x, i]
+    cholesky_solve(L, B)
     ks, Ks, Qzz = vector_at(o[KS], p), matrix_at(o[KSM], p, n), matrix_at(o[QZZ], p, p)
     for a in range(p):
         for b in range(p):
-            acc = 0.0
-            for i in range(m):
-                acc += Hu[a, i] * HQi[b, i]
-            Qzz[a, b] = acc
-        acc = 0.0
+            Qzz[a, b] = 0.0
+        LAM[a, 0] = h[a]
+        for x in range(n):
+            LAM[a, 1 + x] = Hx[a, x]
         for i in range(m):
-            acc += Hu[a, i] * KQ[0, i]
-        ks[a] = h[a] - acc
+            u = Hu[a, i]
+            for b in range(p):
+                Qzz[a, b] += u * B[i, b]
+            for c in range(n + 1):
+                LAM[a, c] -= u * B[i, p + c]
+        ks[a] = LAM[a, 0]
         for x in range(n):
-            acc = 0.0
-            for i in range(m):
-                acc += Hu[a, i] * KQ[1 + x, i]
-            Ks[a, x] = Hx[a, x] - acc
-    if not (finite(Qzz) and finite1(ks) and finite(Ks)) or not cholesky_lower(Qzz, idx, p, Lz):
+            Ks[a, x] = LAM[a, 1 + x]
+    if not (finite(Qzz) and finite(LAM)) or not cholesky(Qzz, p, Lz):
         return SCHUR_SINGULAR
-    for a in range(p):
-        LAM[0, a] = ks[a]
-        for x in range(n):
-            LAM[1 + x, a] = Ks[a, x]
-    for x in range(n + 1):
-        cholesky_solve(Lz, p, LAM[x])
+    cholesky_solve(Lz, LAM)
     for i in range(m):
-        acc = KQ[0, i]
-        for a in range(p):
-            acc += HQi[a, i] * LAM[0, a]
-        k[i] = acc
-        for x in range(n):
-            acc = KQ[1 + x, i]
+        for c in range(n + 1):
+            acc = B[i, p + c]
             for a in range(p):
-                acc += HQi[a, i] * LAM[1 + x, a]
-            K[i, x] = acc
+                acc += B[i, a] * LAM[a, c]
+            if c == 0:
+                k[i] = acc
+            else:
+                K[i, c - 1] = acc
     for name, rows_, cols_ in ((YZ, m, m), (HY, p, p), (QXZ, n, p), (QUZ, m, p), (KZM, m, n)):
         Z = matrix_at(o[name], rows_, cols_)
         for i in range(rows_):
@@ -413,7 +454,7 @@ def _schur_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, W, idx):
     return OK
 
 
-schur_gains = compiled(_schur_gains)
+schur_gains = uncounted(_schur_gains)
 
 
 def _constrained_value(Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx, G):
@@ -443,10 +484,10 @@ def _constrained_value(Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx, G):
                 Vxx[x, y] += b * G[i, y] - a * K[i, y]
 
 
-constrained_value = compiled(_constrained_value)
+constrained_value = uncounted(_constrained_value)
 
 
-def _node_constrained(daddr, saddr, dims, t, raddr, p, o, preg, gaps, method, rtol, S, W, rows, cols, idx):
+def _node_constrained(daddr, saddr, dims, t, raddr, p, o, preg, gaps, method, rtol, S, W, rows, cols):
     """Node ``t`` with ``p`` equality rows: Q terms, gains by ``method``, value function; ``(outcome, rank)``."""
     n, m, n1 = dims[t, 0], dims[t, 1], dims[t + 1, 0]
     Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, fs = node_arrays(daddr, saddr, dims, t)
@@ -477,9 +518,9 @@ def _node_constrained(daddr, saddr, dims, t, raddr, p, o, preg, gaps, method, rt
     h, Hx, Hu = vector_at(raddr[t, 0], p), matrix_at(raddr[t, 1], p, n), matrix_at(raddr[t, 2], p, m)
     r = 0
     if method == SCHUR:
-        outcome = schur_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, W, idx)
+        outcome = schur_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, W)
     else:
-        outcome, r = nullspace_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, method, rtol, W, rows, cols, idx)
+        outcome, r = nullspace_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, method, rtol, W, rows, cols)
     if outcome != OK:
         return outcome, r
     constrained_value(Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx, matrix_at(W.ctypes.data, m, n))
@@ -487,7 +528,7 @@ def _node_constrained(daddr, saddr, dims, t, raddr, p, o, preg, gaps, method, rt
     return OK, r
 
 
-node_constrained = compiled(_node_constrained)
+node_constrained = uncounted(_node_constrained)
 
 
 def _work_size(dims, nh):
@@ -496,7 +537,14 @@ def _work_size(dims, nh):
     for t in range(nh.shape[0]):
         n, m, p = dims[t, 0], dims[t, 1], nh[t]
         q = max(m, p)
-        size = max(size, m * p + 3 * q, p * q + p * (n + 1), m * m, m * n, m * m + p * m + (n + 1) * (m + p) + p * p)
+        size = max(
+            size,
+            m * p + 3 * q,
+            p * q + p * (n + 1),
+            m * m + m * (1 + n + m),
+            m * n,
+            m * m + m * (p + 1 + n) + p * (1 + n) + p * p,
+        )
     return size
 
 
@@ -507,8 +555,6 @@ def _intro_pass(daddr, saddr, dims, raddr, nh, oaddr, ranks, preg, gaps, method,
     q = 1
     for t in range(T):
         q = max(q, dims[t, 1], nh[t])
-    if idx.shape[0] < q:
-        idx = np.arange(q)
     W = np.empty(work_size(dims, nh))
     rows = np.empty(q, dtype=np.int64)
     cols = np.empty(q, dtype=np.int64)
@@ -517,7 +563,7 @@ def _intro_pass(daddr, saddr, dims, raddr, nh, oaddr, ranks, preg, gaps, method,
         if m > 0 and p > 0:
             rtol = th_rank * min(p, m)
             outcome, r = node_constrained(
-                daddr, saddr, dims, t, raddr, p, oaddr[t], preg, gaps, method, rtol, S, W, rows, cols, idx
+                daddr, saddr, dims, t, raddr, p, oaddr[t], preg, gaps, method, rtol, S, W, rows, cols
             )
             ranks[t] = r
             if method == SCHUR and outcome == OK:
