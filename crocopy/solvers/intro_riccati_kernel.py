@@ -336,57 +336,49 @@ def _nullspace_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, method, rtol, W, rows, co
             for x in range(n):
                 YKs[i, x] += y * Ks[j, x]
         Yks[i] = acc
-    for i in range(m):  # Quz ← Quu Z (solved by Qzz below)
-        for c in range(nz):
-            acc = 0.0
-            for j in range(m):
-                acc += Quu[i, j] * basis[j, r + c]
-            Quz[i, c] = acc
+    R = matrix_at(at + 8 * nz * nz, nz, 1 + n + m)  # [Qz  Qxzᵀ  Quzᵀ] before Qzz⁻¹, solved at once
+    ZT = matrix_at(at + 8 * nz * (nz + 1 + n + m), nz, m)
     for a in range(nz):
+        for i in range(m):
+            ZT[a, i] = basis[i, r + a]
+    for a in range(nz):
+        for c in range(1 + n + m):
+            R[a, c] = 0.0
+        for j in range(m):  # (Quu Z)ᵀ = Zᵀ Quu
+            z = ZT[a, j]
+            for i in range(m):
+                R[a, 1 + n + i] += z * Quu[j, i]
+        acc = 0.0
+        for i in range(m):
+            z, q = ZT[a, i], R[a, 1 + n + i]
+            acc += z * Qu[i] - q * Yks[i]
+            for x in range(n):
+                R[a, 1 + x] += z * Qxu[x, i] - q * YKs[i, x]
+        R[a, 0] = acc
         for c in range(nz):
             acc = 0.0
             for i in range(m):
-                acc += basis[i, r + a] * Quz[i, c]
+                acc += R[a, 1 + n + i] * ZT[c, i]
             Qzz[a, c] = acc
-        acc = 0.0
-        for i in range(m):
-            acc += basis[i, r + a] * Qu[i] - Quz[i, a] * Yks[i]
-        Qz[a] = acc
-    for x in range(n):
-        for c in range(nz):
-            Qxz[x, c] = 0.0
-        for i in range(m):
-            u, v = Qxu[x, i], YKs[i, x]
-            for c in range(nz):
-                Qxz[x, c] += basis[i, r + c] * u - Quz[i, c] * v
     if nz > 0:
         L = matrix_at(at, nz, nz)
         if not cholesky(Qzz, nz, L):
             return QZZ_NOT_PD, r
-        R = matrix_at(at + 8 * nz * nz, nz, 1 + n + m)  # [Qz  Qxzᵀ  Quzᵀ], solved at once
-        for a in range(nz):
-            R[a, 0] = Qz[a]
-            for x in range(n):
-                R[a, 1 + x] = Qxz[x, a]
-            for i in range(m):
-                R[a, 1 + n + i] = Quz[i, a]
         cholesky_solve(L, R)
-        for a in range(nz):
-            Qz[a] = R[a, 0]
-            for x in range(n):
-                Qxz[x, a] = R[a, 1 + x]
-            for i in range(m):
-                Quz[i, a] = R[a, 1 + n + i]
     for i in range(m):
-        acc = Yks[i]
-        for c in range(nz):
-            acc += basis[i, r + c] * Qz[c]
-        k[i] = acc
+        k[i] = Yks[i]
         for x in range(n):
-            acc = YKs[i, x]
-            for c in range(nz):
-                acc += basis[i, r + c] * Qxz[x, c]
-            K[i, x] = acc
+            K[i, x] = YKs[i, x]
+    for a in range(nz):
+        Qz[a] = R[a, 0]
+        for x in range(n):
+            Qxz[x, a] = R[a, 1 + x]
+        for i in range(m):
+            z = ZT[a, i]
+            Quz[i, a] = R[a, 1 + n + i]
+            k[i] += z * R[a, 0]
+            for x in range(n):
+                K[i, x] += z * R[a, 1 + x]
     return OK, r
 
 
@@ -537,14 +529,11 @@ def _work_size(dims, nh):
     for t in range(nh.shape[0]):
         n, m, p = dims[t, 0], dims[t, 1], nh[t]
         q = max(m, p)
-        size = max(
-            size,
-            m * p + 3 * q,
-            p * q + p * (n + 1),
-            m * m + m * (1 + n + m),
-            m * n,
-            m * m + m * (p + 1 + n) + p * (1 + n) + p * p,
-        )
+        lu_qr = m * p + 3 * q  # LU's U, or QR's A, tau, vn1, vn2
+        lsq = p * q + p * (n + 1)
+        reduced = m * m + m * (1 + n + m) + m * m  # L, R, ZT of the nullspace step
+        schur = m * m + m * (p + 1 + n) + p * (1 + n) + p * p  # L, B, LAM, Lz
+        size = max(size, lu_qr, lsq, reduced, schur, m * n)
     return size
 
 
