@@ -303,6 +303,7 @@ class SolverIntro(SolverFDDP):
         "_constrained_gains",
         "_schur_gains",
         "_constrained_value_function",
+        "_terminal_value_function",
     )
     """The node steps the compiled constrained pass fuses: a subclass overriding one gets the Python steps."""
 
@@ -346,7 +347,7 @@ class SolverIntro(SolverFDDP):
         datas = problem.runningDatas
         self._sync_problem()
         tables = self._intro_tables()
-        gaps = self._terminal_value_function()
+        gaps = not self.isFeasible
         h = self._horizon
         t, outcome = intro_riccati_kernel.intro_pass(
             self._derivatives.update(datas, self._node_dims),

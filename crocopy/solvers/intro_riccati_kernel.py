@@ -3,12 +3,13 @@
 ``_schur_gains``, ``_constrained_value_function``).
 
 :func:`intro_pass` runs the recursion t = T-1..0 on the arrays listed by address: the solver's stacked
-buffers and the nodes' derivatives (:mod:`.horizon`), the running datas' equality rows ``h, Hx, Hu``
-(``raddr``, ``nh[t]`` rows each) and the per-node read-outs (``oaddr``, columns :data:`YZ` ... :data:`QUZ`,
-laid out by :class:`~crocopy.solvers.intro_buffers.IntroBuffers`; the shapes of the nullspace ones follow the
-rank written into ``ranks[t]``).  A node without rows or without controls takes FDDP's step
-(:func:`~crocopy.solvers.riccati_kernel.node_riccati`); a node with both enforces its rows by ``method``
-(:data:`LU_NULL`, :data:`QR_NULL`, :data:`SCHUR`), each step the twin's (see :mod:`.intro`):
+buffers and the nodes' derivatives (:mod:`.horizon`), the datas' equality rows ``h, Hx, Hu`` (``raddr``,
+``nh[t]`` rows each; its last row also lists the terminal ``Lxx, Lx``: the pass starts from the terminal value
+function, as ``SolverDDP._terminal_value_function`` does) and the per-node read-outs (``oaddr``, columns
+:data:`YZ` ... :data:`QUZ`, laid out by :class:`~crocopy.solvers.intro_buffers.IntroBuffers`; the shapes of the
+nullspace ones follow the rank written into ``ranks[t]``).  A node without rows or without controls takes
+FDDP's step (:func:`~crocopy.solvers.riccati_kernel.node_riccati`); a node with both enforces its rows by
+``method`` (:data:`LU_NULL`, :data:`QR_NULL`, :data:`SCHUR`), each step the twin's (see :mod:`.intro`):
 
 * nullspace: ``[Y Z]`` by the fully pivoted LU of ``Hu`` (:func:`~.intro_kernel.full_pivot_lu_kernel`) or by
   the column-pivoted Householder QR of ``Huᵀ`` (LAPACK's ``dgeqp3``/``dorgqr`` steps), ``[ks Ks] = Hy⁺ [h Hx]``
@@ -28,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..kernels import compiled, matrix_at, uncounted, vector_at
-from .horizon import VX, VXX
+from .horizon import FS, VX, VXX
 from .intro_kernel import full_pivot_lu_kernel
 from .riccati_kernel import (
     SMALL,
@@ -537,6 +538,30 @@ def _work_size(dims, nh):
     return size
 
 
+def _terminal_value(saddr, dims, raddr, preg, gaps):
+    """``Vxx_T = Lxx_T + preg I``, ``Vx_T = Lx_T`` (``+ Vxx_T fs_T`` if ``gaps``)."""
+    T = dims.shape[0] - 1
+    n = dims[T, 0]
+    o = saddr[T]
+    Vxx, Vx, fs = matrix_at(o[VXX], n, n), vector_at(o[VX], n), vector_at(o[FS], n)
+    Lxx, Lx = matrix_at(raddr[T, 3], n, n), vector_at(raddr[T, 4], n)
+    for i in range(n):
+        Vx[i] = Lx[i]
+        for j in range(n):
+            Vxx[i, j] = Lxx[i, j]
+        if preg != 0.0:
+            Vxx[i, i] += preg
+    if gaps:
+        for i in range(n):
+            acc = 0.0
+            for j in range(n):
+                acc += Vxx[i, j] * fs[j]
+            Vx[i] += acc
+
+
+terminal_value = uncounted(_terminal_value)
+
+
 def _intro_pass(daddr, saddr, dims, raddr, nh, oaddr, ranks, preg, gaps, method, th_rank):
     """The whole constrained recursion (t = T-1..0); ``(-1, OK)`` or the first node that failed and why."""
     S, idx = scratch(dims)
@@ -547,6 +572,7 @@ def _intro_pass(daddr, saddr, dims, raddr, nh, oaddr, ranks, preg, gaps, method,
     W = np.empty(work_size(dims, nh))
     rows = np.empty(q, dtype=np.int64)
     cols = np.empty(q, dtype=np.int64)
+    terminal_value(saddr, dims, raddr, preg, gaps)
     for t in range(T - 1, -1, -1):
         n, m, p = dims[t, 0], dims[t, 1], nh[t]
         if m > 0 and p > 0:
