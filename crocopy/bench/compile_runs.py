@@ -27,14 +27,27 @@ def threaded_python_reach(lib: ModuleType) -> tuple:
     return problem, xs, us
 
 
+def equality_lq(lib: ModuleType) -> tuple:
+    """LQR nodes with two equality rows each (SolverIntro's compiled constrained pass, its LU and ``hfeas``)."""
+    import numpy as np
+
+    r = np.random.RandomState(0)
+    nx, nu, nh = 4, 3, 2
+    running = lib.ActionModelLQR(np.eye(nx), r.randn(nx, nu), np.eye(nx), np.eye(nu), np.zeros((nx, nu)),
+                                 np.zeros((0, nx + nu)), r.randn(nh, nx + nu), np.zeros(nx), np.zeros(nx), np.zeros(nu),
+                                 np.zeros(0), r.randn(nh))
+    return lib.ShootingProblem(np.ones(nx), [running] * 5, lib.ActionModelLQR(nx, nu)), [], []
+
+
 def warm_up_runs(crocopy: ModuleType, solvers: dict[str, str]) -> list[tuple[Callable, list[type]]]:
     """``(builder, solver classes)`` pairs: :data:`COMPILE_RUNS` (``solvers`` maps a key to a class name), SQP and
-    CSQP on the arm (their QP and glue kernels), the threaded Python-residual reach (FDDP, SQP) and the terminal
-    equality reach (CSQP)."""
+    CSQP on the arm (their QP and glue kernels), the threaded Python-residual reach (FDDP, SQP), the terminal
+    equality reach (CSQP) and LQR nodes with equality rows (SolverIntro)."""
     from ..problems import registry
 
     runs = [(registry.get(name).build, [getattr(crocopy, solvers[k]) for k in keys]) for name, keys in COMPILE_RUNS]
     runs.append((registry.get("arm").build, [crocopy.SolverSQP, crocopy.SolverCSQP]))
     runs.append((threaded_python_reach, [crocopy.SolverFDDP, crocopy.SolverSQP]))
     runs.append((terminal_equality_reach, [crocopy.SolverCSQP]))
+    runs.append((equality_lq, [crocopy.SolverIntro]))
     return runs

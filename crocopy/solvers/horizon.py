@@ -106,20 +106,29 @@ class NodeDerivatives:
     a new one when the problem's nodes change: ``updateModel``, ``circularAppend``, datas rebuilt).
 
     :attr:`addr` ``(T, 7)``: row t holds where ``Fx, Fu, Lxx, Lxu, Luu, Lx, Lu`` (:data:`NAMES`) of
-    ``datas[t]`` are.  The arrays are referenced here as long as their address is listed.
+    ``datas[t]`` are.  The arrays are referenced here as long as their address is listed.  A subclass lists
+    other fields (:attr:`names`, shaped by :meth:`node_shapes`).
     """
+
+    names: tuple[str, ...] = NAMES
+    """The data fields listed, in the columns of :attr:`addr`."""
+
+    @staticmethod
+    def node_shapes(dims: Sequence[tuple[int, ...]]) -> list[list[tuple]]:
+        """The shape of each field of :attr:`names` at each node (``dims[t] = (ndx, nu)``)."""
+        return [[(n, n), (n, m), (n, n), (n, m), (m, m), (n,), (m,)] for n, m in dims]
 
     def __init__(self) -> None:
         self._seen: list[list] = []
         self._shapes: list[list[tuple]] = []
         self._stale: list[int] = []
         self._staged: list[tuple[int, str, np.ndarray]] = []
-        self.addr = np.zeros((0, len(NAMES)), dtype=np.int64)
+        self.addr = np.zeros((0, len(self.names)), dtype=np.int64)
         self._kept: list[list] = []
 
     def __reduce__(self) -> tuple:
         """A copy lists nothing yet (addresses are not valid in another process or object)."""
-        return NodeDerivatives, ()
+        return type(self), ()
 
     def update(self, datas: list, dims: Sequence[tuple[int, int]]) -> np.ndarray:
         """:attr:`addr` for the current arrays of ``datas`` (``dims[t] = (ndx, nu)`` of node t).
@@ -138,20 +147,21 @@ class NodeDerivatives:
         return self.addr
 
     def _sync(self, datas: list, dims: Sequence[tuple[int, int]]) -> None:
-        shapes = [[(n, n), (n, m), (n, n), (n, m), (m, m), (n,), (m,)] for n, m in dims]
+        names = self.names
+        shapes = self.node_shapes(dims)
         if len(self.addr) != len(datas) or shapes != self._shapes:
             self._shapes = shapes
-            self._seen = [[None] * len(NAMES) for _ in datas]
-            self._kept = [[None] * len(NAMES) for _ in datas]
-            self.addr = np.zeros((len(datas), len(NAMES)), dtype=np.int64)
-        self._stale = [t for t, d in enumerate(datas) if not all(stores(type(d), name) for name in NAMES)]
+            self._seen = [[None] * len(names) for _ in datas]
+            self._kept = [[None] * len(names) for _ in datas]
+            self.addr = np.zeros((len(datas), len(names)), dtype=np.int64)
+        self._stale = [t for t, d in enumerate(datas) if not all(stores(type(d), name) for name in names)]
         self._refresh(range(len(datas)), datas)
 
     def _refresh(self, nodes, datas: list) -> None:
         """Take the arrays of ``nodes`` that are not the ones taken before."""
         for t in nodes:
             d, seen = datas[t], self._seen[t]
-            for i, name in enumerate(NAMES):
+            for i, name in enumerate(self.names):
                 a = getattr(d, name)
                 if a is seen[i]:
                     continue

@@ -49,11 +49,14 @@ import numpy as np
 import scipy.linalg
 
 from .. import kernels
+from ..enums import FeasibilityNorm
+from ..kernels import log_fallback, overridden
 from ..shooting import ShootingProblem
 from ..versioning import STRUCTURE
-from . import intro_kernel
+from . import intro_kernel, intro_riccati_kernel
 from .base import BackwardPassError
 from .fddp import SolverFDDP
+from .intro_buffers import READOUTS, IntroBuffers
 
 __all__ = ["EqualitySolverType", "SolverIntro"]
 
@@ -124,7 +127,9 @@ def qr_range_kernel(Hu: np.ndarray, rtol: float) -> tuple[np.ndarray, int]:
     nu = Hu.shape[1]
     if not Hu.size:
         return np.eye(nu), 0
-    Q, R, _ = scipy.linalg.qr(Hu.T, pivoting=True)
+    if not np.isfinite(Hu).all():
+        raise BackwardPassError("non-finite equality rows")
+    Q, R, _ = scipy.linalg.qr(Hu.T, pivoting=True, check_finite=False)
     d = np.abs(np.diag(R))
     r = int(np.sum(d > rtol * d[0])) if d.size and d[0] > 0 else 0
     return Q, r
@@ -218,8 +223,19 @@ class SolverIntro(SolverFDDP):
             self._upsilon = max(self._upsilon, (self._dg + 0.5 * self._dq) / ((1.0 - self.rho) * hfeas))
 
     def _equality_norm(self) -> float:
+        """The norm (``feasNorm``) of every node's ``h``: one compiled call over the datas' rows while
+        :func:`crocopy.kernels_enabled` (:func:`.intro_riccati_kernel.row_norm`)."""
         p = self.problem
+        if kernels.active:
+            tables = self._intro_tables()
+            linf = self.feasNorm == FeasibilityNorm.LInf
+            return intro_riccati_kernel.row_norm(tables.row_addresses(p), tables.h_rows, linf)
         return self._norm([d.h for d in (*p.runningDatas, p.terminalData)])
+
+    def computeEqualityFeasibility(self) -> float:
+        """Norm of the equality-constraint values ``h`` over all nodes (:meth:`_equality_norm`)."""
+        self.hfeas = self._equality_norm()
+        return self.hfeas
 
     def tryStep(self, steplength: float = 1.0) -> float:
         """Roll out with step ``steplength``; returns the cost reduction ``dV``.
@@ -272,13 +288,43 @@ class SolverIntro(SolverFDDP):
         self.stop = max(abs(self.d[0] + 0.5 * self.d[1]), self.hfeas)
         return self.stop
 
+    def __getstate__(self) -> dict:
+        state = super().__getstate__()
+        state.pop("_intro_held", None)
+        state["_readout_key"] = None
+        return state
+
     # ------------------------------------------------------------------ backward pass
+    _node_steps = (
+        "computeActionValueFunction",
+        "computeGains",
+        "computeValueFunction",
+        "_finish_value_function",
+        "_constrained_gains",
+        "_schur_gains",
+        "_constrained_value_function",
+        "_terminal_value_function",
+    )
+    """The node steps the compiled constrained pass fuses: a subclass overriding one gets the Python steps."""
+
     def backwardPass(self) -> None:
         """Riccati recursion with each node's equality rows enforced by ``eq_solver``; without equality rows on a
-        node with controls, FDDP's (compiled where it applies: the same node steps)."""
+        node with controls, FDDP's (compiled where it applies: the same node steps).
+
+        While :func:`crocopy.kernels_enabled` and no subclass overrides a node step, the whole constrained
+        recursion is one compiled call (:func:`.intro_riccati_kernel.intro_pass`, the same steps; the per-node
+        read-outs ``YZ`` ... ``Quz`` are then views of its buffer); else the Python steps below.
+        """
         if not self._equality_nodes():
             super().backwardPass()
             return
+        if kernels.active:
+            steps = overridden(self, SolverIntro, self._node_steps)
+            if not steps:
+                self._constrained_pass_kernel()
+                return
+            log_fallback(type(self), steps, "the compiled constrained pass")
+        self._readout_key = None
         problem = self.problem
         self._terminal_value_function()
         for t in range(problem.T - 1, -1, -1):
@@ -293,6 +339,71 @@ class SolverIntro(SolverFDDP):
                 self.computeValueFunction(t, model)
             if not (np.isfinite(self.Vx[t]).all() and np.isfinite(self.Vxx[t]).all()):
                 raise BackwardPassError(f"non-finite value function at node {t}")
+
+    def _constrained_pass_kernel(self) -> None:
+        """The constrained recursion in one compiled call; raises what the Python steps raise at the first node
+        (from the end) that fails."""
+        problem = self.problem
+        datas = problem.runningDatas
+        self._sync_problem()
+        tables = self._intro_tables()
+        gaps = not self.isFeasible
+        h = self._horizon
+        t, outcome = intro_riccati_kernel.intro_pass(
+            self._derivatives.update(datas, self._node_dims),
+            h.addr,
+            h.dims,
+            tables.row_addresses(problem),
+            tables.nh,
+            tables.oaddr,
+            tables.ranks,
+            float(self.preg),
+            gaps,
+            int(self._eq_solver),
+            float(self.th_rank),
+        )
+        self._sync_readouts(tables)
+        if t >= 0:
+            raise self._kernel_failure(t, outcome)
+
+    def _kernel_failure(self, t: int, outcome: int) -> Exception:
+        """What the Python steps raise where the compiled pass stopped (node ``t``, ``outcome``)."""
+        k = intro_riccati_kernel
+        if outcome == k.QUU_NOT_PD:
+            return self._node_failure(t)
+        return BackwardPassError(
+            {
+                k.QZZ_NOT_PD: f"the reduced Hessian Qzz is not positive definite at node {t}",
+                k.SCHUR_QUU_NOT_PD: f"Quu is not positive definite at node {t}",
+                k.SCHUR_SINGULAR: f"the Schur complement Hu Quu⁻¹ Huᵀ is singular at node {t}",
+                k.NONFINITE_ROWS: "non-finite equality rows",
+            }.get(outcome, f"non-finite value function at node {t}")
+        )
+
+    def _intro_tables(self) -> IntroBuffers:
+        """The compiled pass's tables (:class:`~.intro_buffers.IntroBuffers`), made again when the problem, its nodes
+        or a registry's item set changed."""
+        problem = self.problem
+        key = (id(problem), problem._nodes_version, STRUCTURE[0])
+        held = self.__dict__.get("_intro_held")
+        if held is None or held[0] != key:
+            held = self.__dict__["_intro_held"] = (key, IntroBuffers(problem.runningModels, problem.terminalModel))
+            self._readout_key = None
+        return held[1]
+
+    def _sync_readouts(self, tables: IntroBuffers) -> None:
+        """Point the read-out lists of the constrained nodes at the compiled pass's buffer, shaped by the ranks and
+        the method (again only when one of them changed: the views show whatever the pass wrote)."""
+        method = int(self._eq_solver)
+        key = (method, tables.ranks.tobytes())
+        if self.__dict__.get("_readout_key") == key:
+            return
+        lists = [getattr(self, name) for name in READOUTS]
+        for t in tables.constrained:
+            for held, view in zip(lists, tables.views(t, method)):
+                held[t] = view
+            self.Hu_rank[t] = int(tables.ranks[t])
+        self._readout_key = key
 
     def _equality_nodes(self) -> bool:
         """Whether a running node with controls has equality rows (found again when the problem, its nodes or a
