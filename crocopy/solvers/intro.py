@@ -54,7 +54,7 @@ from ..kernels import log_fallback, overridden
 from ..shooting import ShootingProblem
 from ..versioning import STRUCTURE
 from . import intro_kernel, intro_riccati_kernel
-from .base import BackwardPassError
+from .base import BackwardPassError, FlagSetting, Setting
 from .fddp import SolverFDDP
 from .intro_buffers import READOUTS, IntroBuffers
 
@@ -150,7 +150,7 @@ class SolverIntro(SolverFDDP):
     th_feas : float
         Threshold to define feasibility (default ``1e-4``).
     rho : float
-        Fraction in ``(0, 1)`` of the expected reduction kept by the penalty update (default ``0.3``).
+        Fraction in ``[0, 1)`` of the expected reduction kept by the penalty update (default ``0.3``).
     upsilon : float
         Merit penalty on ``hfeas`` (only grows; read-only in Crocoddyl).
     zero_upsilon : bool
@@ -164,6 +164,12 @@ class SolverIntro(SolverFDDP):
     """
 
     _nodes_compiled = True  # reads only the action datas' values, derivatives and rows (compiled nodes write them)
+    th_feas = Setting(allow_inf=False)
+    rho = Setting(0.0, maximum=1.0)
+    zero_upsilon = FlagSetting()
+    x_reg = Setting(allow_inf=False)
+    u_reg = Setting(allow_inf=False)
+    th_rank = Setting(allow_inf=False)
 
     def __init__(self, problem: ShootingProblem) -> None:
         super().__init__(problem)
