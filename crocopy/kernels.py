@@ -12,6 +12,8 @@ Each kernel lives beside its twin:
                                        ``feedback_control`` / ``feedback_control_numpy``
 ``solvers/box_kernel.py``              ``box_pass`` (twin: ``BoxSolverMixin.computeGains`` with
                                        :class:`~crocopy.solvers.box_qp.BoxQP`)
+``solvers/intro_riccati_kernel.py``    ``intro_pass`` (twin: ``SolverIntro``'s constrained node steps over
+                                       the horizon); ``row_norm`` (twin: ``SolverIntro._norm`` of every ``h``)
 ``costs/stack_kernel.py``              ``activation_values``, ``activation_derivatives``,
                                        ``accumulate`` and their ``*_numpy`` twins
 ``integrators/euler_kernel.py``        ``euler_step``, ``euler_chain``, ``add_integrate_jacobian``
