@@ -105,7 +105,8 @@ column_norm = uncounted(_column_norm)
 def _pivoted_qr(A, Q, tau, vn1, vn2):
     """Column-pivoted Householder QR of ``A`` (``(m, n)``, in place: ``R`` on and above the diagonal, the
     reflectors below), as LAPACK's ``dgeqp3`` (unblocked, ``dlaqp2``: the largest partial column norm first,
-    norms downdated and recomputed on cancellation), and ``Q = H₀ H₁ ... `` (``(m, m)``) as ``dorgqr``."""
+    norms downdated and recomputed on cancellation), and ``Q = H₀ H₁ ⋯ H_{k-1}`` (``(m, m)``, ``k = min(m, n)``)
+    as ``dorgqr``."""
     m, n = A.shape
     kmax = min(m, n)
     tol3z = np.sqrt(np.finfo(np.float64).eps)
