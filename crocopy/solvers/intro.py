@@ -309,7 +309,6 @@ class SolverIntro(SolverFDDP):
         "_constrained_gains",
         "_schur_gains",
         "_constrained_value_function",
-        "_terminal_value_function",
     )
     """The node steps the compiled constrained pass fuses: a subclass overriding one gets the Python steps."""
 
@@ -353,7 +352,7 @@ class SolverIntro(SolverFDDP):
         datas = problem.runningDatas
         self._sync_problem()
         tables = self._intro_tables()
-        gaps = not self.isFeasible
+        gaps = self._terminal_value_function()
         h = self._horizon
         t, outcome = intro_riccati_kernel.intro_pass(
             self._derivatives.update(datas, self._node_dims),

@@ -23,14 +23,14 @@ READOUTS = ("YZ", "Hy", "ks", "Ks", "kz", "Kz", "Qz", "Qzz", "Qxz", "Quz")
 
 
 class EqualityRows(NodeDerivatives):
-    """The addresses of the datas' own ``h, Hx, Hu`` and ``Lxx, Lx`` (the terminal node's start the recursion;
-    ``dims[t] = (rows, ndx, nu)``, ``rows`` the data's ``max(nh, nh_T)``)."""
+    """The addresses of the datas' own ``h, Hx, Hu`` (``dims[t] = (rows, ndx, nu)``, ``rows`` the data's
+    ``max(nh, nh_T)``)."""
 
-    names = ("h", "Hx", "Hu", "Lxx", "Lx")
+    names = ("h", "Hx", "Hu")
 
     @staticmethod
     def node_shapes(dims: Sequence[tuple[int, ...]]) -> list[list[tuple]]:
-        return [[(r,), (r, n), (r, m), (n, n), (n,)] for r, n, m in dims]
+        return [[(r,), (r, n), (r, m)] for r, n, m in dims]
 
 
 class IntroBuffers:
@@ -41,7 +41,7 @@ class IntroBuffers:
     nh : ndarray
         Rows enforced at each node (its ``nh``; 0 at a node without controls).
     rows : EqualityRows
-        Where each data's ``h, Hx, Hu, Lxx, Lx`` are, the terminal one's last (:meth:`row_addresses`).
+        Where each data's ``h, Hx, Hu`` are, the terminal one's last (:meth:`row_addresses`).
     oaddr : ndarray
         ``(T, NR)``: where each read-out slot starts (0 at a node without enforced rows).
     ranks : ndarray
@@ -68,8 +68,8 @@ class IntroBuffers:
         self.constrained = [t for t, (_, _, p) in enumerate(self.dims) if p]
 
     def row_addresses(self, problem: object) -> np.ndarray:
-        """``(T + 1, 5)``: where ``h, Hx, Hu, Lxx, Lx`` of the problem's running and terminal datas are (ValueError if
-        one does not have its node's shape)."""
+        """``(T + 1, 3)``: where ``h, Hx, Hu`` of the problem's running and terminal datas are (ValueError if one does
+        not have its node's shape)."""
         return self.rows.update([*problem.runningDatas, problem.terminalData], self._row_dims)
 
     def shapes(self, t: int, method: int) -> list[tuple]:

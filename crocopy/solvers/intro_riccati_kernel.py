@@ -4,16 +4,16 @@
 
 :func:`intro_pass` runs the recursion t = T-1..0 on the arrays listed by address: the solver's stacked
 buffers and the nodes' derivatives (:mod:`.horizon`), the datas' equality rows ``h, Hx, Hu`` (``raddr``,
-``nh[t]`` rows each; its last row also lists the terminal ``Lxx, Lx``: the pass starts from the terminal value
-function, as ``SolverDDP._terminal_value_function`` does) and the per-node read-outs (``oaddr``, columns
-:data:`YZ` ... :data:`QUZ`, laid out by :class:`~crocopy.solvers.intro_buffers.IntroBuffers`; the shapes of the
-nullspace ones follow the rank written into ``ranks[t]``).  A node without rows or without controls takes
-FDDP's step (:func:`~crocopy.solvers.riccati_kernel.node_riccati`); a node with both enforces its rows by
-``method`` (:data:`LU_NULL`, :data:`QR_NULL`, :data:`SCHUR`), each step the twin's (see :mod:`.intro`):
+``nh[t]`` rows each) and the per-node read-outs (``oaddr``, columns :data:`YZ` ... :data:`QUZ`, laid out by
+:class:`~crocopy.solvers.intro_buffers.IntroBuffers`; the shapes of the nullspace ones follow the rank written into
+``ranks[t]``); the caller has set the terminal value function (``SolverDDP._terminal_value_function``, as before
+FDDP's pass).  A node without rows or without controls takes FDDP's step
+(:func:`~crocopy.solvers.riccati_kernel.node_riccati`); a node with both enforces its rows by ``method``
+(:data:`LU_NULL`, :data:`QR_NULL`, :data:`SCHUR`), each step the twin's (see :mod:`.intro`):
 
-* nullspace: ``[Y Z]`` by the fully pivoted LU of ``Hu`` (:func:`~.intro_kernel.full_pivot_lu_kernel`) or by
-  the column-pivoted Householder QR of ``Huᵀ`` (LAPACK's ``dgeqp3``/``dorgqr`` steps), ``[ks Ks] = Hy⁺ [h Hx]``
-  by Householder least squares, the reduced Hessian ``Qzz`` by Cholesky;
+* nullspace: ``[Y Z]`` by the fully pivoted LU of ``Hu`` or by the column-pivoted Householder QR of ``Huᵀ``
+  (:mod:`.intro_kernel`), ``[ks Ks] = Hy⁺ [h Hx]`` by Householder least squares (:mod:`.householder_kernel`), the
+  reduced Hessian ``Qzz`` by Cholesky (:func:`~crocopy.solvers.riccati_kernel.cholesky_lower`);
 * Schur: Cholesky of ``Quu`` and of ``Qzz = Hu Quu⁻¹ Huᵀ``.
 
 The value function is the Q-function along the policy, symmetrised, ``preg``-shifted and gap-deflected
@@ -29,17 +29,20 @@ from __future__ import annotations
 import numpy as np
 
 from ..kernels import compiled, matrix_at, uncounted, vector_at
-from .horizon import FS, VX, VXX
-from .intro_kernel import full_pivot_lu_kernel
+from .horizon import VX, VXX
+from .householder_kernel import least_squares
+from .intro_kernel import lu_basis, qr_basis
 from .riccati_kernel import (
     SMALL,
     action_value_function,
+    cholesky_lower,
     finish_value_function,
     node_arrays,
     node_riccati,
     q_arrays,
     q_terms_loops,
     scratch,
+    triangular_solve,
 )
 
 LU_NULL, QR_NULL, SCHUR = 0, 1, 2
@@ -53,190 +56,6 @@ the value function is not finite."""
 YZ, HY, KS, KSM, KZ, KZM, QZ, QZZ, QXZ, QUZ = range(10)
 """Columns of ``oaddr``: where the read-outs ``YZ, Hy, ks, Ks, kz, Kz, Qz, Qzz, Qxz, Quz`` of a node start."""
 NR = 10
-
-
-def _householder_column(A, j, lo):
-    """LAPACK's ``dlarfg`` on ``A[lo:, j]``: ``A[lo, j] ← β``, ``A[lo+1:, j] ← v[1:]`` (``v[0] = 1``); returns ``τ``
-    (``H = I - τ v vᵀ``, ``H A[lo:, j] = β e₀``)."""
-    m = A.shape[0]
-    alpha = A[lo, j]
-    s = 0.0
-    for i in range(lo + 1, m):
-        s += A[i, j] * A[i, j]
-    if s == 0.0:
-        return 0.0
-    beta = -np.copysign(np.hypot(alpha, np.sqrt(s)), alpha)
-    scale = 1.0 / (alpha - beta)
-    for i in range(lo + 1, m):
-        A[i, j] *= scale
-    A[lo, j] = beta
-    return (beta - alpha) / beta
-
-
-def _apply_householder(A, j, lo, tau, C, c0, c1):
-    """``C[lo:, c0:c1] ← H C[lo:, c0:c1]`` with the reflector of :func:`householder_column` stored in ``A[lo:, j]``."""
-    if tau == 0.0:
-        return
-    m = A.shape[0]
-    for c in range(c0, c1):
-        w = C[lo, c]
-        for i in range(lo + 1, m):
-            w += A[i, j] * C[i, c]
-        w *= tau
-        C[lo, c] -= w
-        for i in range(lo + 1, m):
-            C[i, c] -= w * A[i, j]
-
-
-householder_column = uncounted(_householder_column)
-apply_householder = uncounted(_apply_householder)
-
-
-def _column_norm(A, j, lo):
-    s = 0.0
-    for i in range(lo, A.shape[0]):
-        s += A[i, j] * A[i, j]
-    return np.sqrt(s)
-
-
-column_norm = uncounted(_column_norm)
-
-
-def _pivoted_qr(A, Q, tau, vn1, vn2):
-    """Column-pivoted Householder QR of ``A`` (``(m, n)``, in place: ``R`` on and above the diagonal, the
-    reflectors below), as LAPACK's ``dgeqp3`` (unblocked, ``dlaqp2``: the largest partial column norm first,
-    norms downdated and recomputed on cancellation), and ``Q = H₀ H₁ ⋯ H_{k-1}`` (``(m, m)``, ``k = min(m, n)``)
-    as ``dorgqr``."""
-    m, n = A.shape
-    kmax = min(m, n)
-    tol3z = np.sqrt(np.finfo(np.float64).eps)
-    for j in range(n):
-        vn1[j] = column_norm(A, j, 0)
-        vn2[j] = vn1[j]
-    for i in range(kmax):
-        pvt = i
-        for j in range(i + 1, n):
-            if vn1[j] > vn1[pvt]:
-                pvt = j
-        if pvt != i:
-            for r in range(m):
-                A[r, i], A[r, pvt] = A[r, pvt], A[r, i]
-            vn1[pvt] = vn1[i]
-            vn2[pvt] = vn2[i]
-        tau[i] = householder_column(A, i, i)
-        apply_householder(A, i, i, tau[i], A, i + 1, n)
-        for j in range(i + 1, n):
-            if vn1[j] != 0.0:
-                temp = abs(A[i, j]) / vn1[j]
-                temp = max(1.0 - temp * temp, 0.0)
-                ratio = vn1[j] / vn2[j]
-                if temp * ratio * ratio <= tol3z:
-                    if i < m - 1:
-                        vn1[j] = column_norm(A, j, i + 1)
-                        vn2[j] = vn1[j]
-                    else:
-                        vn1[j] = 0.0
-                        vn2[j] = 0.0
-                else:
-                    vn1[j] *= np.sqrt(temp)
-    for i in range(m):
-        for j in range(m):
-            Q[i, j] = 1.0 if i == j else 0.0
-    for i in range(kmax - 1, -1, -1):
-        apply_householder(A, i, i, tau[i], Q, i, m)
-
-
-pivoted_qr = uncounted(_pivoted_qr)
-
-
-def _cholesky(A, n, L):
-    """Lower Cholesky factor of ``A[:n, :n]`` into ``L[:n, :n]``; False if not positive definite or not finite."""
-    for j in range(n):
-        s = A[j, j]
-        for p in range(j):
-            s -= L[j, p] * L[j, p]
-        if not 0.0 < s < np.inf:
-            return False
-        L[j, j] = np.sqrt(s)
-        for i in range(j + 1, n):
-            s = A[i, j]
-            for p in range(j):
-                s -= L[i, p] * L[j, p]
-            L[i, j] = s / L[j, j]
-            if not abs(L[i, j]) < np.inf:
-                return False
-    return True
-
-
-def _cholesky_solve(L, R):
-    """``R ← (L Lᵀ)⁻¹ R`` (``R (n, c)``, ``L`` the factor of :func:`cholesky`), the columns innermost (they are
-    independent: the substitutions run on all of them at once)."""
-    n, c = R.shape
-    for i in range(n):
-        for p in range(i):
-            a = L[i, p]
-            for j in range(c):
-                R[i, j] -= a * R[p, j]
-        d = L[i, i]
-        for j in range(c):
-            R[i, j] /= d
-    for i in range(n - 1, -1, -1):
-        for p in range(i + 1, n):
-            a = L[p, i]
-            for j in range(c):
-                R[i, j] -= a * R[p, j]
-        d = L[i, i]
-        for j in range(c):
-            R[i, j] /= d
-
-
-cholesky = uncounted(_cholesky)
-cholesky_solve = uncounted(_cholesky_solve)
-
-
-def _lu_basis(Hu, U, rows, cols, rtol, basis):
-    """``[Y Z]`` of ``Hu`` by fully pivoted LU (``U``: scratch of ``Hu``'s shape); returns the rank ``r``."""
-    p, m = Hu.shape
-    for i in range(p):
-        rows[i] = i
-        for j in range(m):
-            U[i, j] = Hu[i, j]
-    for j in range(m):
-        cols[j] = j
-    r = full_pivot_lu_kernel(U, rows, cols, rtol)
-    for i in range(m):
-        for j in range(r):
-            basis[i, j] = Hu[rows[j], i]
-        for j in range(r, m):
-            basis[i, j] = 0.0
-    for c in range(m - r):
-        for i in range(r - 1, -1, -1):  # x = U[:r, :r]⁻¹ U[:r, r + c], the column's free part is -x
-            acc = U[i, r + c]
-            for j in range(i + 1, r):
-                acc += U[i, j] * basis[cols[j], r + c]
-            basis[cols[i], r + c] = -(acc / U[i, i])
-        basis[cols[r + c], r + c] = 1.0
-    return r
-
-
-def _qr_basis(Hu, A, tau, vn1, vn2, rtol, basis):
-    """``[Y Z]`` of ``Hu`` by column-pivoted QR of ``Huᵀ`` (``A``: scratch of its shape); returns the rank."""
-    p, m = Hu.shape
-    for i in range(m):
-        for j in range(p):
-            A[i, j] = Hu[j, i]
-    pivoted_qr(A, basis, tau, vn1, vn2)
-    first = abs(A[0, 0])
-    r = 0
-    if first > 0.0:
-        for i in range(min(m, p)):
-            if abs(A[i, i]) > rtol * first:
-                r += 1
-    return r
-
-
-lu_basis = uncounted(_lu_basis)
-qr_basis = uncounted(_qr_basis)
 
 
 def _finite(A):
@@ -258,38 +77,9 @@ finite = uncounted(_finite)
 finite1 = uncounted(_finite1)
 
 
-def _least_squares(Hy, h, Hx, A, B, ks, Ks):
-    """``ks = Hy⁺ h``, ``Ks = Hy⁺ Hx`` (``Hy`` of full column rank) by Householder QR (scratch ``A`` of ``Hy``'s
-    shape, ``B (p, 1 + ndx)``)."""
-    p, r = Hy.shape
-    n = Hx.shape[1]
-    for i in range(p):
-        for j in range(r):
-            A[i, j] = Hy[i, j]
-        B[i, 0] = h[i]
-        for j in range(n):
-            B[i, 1 + j] = Hx[i, j]
-    for j in range(r):
-        tau = householder_column(A, j, j)
-        apply_householder(A, j, j, tau, A, j + 1, r)
-        apply_householder(A, j, j, tau, B, 0, n + 1)
-    for c in range(n + 1):
-        for i in range(r - 1, -1, -1):
-            acc = B[i, c]
-            for j in range(i + 1, r):
-                acc -= A[i, j] * B[j, c]
-            B[i, c] = acc / A[i, i]
-    for i in range(r):
-        ks[i] = B[i, 0]
-        for j in range(n):
-            Ks[i, j] = B[i, 1 + j]
-
-
-least_squares = uncounted(_least_squares)
-
-
-def _nullspace_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, method, rtol, W, rows, cols):
-    """The nullspace step of a node (``o``: its read-out addresses, ``W``: scratch); returns ``(outcome, rank)``."""
+def _nullspace_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, method, rtol, W, rows, cols, ident):
+    """The nullspace step of a node (``o``: its read-out addresses, ``W``: scratch, ``ident``: ``0, 1, ...``);
+    returns ``(outcome, rank)``."""
     p, m = Hu.shape
     n = Hx.shape[1]
     at = W.ctypes.data
@@ -364,9 +154,10 @@ def _nullspace_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, method, rtol, W, rows, co
             Qzz[a, c] = acc
     if nz > 0:
         L = matrix_at(at, nz, nz)
-        if not cholesky(Qzz, nz, L):
+        if not cholesky_lower(Qzz, ident, nz, L):
             return QZZ_NOT_PD, r
-        cholesky_solve(L, R)
+        triangular_solve(L, R, False)
+        triangular_solve(L, R, True)
     for i in range(m):
         k[i] = Yks[i]
         for x in range(n):
@@ -387,13 +178,14 @@ def _nullspace_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, method, rtol, W, rows, co
 nullspace_gains = uncounted(_nullspace_gains)
 
 
-def _schur_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, W):
-    """The Schur-complement step of a node (``o``: its read-out addresses, ``W``: scratch); returns the outcome."""
+def _schur_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, W, ident):
+    """The Schur-complement step of a node (``o``: its read-out addresses, ``W``: scratch, ``ident``: ``0, 1, ...``);
+    returns the outcome."""
     p, m = Hu.shape
     n = Hx.shape[1]
     at = W.ctypes.data
     L = matrix_at(at, m, m)
-    if not cholesky(Quu, m, L):
+    if not cholesky_lower(Quu, ident, m, L):
         return SCHUR_QUU_NOT_PD
     at += 8 * m * m
     B = matrix_at(at, m, p + 1 + n)  # Quu⁻¹ [Huᵀ  Qu  Qux]
@@ -407,7 +199,8 @@ def _schur_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, W):
         B[i, p] = Qu[i]
         for x in range(n):
             B[i, p + 1 + x] = Qxu[x, i]
-    cholesky_solve(L, B)
+    triangular_solve(L, B, False)
+    triangular_solve(L, B, True)
     ks, Ks, Qzz = vector_at(o[KS], p), matrix_at(o[KSM], p, n), matrix_at(o[QZZ], p, p)
     for a in range(p):
         for b in range(p):
@@ -424,9 +217,10 @@ def _schur_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, W):
         ks[a] = LAM[a, 0]
         for x in range(n):
             Ks[a, x] = LAM[a, 1 + x]
-    if not (finite(Qzz) and finite(LAM)) or not cholesky(Qzz, p, Lz):
+    if not (finite(Qzz) and finite(LAM)) or not cholesky_lower(Qzz, ident, p, Lz):
         return SCHUR_SINGULAR
-    cholesky_solve(Lz, LAM)
+    triangular_solve(Lz, LAM, False)
+    triangular_solve(Lz, LAM, True)
     for i in range(m):
         for c in range(n + 1):
             acc = B[i, p + c]
@@ -481,7 +275,7 @@ def _constrained_value(Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx, G):
 constrained_value = uncounted(_constrained_value)
 
 
-def _node_constrained(daddr, saddr, dims, t, raddr, p, o, preg, gaps, method, rtol, S, W, rows, cols):
+def _node_constrained(daddr, saddr, dims, t, raddr, p, o, preg, gaps, method, rtol, S, W, rows, cols, ident):
     """Node ``t`` with ``p`` equality rows: Q terms, gains by ``method``, value function; ``(outcome, rank)``."""
     n, m, n1 = dims[t, 0], dims[t, 1], dims[t + 1, 0]
     Fx, Fu, Lxx, Lxu, Luu, Lx, Lu, Vxx_n, Vx_n, fs = node_arrays(daddr, saddr, dims, t)
@@ -512,9 +306,9 @@ def _node_constrained(daddr, saddr, dims, t, raddr, p, o, preg, gaps, method, rt
     h, Hx, Hu = vector_at(raddr[t, 0], p), matrix_at(raddr[t, 1], p, n), matrix_at(raddr[t, 2], p, m)
     r = 0
     if method == SCHUR:
-        outcome = schur_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, W)
+        outcome = schur_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, W, ident)
     else:
-        outcome, r = nullspace_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, method, rtol, W, rows, cols)
+        outcome, r = nullspace_gains(h, Hx, Hu, Qu, Qxu, Quu, k, K, o, method, rtol, W, rows, cols, ident)
     if outcome != OK:
         return outcome, r
     constrained_value(Qxx, Qxu, Quu, Qx, Qu, K, k, Vxx, Vx, matrix_at(W.ctypes.data, m, n))
@@ -539,30 +333,6 @@ def _work_size(dims, nh):
     return size
 
 
-def _terminal_value(saddr, dims, raddr, preg, gaps):
-    """``Vxx_T = Lxx_T + preg I``, ``Vx_T = Lx_T`` (``+ Vxx_T fs_T`` if ``gaps``)."""
-    T = dims.shape[0] - 1
-    n = dims[T, 0]
-    o = saddr[T]
-    Vxx, Vx, fs = matrix_at(o[VXX], n, n), vector_at(o[VX], n), vector_at(o[FS], n)
-    Lxx, Lx = matrix_at(raddr[T, 3], n, n), vector_at(raddr[T, 4], n)
-    for i in range(n):
-        Vx[i] = Lx[i]
-        for j in range(n):
-            Vxx[i, j] = Lxx[i, j]
-        if preg != 0.0:
-            Vxx[i, i] += preg
-    if gaps:
-        for i in range(n):
-            acc = 0.0
-            for j in range(n):
-                acc += Vxx[i, j] * fs[j]
-            Vx[i] += acc
-
-
-terminal_value = uncounted(_terminal_value)
-
-
 def _intro_pass(daddr, saddr, dims, raddr, nh, oaddr, ranks, preg, gaps, method, th_rank):
     """The whole constrained recursion (t = T-1..0); ``(-1, OK)`` or the first node that failed and why."""
     S, idx = scratch(dims)
@@ -573,13 +343,13 @@ def _intro_pass(daddr, saddr, dims, raddr, nh, oaddr, ranks, preg, gaps, method,
     W = np.empty(work_size(dims, nh))
     rows = np.empty(q, dtype=np.int64)
     cols = np.empty(q, dtype=np.int64)
-    terminal_value(saddr, dims, raddr, preg, gaps)
+    ident = np.arange(q)
     for t in range(T - 1, -1, -1):
         n, m, p = dims[t, 0], dims[t, 1], nh[t]
         if m > 0 and p > 0:
             rtol = th_rank * min(p, m)
             outcome, r = node_constrained(
-                daddr, saddr, dims, t, raddr, p, oaddr[t], preg, gaps, method, rtol, S, W, rows, cols
+                daddr, saddr, dims, t, raddr, p, oaddr[t], preg, gaps, method, rtol, S, W, rows, cols, ident
             )
             ranks[t] = r
             if method == SCHUR and outcome == OK:
