@@ -71,9 +71,7 @@ class EulerHorizon:
             return horizons.horizon_calc_diff(tbls, ints, ioff, par, poff, xs_at, us_at, nus, nx, ndx, gaps, gap_at, a,
                                             b, costs)
 
-        totals = self._run(call, ranges)
-        return [total if math.isfinite(total) else self._python_path(xs, us, fs if gaps else None, t0, t1, True)
-                for (t0, t1), total in zip(ranges, totals)]
+        return self._finite(self._run(call, ranges), ranges, xs, us, fs if gaps else None, True)
 
     def calc(self, xs, us, xs_at: np.ndarray, us_at: np.ndarray, t0: int, t1: int) -> float:
         """Values of the nodes ``t0 <= t < t1``."""
@@ -87,9 +85,7 @@ class EulerHorizon:
         def call(tbls, a, b):
             return horizons.horizon_calc(tbls, ints, ioff, par, poff, xs_at, us_at, nus, nx, a, b, costs)
 
-        totals = self._run(call, ranges)
-        return [total if math.isfinite(total) else self._python_path(xs, us, None, t0, t1, False)
-                for (t0, t1), total in zip(ranges, totals)]
+        return self._finite(self._run(call, ranges), ranges, xs, us, None, False)
 
     def _python_rows(self, xs, us, ranges: list, derivatives: bool) -> None:
         """The rows of the Python residuals of the nodes in ``ranges`` (before the compiled calls), and their
@@ -106,6 +102,11 @@ class EulerHorizon:
     def fold(self, t0: int, t1: int) -> float:
         """The sum of :attr:`costs` ``[t0:t1]`` in node order."""
         return horizons.fold(self.costs, t0, t1)
+
+    def _finite(self, totals: list[float], ranges: list, xs, us, fs, derivatives: bool) -> list[float]:
+        """The ranges' ``totals``, each that is not finite replaced by :meth:`_python_path`'s."""
+        return [total if math.isfinite(total) else self._python_path(xs, us, fs, t0, t1, derivatives)
+                for (t0, t1), total in zip(ranges, totals)]
 
     def _python_path(self, xs, us, fs, t0: int, t1: int, derivatives: bool) -> float:
         """After a range whose total is not finite: the nodes whose cost is not finite again on their Python path
@@ -139,6 +140,9 @@ class EulerHorizon:
             total += horizons.horizon_recost(self.tbls, self.ints, self.ioff, self.par, self.poff,
                                            self._python_in(t0, t1), self.costs)
         return total
+
+    fused_trial = True
+    """Whether :attr:`trial` may run a range as one compiled call (:func:`.trial_kernel.horizon_trial`)."""
 
     trial = trial_kernel.trial
     """SolverSQP/SolverCSQP's trial point of the nodes ``t0 <= t < t1`` (:func:`.trial_kernel.trial`)."""

@@ -22,7 +22,7 @@ the constraint manager's items when they are read.  :meth:`InvDynNode.refresh` r
 step, the contacts' gains and references, the residuals' references and the actuation's ``P`` and unactuated rows;
 :meth:`InvDynNode.refresh_live` what may change unannounced.  As the Euler node, it keeps its kinematics and contacts
 in arrays of its own (:data:`.node_table.OWN`) and stamps each ``calc``: a ``calcDiff`` at that point skips the
-values.  It has no horizon: the rollout calls its :attr:`~InvDynNode.rollout_step` node by node.
+values.  Its horizon (:class:`.invdyn_horizon.InvDynHorizon`) runs a range of such nodes in one compiled call.
 """
 
 from __future__ import annotations
@@ -44,6 +44,7 @@ from . import node_table as table
 from .constraint_rows import ConstraintRows
 from .contact_lowering import CONTACTS
 from .euler_node import ACTUATIONS, EulerNode, Lowered, lowered, residual_kind
+from .invdyn_horizon import InvDynHorizon
 from .joint_types import NotLowerable
 from .live_parameters import contacts_live
 from .stack_items import compiled_items
@@ -110,8 +111,12 @@ class InvDynNode(EulerNode):
     """The compiled ``calc``/``calcDiff`` of one Euler node of free or contact inverse dynamics (see the module
     docstring); writes what an :class:`.euler_node.EulerNode` writes."""
 
-    horizon = None
-    """No horizon of its own (the rollout steps through :attr:`rollout_step`)."""
+    @staticmethod
+    def horizon(nodes: list[InvDynNode | None], nus: list[int], nthreads: int = 1) -> InvDynHorizon:
+        """The running nodes (``None`` where a node is not of this class; ``nus`` their controls) in one compiled call
+        per range of nodes of this class, their evaluations on ``nthreads`` threads
+        (:class:`.invdyn_horizon.InvDynHorizon`)."""
+        return InvDynHorizon(nodes, nus, nthreads)
 
     def __init__(self, iam, data, terminal: bool, nv: int, contacts: list = ()) -> None:
         super().__init__(iam, data, terminal, nv, contacts)

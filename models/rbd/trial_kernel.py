@@ -78,14 +78,15 @@ def trial(horizon, addresses: tuple, x0: np.ndarray, dx: np.ndarray, du: np.ndar
 
     ``addresses``: of ``xs, us, xs_try, us_try``; ``dx``, ``du``, ``fs``: the solver's stacks; ``step``: scratch of at
     least ``ndx`` entries; ``trajectories``: the lists ``(xs_try, us_try, fs)`` (views of the same arrays) for the
-    Python paths.  One compiled call on one thread without Python residuals in the range; otherwise the states and
+    Python paths.  One compiled call on one thread without Python residuals in the range (for a horizon whose
+    ``fused_trial`` is true: the Euler nodes'); otherwise the states and
     controls, then :meth:`~.euler_horizon.EulerHorizon.calc` (which runs those residuals and the threads), then the
     gaps.  A node whose acceleration is not finite is evaluated again on its Python path, its gap from there."""
     xs, us, xs_at, us_at = addresses
     xs_try, us_try, fs_list = trajectories
     tables = horizon.tbls, horizon.ints, horizon.ioff
     nus, nx, ndx = horizon.nus, horizon.nx, horizon.ndx
-    if horizon.threads is None and not any(t0 <= t < t1 for t, _ in horizon.python):
+    if horizon.fused_trial and horizon.threads is None and not any(t0 <= t < t1 for t, _ in horizon.python):
         total = horizon_trial(*tables, horizon.par, horizon.poff, x0, xs, us, xs_at, us_at, nus, nx, ndx, dx, du,
                               alpha, fs, step, t0, t1, horizon.costs)
         return total if math.isfinite(total) else horizon._python_path(xs_try, us_try, fs_list, t0, t1, False)
