@@ -15,7 +15,6 @@ import re
 import shutil
 import signal
 import subprocess
-from concurrent.futures import ThreadPoolExecutor
 from types import SimpleNamespace
 
 import example_robot_data as erd
@@ -41,18 +40,29 @@ FLAGS = [
     "--disable-component-update",
     "--disable-sync",
     "--window-size=800,600",
-    "--virtual-time-budget=5000",
+    # Without these a page sometimes never finishes its virtual time (no screenshot until the timeout: 3 of 20 shots
+    # of an ANYmal page; 0 of 18 with them).
+    "--disable-renderer-backgrounding",
+    "--disable-background-timer-throttling",
+    "--disable-backgrounding-occluded-windows",
+    "--run-all-compositor-stages-before-draw",
 ]
+STILL, PLAYED = 1000, 5000
+"""Virtual milliseconds a page runs before its screenshot (``--virtual-time-budget``): a still scene is drawn within
+the first; an animation needs the second to have played once.  The browser draws every frame of that virtual time in
+software (an ANYmal page: about 10 s for the first, minutes for the second on the 2-core machine)."""
 
 
 def _chromium() -> str:
     return require_chromium()
 
 
-def _screenshot(html: str, png: str, profile: str, attempts: int = 3) -> np.ndarray:
-    """Render ``html`` headless and return the RGB screenshot; tries again (fresh profile) when Chromium
-    hangs or exits without one, which happens on a loaded machine (two hangs of 90 s seen at load 5)."""
-    cmd = [_chromium(), *FLAGS, f"--user-data-dir={profile}", f"--screenshot={png}", f"file://{html}"]
+def _screenshot(html: str, png: str, profile: str, attempts: int = 3, budget: int = STILL) -> np.ndarray:
+    """Render ``html`` headless for ``budget`` virtual milliseconds and return the RGB screenshot; tries again (fresh
+    profile) when Chromium hangs or exits without one, which happens on a loaded machine (two hangs of 90 s seen at
+    load 5)."""
+    cmd = [_chromium(), *FLAGS, f"--virtual-time-budget={budget}", f"--user-data-dir={profile}", f"--screenshot={png}",
+           f"file://{html}"]
     for _ in range(attempts):
         shutil.rmtree(profile, ignore_errors=True)
         proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
@@ -81,7 +91,8 @@ def _differing_pixels(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def _dom(html: str, profile: str) -> str:
     """The page's DOM after its scripts ran (headless Chromium's ``--dump-dom``)."""
-    cmd = [_chromium(), *FLAGS, f"--user-data-dir={profile}", "--dump-dom", f"file://{html}"]
+    cmd = [_chromium(), *FLAGS, f"--virtual-time-budget={STILL}", f"--user-data-dir={profile}", "--dump-dom",
+           f"file://{html}"]
     return subprocess.run(cmd, capture_output=True, text=True, timeout=300).stdout
 
 
@@ -166,9 +177,11 @@ def _fitted_shots(robot, xs, tmp_path, name, dts=()):
             pages.append(display.exportHTML(xs, str(tmp_path / f"{name}_played.html"), dts=dts, repetitions=1))
         display.setVisibility("robot", False)
         pages.append(display.exportHTML([xs[0]], str(tmp_path / f"{name}_hidden.html")))
-    with ThreadPoolExecutor(max_workers=2) as pool:  # two browsers at a time, each with its own profile
-        shots = list(pool.map(lambda k: _screenshot(pages[k], pages[k][:-5] + ".png", str(tmp_path / f"p{k}")),
-                              range(len(pages))))
+    budgets = [STILL] * len(nodes) + ([PLAYED] if dts else []) + [STILL]
+    # One browser at a time: two headless Chromiums at once (even with their own profiles) left one hanging until its
+    # timeout, every other run on the 2-core machine.
+    shots = [_screenshot(page, page[:-5] + ".png", str(tmp_path / f"p{k}"), budget=budget)
+             for k, (page, budget) in enumerate(zip(pages, budgets, strict=True))]
     return shots[:-1], shots[-1]
 
 
