@@ -7,8 +7,9 @@ Both compute (rows ``i``, items ``k``)::
     Lx = Jxᵀ (w ∘ Ar),   Lxx = Jxᵀ diag(w ∘ Arr) Jx,   Lu, Lxu, Luu likewise with the ``Ju`` rows
 
 :func:`derivatives_and_sums` runs the last two in one call (the stack's ``calcDiff`` when every
-activation is fused).  One call replaces a dozen small numpy calls, and rows whose weighted curvature is zero (a barrier
-row inside its bounds, an inactive item) are left out of the matrix products.  Each kernel has a
+activation is fused).  One call replaces a dozen small numpy calls; rows whose weighted curvature is zero (a barrier
+row inside its bounds, an inactive item) are left out of the matrix products, and the compiled products skip the
+zero entries of each Jacobian row.  Each kernel has a
 numpy twin (``*_numpy``, same arguments) giving the same numbers to round-off (tested);
 :mod:`crocopy.kernels` chooses.
 """
@@ -90,16 +91,20 @@ def _activation_derivatives(r, lb, ub, act_w, Ar, Arr):
 
 
 def _accumulate(weights, Ar, Arr, Jx, Ju, u_start, with_u, Jc, Hx, Juc, Hu, Lx, Lu, Lxx, Lxu, Luu):
-    """Weighted Gauss-Newton sums; ``Jc``/``Hx``/``Juc``/``Hu`` are scratch of the shapes of ``Jx``/``Ju``."""
+    """Weighted Gauss-Newton sums, one rank-one update per row whose weighted curvature ``h = w Arr`` is not zero, each
+    over the nonzero entries of its Jacobian row (a state or control residual's row has one or a few: the products
+    cost the rows' nonzeros times ``ndx``, not ``nr ndx²``); the upper triangles of ``Lxx`` and ``Luu``, then their
+    mirror (exactly symmetric).  ``Jc``/``Hx``/``Juc``/``Hu`` are the numpy twin's scratch (unread here)."""
     nr, ndx = Jx.shape
     nu = Ju.shape[1]
     if nu == 0:
         with_u = False
     Lx[:] = 0.0
+    Lxx[:, :] = 0.0
     if with_u:
         Lu[:] = 0.0
-    k = 0
-    ku = 0
+        Lxu[:, :] = 0.0
+        Luu[:, :] = 0.0
     for i in range(nr):
         g = weights[i] * Ar[i]
         h = weights[i] * Arr[i]
@@ -110,27 +115,29 @@ def _accumulate(weights, Ar, Arr, Jx, Ju, u_start, with_u, Jc, Hx, Juc, Hu, Lx, 
             if u_row:
                 for j in range(nu):
                     Lu[j] += g * Ju[i - u_start, j]
-        if h != 0.0:
-            for j in range(ndx):
-                Jc[k, j] = Jx[i, j]
-                Hx[k, j] = h * Jx[i, j]
-            k += 1
-            if u_row:
-                for j in range(nu):
-                    Juc[ku, j] = Ju[i - u_start, j]
-                    Hu[ku, j] = h * Ju[i - u_start, j]
-                ku += 1
-    if k > 0:
-        np.dot(Jc[:k].T, Hx[:k], Lxx)
-    else:
-        Lxx[:, :] = 0.0
+        if h == 0.0:
+            continue
+        for a in range(ndx):
+            s = h * Jx[i, a]
+            if s != 0.0:
+                for b in range(a, ndx):
+                    Lxx[a, b] += s * Jx[i, b]
+                if u_row:
+                    for b in range(nu):
+                        Lxu[a, b] += s * Ju[i - u_start, b]
+        if u_row:
+            for a in range(nu):
+                s = h * Ju[i - u_start, a]
+                if s != 0.0:
+                    for b in range(a, nu):
+                        Luu[a, b] += s * Ju[i - u_start, b]
+    for a in range(ndx):
+        for b in range(a):
+            Lxx[a, b] = Lxx[b, a]
     if with_u:
-        if ku > 0:
-            np.dot(Jc[k - ku : k].T, Hu[:ku], Lxu)
-            np.dot(Juc[:ku].T, Hu[:ku], Luu)
-        else:
-            Lxu[:, :] = 0.0
-            Luu[:, :] = 0.0
+        for a in range(nu):
+            for b in range(a):
+                Luu[a, b] = Luu[b, a]
 
 
 activation_values = compiled(_activation_values)
