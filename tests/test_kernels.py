@@ -201,13 +201,11 @@ def test_stack_kernels_equal_their_twins_on_random_rows():
         getattr(stack_kernel, "activation_derivatives" + suffix)(r, lb, ub, act_w, Ar, Arr)
         L = [np.zeros(ndx), np.zeros(nu), np.zeros((ndx, ndx)), np.zeros((ndx, nu)), np.zeros((nu, nu))]
         getattr(stack_kernel, "accumulate" + suffix)(
-            weights, Ar, Arr, Jx, Ju, u_start, True, np.zeros_like(Jx), np.zeros_like(Jx), np.zeros_like(Ju),
-            np.zeros_like(Ju), *L)
+            weights, Ar, Arr, Jx, Ju, u_start, True, *L)
         fused = [np.zeros(nr), np.zeros(nr), np.zeros(ndx), np.zeros(nu), np.zeros((ndx, ndx)),
                  np.zeros((ndx, nu)), np.zeros((nu, nu))]
         getattr(stack_kernel, "derivatives_and_sums" + suffix)(
-            r, lb, ub, act_w, weights, *fused[:2], Jx, Ju, u_start, True, np.zeros_like(Jx), np.zeros_like(Jx),
-            np.zeros_like(Ju), np.zeros_like(Ju), *fused[2:])
+            r, lb, ub, act_w, weights, *fused[:2], Jx, Ju, u_start, True, *fused[2:])
         for a, b in zip([Ar, Arr, *L], fused, strict=True):
             np.testing.assert_array_equal(a, b)
         outs.append([np.array(total), item_costs, Ar, Arr, *L])
@@ -237,8 +235,7 @@ def test_stack_accumulate_on_rows_with_zero_ends_equals_the_dense_sums(seed):
     Arr[5] = 0.0
     weights = rng.uniform(0.5, 3.0, nr)
     L = [np.zeros(ndx), np.zeros(nu), np.full((ndx, ndx), 7.0), np.full((ndx, nu), 7.0), np.full((nu, nu), 7.0)]
-    stack_kernel.accumulate(weights, Ar, Arr, Jx, Ju, u_start, True, np.zeros_like(Jx), np.zeros_like(Jx),
-                            np.zeros_like(Ju), np.zeros_like(Ju), *L)
+    stack_kernel.accumulate(weights, Ar, Arr, Jx, Ju, u_start, True, *L)
     g, h = weights * Ar, weights * Arr
     Hx = h[:, None] * Jx
     expected = [Jx.T @ g, Ju.T @ g[u_start:], Jx.T @ Hx, Jx[u_start:].T @ (h[u_start:, None] * Ju),

@@ -81,7 +81,6 @@ class CostStack:
         self.lb, self.ub = np.zeros(nr), np.zeros(nr)
         self.act_weights = np.ones(nr)
         self.weights = np.zeros(nr)
-        self.HJx = np.zeros((nr, ndx))
         self.item_costs, self.item_weights = np.zeros(n), np.zeros(n)
         self.slices: list[slice] = []
         start = 0
@@ -92,8 +91,6 @@ class CostStack:
         self.u_start = next((s.start for (_, it, _), s in zip(self.items, self.slices)
                              if it.cost.residual.u_dependent), nr)
         self.Ju = np.zeros((nr - self.u_start, nu))
-        self.HJu = np.zeros_like(self.Ju)
-        self.Jc, self.Juc = np.zeros_like(self.Jx), np.zeros_like(self.Ju)
         for k, ((_, item, cdata), rows) in enumerate(zip(self.items, self.slices)):
             self._share(item, cdata, rows, k)
         self._seen = ParametersSeen()
@@ -198,8 +195,7 @@ class CostStack:
             fused = stack_kernel.derivatives_and_sums if kernel else stack_kernel.derivatives_and_sums_numpy
             fused(
                 self.r, self.lb, self.ub, self.act_weights, self.weights, self.Ar, self.Arr, self.Jx, self.Ju,
-                self.u_start, u is not None, self.Jc, self.HJx, self.Juc, self.HJu,
-                data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu,
+                self.u_start, u is not None, data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu,
             )
             return
         derivatives = stack_kernel.activation_derivatives if kernel else stack_kernel.activation_derivatives_numpy
@@ -209,5 +205,5 @@ class CostStack:
         accumulate = stack_kernel.accumulate if kernel else stack_kernel.accumulate_numpy
         accumulate(
             self.weights, self.Ar, self.Arr, self.Jx, self.Ju, self.u_start, u is not None,
-            self.Jc, self.HJx, self.Juc, self.HJu, data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu,
+            data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu,
         )

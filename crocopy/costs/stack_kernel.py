@@ -42,24 +42,23 @@ def activation_derivatives_numpy(r, lb, ub, act_w, Ar, Arr) -> None:
     np.multiply((r <= lb) | (r >= ub), act_w, out=Arr)
 
 
-def accumulate_numpy(weights, Ar, Arr, Jx, Ju, u_start, with_u, Jc, Hx, Juc, Hu, Lx, Lu, Lxx, Lxu, Luu) -> None:
-    """Numpy twin of :func:`accumulate` (uses ``Hx``/``Hu`` as scratch; ``Jc``/``Juc`` unused)."""
+def accumulate_numpy(weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu) -> None:
+    """Numpy twin of :func:`accumulate`."""
     wArr = weights * Arr
     np.dot(Jx.T, weights * Ar, out=Lx)
-    np.multiply(wArr[:, None], Jx, out=Hx)
-    np.dot(Jx.T, Hx, out=Lxx)
+    np.dot(Jx.T, wArr[:, None] * Jx, out=Lxx)
     if with_u:
         np.dot(Ju.T, (weights * Ar)[u_start:], out=Lu)
-        np.multiply(wArr[u_start:, None], Ju, out=Hu)
+        Hu = wArr[u_start:, None] * Ju
         np.dot(Jx[u_start:].T, Hu, out=Lxu)
         np.dot(Ju.T, Hu, out=Luu)
 
 
-def derivatives_and_sums_numpy(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, with_u, Jc, Hx, Juc, Hu,
-                               Lx, Lu, Lxx, Lxu, Luu) -> None:
+def derivatives_and_sums_numpy(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu,
+                               Luu) -> None:
     """Numpy twin of :func:`derivatives_and_sums`."""
     activation_derivatives_numpy(r, lb, ub, act_w, Ar, Arr)
-    accumulate_numpy(weights, Ar, Arr, Jx, Ju, u_start, with_u, Jc, Hx, Juc, Hu, Lx, Lu, Lxx, Lxu, Luu)
+    accumulate_numpy(weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu)
 
 
 def _activation_values(r, lb, ub, act_w, starts, item_costs, item_weights):
@@ -90,11 +89,11 @@ def _activation_derivatives(r, lb, ub, act_w, Ar, Arr):
         Arr[i] = act_w[i] if (ri <= lb[i] or ri >= ub[i]) else 0.0
 
 
-def _accumulate(weights, Ar, Arr, Jx, Ju, u_start, with_u, Jc, Hx, Juc, Hu, Lx, Lu, Lxx, Lxu, Luu):
+def _accumulate(weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu):
     """Weighted Gauss-Newton sums, one rank-one update per row whose weighted curvature ``h = w Arr`` is not zero, each
     over the nonzero entries of its Jacobian row (a state or control residual's row has one or a few: the products
     cost the rows' nonzeros times ``ndx``, not ``nr ndx²``); the upper triangles of ``Lxx`` and ``Luu``, then their
-    mirror (exactly symmetric).  ``Jc``/``Hx``/``Juc``/``Hu`` are the numpy twin's scratch (unread here)."""
+    mirror (exactly symmetric)."""
     nr, ndx = Jx.shape
     nu = Ju.shape[1]
     if nu == 0:
@@ -145,11 +144,10 @@ activation_derivatives = compiled(_activation_derivatives)
 accumulate = compiled(_accumulate)
 
 
-def _derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, with_u, Jc, Hx, Juc, Hu,
-                          Lx, Lu, Lxx, Lxu, Luu):
+def _derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu):
     """:func:`activation_derivatives` then :func:`accumulate`, one call from Python."""
     activation_derivatives(r, lb, ub, act_w, Ar, Arr)
-    accumulate(weights, Ar, Arr, Jx, Ju, u_start, with_u, Jc, Hx, Juc, Hu, Lx, Lu, Lxx, Lxu, Luu)
+    accumulate(weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu)
 
 
 derivatives_and_sums = compiled(_derivatives_and_sums)

@@ -437,8 +437,8 @@ class EulerNode:
             "dLxx": ddata.Lxx, "dLxu": ddata.Lxu, "dLuu": ddata.Luu,
             "r": stack.r, "lb": stack.lb, "ub": stack.ub, "act_weights": stack.act_weights,
             "item_costs": stack.item_costs, "item_weights": stack.item_weights, "weights": stack.weights,
-            "Ar": stack.Ar, "Arr": stack.Arr, "Jx": stack.Jx, "Ju": stack.Ju, "Jc": stack.Jc, "HJx": stack.HJx,
-            "Juc": stack.Juc, "HJu": stack.HJu, "stamp": self.stamp, **self.parameters,
+            "Ar": stack.Ar, "Arr": stack.Arr, "Jx": stack.Jx, "Ju": stack.Ju,
+            "stamp": self.stamp, **self.parameters,
             **self.rows.fields(data, ddata),
         }
         n = table.NODE + len(table.NODE_ARRAYS) + len(table.SCRATCH_ARRAYS)

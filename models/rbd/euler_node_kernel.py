@@ -67,15 +67,11 @@ from .node_table import (
     E_FX,
     E_GAINS,
     E_GAP,
-    E_HJU,
-    E_HJX,
     E_ITEM_COSTS,
     E_ITEM_WEIGHTS,
-    E_JC,
     E_JCS,
     E_JQ,
     E_JU,
-    E_JUC,
     E_JV,
     E_JX,
     E_LAM,
@@ -418,10 +414,8 @@ def _sums_and_chain(tbl, ints, par, x, rb, cost, terminal):
     r, lb, ub, act_w = vec(tbl, ints, E_R), vec(tbl, ints, E_LB), vec(tbl, ints, E_UB), vec(tbl, ints, E_ACT_WEIGHTS)
     weights, Ar, Arr = vec(tbl, ints, E_WEIGHTS), vec(tbl, ints, E_AR), vec(tbl, ints, E_ARR)
     Jx, Ju, u_start = mat(tbl, ints, E_JX), mat(tbl, ints, E_JU), ints[U_START]
-    Jc, HJx, Juc, HJu = mat(tbl, ints, E_JC), mat(tbl, ints, E_HJX), mat(tbl, ints, E_JUC), mat(tbl, ints, E_HJU)
     if terminal:
-        derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, False, Jc, HJx, Juc, HJu,
-                             Lx, Lu, Lxx, Lxu, Luu)
+        derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, False, Lx, Lu, Lxx, Lxu, Luu)
         Fx = mat(tbl, ints, E_FX)
         n = Fx.shape[0]
         for i in range(n):
@@ -430,8 +424,7 @@ def _sums_and_chain(tbl, ints, par, x, rb, cost, terminal):
         return cost
     dLx, dLu, dLxx, dLxu, dLuu = (vec(tbl, ints, E_DLX), vec(tbl, ints, E_DLU), mat(tbl, ints, E_DLXX),
                                   mat(tbl, ints, E_DLXU), mat(tbl, ints, E_DLUU))
-    derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, True, Jc, HJx, Juc, HJu,
-                         dLx, dLu, dLxx, dLxu, dLuu)
+    derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, True, dLx, dLu, dLxx, dLxu, dLuu)
     euclidean = ints[EUCLIDEAN] != 0
     euler_chain(
         mat(tbl, ints, E_DFX), mat(tbl, ints, E_DFU), dLx, dLu, dLxx, dLxu, dLuu, par[0], euclidean,

@@ -210,14 +210,13 @@ class ImpulseNode:
         """The addresses and dimensions of every array the kernels read or write (the Euler node's layout,
         :mod:`.node_table`), and the integer program."""
         no_u = stack.Ju.shape[1] != 0  # costs built with nu > 0: their u columns are never read
-        u_part = {name: np.zeros((stack.Ju.shape[0], 0)) if no_u else getattr(stack, name)
-                  for name in ("Ju", "Juc", "HJu")}
+        Ju = np.zeros((stack.Ju.shape[0], 0)) if no_u else stack.Ju
         fields = {
             "xnext": data.xnext, "Fx": data.Fx, "Fu": data.Fu, "Lx": data.Lx, "Lu": data.Lu, "Lxx": data.Lxx,
             "Lxu": data.Lxu, "Luu": data.Luu, "r": stack.r, "lb": stack.lb, "ub": stack.ub,
             "act_weights": stack.act_weights, "item_costs": stack.item_costs, "item_weights": stack.item_weights,
-            "weights": stack.weights, "Ar": stack.Ar, "Arr": stack.Arr, "Jx": stack.Jx, "Jc": stack.Jc,
-            "HJx": stack.HJx, **u_part, **self.own, **self.rows.fields(data, data),
+            "weights": stack.weights, "Ar": stack.Ar, "Arr": stack.Arr, "Jx": stack.Jx, "Ju": Ju,
+            **self.own, **self.rows.fields(data, data),
         }
         n = table.NODE + len(table.NODE_ARRAYS) + len(table.SCRATCH_ARRAYS)
         self.rows.allocate(n, table.SHAPES + 3 * n + len(self._items) + len(stack.starts) + len(self.impulses))

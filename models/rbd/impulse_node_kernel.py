@@ -54,15 +54,11 @@ from .node_table import (
     E_DTAU_DQ,
     E_DTAU_DV,
     E_FX,
-    E_HJU,
-    E_HJX,
     E_ITEM_COSTS,
     E_ITEM_WEIGHTS,
     E_J6,
-    E_JC,
     E_JCS,
     E_JU,
-    E_JUC,
     E_JX,
     E_K6,
     E_LAM,
@@ -230,8 +226,7 @@ def impulse_calc_diff(tbl, ints, par, x, u):
     r, lb, ub, act_w = vec(tbl, ints, E_R), vec(tbl, ints, E_LB), vec(tbl, ints, E_UB), vec(tbl, ints, E_ACT_WEIGHTS)
     derivatives_and_sums(
         r, lb, ub, act_w, vec(tbl, ints, E_WEIGHTS), vec(tbl, ints, E_AR), vec(tbl, ints, E_ARR),
-        mat(tbl, ints, E_JX), mat(tbl, ints, E_JU), ints[U_START], False, mat(tbl, ints, E_JC),
-        mat(tbl, ints, E_HJX), mat(tbl, ints, E_JUC), mat(tbl, ints, E_HJU), vec(tbl, ints, E_LX),
+        mat(tbl, ints, E_JX), mat(tbl, ints, E_JU), ints[U_START], False, vec(tbl, ints, E_LX),
         vec(tbl, ints, E_LU), mat(tbl, ints, E_LXX), mat(tbl, ints, E_LXU), mat(tbl, ints, E_LUU),
     )
     _impulse_derivatives(tbl, ints, par, x, rb, ws)
