@@ -64,12 +64,11 @@ class EulerHorizon:
         """:meth:`calc_diff` of each range ``(t0, t1)`` of ``ranges``; returns their totals.  On several threads the
         nodes of all the ranges are shared out at once (one dispatch, :meth:`.node_threads.ThreadTables.run`)."""
         self._python_rows(xs, us, ranges, True)
-        ints, ioff, par, poff, nus, costs = self.ints, self.ioff, self.par, self.poff, self.nus, self.costs
+        head, nus, costs, kernel = self._head(), self.nus, self.costs, self.calc_diff_kernel
         nx, ndx, gaps, gap_at = self.nx, self.ndx, fs_at is not None, self.no_gaps if fs_at is None else fs_at
 
         def call(tbls, a, b):
-            return horizons.horizon_calc_diff(tbls, ints, ioff, par, poff, xs_at, us_at, nus, nx, ndx, gaps, gap_at, a,
-                                            b, costs)
+            return kernel(tbls, *head, xs_at, us_at, nus, nx, ndx, gaps, gap_at, a, b, costs)
 
         return self._finite(self._run(call, ranges), ranges, xs, us, fs if gaps else None, True)
 
@@ -80,10 +79,10 @@ class EulerHorizon:
     def calc_ranges(self, xs, us, xs_at: np.ndarray, us_at: np.ndarray, ranges: list) -> list[float]:
         """:meth:`calc` of each range of ``ranges`` (shared out at once on several threads); returns their totals."""
         self._python_rows(xs, us, ranges, False)
-        ints, ioff, par, poff, nus, nx, costs = self.ints, self.ioff, self.par, self.poff, self.nus, self.nx, self.costs
+        head, nus, nx, costs, kernel = self._head(), self.nus, self.nx, self.costs, self.calc_kernel
 
         def call(tbls, a, b):
-            return horizons.horizon_calc(tbls, ints, ioff, par, poff, xs_at, us_at, nus, nx, a, b, costs)
+            return kernel(tbls, *head, xs_at, us_at, nus, nx, a, b, costs)
 
         return self._finite(self._run(call, ranges), ranges, xs, us, None, False)
 
@@ -130,16 +129,24 @@ class EulerHorizon:
     def rollout(self, addresses: tuple, xs_try: list, us_try: list, alpha: float, gaps: bool, gap_at: int, t0: int,
                 t1: int) -> float:
         """The rollout steps of the nodes ``t0 <= t < t1`` (the Python residuals' rows and costs after them)."""
-        total = horizons.horizon_rollout(
-            self.tbls, self.ints, self.ioff, self.par, self.poff, *addresses, self.nus, self.nx, self.ndx, alpha,
-            gaps, gap_at, t0, t1, self.costs,
-        )
+        total = self.rollout_kernel(self.tbls, *self._head(), *addresses, self.nus, self.nx, self.ndx, alpha, gaps,
+                                    gap_at, t0, t1, self.costs)
         if self.python:
             for t, evaluate, _ in self._python_nodes(t0, t1):
                 evaluate(xs_try[t], us_try[t])
             total += horizons.horizon_recost(self.tbls, self.ints, self.ioff, self.par, self.poff,
                                            self._python_in(t0, t1), self.costs)
         return total
+
+    calc_diff_kernel = staticmethod(horizons.horizon_calc_diff)
+    calc_kernel = staticmethod(horizons.horizon_calc)
+    rollout_kernel = staticmethod(horizons.horizon_rollout)
+    """The compiled loops over a range of nodes (:mod:`.horizon_kernel`); a subclass names its own, which take the
+    arguments after the tables that :meth:`_head` gives."""
+
+    def _head(self) -> tuple:
+        """The kernels' arguments after the stacked tables: the nodes' integers and parameters with their offsets."""
+        return self.ints, self.ioff, self.par, self.poff
 
     fused_trial = True
     """Whether :attr:`trial` may run a range as one compiled call (:func:`.trial_kernel.horizon_trial`)."""
