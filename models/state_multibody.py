@@ -132,8 +132,7 @@ class StateMultibody(StateAbstract):
         vlim = _finite_or_inf(model.velocityLimit, 1.0)
         self._set_limits(np.concatenate([lq, -vlim]), np.concatenate([uq, vlim]))
         self._q0 = pin.neutral(model)
-        continuous = [(j.idx_q, j.idx_v) for j in model.joints[1:] if j.shortname() in _CONTINUOUS]
-        self._continuous = np.array(continuous, dtype=np.int64).reshape(-1, 2).T.copy()  # (2, n): idx_q, idx_v
+        self._continuous = tuple((j.idx_q, j.idx_v) for j in model.joints[1:] if j.shortname() in _CONTINUOUS)
         self._rand_lo = np.where(np.isfinite(lq), lq, -1.0)
         self._rand_hi = np.where(np.isfinite(uq), uq, 1.0)
         nv, ndx = self.nv, self.ndx
@@ -162,17 +161,15 @@ class StateMultibody(StateAbstract):
     def diff(self, x0: np.ndarray, x1: np.ndarray) -> np.ndarray:
         nq = self.nq
         dq = pin.difference(self.pinocchio, x0[:nq], x1[:nq])
-        if self._continuous.shape[1]:
+        if self._continuous:
             self._continuous_difference(x0, x1, dq)
         return np.concatenate([dq, x1[nq:] - x0[nq:]])
 
     def _continuous_difference(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:
         """Where Pinocchio's difference ``out`` of a continuous joint is exactly 0, write ``atan2(c0 s1 - s0 c1,
         c0 c1 + s0 s1)`` (elsewhere Pinocchio's value is that formula already, bit for bit, as in the kernel)."""
-        iq, iv = self._continuous
-        zero = out[iv] == 0.0
-        if zero.any():
-            for a, k in zip(iq[zero], iv[zero]):
+        for a, k in self._continuous:
+            if out[k] == 0.0:
                 c0, s0, c1, s1 = x0[a], x0[a + 1], x1[a], x1[a + 1]
                 out[k] = math.atan2(c0 * s1 - s0 * c1, c0 * c1 + s0 * s1)
 
@@ -232,7 +229,7 @@ class StateMultibody(StateAbstract):
             return
         nq, nv = self.nq, self.nv
         out[:nv] = pin.difference(self.pinocchio, x0[:nq], x1[:nq])
-        if self._continuous.shape[1]:
+        if self._continuous:
             self._continuous_difference(x0, x1, out)
         np.subtract(x1[nq:], x0[nq:], out=out[nv:])
 

@@ -135,12 +135,15 @@ def _first_nonfinite(arrays: Sequence[np.ndarray]) -> int | None:
     """The index of the first array of ``arrays`` with a NaN/inf entry, None if all are finite."""
     if not len(arrays):
         return None
-    sizes = np.fromiter((a.size for a in arrays), dtype=np.int64, count=len(arrays))
-    flat = np.concatenate([np.ravel(a) for a in arrays])
-    bad = np.flatnonzero(~np.isfinite(flat))
-    if not bad.size:
+    try:
+        flat = np.concatenate(arrays)
+    except ValueError:  # not all of one dimension
+        flat = np.concatenate([np.ravel(a) for a in arrays])
+    finite = np.isfinite(flat)
+    if finite.all():
         return None
-    return int(np.searchsorted(np.cumsum(sizes), bad[0], side="right"))
+    ends = np.cumsum([a.size for a in arrays])
+    return int(np.searchsorted(ends, np.argmin(finite), side="right"))
 
 
 def trajectory_finite(xs: Sequence[np.ndarray], us: Sequence[np.ndarray]) -> bool:

@@ -134,7 +134,7 @@ def trial_rollout(solver, steplength: float, gaps: bool = False, bounds: tuple[l
         calcs[-1](x, None)
     cost += problem.terminalData.cost
     _note_divergence(solver, steplength, diverged)
-    if not np.isfinite(cost) or not np.isfinite(x).all():
+    if not math.isfinite(cost) or not np.isfinite(x).all():
         raise ForwardPassError("the rollout produced a non-finite state or cost")
     solver.cost_try = cost
 
