@@ -186,6 +186,34 @@ def test_inverted_or_nan_bounds_raise():
         SolverBoxDDP(problem)
 
 
+@pytest.mark.parametrize("Solver", [SolverBoxDDP, SolverBoxFDDP])
+def test_bounds_changed_between_solves_are_read_again(Solver):
+    """A solve takes the bounds it read at the last one only while they are the same arrays holding the same values:
+    bounds written in place (not through the setter), set anew or made NaN are read again, as a new solver reads
+    them."""
+    problem, model = lqr_problem()
+    solver = Solver(problem)
+    solver.solve()
+
+    def same_as_a_new_solver():
+        solver.solve()
+        new = Solver(problem)
+        new.solve()
+        assert solver.iter == new.iter and solver.cost == new.cost
+        for a, b in zip([*solver.xs, *solver.us], [*new.xs, *new.us], strict=True):
+            np.testing.assert_array_equal(a, b)
+
+    model.u_lb[:] = -0.4
+    same_as_a_new_solver()
+    assert min(u.min() for u in solver.us) >= -0.4 and min(u.min() for u in solver.us) < -0.35
+    model.u_ub = np.full(model.nu, 0.3)
+    same_as_a_new_solver()
+    assert max(u.max() for u in solver.us) <= 0.3
+    model.u_lb[0] = np.nan
+    with pytest.raises(ValueError, match="NaN"):
+        solver.solve()
+
+
 @pytest.mark.parametrize("clamping", ["forward", "backward"])
 def test_clamping_baselines_stay_in_the_box(clamping):
     problem = unicycle_problem(T=20)

@@ -55,6 +55,8 @@ path's numbers to round-off; a subclass that overrides ``computeActionValueFunct
 
 from __future__ import annotations
 
+from operator import is_
+
 import numpy as np
 
 from .. import kernels
@@ -106,10 +108,17 @@ class BoxSolverMixin:
 
     def _read_bounds(self) -> None:
         """Fetch and check every running model's control bounds (called at each ``solve``); also stacked
-        for the compiled pass (infinite where a node is unbounded)."""
+        for the compiled pass (infinite where a node is unbounded).  Bounds that are the same arrays holding the same
+        values as at the last read, on the same nodes and buffers, are taken as they were (checked then)."""
+        models = self.problem.runningModels
+        lbs, ubs = [m.u_lb for m in models], [m.u_ub for m in models]
+        key = (self._horizon, self.problem._nodes_version)
+        seen = self.__dict__.get("_bounds_seen")
+        if seen is not None and seen[0] == key and _same_bounds(lbs, seen[1]) and _same_bounds(ubs, seen[2]):
+            return
         self._lb, self._ub = [], []
-        for t, m in enumerate(self.problem.runningModels):
-            lb, ub = np.asarray(m.u_lb, dtype=float), np.asarray(m.u_ub, dtype=float)
+        for t, (m, lb, ub) in enumerate(zip(models, lbs, ubs)):
+            lb, ub = np.asarray(lb, dtype=float), np.asarray(ub, dtype=float)
             if lb.shape != (m.nu,) or ub.shape != (m.nu,):
                 raise ValueError(f"running model {t}: u_lb/u_ub must have shape ({m.nu},)")
             if np.isnan(lb).any() or np.isnan(ub).any():
@@ -129,6 +138,7 @@ class BoxSolverMixin:
         self._us_stack = np.zeros(self._uoff[-1])
         self._bounds_for = self._horizon
         self._bound_addresses = None
+        self._bounds_seen = (key, _snapshot(lbs), _snapshot(ubs))
 
     def _start(self, init_xs, init_us, is_feasible: bool, init_reg) -> None:
         self._read_bounds()
@@ -258,3 +268,21 @@ class SolverBoxDDP(BoxSolverMixin, SolverDDP):
         """
         last_gap = self.compat_crocoddyl and not self.isFeasible and steplength != 1.0
         self._trial_rollout(steplength, bounds=(self._lb, self._ub), last_gap=last_gap)
+
+
+def _values(bounds: list) -> np.ndarray:
+    return np.concatenate([np.asarray(b, dtype=float).ravel() for b in bounds] or [np.zeros(0)])
+
+
+def _snapshot(bounds: list) -> tuple:
+    """The bound arrays themselves and a copy of their values (what :func:`_same_bounds` compares)."""
+    return bounds, _values(bounds)
+
+
+def _same_bounds(bounds: list, snapshot: tuple) -> bool:
+    """Whether ``bounds`` are the arrays of ``snapshot`` holding its values to the bit (a signed zero included)."""
+    arrays, values = snapshot
+    if len(bounds) != len(arrays) or not all(map(is_, bounds, arrays)):
+        return False
+    now = _values(bounds)
+    return now.shape == values.shape and bool((now.view(np.int64) == values.view(np.int64)).all())

@@ -77,6 +77,7 @@ class SolverDDP(SolverAbstract):
         self._layout = self._shapes()
         self._best: tuple | None = None
         self._allocate()
+        self._prepare_kernels()
 
     def _shapes(self) -> tuple:
         return tuple((m.state.nx, m.state.ndx, m.nu) for m in self._models)
@@ -126,6 +127,19 @@ class SolverDDP(SolverAbstract):
         self._diverged_steps: set[float] = set()
         """Step lengths whose last trial had a compiled step diverge (:func:`.rollout.segment_rollout`)."""
         self._last_trial_diverged = False
+
+    def _prepare_kernels(self) -> None:
+        """With kernels on, what the first solve would otherwise make, as Crocoddyl's solvers allocate their
+        workspace when they are made: the compiled nodes' tables (:func:`.compiled_nodes.prepare`) and the addresses
+        of the trajectories and of the nodes' derivatives (a solve re-reads the models' parameters)."""
+        if not kernels.active:
+            return
+        compiled_nodes.prepare(self)
+        self._addresses()
+        try:
+            self._derivatives.update(self.problem.runningDatas, self._node_dims)
+        except ValueError:  # a derivative array of the wrong size: the solve reports it
+            self._derivatives = NodeDerivatives()
 
     _views = ("Vxx", "Vx", "fs", "Qxx", "Qxu", "Quu", "Qx", "Qu", "K", "k")
     """Attributes holding views of the horizon's buffer: not pickled, bound again to the copy's buffer."""

@@ -44,7 +44,6 @@ from ..shooting import ShootingProblem
 from . import compiled_nodes, sqp_kernel
 from .base import CountSetting, FlagSetting, Setting, check_solve_arguments
 from .ddp import SolverDDP
-from .horizon import NodeDerivatives
 from .nonfinite import trajectory_finite
 from .std_vector import StdVecAttribute, allocate
 from .stopwatch import profiled
@@ -85,7 +84,7 @@ class SolverSQP(SolverDDP):
         self.gap_norm = 0.0
         self.gap_norm_try = 0.0
         self._allocate_sqp()
-        self._prepare_kernels()
+        self._prepare_kernels()  # again: allocating the SQP arrays dropped the trajectories' addresses
 
     def _allocate_sqp(self) -> None:
         """The steps ``dx``, ``du``, the multipliers ``lag_mul`` and ``fs_try``: views of padded stacks
@@ -99,18 +98,6 @@ class SolverSQP(SolverDDP):
         self._no_rows = (np.zeros((len(ndx), 0, n)), np.zeros((len(ndx), 0, m)), np.zeros((len(ndx), 0)))
         self._scratch = np.zeros(max(n, m, 1))
         self._bind_sqp_views()
-
-    def _prepare_kernels(self) -> None:
-        """With kernels on, what the first solve would otherwise make: the compiled nodes' tables
-        (:func:`.compiled_nodes.prepare`) and the addresses of the trajectories and of the nodes' derivatives."""
-        if not kernels.active:
-            return
-        compiled_nodes.prepare(self)
-        self._addresses()
-        try:
-            self._derivative_addresses()
-        except ValueError:  # a derivative array of the wrong size: the solve reports it
-            self._derivatives = NodeDerivatives()
 
     def _bind_sqp_views(self) -> None:
         """Make ``dx``, ``du``, ``lag_mul``, ``fs_try`` the views of their stacks (after allocating or unpickling;
