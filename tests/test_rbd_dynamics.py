@@ -101,7 +101,7 @@ def test_forward_dynamics_and_mass_inverse(robot, seed):
     q, v, _, tau = state(model, seed)
     acc, Minv = np.zeros(model.nv), np.zeros((model.nv, model.nv))
     K.forward_dynamics(rb, ws, q, v, tau, acc)
-    K.mass_inverse(rb, ws, Minv)
+    K.mass_inverse(rb.dof_parent, ws.L, ws.dinv, Minv)
     M = symmetric(pin.crba(model, data, q))  # includes the armature
     close(ws.M, M)
     close(ws.L.T @ ws.L, M)
@@ -145,7 +145,7 @@ def test_free_dynamics_derivatives_from_rnea_derivatives(robot, seed):
     n = model.nv
     acc, Minv, dq, dv = np.zeros(n), np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
     K.forward_dynamics(rb, ws, q, v, tau, acc)
-    K.mass_inverse(rb, ws, Minv)
+    K.mass_inverse(rb.dof_parent, ws.L, ws.dinv, Minv)
     K.dynamics_derivatives(rb, ws, q, v, acc, dq, dv)
     pin.computeABADerivatives(model, data, q, v, tau)
     close(-Minv @ dq, data.ddq_dq, 1e-8)
@@ -190,7 +190,7 @@ def _node(rb, ws, q, v, tau, fid, out):
     """A compiled caller, as a compiled node will be: every kernel called from inside numba."""
     acc, Minv, dq, dv, J, Jq, Jv, R, p, vel = out
     K.forward_dynamics(rb, ws, q, v, tau, acc)
-    K.mass_inverse(rb, ws, Minv)
+    K.mass_inverse(rb.dof_parent, ws.L, ws.dinv, Minv)
     K.dynamics_derivatives(rb, ws, q, v, acc, dq, dv)
     K.forward_kinematics(rb, ws, q, v)
     K.frame_jacobian(rb, ws, fid, 1, J)

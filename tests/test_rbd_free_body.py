@@ -51,7 +51,7 @@ def test_free_body_dynamics_and_derivatives_equal_pinocchio(seed):
     assert free_body_kernel.free_body(rb)
     acc, Minv = np.zeros(6), np.zeros((6, 6))
     K.forward_dynamics(rb, ws, q, v, tau, acc)
-    K.mass_inverse(rb, ws, Minv)
+    K.mass_inverse(rb.dof_parent, ws.L, ws.dinv, Minv)
     M = pin.crba(model, data, q)
     M = np.triu(M) + np.triu(M, 1).T
     close(ws.M, M)

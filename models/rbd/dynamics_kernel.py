@@ -236,13 +236,14 @@ def _crba(rb, ws):
 
 
 @uncounted
-def _factor(rb, ws):
-    """``ws.L``: the lower-triangular ``L`` with ``ws.M = Lᵀ L`` and the branch-induced sparsity of ``M``
+def _factor(lam, M, L, dinv):
+    """``L``: the lower-triangular ``L`` with ``M = Lᵀ L`` and the branch-induced sparsity of ``M``
     (Featherstone's LTL factorization: no fill-in, ``O(nv · depth²)``).  A pivot that is not positive (a
     singular ``M``: a moving joint whose subtree has no mass, no inertia about its axis and no armature) is
-    NaN, so the dynamics come out NaN as Pinocchio's ABA gives them, instead of a division by zero."""
-    n = rb.nv
-    L, M, dinv, lam = ws.L, ws.M, ws.dinv, rb.dof_parent
+    NaN, so the dynamics come out NaN as Pinocchio's ABA gives them, instead of a division by zero.  ``lam``:
+    ``rb.dof_parent``; ``dinv = 1 / diag(L)``; the workspace's arrays are passed one by one, not the workspace (a
+    kernel receiving the workspace copies all its arrays' descriptors at every call)."""
+    n = lam.shape[0]
     for r in range(n):
         for c in range(n):
             L[r, c] = M[r, c] if c <= r else 0.0
@@ -291,22 +292,24 @@ def forward_dynamics(
     (``ws.oa`` holds the accelerations at zero joint acceleration)."""
     forward_kinematics(rb, ws, q, v)
     if free_body(rb):
-        free_body_bias(rb, ws, v)
+        free_body_bias(rb.mass, rb.com, rb.inertia, rb.armature, rb.gravity, ws.oR, ws.op, v, ws.tmp, ws.M, ws.tau,
+                       ws.oa)
     else:
         _rnea_pass(rb, ws, ws.zero, ws.tau)
         _crba(rb, ws)
-    _factor(rb, ws)
+    _factor(rb.dof_parent, ws.M, ws.L, ws.dinv)
     for k in range(rb.nv):
         a_out[k] = tau[k] - ws.tau[k]
     factor_solve(rb.dof_parent, ws.L, ws.dinv, a_out)
 
 
 @uncounted
-def mass_inverse(rb: RigidBodyModel, ws: RigidBodyWorkspace, Minv_out: np.ndarray) -> None:
-    """``Minv_out (nv, nv) = M⁻¹`` (armature included) from the factor ``ws.L`` of the last
-    :func:`forward_dynamics`, one sparse solve per column (``O(nv² · depth)``), then mirrored to be symmetric."""
-    n = rb.nv
-    L, lam, dinv, x = ws.L, rb.dof_parent, ws.dinv, Minv_out
+def mass_inverse(lam: np.ndarray, L: np.ndarray, dinv: np.ndarray, Minv_out: np.ndarray) -> None:
+    """``Minv_out (nv, nv) = M⁻¹`` (armature included) from the factor ``L = ws.L`` (``dinv = ws.dinv``) of the last
+    :func:`forward_dynamics`, one sparse solve per column (``O(nv² · depth)``), then mirrored to be symmetric
+    (``lam = rb.dof_parent``)."""
+    n = lam.shape[0]
+    x = Minv_out
     for j in range(n):  # row j = column j, contiguous
         for k in range(n):
             x[j, k] = 0.0
@@ -392,7 +395,8 @@ def rnea_derivatives(
     ``(q, v)``, e.g. the one of :func:`forward_dynamics`)."""
     _rnea_pass(rb, ws, a, ws.tau)
     if free_body(rb):
-        free_body_derivatives(rb, ws, dtau_dq_out, dtau_dv_out)
+        free_body_derivatives(rb.mass, rb.com, rb.inertia, rb.gravity, ws.oR, ws.op, ws.ov, ws.tmp, dtau_dq_out,
+                              dtau_dv_out)
         return
     _composite_coriolis(rb, ws)
     oS, ov, oa, of, oIc, oBc, Y, Z = ws.oS, ws.ov, ws.oa, ws.of, ws.oIc, ws.oBc, ws.IcS, ws.BcS

@@ -300,7 +300,7 @@ def _dynamics_jacobians(tbl, ints, x, rb, ws):
         contact_dynamics_derivatives(rb, ws, cw, Jcs, ints[NC], dq, dv, da0_dx, Sm, dFx, dFu,
                                      mat(tbl, ints, E_DF_DX), mat(tbl, ints, E_DF_DU))
         return
-    mass_inverse(rb, ws, Minv)
+    mass_inverse(rb.dof_parent, ws.L, ws.dinv, Minv)
     for i in range(nv):
         for j in range(nv):
             sq = 0.0

@@ -12,12 +12,10 @@ column ``j`` of ``∂τ/∂v`` is ``e_j ×* (I v) + v ×* (I e_j)``.  The world 
 
 from __future__ import annotations
 
-import numpy as np
-
 from crocopy.kernels import uncounted
 
 from .joint_types import FREEFLYER
-from .lowering import RigidBodyModel, RigidBodyWorkspace
+from .lowering import RigidBodyModel
 from .spatial import fcross, get6, mcross, plus
 
 
@@ -28,9 +26,10 @@ def free_body(rb: RigidBodyModel) -> bool:
 
 
 @uncounted
-def _body_inertia(rb, I):
-    """``I (6, 6)``: the spatial inertia of body 1 in its joint frame, ``[[m, -m[c]x], [m[c]x, Ic - m [c]x [c]x]]``."""
-    m, com, Ic = rb.mass[1], rb.com, rb.inertia
+def _body_inertia(mass, com, Ic, I):
+    """``I (6, 6)``: the spatial inertia of body 1 in its joint frame, ``[[m, -m[c]x], [m[c]x, Ic - m [c]x [c]x]]``
+    (``mass``, ``com``, ``Ic``: the lowered model's per-body arrays)."""
+    m = mass[1]
     cx, cy, cz = com[1, 0], com[1, 1], com[1, 2]
     for r in range(3):
         for c in range(3):
@@ -54,10 +53,9 @@ def _body_inertia(rb, I):
 
 
 @uncounted
-def _in_body(ws, m):
-    """The world motion ``m`` (6-tuple) read in body 1's frame ``oM_1 = (R, p)``: ``X⁻¹ m = [Rᵀ(m_v - p × m_ω);
-    Rᵀ m_ω]``."""
-    R, p = ws.oR, ws.op
+def _in_body(R, p, m):
+    """The world motion ``m`` (6-tuple) read in body 1's frame ``oM_1 = (R, p)`` (the workspace's ``oR``, ``op``):
+    ``X⁻¹ m = [Rᵀ(m_v - p × m_ω); Rᵀ m_ω]``."""
     vx, vy, vz, wx, wy, wz = m
     px, py, pz = p[1, 0], p[1, 1], p[1, 2]
     vx, vy, vz = vx - (py * wz - pz * wy), vy - (pz * wx - px * wz), vz - (px * wy - py * wx)
@@ -72,19 +70,21 @@ def _in_body(ws, m):
 
 
 @uncounted
-def free_body_bias(rb: RigidBodyModel, ws: RigidBodyWorkspace, v: np.ndarray) -> None:
-    """The forward dynamics' terms of the module docstring (``v (6,)`` the body's twist): ``ws.M = I + diag(armature)``,
-    ``ws.tau = b = I ag + v ×* (I v)`` and ``ws.oa = -g`` (the world acceleration at zero joint acceleration, ``ov × ow
-    = 0`` for the root): what the generic RNEA pass and CRBA leave that later kernels read."""
-    I, M, tau, oa, g = ws.tmp, ws.M, ws.tau, ws.oa, rb.gravity
-    _body_inertia(rb, I)
-    ag = _in_body(ws, (-g[0], -g[1], -g[2], -g[3], -g[4], -g[5]))
+def free_body_bias(mass, com, inertia, armature, g, oR, op, v, I, M, tau, oa) -> None:
+    """The forward dynamics' terms of the module docstring (``v (6,)`` the body's twist): ``M = I + diag(armature)``,
+    ``tau = b = I ag + v ×* (I v)`` and ``oa = -g`` (the world acceleration at zero joint acceleration, ``ov × ow
+    = 0`` for the root): what the generic RNEA pass and CRBA leave in the workspace that later kernels read.  The
+    lowered model's arrays (``mass``, ``com``, ``inertia``, ``armature``, the gravity ``g``) and the workspace's
+    (``oR``, ``op``, the scratch ``I = tmp``, ``M``, ``tau``, ``oa``) come one by one, not as the model and the
+    workspace (a kernel receiving those copies all their arrays' descriptors at every call)."""
+    _body_inertia(mass, com, inertia, I)
+    ag = _in_body(oR, op, (-g[0], -g[1], -g[2], -g[3], -g[4], -g[5]))
     vv = (v[0], v[1], v[2], v[3], v[4], v[5])
     b = plus(_times6(I, ag), fcross(vv, _times6(I, vv)))
     for r in range(6):
         for c in range(6):
             M[r, c] = I[r, c]
-        M[r, r] += rb.armature[r]
+        M[r, r] += armature[r]
         tau[r] = b[r]
         oa[0, r] = -g[r]
         oa[1, r] = -g[r]
@@ -104,15 +104,13 @@ def _times6(A, t):
 
 
 @uncounted
-def free_body_derivatives(
-    rb: RigidBodyModel, ws: RigidBodyWorkspace, dtau_dq_out: np.ndarray, dtau_dv_out: np.ndarray
-) -> None:
+def free_body_derivatives(mass, com, inertia, g, oR, op, ov, I, dtau_dq_out, dtau_dv_out) -> None:
     """``∂τ/∂q = I (ag ×)`` and ``∂τ/∂v`` (columns ``e_j ×* (I v) + v ×* (I e_j)``, ``v = X⁻¹ ov``) into ``(6, 6)``
-    arrays, after the RNEA pass of :func:`~.dynamics_kernel.rnea_derivatives` (module docstring)."""
-    I, g = ws.tmp, rb.gravity
-    _body_inertia(rb, I)
-    ag = _in_body(ws, (-g[0], -g[1], -g[2], -g[3], -g[4], -g[5]))
-    v = _in_body(ws, get6(ws.ov, 1))
+    arrays, after the RNEA pass of :func:`~.dynamics_kernel.rnea_derivatives` (module docstring); the arrays one by
+    one as in :func:`free_body_bias` (``I``: the workspace's scratch ``tmp``)."""
+    _body_inertia(mass, com, inertia, I)
+    ag = _in_body(oR, op, (-g[0], -g[1], -g[2], -g[3], -g[4], -g[5]))
+    v = _in_body(oR, op, get6(ov, 1))
     h = _times6(I, v)
     for j in range(6):
         e = (1.0 if j == 0 else 0.0, 1.0 if j == 1 else 0.0, 1.0 if j == 2 else 0.0,
