@@ -112,9 +112,10 @@ class BoxSolverMixin:
         values as at the last read, on the same nodes and buffers, are taken as they were (checked then)."""
         models = self.problem.runningModels
         lbs, ubs = [m.u_lb for m in models], [m.u_ub for m in models]
-        key = (self._horizon, self.problem._nodes_version)
+        version = self.problem._nodes_version
         seen = self.__dict__.get("_bounds_seen")
-        if seen is not None and seen[0] == key and _same_bounds(lbs, seen[1]) and _same_bounds(ubs, seen[2]):
+        if (seen is not None and seen[0] == version and self._bounds_for is self._horizon
+                and _same_bounds(lbs, seen[1]) and _same_bounds(ubs, seen[2])):
             return
         self._lb, self._ub = [], []
         for t, (m, lb, ub) in enumerate(zip(models, lbs, ubs)):
@@ -138,7 +139,7 @@ class BoxSolverMixin:
         self._us_stack = np.zeros(self._uoff[-1])
         self._bounds_for = self._horizon
         self._bound_addresses = None
-        self._bounds_seen = (key, _snapshot(lbs), _snapshot(ubs))
+        self._bounds_seen = (version, _snapshot(lbs), _snapshot(ubs))
 
     def _start(self, init_xs, init_us, is_feasible: bool, init_reg) -> None:
         self._read_bounds()
@@ -271,6 +272,7 @@ class SolverBoxDDP(BoxSolverMixin, SolverDDP):
 
 
 def _values(bounds: list) -> np.ndarray:
+    """The bounds' values, stacked as floats."""
     return np.concatenate([np.asarray(b, dtype=float).ravel() for b in bounds] or [np.zeros(0)])
 
 

@@ -137,9 +137,14 @@ class SolverDDP(SolverAbstract):
         compiled_nodes.prepare(self)
         self._addresses()
         try:
-            self._derivatives.update(self.problem.runningDatas, self._node_dims)
+            self._derivative_addresses()
         except ValueError:  # a derivative array of the wrong size: the solve reports it
             self._derivatives = NodeDerivatives()
+
+    def _derivative_addresses(self) -> np.ndarray:
+        """Where the running nodes' ``Fx, Fu, Lxx, Lxu, Luu, Lx, Lu`` are (:class:`.horizon.NodeDerivatives`)."""
+        self._sync_problem()  # updateModel/circularAppend since the last solve
+        return self._derivatives.update(self.problem.runningDatas, self._node_dims)
 
     _views = ("Vxx", "Vx", "fs", "Qxx", "Qxu", "Quu", "Qx", "Qu", "K", "k")
     """Attributes holding views of the horizon's buffer: not pickled, bound again to the copy's buffer."""
@@ -454,10 +459,9 @@ class SolverDDP(SolverAbstract):
     def _backward_pass_kernel(self) -> None:
         """The whole recursion in one compiled call (:meth:`_compiled_pass`) over the stacked arrays of
         :mod:`.horizon`; the first node whose ``Quu`` is not positive definite or not finite raises."""
-        datas = self.problem.runningDatas
-        self._sync_problem()  # updateModel/circularAppend since the last solve
+        self._sync_problem()  # updateModel/circularAppend since the last solve (before V_T: it may remake buffers)
         gaps = self._terminal_value_function()
-        t = self._compiled_pass(self._derivatives.update(datas, self._node_dims), float(self.preg), gaps)
+        t = self._compiled_pass(self._derivative_addresses(), float(self.preg), gaps)
         if t >= 0:
             raise self._node_failure(t)
 

@@ -349,13 +349,12 @@ class SolverIntro(SolverFDDP):
         """The constrained recursion in one compiled call; raises what the Python steps raise at the first node
         (from the end) that fails."""
         problem = self.problem
-        datas = problem.runningDatas
         self._sync_problem()
         tables = self._intro_tables()
         gaps = self._terminal_value_function()
         h = self._horizon
         t, outcome = intro_riccati_kernel.intro_pass(
-            self._derivatives.update(datas, self._node_dims),
+            self._derivative_addresses(),
             h.addr,
             h.dims,
             tables.row_addresses(problem),

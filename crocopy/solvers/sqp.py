@@ -84,7 +84,6 @@ class SolverSQP(SolverDDP):
         self.gap_norm = 0.0
         self.gap_norm_try = 0.0
         self._allocate_sqp()
-        self._prepare_kernels()  # again: allocating the SQP arrays dropped the trajectories' addresses
 
     def _allocate_sqp(self) -> None:
         """The steps ``dx``, ``du``, the multipliers ``lag_mul`` and ``fs_try``: views of padded stacks
@@ -185,11 +184,6 @@ class SolverSQP(SolverDDP):
             self.merit = self.cost + self.mu_dynamic * self.gap_norm
         self.backwardPass()
         self._linear_rollout()
-
-    def _derivative_addresses(self) -> np.ndarray:
-        """Where the running nodes' ``Fx, Fu, Lxx, Lxu, Luu, Lx, Lu`` are (:class:`.horizon.NodeDerivatives`)."""
-        self._sync_problem()  # updateModel/circularAppend since the last solve
-        return self._derivatives.update(self.problem.runningDatas, self._node_dims)
 
     def _gap_norm(self) -> float:
         """``Γ = Σ_t ‖f_t‖₁``."""

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..stored import copy_into
+from .trajectories import TrajectoryAddresses
 
 
 class StdVec_VectorXs(list):
@@ -100,5 +101,6 @@ class StdVecAttribute:
 def allocate(obj: Any, name: str, arrays) -> Trajectory:
     """Give ``obj`` a new :class:`Trajectory` ``name`` holding ``arrays`` themselves (the solver's storage)."""
     held = obj.__dict__[name] = Trajectory(arrays, name)
-    obj.__dict__["_trajectory_addresses"] = None  # read again (crocopy.solvers.trajectories)
+    if name in TrajectoryAddresses.names:  # new arrays whose addresses the solver holds: read them again
+        obj.__dict__["_trajectory_addresses"] = None
     return held

@@ -26,6 +26,9 @@ def addresses(arrays: Sequence[np.ndarray | None]) -> np.ndarray:
 class TrajectoryAddresses:
     """The addresses of a DDP-family solver's trajectories, read at construction (after an allocation)."""
 
+    names = ("xs", "us", "xs_try", "us_try", "_dx_try", "k", "K", "fs")
+    """The solver's attributes whose arrays' addresses it holds (a new list under one of these names is read again)."""
+
     def __init__(self, solver) -> None:
         self.xs, self.us = addresses(solver.xs), addresses(solver.us)
         self.xs_try, self.us_try = addresses(solver.xs_try), addresses(solver.us_try)
