@@ -19,7 +19,7 @@ import numpy as np
 from .action_base import ActionDataAbstract, ActionModelAbstract
 from .guards import Guard, Guarded
 from .validation import ArgumentTypeError, as_count, as_vector, finite_stack, plain_vectors
-from .versioning import STRUCTURE, holds_stale_data
+from .versioning import STRUCTURE, any_stale, holds_stale_data
 
 
 class StdVec_ActionModel(list):
@@ -238,6 +238,9 @@ class ShootingProblem(Guarded):
             The nodes whose data was replaced (``T`` for the terminal node).
         """
         if self._structure_seen == STRUCTURE[0]:
+            return []
+        if not any_stale():
+            self._structure_seen = STRUCTURE[0]
             return []
         replaced = []
         for t, (m, d) in enumerate(zip(self._runningModels, self._runningDatas)):

@@ -53,6 +53,10 @@ with the wrong shape (:func:`structure_changed`)."""
 _MADE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 """Registry model → the datas it made (weakly)."""
 
+_STALE: weakref.WeakSet = weakref.WeakSet()
+"""The datas made stale by :func:`structure_changed` that are still alive (weakly): while it is empty no node data
+can hold a stale one (:func:`any_stale`)."""
+
 
 def made_from(model: object, data: object) -> None:
     """Record that ``model`` (a registry of named items) made ``data``; ``data.structure_stale`` starts False."""
@@ -66,6 +70,13 @@ def structure_changed(model: object) -> None:
     STRUCTURE[0] += 1
     for data in _MADE.get(model, ()):
         data.structure_stale = True
+        _STALE.add(data)
+
+
+def any_stale() -> bool:
+    """Whether a data made stale by :func:`structure_changed` is still alive (a building step that adds items to
+    models whose datas are not made yet moves :data:`STRUCTURE` without making any)."""
+    return len(_STALE) > 0
 
 
 def holds_stale_data(data: object) -> bool:

@@ -237,3 +237,23 @@ def test_a_copied_or_pickled_cache_mark_is_never_filled():
     assert not seen.stale(list)
     for other in (copy.deepcopy(seen), pickle.loads(pickle.dumps(seen))):
         assert other.value == -1 and other.stale(list)
+
+
+
+def test_datas_are_walked_only_when_one_was_made_stale(monkeypatch):
+    """Items added to models whose datas are not made yet (building another problem) move the structure clock
+    without making any data stale: ``refresh_datas`` then walks none of the problem's datas. A cost removed from a
+    model whose data exists still makes that data stale, and only that node's data is replaced."""
+    import crocopy.shooting as shooting
+    from crocopy.problems import registry
+
+    problem, xs, us = registry.build("pend")
+    walked = []
+    real = shooting.holds_stale_data
+    monkeypatch.setattr(shooting, "holds_stale_data", lambda data: walked.append(data) or real(data))
+    registry.build("pend")
+    assert problem.refresh_datas() == [] and walked == []
+    problem.runningModels[1].differential.costs.removeCost("control")
+    old = list(problem.runningDatas)
+    assert problem.refresh_datas() == [1] and len(walked) == problem.T + 1
+    assert [d is o for d, o in zip(problem.runningDatas, old)] == [t != 1 for t in range(problem.T)]
