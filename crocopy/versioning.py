@@ -5,7 +5,9 @@ activity and activation bounds of its items (:mod:`crocopy.costs.stack`), a cont
 Pinocchio constraint models built from its contacts' references and gains
 (``crocopy.models.ContactModelMultiple``).  Every such parameter changes through a setter that calls
 :func:`touch` on the object it belongs to: one global clock, ``ParametersVersion.value``, moves on
-by one, and the object is stamped with the new value (``_stamp``; 0 for an object never touched).
+by one, and the object is stamped with the new value (``_stamp``; 0 for an object never touched), and with it its
+layout (``_layout_stamp``) unless only values of a fixed length changed (a class's ``_value_attributes``: what
+compiled nodes re-read at every solve; :func:`changes_since` tells the two apart over a node's objects).
 Registries of named items (:mod:`crocopy.named_items`) touch themselves when an item is added,
 removed, activated or deactivated.  The model classes derive :class:`Parametrized`: assigning any public
 attribute of a model (a property setter such as ``residual.id`` or ``dam.armature``, or a plain attribute)
@@ -32,10 +34,14 @@ class ParametersVersion:
     value = 0
 
 
-def touch(owner: object) -> None:
-    """Record that a parameter of ``owner`` changed: advance the clock and stamp ``owner`` with it."""
+def touch(owner: object, layout: bool = True) -> None:
+    """Record that a parameter of ``owner`` changed: advance the clock and stamp ``owner`` with it (``_stamp``).
+    ``layout=False``: only parameter values changed, in number as before (a reference, a time step:
+    :attr:`Parametrized._value_attributes`); the layout stamp (``_layout_stamp``, :func:`changes_since`) stays."""
     ParametersVersion.value += 1
     object.__setattr__(owner, "_stamp", ParametersVersion.value)
+    if layout:
+        object.__setattr__(owner, "_layout_stamp", ParametersVersion.value)
 
 
 def frozen_copy(values: np.ndarray) -> np.ndarray:
@@ -100,12 +106,55 @@ def holds_stale_data(data: object) -> bool:
     return False
 
 
+def parameter_owners(root: object) -> list[object]:
+    """Every object reachable from ``root`` (a node's model) through the attributes, lists, tuples and dicts of
+    crocopy's classes, once each: the objects whose layout stamps tell whether something a compiled node read from
+    ``root`` as its layout (items, frames, rows) may have changed (:func:`changes_since`).  A nested object replaced
+    by another is an assignment to its owner, which is in the list: the list holds until one of its stamps moves."""
+    seen: set[int] = set()
+    owners = []
+    stack = [root]
+    while stack:
+        obj = stack.pop()
+        if id(obj) in seen:
+            continue
+        seen.add(id(obj))
+        if isinstance(obj, dict):
+            stack.extend(obj.values())
+        elif isinstance(obj, list | tuple):
+            stack.extend(obj)
+        elif type(obj).__module__.startswith("crocopy") and hasattr(obj, "__dict__"):
+            owners.append(obj)
+            stack.extend(obj.__dict__.values())
+    return owners
+
+
+VALUES, LAYOUT = 1, 2
+"""What :func:`changes_since` found: value attributes only were assigned, or something else (0: nothing)."""
+
+
+def changes_since(owners: Iterable[object], value: int) -> int:
+    """What changed among ``owners`` (:func:`parameter_owners`) after the clock read ``value``: :data:`LAYOUT` if
+    one was touched other than by a value attribute, else :data:`VALUES` if one was touched, else 0."""
+    found = 0
+    for owner in owners:
+        stamps = owner.__dict__
+        if stamps.get("_layout_stamp", 0) > value:
+            return LAYOUT
+        if stamps.get("_stamp", 0) > value:
+            found = VALUES
+    return found
+
+
 class Parametrized:
     """Mixin of model classes: assigning a public attribute touches the model (:func:`touch`), and the names in
-    ``_read_only`` can be assigned once (by the constructor), as in Crocoddyl's bindings."""
+    ``_read_only`` can be assigned once (by the constructor), as in Crocoddyl's bindings.  The names in
+    ``_value_attributes`` hold parameter values only (an array of fixed length, a number), which compiled nodes
+    re-read at every solve: assigning one touches the model without moving its layout stamp."""
 
     __slots__ = ()
     _read_only: frozenset[str] = frozenset()
+    _value_attributes: frozenset[str] = frozenset()
 
     def __setattr__(self, name: str, value: object) -> None:
         if name[0] == "_":
@@ -116,7 +165,15 @@ class Parametrized:
                 f"{type(self).__name__}.{name} is read-only (as in Crocoddyl): build a new model with the new {name}"
             )
         object.__setattr__(self, name, value)
-        touch(self)
+        touch(self, name not in self._value_attributes)
+
+    def __getstate__(self) -> dict:
+        """Copy and pickle without the stamps: a clock value means nothing in another process or object (a copy is
+        a model never touched, as :class:`ParametersSeen` copies as never filled)."""
+        state = self.__dict__.copy()
+        state.pop("_stamp", None)
+        state.pop("_layout_stamp", None)
+        return state
 
 
 class ParametersSeen:

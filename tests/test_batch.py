@@ -117,9 +117,9 @@ def test_registry_problem_pickles_without_datas_and_evaluates_the_same(name):
         for f in ("cost", "xnext", "Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu"):
             np.testing.assert_array_equal(getattr(d, f), getattr(e, f), err_msg=f)
     models_only = len(pickle.dumps(models))
-    # the problem's own fields shift pickle's memo indices (2- or 5-byte references): a few hundred bytes;
-    # one node's data would be tens of kB
-    assert len(pickle.dumps(problem)) < models_only + 2000
+    # the problem's own fields shift pickle's memo indices (2- or 5-byte references): a few kB at most;
+    # one node's data would be tens of kB (77 kB for the pendulum's)
+    assert len(pickle.dumps(problem)) < models_only + 5000
 
 
 def unicycle(x0=(1.0, 0.5, 0.2), T=20):

@@ -163,12 +163,22 @@ def test_unannounced_mutation_between_solves_gives_a_fresh_problems_solve(case, 
     assert mutated[1] != fresh(build, None, solver_class)[1]  # the mutation matters
 
 
-def test_selection_is_kept_while_nothing_changes_and_made_again_after_a_setter():
+def test_selection_is_kept_after_a_value_setter_and_made_again_after_a_layout_setter():
+    """A value attribute assigned (``dt``, a residual's ``reference``) is re-read into the kept selection's
+    parameters in place; a frame changed (the node's layout) makes the selection again, as a new problem does."""
     problem, xs, us = arm.build_arm_reaching(crocopy, nodes=10)
     solver = crocopy.SolverFDDP(problem)
     first = compiled_nodes.select(solver)
     assert compiled_nodes.select(crocopy.SolverDDP(problem)) is first
-    problem.runningModels[0].dt = problem.runningModels[0].dt
+    problem.runningModels[0].dt = 0.5 * problem.runningModels[0].dt
+    goal = problem.runningModels[3].differential.costs.costs["goal"].cost.residual
+    goal.reference = goal.reference + 0.25
+    assert compiled_nodes.select(solver) is first
+    horizon = first.horizon
+    assert horizon.par[horizon.poff[0]] == problem.runningModels[0].dt
+    assert 0.25 + problem.runningModels[2].differential.costs.costs["goal"].cost.residual.reference[0] in \
+        horizon.par[horizon.poff[3]:horizon.poff[4]]
+    goal.id = goal.id - 1
     second = compiled_nodes.select(solver)
     assert second is not first
     assert compiled_nodes.select(solver) is second

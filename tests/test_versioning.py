@@ -257,3 +257,40 @@ def test_datas_are_walked_only_when_one_was_made_stale(monkeypatch):
     old = list(problem.runningDatas)
     assert problem.refresh_datas() == [1] and len(walked) == problem.T + 1
     assert [d is o for d, o in zip(problem.runningDatas, old)] == [t != 1 for t in range(problem.T)]
+
+
+def test_value_attributes_stamp_values_and_others_the_layout():
+    """A value attribute assigned (a residual's ``reference``, ``dt``) is a change of values; any other public
+    assignment (a frame, a residual's reference frame) a change of layout; :func:`changes_since` over a model's
+    owners tells which, and a model not touched shows no change."""
+    from crocopy.problems import registry
+    from crocopy.versioning import LAYOUT, VALUES, changes_since, parameter_owners
+
+    problem, _, _ = registry.build("arm")
+    model, other = problem.runningModels[0], problem.runningModels[1]
+    owners = parameter_owners(model)
+    goal = model.differential.costs.costs["goal"].cost.residual
+    assert goal in owners and model.differential.costs in owners and model.state in owners
+    clock = ParametersVersion.value
+    other.dt = 0.5 * other.dt
+    assert changes_since(owners, clock) == 0
+    goal.reference = goal.reference + 0.1
+    assert changes_since(owners, clock) == VALUES
+    clock = ParametersVersion.value
+    model.dt = 2.0 * model.dt
+    assert changes_since(owners, clock) == VALUES
+    goal.id = goal.id - 1
+    assert changes_since(owners, clock) == LAYOUT
+
+
+def test_copies_and_pickles_carry_no_stamps():
+    """A copied or unpickled model is one never touched: no clock value of this process travels with it."""
+    from crocopy.problems import registry
+
+    problem, _, _ = registry.build("arm")
+    model = problem.runningModels[0]
+    model.dt = model.dt
+    assert "_stamp" in model.__dict__ and "_layout_stamp" in model.__dict__
+    for other in (copy.deepcopy(model), pickle.loads(pickle.dumps(model))):
+        assert "_stamp" not in other.__dict__ and "_layout_stamp" not in other.__dict__
+        assert other.dt == model.dt

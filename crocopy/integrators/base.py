@@ -78,6 +78,9 @@ class IntegratedActionModelAbstract(ActionModelAbstract):
         Expose the differential model's residual as the node's residual ``r`` (default True).
     """
 
+    _value_attributes = frozenset({"dt"})
+    """Assigning ``dt`` changes a compiled parameter's value only (:class:`crocopy.versioning.Parametrized`)."""
+
     def __init__(self, diffModel: DifferentialActionModelAbstract, *args: object, **kwargs: object) -> None:
         bound = bind_arguments(type(self).__name__, args, kwargs, ("control", "timeStep", "withCostResidual"))
         self._init_integrated(diffModel, bound["control"], bound["timeStep"], bound["withCostResidual"])

@@ -280,13 +280,15 @@ def select(solver) -> CompiledNodes | None:
 class Selection:
     """A problem's compiled nodes kept from one solve to the next.
 
-    It is current while the parameter clock (:class:`~crocopy.versioning.ParametersVersion`: no setter called
-    anywhere), the structure clock (:data:`~crocopy.versioning.STRUCTURE`), the problem's node version, its
+    It is current while the structure clock (:data:`~crocopy.versioning.STRUCTURE`), the problem's node version, its
     ``nthreads``, its models and datas (the same objects) have not changed, no evaluator was refreshed by another
-    selection since (``evaluator.refreshes``), every evaluator's ``refresh_live(memo)`` re-read in place what may
-    change unannounced (Pinocchio's objects, a user residual's ``parameters()``; False if it cannot: its Pinocchio
-    model changed, ...), and the nodes without an evaluator, offered again, still decline (their refusals are class
-    checks, except those that depend on a Pinocchio model).  Otherwise :func:`select` makes the selection again.
+    selection since (``evaluator.refreshes``), every evaluator re-read in place what it reads at a solve's start
+    (False if it cannot: its Pinocchio model changed, ...), and the nodes without an evaluator, offered again, still
+    decline (their refusals are class checks, except those that depend on a Pinocchio model).  While the parameter
+    clock (:class:`~crocopy.versioning.ParametersVersion`) stands still, an evaluator re-reads what may change
+    unannounced (``refresh_live(memo)``: Pinocchio's objects, a user residual's ``parameters()``); once it moved
+    (a setter called anywhere), all its parameters (``refresh_values(memo)``: False where what it read as its layout
+    was touched, a frame or a residual replaced).  Otherwise :func:`select` makes the selection again.
     """
 
     def __init__(self, problem, nodes: CompiledNodes, evaluators: list) -> None:
@@ -303,9 +305,13 @@ class Selection:
         return ParametersVersion.value, STRUCTURE[0], problem._nodes_version, problem.nthreads
 
     def current(self, problem) -> bool:
-        """Whether the selection still holds (see the class docstring); re-reads the live parameters in place."""
-        if self.clocks != self._clocks(problem):
+        """Whether the selection still holds (see the class docstring); re-reads the live parameters in place, and
+        after the parameter clock alone moved, every evaluator's parameters (``refresh_values``: False where what
+        it read as its layout was touched)."""
+        clocks = self._clocks(problem)
+        if self.clocks[1:] != clocks[1:]:
             return False
+        values = self.clocks[0] != clocks[0]
         models, datas = problem.runningModels, problem.runningDatas
         if len(models) + 1 != len(self.models) or not all(map(is_, models, self.models)) \
                 or not all(map(is_, datas, self.datas)) or problem.terminalModel is not self.models[-1] \
@@ -313,8 +319,12 @@ class Selection:
             return False
         memo: dict = {}
         T = problem.T
-        return all(e.refreshes == n and e.refresh_live(memo) for e, n in self.evaluators) and \
-            all(m._compiled_node(d, t == T, memo) is None for t, m, d in self.declined)
+        if not (all(e.refreshes == n and (e.refresh_values(memo) if values else e.refresh_live(memo))
+                    for e, n in self.evaluators)
+                and all(m._compiled_node(d, t == T, memo) is None for t, m, d in self.declined)):
+            return False
+        self.clocks = clocks
+        return True
 
 
 _SELECTIONS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()

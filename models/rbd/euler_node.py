@@ -44,7 +44,7 @@ from crocopy.costs.stack_kernel import activation_values
 from crocopy.kernels import checked_address, overridden
 from crocopy.not_compiled import class_reason, decline
 from crocopy.residuals.base import ResidualModelAbstract
-from crocopy.versioning import ParametersVersion
+from crocopy.versioning import LAYOUT, ParametersVersion, changes_since, parameter_owners
 
 from ..actuations import ActuationModelAbstract
 from ..residual_numba import ResidualModelNumba, kinematics_size
@@ -250,6 +250,7 @@ class EulerNode:
         self.stamp = np.zeros(0)
         self._own: tuple = (None, None, np.zeros(0, dtype=np.int64), [])
         self._seen = -1
+        self._owners: list = []
         self._n_parameters = 0
         self.shared_minv = False
 
@@ -257,16 +258,17 @@ class EulerNode:
         """Re-read the models' parameters and the data arrays' addresses; False if the node no longer qualifies (the
         reason recorded in ``memo``).
 
-        The cost stack's items (kinds, frames, reference frames) are read again when any parameter anywhere was
-        touched since this node last read them (:mod:`crocopy.versioning`: every public assignment to a model
-        touches it); the references, the time step, the armature and ``S`` at every call; the table only when an
-        array it lists or the items changed."""
+        The cost stack's items (kinds, frames, reference frames) are read again when the layout of an object reachable
+        from the node's model was touched since this node last read them (:func:`~crocopy.versioning.changes_since`:
+        every public assignment to a model touches it, except of a value attribute such as a residual's
+        ``reference`` or ``dt``); the references, the time step, the armature and ``S`` at every call; the table only
+        when an array it lists or the items changed."""
         data = self._data()
         iam = self.model
         dam, ddata = iam.differential, data.differential
         stack = ddata.costs.stack
-        changed = stack.refresh_if_stale(self.terminal)
-        changed = changed or self._residuals is None or self._seen != ParametersVersion.value
+        changed = stack.refresh_if_stale(self.terminal) or self._residuals is None or (
+            self._seen != ParametersVersion.value and changes_since(self._owners, self._seen) == LAYOUT)
         read: dict | None = None
         if changed:
             read = {}
@@ -274,7 +276,8 @@ class EulerNode:
             if why is not None:
                 decline(memo, why)
                 return False
-            self._seen = ParametersVersion.value
+            self._owners = parameter_owners(iam)
+        self._seen = ParametersVersion.value
         self.contacts.refresh()
         par = [float(iam.dt), self._damping(dam)]
         live = read_parameters(self._residuals, par, self._parameters, read)
@@ -304,6 +307,38 @@ class EulerNode:
         a live actuation matrix."""
         return (live, contacts_live(self.contacts.models), not frozen(dam.armature),
                 not self.terminal and actuation_live(dam.actuation, memo["S", id(dam.actuation)]))
+
+    def refresh_values(self, memo: dict) -> bool:
+        """After the parameter clock moved: False (the node must be refreshed) when what the node read as its layout
+        was touched since (:func:`~crocopy.versioning.changes_since`: a frame, a residual or an item replaced); else
+        re-read in place what changed: nothing but the live parameters (:meth:`refresh_live`) when no object of the
+        node was touched (another model's parameter was), else the parameters of the touched residuals (a value
+        attribute such as ``reference``), the time step, the damping, the contacts, the armature and ``S``.  Spends
+        the stamp of the last values."""
+        self.forget()
+        changes = LAYOUT if self._residuals is None else changes_since(self._owners, self._seen)
+        if changes == LAYOUT:
+            return False
+        if not changes:
+            if not self.refresh_live(memo):
+                return False
+            self._seen = ParametersVersion.value
+            return True
+        data, low = self._data(), self._lowered
+        if data is None or low.version != self._low_version or not low.current(memo):
+            return False
+        if data.differential.costs.stack.refresh_if_stale(self.terminal):
+            self._residuals = None  # read the items again
+            return False
+        iam, dam = self.model, self.model.differential
+        self.par[0], self.par[1] = float(iam.dt), self._damping(dam)  # in place: a horizon reads this array
+        if not self._live[0].reread_since(self.par, self._seen):
+            self._residuals = None
+            return False
+        self.contacts.refresh()
+        self._refresh_dynamics(low, dam, memo)
+        self._seen = ParametersVersion.value
+        return True
 
     def refresh_live(self, memo: dict) -> bool:
         """Re-read, in place, what :meth:`refresh` read that may have changed without moving the parameter clock

@@ -33,7 +33,7 @@ import weakref
 import numpy as np
 
 from crocopy.not_compiled import class_reason, decline
-from crocopy.versioning import ParametersVersion
+from crocopy.versioning import LAYOUT, ParametersVersion, changes_since, parameter_owners
 
 from ..impulses import ImpulseModel3D, ImpulseModel6D
 from ..state_multibody import StateMultibody
@@ -131,6 +131,7 @@ class ImpulseNode:
         self._data_entries = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
         self._lowered: Lowered | None = None
         self._seen = -1
+        self._owners: list = []
 
     @property
     def stack_terminal(self) -> bool:
@@ -139,19 +140,20 @@ class ImpulseNode:
 
     def refresh(self, low: Lowered, memo: dict) -> bool:
         """Re-read the models' parameters and the data arrays' addresses; False if the node no longer qualifies (the
-        reason recorded in ``memo``).  The items are read again when any parameter anywhere was touched since this
-        node last read them (:mod:`crocopy.versioning`), the references, ``r_coeff``, the damping and the armature
-        at every call."""
+        reason recorded in ``memo``).  The items are read again when the layout of an object reachable from the model
+        was touched since this node last read them (:func:`~crocopy.versioning.changes_since`); the references,
+        ``r_coeff``, the damping and the armature at every call."""
         data, model = self._data(), self.model
         stack = data.costs.stack
-        changed = stack.refresh_if_stale(self.stack_terminal)
-        changed = changed or self._items is None or self._seen != ParametersVersion.value
+        changed = stack.refresh_if_stale(self.stack_terminal) or self._items is None or (
+            self._seen != ParametersVersion.value and changes_since(self._owners, self._seen) == LAYOUT)
         if changed:
             why = self._read_items(stack, data)
             if why is not None:
                 decline(memo, why)
                 return False
-            self._seen = ParametersVersion.value
+            self._owners = parameter_owners(model)
+        self._seen = ParametersVersion.value
         par = [float(model.r_coeff), float(model._damping)]
         live = read_parameters([(0, r) for r in self._residuals], par, _compiled_parameters)
         self.par = np.array(par)
@@ -160,6 +162,33 @@ class ImpulseNode:
         self._live = (live, not frozen(model.armature))
         self._low_version = low.version
         self.refreshes += 1
+        return True
+
+    def refresh_values(self, memo: dict) -> bool:
+        """After the parameter clock moved: False (the node must be refreshed) when what the node read as its layout
+        was touched since (:func:`~crocopy.versioning.changes_since`); else re-read in place the live parameters
+        (:meth:`refresh_live`), and if an object of the node was touched, the touched residuals' parameters,
+        ``r_coeff``, the damping and the armature."""
+        changes = LAYOUT if self._items is None else changes_since(self._owners, self._seen)
+        if changes == LAYOUT:
+            return False
+        if not changes:
+            if not self.refresh_live(memo):
+                return False
+            self._seen = ParametersVersion.value
+            return True
+        data, low, model = self._data(), self._lowered, self.model
+        if data is None or low.version != self._low_version or not low.current(memo):
+            return False
+        if data.costs.stack.refresh_if_stale(self.stack_terminal):
+            self._items = None  # read the items again
+            return False
+        self.par[0], self.par[1] = float(model.r_coeff), float(model._damping)
+        if not self._live[0].reread_since(self.par, self._seen):
+            self._items = None
+            return False
+        np.add(low.rb.armature, model.armature, out=self.armature)
+        self._seen = ParametersVersion.value
         return True
 
     def refresh_live(self, memo: dict) -> bool:

@@ -61,13 +61,15 @@ def read_parameters(residuals: list, par: list, parameters: Callable, read: dict
     """Append the parameters of ``residuals`` (``(kind, residual)`` in ``par`` order; ``parameters(kind, residual)``
     their values, or ``read[id(residual)]`` where the caller has just read them) to the list ``par``; returns which of
     them are live."""
-    slices = []
+    slices, every = [], []
     for kind, residual in residuals:
         values = parameters(kind, residual) if read is None else read[id(residual)]
+        where = (len(par), len(par) + len(values), kind, residual)
+        every.append(where)
         if residual_live(residual):
-            slices.append((len(par), len(par) + len(values), kind, residual))
+            slices.append(where)
         par += values
-    return LiveParameters(slices, parameters)
+    return LiveParameters(slices, parameters, every)
 
 
 class LiveParameters:
@@ -79,16 +81,27 @@ class LiveParameters:
         Where the live residuals' parameters are in ``par``.
     parameters : callable
         ``parameters(kind, residual) -> list of float``, the values the node reads.
+    every : list of (start, stop, kind, residual)
+        Where every residual's parameters are in ``par`` (:meth:`reread_since`).
     """
 
-    def __init__(self, slices: list, parameters: Callable) -> None:
+    def __init__(self, slices: list, parameters: Callable, every: list) -> None:
         self.slices = slices
         self.parameters = parameters
+        self.every = every
 
     def reread(self, par: np.ndarray) -> bool:
         """Write the live residuals' current parameters into ``par``; False (``par`` partly written) if one changed
         its number of parameters (the node must be refreshed)."""
-        for start, stop, kind, residual in self.slices:
+        return self._write(par, self.slices)
+
+    def reread_since(self, par: np.ndarray, seen: int) -> bool:
+        """:meth:`reread` of the live residuals and of those touched after the parameter clock read ``seen`` (a
+        reference assigned: :func:`crocopy.versioning.touch`)."""
+        return self._write(par, [s for s in self.every if residual_live(s[3]) or getattr(s[3], "_stamp", 0) > seen])
+
+    def _write(self, par: np.ndarray, slices: list) -> bool:
+        for start, stop, kind, residual in slices:
             if type(residual) in CONE_MATRIX:
                 values = np.asarray(residual.reference.A, dtype=float).reshape(-1)
             else:
