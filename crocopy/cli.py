@@ -28,6 +28,8 @@
   ``crocopy solve`` to its first iteration line, fresh (empty caches) and warm (:mod:`crocopy.bench.latency`)
 * ``crocopy bench --threads [--problems ...]``: node evaluation with ``problem.nthreads`` 1 and 2
   (:mod:`crocopy.bench.threads`)
+* ``crocopy bench --mpc [--problems ...]``: a model-predictive cycle (new state references, one warm-started FDDP
+  iteration), next to Crocoddyl's when installed (:mod:`crocopy.bench.mpc`)
 * ``crocopy bench --first-solve [--problems P] [--solver S] [--repeats N]``: a whole ``crocopy solve`` with its
   HTML, fresh and warm: first iteration, end of the solve, HTML export, exit, CPU, whether the compile notice
   was printed (:mod:`crocopy.bench.first_solve`)
@@ -535,6 +537,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--threads", action="store_true",
                        help="the compiled nodes' calc+calcDiff with problem.nthreads = 1 and 2, and solves checked "
                             "bit-identical (crocopy.bench.threads; --problems selects)")
+    bench.add_argument("--mpc", action="store_true",
+                       help="a model-predictive cycle: new state references, then one warm-started FDDP iteration, "
+                            "next to Crocoddyl's when installed (crocopy.bench.mpc; --problems selects)")
     bench.add_argument("--workers", type=_positive_int, default=2, help="with --batch: worker processes")
     bench.add_argument("--runs", type=_positive_int, default=3,
                        help="with --batch/--scaling: repetitions (median reported)")

@@ -66,6 +66,12 @@ def run_bench(args: argparse.Namespace) -> int:
         problem = args.problems[0] if args.problems else "jump"
         print(run_latency_bench(problem, args.solver, repeats=args.repeats or 3))
         return 0
+    if args.mpc:
+        from .mpc import PROBLEMS as MPC_PROBLEMS
+        from .mpc import run_mpc_bench
+
+        print(run_mpc_bench(tuple(args.problems or MPC_PROBLEMS)))
+        return 0
     if args.threads:
         from .threads import PROBLEMS, run_threads_bench
 
@@ -170,6 +176,10 @@ def _bench_vs(args: argparse.Namespace) -> int:
 
             progress("two threads: taichi and walk")
             parts.append(THREADS + run_threads_bench())
+            from .mpc import run_mpc_bench
+
+            progress("model-predictive cycle: quad-goal, arm, walk")
+            parts.append(run_mpc_bench())
             from .coverage import run_coverage
 
             progress("compiled nodes: every builder, script and gait")
