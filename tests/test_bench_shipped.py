@@ -85,7 +85,7 @@ def test_recorder_keeps_copies_of_the_arguments():
 
 
 @pytest.mark.parametrize(("argv", "parts"), [
-    ([], ["builders", "shipped", "user", "threads", "coverage", "mim"]),
+    ([], ["builders", "shipped", "user", "threads", "mpc", "coverage", "mim"]),
     (["--problems", "pend"], ["builders"]),
     (["--shipped"], ["shipped"]),
     (["--shipped", "arm_manipulation_fwddyn", "--problems", "pend"], ["builders", "shipped"]),
@@ -100,12 +100,13 @@ def test_the_command_runs_the_parts_asked_for(monkeypatch, capsys, argv, parts):
     monkeypatch.setattr("crocopy.bench.user_residual.SECTION", "")
     monkeypatch.setattr("crocopy.bench.threads.run_threads_bench", lambda *a, **k: ran.append("threads") or "T\n")
     monkeypatch.setattr("crocopy.bench.threads.SECTION", "")
+    monkeypatch.setattr("crocopy.bench.mpc.run_mpc_bench", lambda *a, **k: ran.append("mpc") or "P\n")
     monkeypatch.setattr("crocopy.bench.coverage.run_coverage", lambda *a, **k: ran.append("coverage") or "C\n")
     monkeypatch.setattr("crocopy.bench.command._mim_sections", lambda *a, **k: ran.append("mim") or ["M\n"])
     assert main(["bench", "--vs", "crocoddyl", *argv]) == 0
     assert ran == parts
-    expected = {"builders": "B\n", "shipped": "S\n", "user": "U\n\n", "threads": "T\n", "coverage": "C\n",
-                "mim": "M\n"}
+    expected = {"builders": "B\n", "shipped": "S\n", "user": "U\n\n", "threads": "T\n", "mpc": "P\n",
+                "coverage": "C\n", "mim": "M\n"}
     assert capsys.readouterr().out == "\n".join(expected[p] for p in parts) + "\n"
 
 

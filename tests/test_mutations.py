@@ -396,33 +396,40 @@ def mpc_targets(steps: int) -> list[np.ndarray]:
     return [np.array([0.4 + 0.1 * np.cos(a), 0.3 + 0.1 * np.sin(a), 0.6]) for a in s]
 
 
-def mpc_fresh(target: np.ndarray, x0: np.ndarray, weight: float):
+def mpc_fresh(target: np.ndarray, x0: np.ndarray, weight: float, dt_scale: float):
     problem, _, _ = arm.build_arm_reaching(crocopy, target=target, nodes=10)
     problem.x0 = x0
     for dam in dams(problem):
         dam.costs.costs["goal"].weight = weight * dam.costs.costs["goal"].weight
+    for m in problem.runningModels:
+        m.dt = dt_scale * m.dt
     return problem
 
 
 @pytest.mark.parametrize(("kernels", "steps"), [(True, 500), (False, 60)])
 def test_mpc_loop_equals_fresh_problems(kernels, steps):
-    """Receding horizon: every step moves x0 and the goal reference (setters) and every tenth step the goal weight,
-    then solves from the previous solution; each step equals a problem built afresh with those values."""
+    """Receding horizon: every step moves x0 and the goal reference (setters: values only), every seventh step the
+    time step (a value too) and every tenth step the goal weight (the cost stack's layout), then solves from the
+    previous solution; each step equals a problem built afresh with those values."""
     with crocopy.use_kernels(kernels):
         problem, xs, us = build_arm()
         solver = crocopy.SolverFDDP(problem)
-        weight = 1.0
+        weight, dt_scale, dt = 1.0, 1.0, problem.runningModels[0].dt
         for step, target in enumerate(mpc_targets(steps)):
             if step % 10 == 9:
                 weight = 2.0 if weight == 1.0 else 1.0
                 for dam in dams(problem):
                     item = dam.costs.costs["goal"]
                     item.weight = (1e4 if dam is dams(problem)[-1] else 1e1) * weight
+            if step % 7 == 6:
+                dt_scale = 0.9 if dt_scale == 1.0 else 1.0
+                for m in problem.runningModels:
+                    m.dt = dt_scale * dt
             for r in residuals(problem, crocopy.ResidualModelFrameTranslation):
                 r.reference = target
             warm_xs, warm_us = [x.copy() for x in xs], [u.copy() for u in us]
             solver.solve(warm_xs, warm_us, 2)
-            fresh = crocopy.SolverFDDP(mpc_fresh(target, problem.x0, weight))
+            fresh = crocopy.SolverFDDP(mpc_fresh(target, problem.x0, weight, dt_scale))
             fresh.solve(warm_xs, warm_us, 2)
             assert solver.iter == fresh.iter, step
             assert solver.cost == pytest.approx(fresh.cost, rel=1e-9), step
