@@ -23,7 +23,7 @@ the setters, so it raises instead.
 from __future__ import annotations
 
 import weakref
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 
 import numpy as np
 
@@ -85,34 +85,10 @@ def any_stale() -> bool:
     return len(_STALE) > 0
 
 
-def holds_stale_data(data: object) -> bool:
-    """Whether ``data`` (a node's data) or a data nested in it (attributes, lists and dicts of crocopy's data
-    classes) was made by a registry whose item set changed since (:func:`structure_changed`)."""
+def _reachable(root: object) -> Iterator[object]:
+    """The objects of crocopy's classes reachable from ``root`` through their attributes, lists, tuples and dicts,
+    once each (``root`` first when it is one)."""
     seen: set[int] = set()
-    stack = [data]
-    while stack:
-        obj = stack.pop()
-        if id(obj) in seen:
-            continue
-        seen.add(id(obj))
-        if isinstance(obj, dict):
-            stack.extend(obj.values())
-        elif isinstance(obj, list | tuple):
-            stack.extend(obj)
-        elif type(obj).__module__.startswith("crocopy") and hasattr(obj, "__dict__"):
-            if obj.__dict__.get("structure_stale", False):
-                return True
-            stack.extend(obj.__dict__.values())
-    return False
-
-
-def parameter_owners(root: object) -> list[object]:
-    """Every object reachable from ``root`` (a node's model) through the attributes, lists, tuples and dicts of
-    crocopy's classes, once each: the objects whose layout stamps tell whether something a compiled node read from
-    ``root`` as its layout (items, frames, rows) may have changed (:func:`changes_since`).  A nested object replaced
-    by another is an assignment to its owner, which is in the list: the list holds until one of its stamps moves."""
-    seen: set[int] = set()
-    owners = []
     stack = [root]
     while stack:
         obj = stack.pop()
@@ -124,9 +100,22 @@ def parameter_owners(root: object) -> list[object]:
         elif isinstance(obj, list | tuple):
             stack.extend(obj)
         elif type(obj).__module__.startswith("crocopy") and hasattr(obj, "__dict__"):
-            owners.append(obj)
+            yield obj
             stack.extend(obj.__dict__.values())
-    return owners
+
+
+def holds_stale_data(data: object) -> bool:
+    """Whether ``data`` (a node's data) or a data nested in it (attributes, lists and dicts of crocopy's data
+    classes) was made by a registry whose item set changed since (:func:`structure_changed`)."""
+    return any(obj.__dict__.get("structure_stale", False) for obj in _reachable(data))
+
+
+def parameter_owners(root: object) -> list[object]:
+    """Every object reachable from ``root`` (a node's model) through the attributes, lists, tuples and dicts of
+    crocopy's classes, once each: the objects whose layout stamps tell whether something a compiled node read from
+    ``root`` as its layout (items, frames, rows) may have changed (:func:`changes_since`).  A nested object replaced
+    by another is an assignment to its owner, which is in the list: the list holds until one of its stamps moves."""
+    return list(_reachable(root))
 
 
 VALUES, LAYOUT = 1, 2

@@ -55,7 +55,7 @@ from .constraint_rows import ConstraintRows
 from .contact_lowering import ContactSet
 from .euler_horizon import EulerHorizon
 from .joint_types import NotLowerable
-from .live_parameters import actuation_live, contacts_live, frozen, read_parameters
+from .live_parameters import actuation_live, contacts_live, frozen, read_parameters, values_touched
 from .lowering import RigidBodyModel, declaring, lower_model, make_workspace
 from .python_residuals import PythonResiduals
 from .stack_items import compiled_items
@@ -316,14 +316,9 @@ class EulerNode:
         attribute such as ``reference``), the time step, the damping, the contacts, the armature and ``S``.  Spends
         the stamp of the last values."""
         self.forget()
-        changes = LAYOUT if self._residuals is None else changes_since(self._owners, self._seen)
-        if changes == LAYOUT:
-            return False
-        if not changes:
-            if not self.refresh_live(memo):
-                return False
-            self._seen = ParametersVersion.value
-            return True
+        touched = values_touched(self, self._residuals is not None, memo)
+        if not touched:
+            return touched is False
         data, low = self._data(), self._lowered
         if data is None or low.version != self._low_version or not low.current(memo):
             return False

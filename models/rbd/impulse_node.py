@@ -42,7 +42,7 @@ from . import node_table as table
 from .constraint_rows import ConstraintRows
 from .euler_node import Lowered, lowered, residual_kind, table_entries
 from .joint_types import NotLowerable
-from .live_parameters import frozen, read_parameters
+from .live_parameters import frozen, read_parameters, values_touched
 from .lowering import RigidBodyModel
 from .stack_items import compiled_items
 
@@ -169,14 +169,9 @@ class ImpulseNode:
         was touched since (:func:`~crocopy.versioning.changes_since`); else re-read in place the live parameters
         (:meth:`refresh_live`), and if an object of the node was touched, the touched residuals' parameters,
         ``r_coeff``, the damping and the armature."""
-        changes = LAYOUT if self._items is None else changes_since(self._owners, self._seen)
-        if changes == LAYOUT:
-            return False
-        if not changes:
-            if not self.refresh_live(memo):
-                return False
-            self._seen = ParametersVersion.value
-            return True
+        touched = values_touched(self, self._items is not None, memo)
+        if not touched:
+            return touched is False
         data, low, model = self._data(), self._lowered, self.model
         if data is None or low.version != self._low_version or not low.current(memo):
             return False

@@ -21,6 +21,7 @@ from collections.abc import Callable
 import numpy as np
 
 from crocopy.residuals import ResidualModelControl, ResidualModelState
+from crocopy.versioning import LAYOUT, ParametersVersion, changes_since
 
 from ..actuations import ActuationModelFloatingBase, ActuationModelFull
 from ..residuals_contact import ResidualModelContactFrictionCone, ResidualModelContactWrenchCone
@@ -110,3 +111,19 @@ class LiveParameters:
                 return False
             par[start:stop] = values
         return True
+
+
+def values_touched(node, read: bool, memo: dict) -> bool | None:
+    """The start of a compiled node's ``refresh_values`` (:mod:`.euler_node`, :mod:`.impulse_node`) after the
+    parameter clock moved: None if the node must be refreshed (``read`` False: its items are to be read again; the
+    layout of one of its objects was touched; its live parameters cannot be re-read), False if none of its objects
+    was touched (its live parameters re-read, ``node.refresh_live``), True if values of its objects were."""
+    changes = changes_since(node._owners, node._seen) if read else LAYOUT
+    if changes == LAYOUT:
+        return None
+    if changes:
+        return True
+    if not node.refresh_live(memo):
+        return None
+    node._seen = ParametersVersion.value
+    return False
