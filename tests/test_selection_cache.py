@@ -198,3 +198,30 @@ def test_a_running_node_evaluated_as_terminal_between_solves():
     for same_solver in (True, False):
         assert mutated_between_solves(arm_with_frames, evaluate_as_terminal, crocopy.SolverBoxFDDP,
                                       same_solver) == expected
+
+
+def test_another_problem_built_keeps_the_selection_and_a_held_stale_data_costs_one_selection(monkeypatch):
+    """Building another problem moves the structure clock without making a data stale: the selection is kept.  A
+    data made stale by an item-set change that the user still holds makes the next selection anew, once."""
+    import weakref
+
+    from crocopy import versioning
+
+    monkeypatch.setattr(versioning, "_STALE", weakref.WeakSet())  # no stale data of other tests
+    problem, xs, us = arm.build_arm_reaching(crocopy, nodes=10)
+    solver = crocopy.SolverFDDP(problem)
+    first = compiled_nodes.select(solver)
+    arm.build_arm_reaching(crocopy, nodes=10)
+    assert compiled_nodes.select(solver) is first
+    held = problem.runningDatas[0]
+    problem.runningModels[0].differential.costs.removeCost("control")
+    assert problem.refresh_datas() == [0] and held.differential.costs.structure_stale
+    second = compiled_nodes.select(solver)
+    assert second is not first and compiled_nodes.select(solver) is second
+    arm.build_arm_reaching(crocopy, nodes=10)
+    third = compiled_nodes.select(solver)
+    assert third is not second and compiled_nodes.select(solver) is third
+    solver.solve(xs, us, 3)
+    fresh = crocopy.SolverFDDP(crocopy.ShootingProblem(problem.x0, problem.runningModels, problem.terminalModel))
+    fresh.solve(xs, us, 3)
+    assert solver.cost == fresh.cost and held is not problem.runningDatas[0]

@@ -64,7 +64,7 @@ from operator import is_
 import numpy as np
 
 from .. import kernels
-from ..versioning import ParametersVersion, any_stale
+from ..versioning import STRUCTURE, ParametersVersion, any_stale
 from .trajectories import TrajectoryAddresses, addresses
 
 
@@ -280,13 +280,14 @@ def select(solver) -> CompiledNodes | None:
 class Selection:
     """A problem's compiled nodes kept from one solve to the next.
 
-    It is current while no data made stale by a change of a registry's item set is alive
-    (:func:`~crocopy.versioning.any_stale`: a solve replaces the problem's with ``problem.refresh_datas()`` first,
-    which moves its node version), the problem's node version, its ``nthreads``, its models and datas (the same
-    objects) have not changed, no evaluator was refreshed by another
-    selection since (``evaluator.refreshes``), every evaluator re-read in place what it reads at a solve's start
-    (False if it cannot: its Pinocchio model changed, ...), and the nodes without an evaluator, offered again, still
-    decline (their refusals are class checks, except those that depend on a Pinocchio model).  While the parameter
+    It is current while the problem's node version, its ``nthreads``, its models and datas (the same objects) have
+    not changed, the structure clock (:data:`~crocopy.versioning.STRUCTURE`) stood still or moved without making a
+    data stale that is still alive (:func:`~crocopy.versioning.any_stale`: another problem built; a solve replaces
+    its problem's stale datas with ``problem.refresh_datas()`` first, which moves the node version), no evaluator
+    was refreshed by another selection since (``evaluator.refreshes``), every evaluator re-read in place what it
+    reads at a solve's start (False if it cannot: its Pinocchio model changed, ...), and the nodes without an
+    evaluator, offered again, still decline (their refusals are class checks, except those that depend on a
+    Pinocchio model).  While the parameter
     clock (:class:`~crocopy.versioning.ParametersVersion`) stands still, an evaluator re-reads what may change
     unannounced (``refresh_live(memo)``: Pinocchio's objects, a user residual's ``parameters()``); once it moved
     (a setter called anywhere), all its parameters (``refresh_values(memo)``: False where what it read as its layout
@@ -304,14 +305,14 @@ class Selection:
 
     @staticmethod
     def _clocks(problem) -> tuple:
-        return ParametersVersion.value, problem._nodes_version, problem.nthreads
+        return ParametersVersion.value, STRUCTURE[0], problem._nodes_version, problem.nthreads
 
     def current(self, problem) -> bool:
         """Whether the selection still holds (see the class docstring); re-reads the live parameters in place, and
         after the parameter clock alone moved, every evaluator's parameters (``refresh_values``: False where what
         it read as its layout was touched)."""
         clocks = self._clocks(problem)
-        if self.clocks[1:] != clocks[1:] or any_stale():
+        if self.clocks[2:] != clocks[2:] or (self.clocks[1] != clocks[1] and any_stale()):
             return False
         values = self.clocks[0] != clocks[0]
         models, datas = problem.runningModels, problem.runningDatas
