@@ -242,7 +242,7 @@ def test_the_registry_of_compiled_kinds_is_covered_and_documented():
     from pathlib import Path
 
     from crocopy.models.rbd import node_table
-    from crocopy.models.rbd.euler_node import compiled_residual_classes
+    from crocopy.models.rbd.node_kinds import compiled_residual_classes
 
     registry = compiled_residual_classes()
     factory = {kind.split("_")[0] for kind in KINDS} | {"com", "cone"}
@@ -256,14 +256,14 @@ def test_the_actuations_and_contacts_that_lower_themselves_are_covered_and_docum
     """The registries built from the models' own lowerings (``compiled_matrix``, ``compiled_reference``) are the
     classes this file's factory (actuations) and the contact-node tests (3D and 6D contacts) build, each named in the
     compiled node's docstring, and each lowering agrees with the model's own maths."""
-    from crocopy.models.rbd import contact_lowering, euler_node
+    from crocopy.models.rbd import contact_lowering, euler_node, node_kinds
 
     states = {robot: crocopy.StateMultibody(load(robot) if robot not in ("iris", "double_pendulum") else _extra(robot))
               for robot in ROBOTS}
     built = {robot: actuation(robot, state) for robot, state in states.items()}
-    assert set(euler_node.ACTUATIONS) == {type(a) for a in built.values()}
+    assert set(node_kinds.ACTUATIONS) == {type(a) for a in built.values()}
     assert set(contact_lowering.CONTACTS) == {crocopy.ContactModel3D, crocopy.ContactModel6D}
-    for cls in (*euler_node.ACTUATIONS, *contact_lowering.CONTACTS):
+    for cls in (*node_kinds.ACTUATIONS, *contact_lowering.CONTACTS):
         assert f"``{cls.__name__}``" in euler_node.__doc__, cls.__name__
     for robot, act in built.items():
         data = act.createData()

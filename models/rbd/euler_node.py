@@ -38,16 +38,12 @@ from collections.abc import Callable
 from functools import partial
 
 import numpy as np
-import pinocchio as pin
 
 from crocopy.costs.stack_kernel import activation_values
-from crocopy.kernels import checked_address, overridden
 from crocopy.not_compiled import class_reason, decline
-from crocopy.residuals.base import ResidualModelAbstract
 from crocopy.versioning import LAYOUT, ParametersVersion, changes_since, parameter_owners
 
-from ..actuations import ActuationModelAbstract
-from ..residual_numba import ResidualModelNumba, kinematics_size
+from ..residual_numba import kinematics_size
 from ..state_multibody import StateMultibody
 from . import euler_node_kernel as kernel
 from . import node_table as table
@@ -56,144 +52,13 @@ from .contact_lowering import ContactSet
 from .euler_horizon import EulerHorizon
 from .joint_types import NotLowerable
 from .live_parameters import actuation_live, contacts_live, frozen, read_parameters, values_touched
-from .lowering import RigidBodyModel, declaring, lower_model, make_workspace
+from .lowered_model import Lowered, lowered, table_entries
+from .node_kinds import ACTUATIONS, python_residual, residual_kind
 from .python_residuals import PythonResiduals
 from .stack_items import compiled_items
 
-ACTUATIONS = declaring(ActuationModelAbstract, "compiled_matrix")
-"""The actuations compiled nodes take: those that declare their constant ``S = ∂τ/∂u`` (``compiled_matrix()``)."""
-def compiled_residual_classes() -> dict[type, str]:
-    """Every residual class that declares a ``compiled_kind`` of its own (beside its maths, with its
-    ``compiled_parameters()``), with that kind: the registry of the kinds compiled nodes evaluate (a subclass
-    inherits none: it may override ``calc``)."""
-    return {cls: cls.__dict__["compiled_kind"] for cls in declaring(ResidualModelAbstract, "compiled_kind")}
-
-
-def residual_kind(residual) -> int | None:
-    """The kernel's kind of ``residual`` (its class's own ``compiled_kind``, or ``USER`` for a
-    :class:`ResidualModelNumba` that keeps
-    the base class's ``calc``/``calcDiff``), or None when compiled nodes cannot evaluate it."""
-    name = type(residual).__dict__.get("compiled_kind")
-    if name is not None:
-        return table.KIND[name]
-    if isinstance(residual, ResidualModelNumba) and not overridden(residual, ResidualModelNumba, ("calc", "calcDiff")):
-        return table.USER
-    return None
-
-
-def python_residual(residual) -> bool:
-    """Whether ``residual`` may run in Python inside a compiled free-dynamics node (:mod:`.python_residuals`): a
-    residual class of the user's, not one of the library's models (some of which read the actuation's or the
-    contacts' data)."""
-    return isinstance(residual, ResidualModelAbstract) and not type(residual).__module__.startswith(
-        ("crocopy.models.", "crocopy.residuals.")
-    )
-
-
 _NODES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 """Node data → its :class:`EulerNode`."""
-
-
-class Lowered:
-    """A lowered Pinocchio model with the addresses and dimensions of its arrays (the first entries of every
-    node's table, see :mod:`.euler_node_kernel`; the armature's entry is each node's own)."""
-
-    version = 0
-    """How many times :meth:`update` rewrote the arrays (a node compares it with the one it read them at)."""
-    source: tuple = ()
-    """``(model, copy)``: the Pinocchio model lowered and a copy of it taken then (:meth:`current`)."""
-
-    def __init__(self, rb: RigidBodyModel) -> None:
-        self.rb = rb
-        self.addresses, self.shapes = table_entries([getattr(rb, name) for name in rb._fields[4:]])
-        self.workspace = make_workspace(rb)
-        self.workspace_entries = table_entries(list(self.workspace))
-        self._scratch: dict[tuple[int, int], tuple[dict, tuple]] = {}
-        self._threads: dict[tuple[int, int, int], tuple] = {}
-
-    def scratch(self, nu: int, nc: int) -> tuple[dict, tuple[np.ndarray, np.ndarray]]:
-        """The arrays of :data:`.node_table.SCRATCH_ARRAYS` (and a ``Minv`` for a data without one) shared by
-        the nodes of this model with ``nu`` controls and ``nc`` contact rows, with their table entries."""
-        key = (nu, nc)
-        if key not in self._scratch:
-            nv = self.rb.nv
-            arrays = table.make_arrays(table.SCRATCH_ARRAYS, {"nv": nv, "ndx": 2 * nv, "nu": nu, "nc": nc})
-            arrays["Minv"] = np.zeros((nv, nv))
-            self._scratch[key] = arrays, table_entries([arrays[e.name] for e in table.SCRATCH_ARRAYS])
-        return self._scratch[key]
-
-    def thread_entries(self, c: int, nu: int, nc: int) -> tuple[np.ndarray, np.ndarray]:
-        """The addresses of the workspace and of the scratch (with ``Minv`` last) of extra thread ``c >= 1`` for the
-        nodes with ``nu`` controls and ``nc`` contact rows (their own copies, kept here)."""
-        key = (c, nu, nc)
-        if key not in self._threads:
-            nv = self.rb.nv
-            workspace = make_workspace(self.rb)
-            arrays = table.make_arrays(table.SCRATCH_ARRAYS, {"nv": nv, "ndx": 2 * nv, "nu": nu, "nc": nc})
-            arrays["Minv"] = np.zeros((nv, nv))
-            listed = [arrays[e.name] for e in table.SCRATCH_ARRAYS] + [arrays["Minv"]]
-            self._threads[key] = (table_entries(list(workspace))[0], table_entries(listed)[0], workspace, arrays)
-        return self._threads[key][:2]
-
-    def update(self, rb: RigidBodyModel) -> bool:
-        """Copy ``rb``'s values into this model's arrays (their addresses stay); False if a size differs."""
-        names = self.rb._fields[4:]
-        if tuple(self.rb[:4]) != tuple(rb[:4]) or any(getattr(self.rb, n).shape != getattr(rb, n).shape for n in names):
-            return False
-        for name in names:
-            np.copyto(getattr(self.rb, name), getattr(rb, name))
-        self.version += 1
-        return True
-
-    def current(self, memo: dict) -> bool:
-        """Whether the Pinocchio model still equals the copy taken when it was lowered (Pinocchio's own ``==``, which
-        compares every field in C++: about 1 µs for an arm, 4 µs for a humanoid), once per ``memo`` (one solve)."""
-        key = ("current", id(self))
-        if key not in memo:
-            memo[key] = bool(self.source and self.source[0] == self.source[1])
-        return memo[key]
-
-
-_LOWERED: dict[int, tuple[pin.Model, Lowered]] = {}
-"""``id(model)`` → the model and its :class:`Lowered`, whose arrays are rewritten when the model changed."""
-
-
-def lowered(model: pin.Model, memo: dict) -> Lowered | None:
-    """The lowered ``model``, its values read once per ``memo`` (one solve) into arrays that keep their
-    addresses from solve to solve (read again only when the model no longer equals the copy kept when it was last
-    lowered, :meth:`Lowered.current`); None if it does not lower."""
-    key = id(model)
-    if key in memo:
-        return memo[key]
-    cached = _LOWERED.get(key)
-    if cached is not None and cached[0] is model and cached[1].current(memo):
-        memo[key] = cached[1]
-        return cached[1]
-    try:
-        rb = lower_model(model)
-    except NotLowerable as exc:
-        memo[key] = None
-        memo[key, NotLowerable] = exc.reason
-        return None
-    if cached is not None and cached[0] is model and cached[1].update(rb):
-        low = cached[1]
-    else:
-        if len(_LOWERED) > 16:
-            _LOWERED.clear()
-        low = Lowered(rb)
-        _LOWERED[key] = (model, low)
-    low.source = (model, model.copy())
-    memo["current", id(low)] = True
-    memo[key] = low
-    return low
-
-
-def table_entries(arrays: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-    """``(addresses, dimensions)`` of ``arrays``: shapes ``(n,)`` and ``(3 n,)`` (unused dimensions zero)."""
-    shapes = np.zeros(3 * len(arrays), dtype=np.int64)
-    for k, a in enumerate(arrays):
-        shapes[3 * k: 3 * k + a.ndim] = a.shape
-    return np.array([checked_address(a) for a in arrays], dtype=np.int64), shapes
 
 
 def euler_node(iam, data, terminal: bool, memo: dict, contacts: list = ()) -> EulerNode | None:
@@ -339,9 +204,9 @@ class EulerNode:
         """Re-read, in place, what :meth:`refresh` read that may have changed without moving the parameter clock
         (:mod:`.live_parameters`: ``pin.SE3`` references, cones, a user residual's ``parameters()``, writeable
         arrays); False when the node must be refreshed instead: its Pinocchio model changed
-        (:meth:`Lowered.current`), its cost stack was evaluated for the other node kind since, or a user residual's
-        number of parameters changed.  Only for a node refreshed since the parameter clock last moved.  Spends the
-        stamp of the last values (:meth:`forget`) either way."""
+        (:meth:`.lowered_model.Lowered.current`), its cost stack was evaluated for the other node kind since, or a
+        user residual's number of parameters changed.  Only for a node refreshed since the parameter clock last
+        moved.  Spends the stamp of the last values (:meth:`forget`) either way."""
         self.forget()
         low = self._lowered
         if low.version != self._low_version or not low.current(memo):
@@ -447,11 +312,11 @@ class EulerNode:
         """The addresses and dimensions of every array the kernels read or write, and the integer program.
 
         Entries: the lowered model's arrays (the armature is this node's, model's plus dynamics'), its shared
-        workspace, then :data:`.node_table.NODE_ARRAYS` (the node's own) and ``SCRATCH_ARRAYS`` (shared
-        by the model's nodes of the same sizes, :meth:`Lowered.scratch`), except the workspace and scratch entries
-        the node keeps of its own (:data:`.node_table.OWN`, :meth:`_own_addresses`).  Made again only when the items
-        changed (``changed``) or the lowered model is another one: the arrays a data or a stack owns never move
-        (:mod:`crocopy.stored`), and a new data gets a new node."""
+        workspace, then :data:`.node_table.NODE_ARRAYS` (the node's own) and ``SCRATCH_ARRAYS`` (shared by the
+        model's nodes of the same sizes, :meth:`.lowered_model.Lowered.scratch`), except the workspace and scratch
+        entries the node keeps of its own (:data:`.node_table.OWN`, :meth:`_own_addresses`).  Made again only when
+        the items changed (``changed``) or the lowered model is another one: the arrays a data or a stack owns never
+        move (:mod:`crocopy.stored`), and a new data gets a new node."""
         self.forget()
         if not changed and low is self._lowered and self._data_arrays:
             return

@@ -40,10 +40,11 @@ from ..state_multibody import StateMultibody
 from . import impulse_node_kernel as kernel
 from . import node_table as table
 from .constraint_rows import ConstraintRows
-from .euler_node import Lowered, lowered, residual_kind, table_entries
 from .joint_types import NotLowerable
 from .live_parameters import frozen, read_parameters, values_touched
+from .lowered_model import Lowered, lowered, table_entries
 from .lowering import RigidBodyModel
+from .node_kinds import residual_kind
 from .stack_items import compiled_items
 
 IMPULSES = (ImpulseModel3D, ImpulseModel6D)

@@ -6,12 +6,12 @@
 
 * ``IntegratedActionModelEuler`` with the identity control parametrization over one of those models, on a
   ``StateMultibody`` whose Pinocchio model lowers (:func:`.lowering.lower_model`);
-* its actuation is one the Euler node takes (``τ = S u`` with a constant ``S``, :data:`.euler_node.ACTUATIONS`):
+* its actuation is one the Euler node takes (``τ = S u`` with a constant ``S``, :data:`.node_kinds.ACTUATIONS`):
   the joint efforts are then ``P τ`` with a constant ``P`` (the actuation's ``Mtau``);
 * its contacts (contact model) are all active ``ContactModel3D``/``ContactModel6D`` (:mod:`.contact_lowering`);
 * every cost is a ``CostModelResidual`` in the cost stack with an activation of the quadratic-barrier family, and
   every active one's residual, and every active constraint's (a ``ConstraintModelResidual``), is of a kind the Euler
-  node evaluates (:func:`.euler_node.residual_kind`; the cones read the forces of the control) or one of
+  node evaluates (:func:`.node_kinds.residual_kind`; the cones read the forces of the control) or one of
   :data:`ITEM_KINDS`: the models' actuation residual (``"tau"``), contact-acceleration residual (``"<contact>_acc"``),
   ``ResidualModelJointEffort`` and ``ResidualModelJointAcceleration`` (the actuation and contact residuals on running
   nodes only).
@@ -43,10 +43,12 @@ from . import invdyn_node_kernel as kernel
 from . import node_table as table
 from .constraint_rows import ConstraintRows
 from .contact_lowering import CONTACTS
-from .euler_node import ACTUATIONS, EulerNode, Lowered, lowered, residual_kind
+from .euler_node import EulerNode
 from .invdyn_horizon import InvDynHorizon
 from .joint_types import NotLowerable
 from .live_parameters import contacts_live
+from .lowered_model import Lowered, lowered
+from .node_kinds import ACTUATIONS, residual_kind
 from .stack_items import compiled_items
 
 INV = 100

@@ -7,7 +7,7 @@ is refreshed.  Most of them change only through a setter, which moves the parame
 contacts, a friction or wrench cone's matrix, a user's ``ResidualModelNumba.parameters()``, and any numpy parameter
 that is writeable (a deep-copied or unpickled model's references are).  :class:`LiveParameters` lists those of one
 node, so that a solve whose clocks did not move re-reads only them (:meth:`LiveParameters.reread`); the Pinocchio model
-is compared with a copy instead (:meth:`.euler_node.Lowered.current`).
+is compared with a copy instead (:meth:`.lowered_model.Lowered.current`).
 
 Whatever this module does not know as announced is live: a residual class outside :data:`REFERENCE_ONLY`, a contact
 whose reference or gains are not read-only arrays, an actuation outside :data:`CONSTANT_ACTUATIONS` whose matrix is

@@ -5,9 +5,9 @@ one compiled call, which releases the GIL (:func:`.horizon_kernel.horizon_calc_d
 ``k`` threads the nodes of a solve's ranges (those of one call of the solver, all at once) are cut into ``k``
 contiguous shares of nearly equal length; the calling thread runs the first
 and a pool of ``k - 1`` threads the others, at once.  The nodes of one Pinocchio model share a workspace and a
-scratch (:meth:`.euler_node.Lowered.scratch`), so each extra thread ``c`` reads tables of its own
+scratch (:meth:`.lowered_model.Lowered.scratch`), so each extra thread ``c`` reads tables of its own
 (:class:`ThreadTables`): every node's table with the addresses of the workspace and scratch replaced by those of
-thread ``c``'s copies (:meth:`.euler_node.Lowered.thread_entries`), except the node's own arrays
+thread ``c``'s copies (:meth:`.lowered_model.Lowered.thread_entries`), except the node's own arrays
 (:data:`.node_table.OWN`: one thread evaluates a node at a time).  A node's result does not depend on which thread
 evaluated it (a kernel call reads nothing a previous call left in the scratch), each writes only its own arrays and
 ``costs[t]``, and the total is then added in node order (:func:`.horizon_kernel.fold`): the results are
