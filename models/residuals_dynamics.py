@@ -54,7 +54,6 @@ class ResidualModelCoMPosition(ResidualModelAbstract):
     """``ResidualModelCoMPosition(state, cref, nu=state.nv)``: ``r = com(q) - cref``."""
 
     _value_attributes = frozenset({"reference"})
-    """Assigning these changes the compiled parameters' values only (:class:`crocopy.versioning.Parametrized`)."""
 
     compiled_kind = "com"
     """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""

@@ -76,6 +76,8 @@ def frame_jacobian(model: pin.Model, data: pin.Data, fid: int, reference: pin.Re
 class _FrameResidual(ResidualModelAbstract):
     """Shared construction of the frame residuals (``_data_class``: the data's class, by Crocoddyl's name)."""
 
+    _value_attributes = frozenset({"reference"})
+
     _data_class: type
 
     def __init__(self, state: StateMultibody, id: int | str, nr: int, nu: int | None, v_dependent: bool) -> None:
@@ -118,9 +120,6 @@ class ResidualDataFrameVelocity(ResidualDataAbstract):
 
 class ResidualModelFramePlacement(_FrameResidual):
     """``ResidualModelFramePlacement(state, id, pref, nu=state.nv)``: ``r = log6(pref⁻¹ oMf)``."""
-
-    _value_attributes = frozenset({"reference"})
-    """Assigning these changes the compiled parameters' values only (:class:`crocopy.versioning.Parametrized`)."""
 
     compiled_kind = "placement"
     """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""
@@ -165,9 +164,6 @@ class ResidualModelFramePlacement(_FrameResidual):
 class ResidualModelFrameTranslation(_FrameResidual):
     """``ResidualModelFrameTranslation(state, id, xref, nu=state.nv)``: ``r = oMf.translation - xref``."""
 
-    _value_attributes = frozenset({"reference"})
-    """Assigning these changes the compiled parameters' values only (:class:`crocopy.versioning.Parametrized`)."""
-
     compiled_kind = "translation"
     """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""
 
@@ -206,9 +202,6 @@ class ResidualModelFrameTranslation(_FrameResidual):
 
 class ResidualModelFrameRotation(_FrameResidual):
     """``ResidualModelFrameRotation(state, id, Rref, nu=state.nv)``: ``r = log3(Rrefᵀ oMf.rotation)``."""
-
-    _value_attributes = frozenset({"reference"})
-    """Assigning these changes the compiled parameters' values only (:class:`crocopy.versioning.Parametrized`)."""
 
     compiled_kind = "rotation"
     """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""
@@ -255,9 +248,6 @@ class ResidualModelFrameVelocity(_FrameResidual):
     the derivative of the frame rotation is included (Pinocchio's LOCAL_WORLD_ALIGNED output, used
     as is by Crocoddyl 3.2, omits it from the linear rows).
     """
-
-    _value_attributes = frozenset({"reference"})
-    """Assigning these changes the compiled parameters' values only (:class:`crocopy.versioning.Parametrized`)."""
 
     compiled_kind = "velocity"
     """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""

@@ -79,7 +79,6 @@ class IntegratedActionModelAbstract(ActionModelAbstract):
     """
 
     _value_attributes = frozenset({"dt"})
-    """Assigning ``dt`` changes a compiled parameter's value only (:class:`crocopy.versioning.Parametrized`)."""
 
     def __init__(self, diffModel: DifferentialActionModelAbstract, *args: object, **kwargs: object) -> None:
         bound = bind_arguments(type(self).__name__, args, kwargs, ("control", "timeStep", "withCostResidual"))

@@ -15,7 +15,6 @@ class ResidualModelControl(ResidualModelAbstract):
     """``ResidualModelControl(state, uref)``, ``(state, nu)`` or ``(state)`` (``uref = 0``, ``nu = nv``)."""
 
     _value_attributes = frozenset({"reference", "uref"})
-    """Assigning these changes the compiled parameters' values only (:class:`crocopy.versioning.Parametrized`)."""
 
     compiled_kind = "control"
     """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""

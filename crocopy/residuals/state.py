@@ -15,7 +15,6 @@ class ResidualModelState(ResidualModelAbstract):
     """``ResidualModelState(state, xref=state.zero(), nu=state.nv)``; also ``(state, nu)``."""
 
     _value_attributes = frozenset({"reference", "xref"})
-    """Assigning these changes the compiled parameters' values only (:class:`crocopy.versioning.Parametrized`)."""
 
     compiled_kind = "state"
     """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""

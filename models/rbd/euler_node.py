@@ -41,7 +41,7 @@ import numpy as np
 
 from crocopy.costs.stack_kernel import activation_values
 from crocopy.not_compiled import class_reason, decline
-from crocopy.versioning import LAYOUT, ParametersVersion, changes_since, parameter_owners
+from crocopy.versioning import ParametersVersion, parameter_owners
 
 from ..residual_numba import kinematics_size
 from ..state_multibody import StateMultibody
@@ -51,7 +51,7 @@ from .constraint_rows import ConstraintRows
 from .contact_lowering import ContactSet
 from .euler_horizon import EulerHorizon
 from .joint_types import NotLowerable
-from .live_parameters import actuation_live, contacts_live, frozen, read_parameters, values_touched
+from .live_parameters import actuation_live, contacts_live, frozen, layout_touched, read_parameters, values_touched
 from .lowered_model import Lowered, lowered, table_entries
 from .node_kinds import ACTUATIONS, python_residual, residual_kind
 from .python_residuals import PythonResiduals
@@ -132,8 +132,8 @@ class EulerNode:
         iam = self.model
         dam, ddata = iam.differential, data.differential
         stack = ddata.costs.stack
-        changed = stack.refresh_if_stale(self.terminal) or self._residuals is None or (
-            self._seen != ParametersVersion.value and changes_since(self._owners, self._seen) == LAYOUT)
+        changed = stack.refresh_if_stale(self.terminal) or self._residuals is None \
+            or layout_touched(self)
         read: dict | None = None
         if changed:
             read = {}

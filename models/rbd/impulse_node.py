@@ -33,7 +33,7 @@ import weakref
 import numpy as np
 
 from crocopy.not_compiled import class_reason, decline
-from crocopy.versioning import LAYOUT, ParametersVersion, changes_since, parameter_owners
+from crocopy.versioning import ParametersVersion, parameter_owners
 
 from ..impulses import ImpulseModel3D, ImpulseModel6D
 from ..state_multibody import StateMultibody
@@ -41,7 +41,7 @@ from . import impulse_node_kernel as kernel
 from . import node_table as table
 from .constraint_rows import ConstraintRows
 from .joint_types import NotLowerable
-from .live_parameters import frozen, read_parameters, values_touched
+from .live_parameters import frozen, layout_touched, read_parameters, values_touched
 from .lowered_model import Lowered, lowered, table_entries
 from .lowering import RigidBodyModel
 from .node_kinds import residual_kind
@@ -146,8 +146,8 @@ class ImpulseNode:
         ``r_coeff``, the damping and the armature at every call."""
         data, model = self._data(), self.model
         stack = data.costs.stack
-        changed = stack.refresh_if_stale(self.stack_terminal) or self._items is None or (
-            self._seen != ParametersVersion.value and changes_since(self._owners, self._seen) == LAYOUT)
+        changed = stack.refresh_if_stale(self.stack_terminal) or self._items is None \
+            or layout_touched(self)
         if changed:
             why = self._read_items(stack, data)
             if why is not None:

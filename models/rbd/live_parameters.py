@@ -113,6 +113,12 @@ class LiveParameters:
         return True
 
 
+def layout_touched(node) -> bool:
+    """Whether the layout of an object of a compiled node (``node._owners``) was touched since the node last read its
+    parameters (``node._seen``): its items and table must be read again (:func:`crocopy.versioning.changes_since`)."""
+    return node._seen != ParametersVersion.value and changes_since(node._owners, node._seen) == LAYOUT
+
+
 def values_touched(node, read: bool, memo: dict) -> bool | None:
     """The start of a compiled node's ``refresh_values`` (:mod:`.euler_node`, :mod:`.impulse_node`) after the
     parameter clock moved: None if the node must be refreshed (``read`` False: its items are to be read again; the
