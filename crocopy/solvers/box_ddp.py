@@ -257,6 +257,8 @@ class SolverBoxDDP(BoxSolverMixin, SolverDDP):
     """
 
     _nodes_compiled = True
+    _line_search = (False, True)
+    """``(negative, bounded)`` of the compiled line search (:mod:`.line_search`)."""
 
     def __init__(self, problem: ShootingProblem) -> None:
         super().__init__(problem)

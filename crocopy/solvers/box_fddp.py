@@ -41,6 +41,8 @@ class SolverBoxFDDP(BoxSolverMixin, SolverFDDP):
     """
 
     _nodes_compiled = True
+    _line_search = (False, True)
+    """``(negative, bounded)`` of the compiled line search (:mod:`.line_search`)."""
 
     def __init__(self, problem: ShootingProblem) -> None:
         super().__init__(problem)

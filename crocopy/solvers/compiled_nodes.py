@@ -89,8 +89,10 @@ class CompiledNodes:
     where the nodes offer one, the models' own methods elsewhere (the terminal node last)."""
 
     def __init__(self, calcs: list[Callable], calc_diffs: list[Callable], steps: list[Callable | None],
-                 horizon: Callable | None = None, problem=None) -> None:
+                 horizon: Callable | None = None, problem=None, terminal=None) -> None:
         self.calcs = calcs
+        self.terminal = terminal
+        """The terminal node's evaluator, or None (its model's own methods)."""
         self.calc_diffs = calc_diffs
         self.steps = steps
         self.horizon = horizon
@@ -271,7 +273,7 @@ def select(solver) -> CompiledNodes | None:
             horizon = make_horizon([e if step is not None else None for e, step in zip(running, steps)],
                                    [m.nu for m in problem.runningModels], problem.nthreads)
             steps = [None if step is None else e.rollout_step for e, step in zip(running, steps)]  # its arrays
-    selected = CompiledNodes(calcs, calc_diffs, steps[:problem.T], horizon, problem)
+    selected = CompiledNodes(calcs, calc_diffs, steps[:problem.T], horizon, problem, evaluators[-1])
     if all(e is None or hasattr(e, "refresh_live") for e in evaluators):
         _SELECTIONS[problem] = Selection(problem, selected, evaluators)
     return selected

@@ -33,6 +33,8 @@ buffers when ``problem.updateModel``/``circularAppend`` changed a node's ``nx``,
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.linalg.lapack import dpotrf, dpotrs
 
@@ -40,7 +42,7 @@ from .. import kernels
 from ..enums import FeasibilityNorm
 from ..kernels import log_fallback, overridden
 from ..shooting import ShootingProblem
-from . import compiled_nodes, horizon, riccati_kernel, rollout, sqp_kernel
+from . import compiled_nodes, horizon, line_search, riccati_kernel, rollout, sqp_kernel
 from .base import BackwardPassError, ForwardPassError, SolverAbstract
 from .horizon import Horizon, NodeDerivatives
 from .nonfinite import (
@@ -59,6 +61,8 @@ class SolverDDP(SolverAbstract):
     """Crocoddyl's ``SolverDDP(problem)``: regularised DDP with a backtracking line search."""
 
     _nodes_compiled = True
+    _line_search = (False, False)
+    """``(negative, bounded)`` of the compiled line search (:mod:`.line_search`)."""
     _nodes: compiled_nodes.CompiledNodes | None = None
 
     def __init__(self, problem: ShootingProblem) -> None:
@@ -241,7 +245,20 @@ class SolverDDP(SolverAbstract):
             self.expectedImprovement()
             self._check_direction()
             rollout_error = None
-            for alpha in self.alphas:
+            i, n = 0, len(self.alphas)
+            while i < n:
+                i, accepted = line_search.compiled_trials(self, i)
+                if accepted:
+                    feasible = self.isFeasible
+                    taken, rollout_error = self._take_trial(self.stepLength)
+                    if taken:
+                        was_feasible = feasible
+                        break
+                    continue
+                if i == n:
+                    break
+                alpha = self.alphas[i]
+                i += 1
                 self.stepLength = alpha
                 try:
                     self.dV = self.tryStep(alpha)
@@ -251,20 +268,27 @@ class SolverDDP(SolverAbstract):
                     continue
                 self.dVexp = alpha * (self.d[0] + 0.5 * alpha * self.d[1])
                 if self._accept(alpha):
-                    if not trajectory_finite(self.xs_try, self.us_try):
-                        rollout_error = locate_in_rollout(self.problem, self.xs_try, self.us_try)
-                        self._synced = False
-                        continue
-                    was_feasible = self.isFeasible
-                    self._accept_trial(alpha)
-                    rollout_error = None
-                    break
+                    feasible = self.isFeasible
+                    taken, rollout_error = self._take_trial(alpha)
+                    if taken:
+                        was_feasible = feasible
+                        break
+                    continue
                 self._synced = False
             outcome = self._close_iteration(was_feasible, rollout_error)
             if outcome is not None:
                 return outcome
         self.iter = maxiter
         return self._fail(f"maximum number of iterations ({maxiter}) reached")
+
+    def _take_trial(self, alpha: float) -> tuple[bool, str | None]:
+        """Take the trial of step ``alpha``, accepted by the line search: ``(True, None)``; ``(False, why)`` where a
+        trial state or control is not finite (the iterate is kept)."""
+        if not trajectory_finite(self.xs_try, self.us_try):
+            self._synced = False
+            return False, locate_in_rollout(self.problem, self.xs_try, self.us_try)
+        self._accept_trial(alpha)
+        return True, None
 
     def _close_iteration(self, was_feasible: bool, rollout_error: str | None = None) -> bool | None:
         """After the line search: regularisation update, stopping value, callbacks; True once converged,
@@ -302,7 +326,8 @@ class SolverDDP(SolverAbstract):
 
     def _check_direction(self) -> None:
         """One finiteness test of the direction (``d``, ``Vx₀``, ``Vxx₀``); on failure, find where it arose."""
-        if np.isfinite(self.d).all() and np.isfinite(self.Vx[0]).all() and np.isfinite(self.Vxx[0]).all():
+        if math.isfinite(self.d.sum() + self.Vx[0].sum() + self.Vxx[0].sum()) or (
+                np.isfinite(self.d).all() and np.isfinite(self.Vx[0]).all() and np.isfinite(self.Vxx[0]).all()):
             return
         raise (locate_in_derivatives(self.problem) or locate_in_backward_pass(self)
                or NonFiniteError("expected improvement", None, "backward pass"))
@@ -393,13 +418,21 @@ class SolverDDP(SolverAbstract):
         elif not feasible or reported:
             self.computeDynamicFeasibility()
         if feasible:
-            for f in self.fs:
-                f[:] = 0.0
+            self._zero_gaps()
             if not reported:
                 self.ffeas = 0.0
         self.computeInequalityFeasibility()
         self.computeEqualityFeasibility()
         return self.cost
+
+    def _zero_gaps(self) -> None:
+        """``fs[t] = 0`` for every node (one compiled call on the horizon's buffer while
+        :func:`crocopy.kernels_enabled`)."""
+        if kernels.active:
+            sqp_kernel.zero_gaps(self._horizon.dims, self._horizon.addr)
+            return
+        for f in self.fs:
+            f[:] = 0.0
 
     def _gaps_norm(self) -> float:
         """The norm of all the gaps (``feasNorm``): the ∞-norm in one compiled call on the horizon's buffer

@@ -22,6 +22,8 @@ class SolverFDDP(SolverDDP):
     """Crocoddyl's ``SolverFDDP(problem)``."""
 
     _nodes_compiled = True
+    _line_search = (True, False)
+    """``(negative, bounded)`` of the compiled line search (:mod:`.line_search`)."""
     th_acceptNegStep = Setting(allow_inf=False)
 
     def __init__(self, problem: ShootingProblem) -> None:

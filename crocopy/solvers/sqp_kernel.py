@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from ..kernels import compiled, matrix_at, vector_at
+from ..kernels import compiled, matrix_at, uncounted, vector_at
 from .horizon import FS, KM, KV, VX, VXX
 
 
@@ -157,8 +157,17 @@ def _gap_linf(dims, haddr):
     return worst
 
 
+def _zero_gaps(dims, haddr):
+    """``f_t = 0`` for every node."""
+    for t in range(dims.shape[0]):
+        f = vector_at(haddr[t, FS], dims[t, 0])
+        for i in range(dims[t, 0]):
+            f[i] = 0.0
+
+
 gap_l1 = compiled(_gap_l1)
 gap_linf = compiled(_gap_linf)
+zero_gaps = uncounted(_zero_gaps)
 stack_l1 = compiled(_stack_l1)
 
 

@@ -63,6 +63,11 @@ def disable_profiler() -> None:
     _StopWatch.enabled = False
 
 
+def profiling() -> bool:
+    """Whether the profiler is enabled (what it times must then run as the timed methods)."""
+    return _StopWatch.enabled
+
+
 def profiled(name: str, func: Callable) -> Callable:
     """``func`` timed under ``name`` whenever the profiler is enabled (a plain call otherwise)."""
 

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from . import horizon_kernel as horizons
-from . import trial_kernel
+from . import line_search_kernel, trial_kernel
 from .node_threads import ThreadTables
 
 if TYPE_CHECKING:
@@ -50,6 +50,8 @@ class EulerHorizon:
         self._python_indices: dict[tuple[int, int], np.ndarray] = {}
         self.no_gaps = np.zeros(len(nodes) + 1, dtype=np.int64)
         self.nodes = nodes
+        self._searches = type(self) is EulerHorizon and not self.python and all(n is not None for n in nodes)
+        """Whether :meth:`line_search` may run: every running node of this class, none with Python residuals."""
         self.threads = ThreadTables(nodes, self.tbls, nthreads) if nthreads > 1 else None
         """The extra threads' tables (:mod:`.node_threads`), or None on one thread."""
 
@@ -137,6 +139,21 @@ class EulerHorizon:
             total += horizons.horizon_recost(self.tbls, self.ints, self.ioff, self.par, self.poff,
                                            self._python_in(t0, t1), self.costs)
         return total
+
+    def line_search(self, addresses: tuple, terminal, alphas: np.ndarray, cost: float, d: tuple[float, float],
+                    thresholds: tuple[float, float, float], negative: bool, out: np.ndarray) -> tuple[int, int] | None:
+        """The DDP family's line search from a feasible iterate in one call (:func:`.line_search_kernel.line_search`,
+        ``addresses`` as for :meth:`rollout`, ``d = (d₀, d₁)``, ``thresholds = (th_grad, th_accept, th_negative)``);
+        returns ``(i, status)``, or None where it does not apply: a range short of the whole horizon, Python residuals,
+        another horizon class, or a ``terminal`` evaluator that is not a compiled Euler node without Python
+        residuals.  Node ``t``'s cost stays in :attr:`costs`, the terminal node's in ``out[1]``."""
+        from .euler_node import EulerNode
+
+        if not self._searches or type(terminal) is not EulerNode or terminal.python.items:
+            return None
+        return line_search_kernel.line_search(self.tbls, *self._head(), *addresses, self.nus, self.nx, self.ndx,
+                                              len(self.nodes), self.costs, terminal.tbl, terminal.ints, terminal.par,
+                                              terminal.no_control, alphas, cost, *d, *thresholds, negative, out)
 
     calc_diff_kernel = staticmethod(horizons.horizon_calc_diff)
     calc_kernel = staticmethod(horizons.horizon_calc)

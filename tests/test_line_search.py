@@ -1,0 +1,104 @@
+"""The DDP family's line search in one compiled call (:mod:`crocopy.solvers.line_search`): the same trials, iterates
+and outcome as the Python loop of one ``tryStep`` per step length, to the bit; a trial that is not finite hands the
+search back to that loop."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import crocopy
+from crocopy.models.rbd import euler_horizon, line_search_kernel
+from crocopy.problems import registry
+from crocopy.solvers import line_search, stopwatch
+
+SOLVERS = ["SolverDDP", "SolverFDDP", "SolverBoxDDP", "SolverBoxFDDP"]
+
+
+@pytest.fixture
+def statuses(monkeypatch):
+    """The ``(i, status)`` of every compiled search run while the test runs (None where it did not apply)."""
+    seen = []
+    search = euler_horizon.EulerHorizon.line_search
+
+    def spy(self, *args):
+        found = search(self, *args)
+        seen.append(found)
+        return found
+
+    monkeypatch.setattr(euler_horizon.EulerHorizon, "line_search", spy)
+    return seen
+
+
+def _outcome(solver, solved):
+    return (solved, solver.iter, solver.cost, solver.stop, solver.stepLength, solver.preg, solver.isFeasible,
+            np.concatenate(solver.xs).tobytes(), np.concatenate(solver.us).tobytes(),
+            [d.cost for d in solver.problem.runningDatas], solver.problem.terminalData.cost)
+
+
+def _solve(build, solver_name, maxiter, feasible=False, solver_class=None):
+    problem, xs, us = build()
+    solver = (solver_class or getattr(crocopy, solver_name))(problem)
+    return solver, _outcome(solver, solver.solve(xs, us, maxiter, feasible))
+
+
+def _python_loop(monkeypatch, build, solver_name, maxiter, feasible=False):
+    with monkeypatch.context() as patch:
+        patch.setattr(line_search, "compiled_trials", lambda solver, first: (first, False))
+        return _solve(build, solver_name, maxiter, feasible)[1]
+
+
+@pytest.mark.parametrize("name", ["quad-goal", "pend"])
+@pytest.mark.parametrize("solver_name", SOLVERS)
+def test_the_compiled_search_gives_the_iterates_of_the_python_loop(name, solver_name, statuses, monkeypatch):
+    def build():
+        return registry.build(name)
+
+    expected = _python_loop(monkeypatch, build, solver_name, 120)
+    statuses.clear()
+    _, outcome = _solve(build, solver_name, 120)
+    assert any(s is not None and s[1] == line_search_kernel.ACCEPTED for s in statuses)
+    assert outcome == expected
+
+
+def _hovering(dt: float):
+    """quad-goal with time step ``dt`` from a feasible hover-thrust rollout: its first full steps diverge."""
+
+    def build():
+        problem, _, us = registry.build("quad-goal")
+        for model in problem.runningModels:
+            model.dt = dt
+        us = [np.full(4, 8.0) for _ in us]
+        return problem, problem.rollout(us), us
+
+    return build
+
+
+@pytest.mark.parametrize("dt", [0.05, 2.0])
+@pytest.mark.parametrize("solver_name", ["SolverFDDP", "SolverBoxFDDP"])
+def test_a_trial_that_is_not_finite_hands_the_search_back_to_the_python_loop(dt, solver_name, statuses, monkeypatch):
+    expected = _python_loop(monkeypatch, _hovering(dt), solver_name, 30, True)
+    statuses.clear()
+    _, outcome = _solve(_hovering(dt), solver_name, 30, True)
+    assert any(s is not None and s[1] == line_search_kernel.NONFINITE for s in statuses)
+    assert outcome == expected
+
+
+def test_a_subclass_and_the_profiler_keep_the_python_loop(statuses):
+    class Mine(crocopy.SolverFDDP):
+        _nodes_compiled = True  # compiled nodes, not the compiled search (not declared in its own body)
+
+    def build():
+        return registry.build("quad-goal")
+
+    _, subclassed = _solve(build, None, 20, solver_class=Mine)
+    stopwatch.enable_profiler()
+    try:
+        _, profiled = _solve(build, "SolverFDDP", 20)
+    finally:
+        stopwatch.disable_profiler()
+        stopwatch.stop_watch_reset_all()
+    assert statuses == []
+    statuses.clear()
+    _, compiled = _solve(build, "SolverFDDP", 20)
+    assert statuses and subclassed == profiled == compiled
