@@ -186,6 +186,43 @@ def test_selection_is_kept_after_a_value_setter_and_made_again_after_a_layout_se
     assert compiled_nodes.select(crocopy.SolverFDDP(copied)) is not second
 
 
+def arm_with_weights():
+    """The arm reach with a posture cost of weighted activation on every node."""
+    problem, xs, us = arm.build_arm_reaching(crocopy, nodes=10)
+    for m in [*problem.runningModels, problem.terminalModel]:
+        dam = m.differential
+        weights = np.linspace(1.0, 2.0, dam.state.ndx)
+        posture = crocopy.CostModelResidual(dam.state, crocopy.ActivationModelWeightedQuad(weights),
+                                            crocopy.ResidualModelState(dam.state, problem.x0, dam.nu))
+        dam.costs.addCost("posture", posture, 0.5)
+    return problem, xs, us
+
+
+def test_weights_assigned_keep_the_selection_and_its_items():
+    """A cost item's ``weight`` and an activation's ``weights`` assigned between solves are re-read in place: the
+    selection and its nodes' items are kept, and the solve equals a fresh problem's with those weights; switching a
+    cost off makes the selection again."""
+    def reweight(p):
+        for m in [*p.runningModels, p.terminalModel]:
+            costs = m.differential.costs.costs
+            costs["goal"].weight = 3.0 * costs["goal"].weight
+            activation = costs["posture"].cost.activation
+            activation.weights = 2.0 * activation.weights[::-1]
+
+    problem, xs, us = arm_with_weights()
+    solver = crocopy.SolverFDDP(problem)
+    solve(solver, xs, us, 2)
+    first = compiled_nodes.select(solver)
+    items = [node._residuals for node in first.horizon.nodes]
+    reweight(problem)
+    assert compiled_nodes.select(solver) is first
+    assert all(node._residuals is kept for node, kept in zip(first.horizon.nodes, items))
+    assert solve(solver, xs, us, MAXITER) == fresh(arm_with_weights, reweight, crocopy.SolverFDDP)
+    assert solve(solver, xs, us, MAXITER) != fresh(arm_with_weights, None, crocopy.SolverFDDP)
+    problem.runningModels[2].differential.costs.changeCostStatus("goal", False)
+    assert compiled_nodes.select(solver) is not first
+
+
 def test_a_running_node_evaluated_as_terminal_between_solves():
     """``model.calc(data, x)`` on a running node switches its cost stack to a terminal node's: the next solve
     switches it back (same solve as without that evaluation)."""

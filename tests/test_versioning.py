@@ -283,6 +283,38 @@ def test_value_attributes_stamp_values_and_others_the_layout():
     assert changes_since(owners, clock) == LAYOUT
 
 
+def test_weights_are_values_and_activity_the_layout_of_a_cost_stack():
+    """A cost item's ``weight`` and a weighted activation's ``weights`` are values: :func:`changes_since` says so and
+    the cost stack re-reads them into the same arrays, reporting no change of its layout; switching an item off is a
+    change of layout, for both."""
+    from crocopy.versioning import LAYOUT, VALUES, changes_since, parameter_owners
+
+    state = crocopy.StateVector(4)
+    costs = crocopy.CostModelSum(state, 2)
+    activation = crocopy.ActivationModelWeightedQuad(np.arange(1.0, 5.0))
+    costs.addCost("x", crocopy.CostModelResidual(state, activation, crocopy.ResidualModelState(state, 2)), 2.0)
+    costs.addCost("u", crocopy.CostModelResidual(state, crocopy.ResidualModelControl(state, 2)), 3.0)
+    data = costs.createData(crocopy.DataCollectorAbstract())
+    x, u = np.linspace(-1.0, 1.0, 4), np.array([0.5, -2.0])
+    costs.calc(data, x, u)
+    stack = data.stack
+    arrays = [stack.weights, stack.item_weights, stack.act_weights]
+    owners = parameter_owners(costs)
+    clock = ParametersVersion.value
+    costs.costs["x"].weight = 5.0
+    activation.weights = np.full(4, 0.5)
+    assert changes_since(owners, clock) == VALUES
+    assert stack.refresh_if_stale(False) is False
+    assert [a is b for a, b in zip(arrays, [stack.weights, stack.item_weights, stack.act_weights])] == [True] * 3
+    assert sorted(stack.item_weights.tolist()) == [3.0, 5.0] and 0.5 in stack.act_weights
+    costs.calc(data, x, u)
+    assert data.cost == pytest.approx(5.0 * 0.5 * 0.5 * float(x @ x) + 3.0 * 0.5 * float(u @ u))  # xref = 0
+    clock = ParametersVersion.value
+    costs.changeCostStatus("u", False)
+    assert changes_since(owners, clock) == LAYOUT
+    assert stack.refresh_if_stale(False) is True
+
+
 def test_copies_and_pickles_carry_no_stamps():
     """A copied or unpickled model is one never touched: no clock value of this process travels with it."""
     from crocopy.problems import registry

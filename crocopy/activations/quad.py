@@ -31,6 +31,8 @@ class ActivationWeights:
 
     nr: int
     _weights: np.ndarray
+    _value_attributes = frozenset({"weights"})
+    """Assigning new weights (of the same length) changes values only (:mod:`crocopy.versioning`)."""
 
     @property
     def weights(self) -> np.ndarray:
@@ -40,7 +42,7 @@ class ActivationWeights:
     @weights.setter
     def weights(self, value: np.ndarray) -> None:
         self._weights = frozen_copy(as_vector(value, self.nr, "weights"))
-        touch(self)
+        touch(self, layout=False)
 
 
 class ActivationModelWeightedQuad(ActivationWeights, ActivationModelAbstract):

@@ -119,8 +119,11 @@ class CostStack:
         self.item_costs[k] = adata.a_value
         adata._a_store = self.item_costs[k : k + 1]
 
-    def refresh(self, terminal: bool) -> None:
-        """Re-read weights, activity and activation parameters (for a terminal node if ``terminal``)."""
+    def refresh(self, terminal: bool) -> bool:
+        """Re-read weights, activity and activation parameters (for a terminal node if ``terminal``), in place; returns
+        whether its layout changed: the node kind, or which items are evaluated and how (active, varying, unfused).
+        Otherwise only values changed (weights, activation weights and bounds), in the same arrays."""
+        before = self._layout()
         self.active, self.varying, self.unfused = [], [], []
         for k, ((_, item, cdata), rows) in enumerate(zip(self.items, self.slices)):
             cost = item.cost
@@ -145,15 +148,21 @@ class CostStack:
                 self.Jx[rows] = 0.0
         self._seen.filled()
         self._terminal = terminal
+        return self._layout() != before
+
+    def _layout(self) -> tuple:
+        """The node kind and the items evaluated, each list by identity."""
+        return (self._terminal, [id(r) for r, _ in self.active], [id(r) for r, _ in self.varying],
+                [id(a) for a, _, _ in self.unfused])
 
     def refresh_if_stale(self, terminal: bool) -> bool:
-        """:meth:`refresh` when the node kind changed or a parameter was touched since; True if it did."""
+        """:meth:`refresh` when the node kind changed or a parameter was touched since; True if its layout changed
+        (a compiled node then reads its items again; after values only, it reads the same arrays)."""
         seen = self._seen
         if self._terminal != terminal or (
             seen.value != ParametersVersion.value and seen.stale(self._parameter_owners)
         ):
-            self.refresh(terminal)
-            return True
+            return self.refresh(terminal)
         return False
 
     def _parameter_owners(self):

@@ -31,7 +31,7 @@ class CostItem:
         elif name == "active":
             value = as_bool(value, "active")
         object.__setattr__(self, name, value)
-        touch(self)
+        touch(self, name != "weight")  # a weight is a value (compiled nodes re-read it in place)
 
     def __repr__(self) -> str:
         return f"{{w={self.weight}, {self.cost!r}}}"
