@@ -409,8 +409,8 @@ def mpc_fresh(target: np.ndarray, x0: np.ndarray, weight: float, dt_scale: float
 @pytest.mark.parametrize(("kernels", "steps"), [(True, 500), (False, 60)])
 def test_mpc_loop_equals_fresh_problems(kernels, steps):
     """Receding horizon: every step moves x0 and the goal reference (setters: values only), every seventh step the
-    time step (a value too) and every tenth step the goal weight (a value of the cost stack, re-read in place), then solves from the
-    previous solution; each step equals a problem built afresh with those values."""
+    time step (a value too) and every tenth step the goal weight (a value of the cost stack, re-read in place), then
+    solves from the previous solution; each step equals a problem built afresh with those values."""
     with crocopy.use_kernels(kernels):
         problem, xs, us = build_arm()
         solver = crocopy.SolverFDDP(problem)
