@@ -203,3 +203,68 @@ def test_terminal_constraint_present_but_inactive():
 
 def nu_ng(problem) -> int:
     return problem.runningModels[0].ng
+
+
+def _kinova_ubound(change):
+    from crocopy.bench import mim
+
+    problem = mim.build_problem(crocopy, "kinova_ubound")
+    change(problem)
+    return problem
+
+
+def _solve_from_rest(solver):
+    problem = solver.problem
+    solver.solve([problem.x0] * (problem.T + 1), [np.zeros(m.nu) for m in problem.runningModels], 4)
+    return solver.iter, solver.cost, np.concatenate(solver.us).tobytes()
+
+
+def test_bounds_are_read_again_only_after_a_constraint_changed(monkeypatch):
+    """Between two solves, an assignment elsewhere (every goal's reference) leaves the QP's bounds as they were read;
+    ``updateBounds`` on one constraint has them read again.  Each solve equals that of a solver with the same history
+    made to read its bounds before every solve."""
+    from crocopy.solvers import csqp
+
+    reads = []
+    bounds = csqp._bounds
+    monkeypatch.setattr(csqp, "_bounds", lambda model, terminal: reads.append(model) or bounds(model, terminal))
+
+    def move_goals(problem):
+        for m in [*problem.runningModels, problem.terminalModel]:
+            goal = m.differential.costs.costs["goal"].cost.residual
+            goal.reference = goal.reference + np.array([0.05, -0.05, 0.0])
+
+    def tighten(problem):
+        problem.runningModels[5].differential.constraints.constraints["u"].constraint.updateBounds(
+            -np.full(6, 2.0), np.full(6, 2.0))
+
+    solvers = [crocopy.SolverCSQP(_kinova_ubound(lambda p: None)) for _ in range(2)]
+    outcomes = []
+    for change in (None, move_goals, tighten):
+        step = []
+        for k, solver in enumerate(solvers):
+            if change is not None:
+                change(solver.problem)
+            if k == 1:
+                solver._bounds_seen = (-1, -1)  # read them again whatever changed
+            reads.clear()
+            step.append(_solve_from_rest(solver))
+            step.append(len(reads))
+        outcomes.append(step)
+    T = solvers[0].problem.T
+    assert [reads_kept for _, reads_kept, _, _ in outcomes[1:]] == [0, T + 1]
+    assert all(kept == read for kept, _, read, _ in outcomes)
+    assert outcomes[2][0][1] != outcomes[1][0][1]  # the tightened bound is active
+
+
+def test_constraint_bounds_are_read_only():
+    """A constraint's bounds change through ``updateBounds``/``removeBounds`` only (an in-place write would go
+    unseen by a solver that read them)."""
+    state = crocopy.StateVector(2)
+    constraint = crocopy.ConstraintModelResidual(state, crocopy.ResidualModelControl(state, 2), -np.ones(2),
+                                                 np.ones(2))
+    for bound in (constraint.lb, constraint.ub):
+        with pytest.raises(ValueError, match="read-only"):
+            bound[0] = 0.5
+    constraint.updateBounds(-np.full(2, 3.0), np.full(2, 3.0))
+    assert constraint.lb.tolist() == [-3.0, -3.0] and not constraint.ub.flags.writeable

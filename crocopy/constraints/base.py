@@ -22,7 +22,7 @@ from ..guards import Guarded, point_control_guards
 from ..residuals.base import ResidualModelAbstract
 from ..state import StateAbstract
 from ..validation import as_vector, check_bounds
-from ..versioning import Parametrized, touch
+from ..versioning import Parametrized, frozen_copy, touch
 
 
 class ConstraintType(enum.IntEnum):
@@ -89,8 +89,8 @@ class ConstraintModelAbstract(Parametrized, Guarded):
         self.ng = int(ng)
         self.nh = int(nh)
         self.T_constraint = bool(T_const)
-        self._lb = np.full(self.ng, -np.inf)
-        self._ub = np.full(self.ng, np.inf)
+        self._lb = frozen_copy(np.full(self.ng, -np.inf))
+        self._ub = frozen_copy(np.full(self.ng, np.inf))
         self._update_type()
 
     def _update_type(self) -> None:
@@ -103,12 +103,12 @@ class ConstraintModelAbstract(Parametrized, Guarded):
 
     @property
     def lb(self) -> np.ndarray:
-        """Lower bound of the inequality rows, shape ``(ng,)``."""
+        """Lower bound of the inequality rows, shape ``(ng,)`` (read-only: :meth:`updateBounds` changes them)."""
         return self._lb
 
     @property
     def ub(self) -> np.ndarray:
-        """Upper bound of the inequality rows, shape ``(ng,)``."""
+        """Upper bound of the inequality rows, shape ``(ng,)`` (read-only: :meth:`updateBounds` changes them)."""
         return self._ub
 
     def updateBounds(self, lower: np.ndarray, upper: np.ndarray) -> None:
@@ -116,13 +116,13 @@ class ConstraintModelAbstract(Parametrized, Guarded):
         lower = as_vector(lower, self.ng, "lower", allow_nonfinite=True)
         upper = as_vector(upper, self.ng, "upper", allow_nonfinite=True)
         check_bounds(lower, upper, "lower", "upper")
-        self._lb, self._ub = lower.copy(), upper.copy()
+        self._lb, self._ub = frozen_copy(lower), frozen_copy(upper)
         touch(self)
 
     def removeBounds(self) -> None:
         """Make the inequality rows unbounded."""
-        self._lb = np.full(self.ng, -np.inf)
-        self._ub = np.full(self.ng, np.inf)
+        self._lb = frozen_copy(np.full(self.ng, -np.inf))
+        self._ub = frozen_copy(np.full(self.ng, np.inf))
         touch(self)
 
     def createData(self, data: DataCollectorAbstract | None = None) -> "ConstraintDataAbstract":

@@ -35,7 +35,7 @@ import numpy as np
 from .. import kernels
 from ..enums import FeasibilityNorm
 from ..shooting import ShootingProblem
-from ..versioning import STRUCTURE, ParametersVersion
+from ..versioning import STRUCTURE, ParametersVersion, changes_since, parameter_owners
 from . import csqp_kernel
 from .base import BackwardPassError, CountSetting, FlagSetting, Setting
 from .csqp_admm import StagewiseADMM
@@ -151,6 +151,8 @@ class SolverCSQP(SolverSQP):
     def _node_bounds(self) -> list[tuple[np.ndarray, np.ndarray]]:
         models = [*self.problem.runningModels, self.problem.terminalModel]
         self._bounds_seen = (ParametersVersion.value, STRUCTURE[0])
+        owners = {id(o): o for m in models for o in parameter_owners(_manager(m) or m)}
+        self._bounds_owners = list(owners.values())
         return [_bounds(m, t == self.problem.T) for t, m in enumerate(models)]
 
     def _build_qp(self, bounds: list[tuple[np.ndarray, np.ndarray]] | None = None) -> None:
@@ -218,7 +220,10 @@ class SolverCSQP(SolverSQP):
         """Follow the constraints' bounds (``updateBounds``) and rows (a constraint switched on or off) when the
         clocks moved since they were read: new bounds of the same shapes are taken in place (the ADMM state is kept,
         as mim-solvers reads its bounds at every QP), new shapes make the QP again."""
-        if self._bounds_seen == (ParametersVersion.value, STRUCTURE[0]):
+        clock, structure = self._bounds_seen
+        if structure == STRUCTURE[0] and (clock == ParametersVersion.value
+                                          or not changes_since(self._bounds_owners, clock)):
+            self._bounds_seen = (ParametersVersion.value, structure)
             return
         bounds = self._node_bounds()
         rows = self._qp.rows
