@@ -211,7 +211,9 @@ def test_table_counts_runs_that_end_and_that_end_alike():
             Row("c", ok, None)]
     text = mx.format_table(rows)
     assert "2 of 3 runs of mim-solvers 0.3.0's examples (from its sdist) end" in text
-    assert "; 2 of 2 end as mim-solvers' runs do." in text
+    assert "; 2 of 2 end as mim-solvers' runs do (1 of these stopping at the same error with mim-solvers" in text
+    assert "yes: mim-solvers' own run stops at this error too" in text
+    assert "; 1 of 1 end as mim-solvers' runs do." in mx.format_table(rows[:1])
     table = [line for line in text.splitlines() if line.startswith("|")]
     assert len(table) == 2 + len(rows) and all(len(cells(line)) == 7 for line in table)
 

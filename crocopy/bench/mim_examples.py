@@ -354,7 +354,8 @@ def format_row(row: compat.Row) -> str:
     diff = compat.relative_difference(mine, theirs)
     counts = (len(mine.solves), len(theirs.solves) if theirs is not None else 0)
     solves = f" ({counts[0]} vs {counts[1]} solves)" if diff is not None and counts[0] != counts[1] else ""
-    alike = {None: "-", True: "yes", False: "no" + (f" (its run: {_status(theirs)})" if theirs else "")}
+    same = "yes" if mine.ok else "yes: mim-solvers' own run stops at this error too"
+    alike = {None: "-", True: same, False: "no" + (f" (its run: {_status(theirs)})" if theirs else "")}
     seconds = f"{mine.seconds:.1f} / " + (f"{theirs.seconds:.1f}" if theirs is not None else "-")
     cells = [row.name, _status(mine), alike[same_end(mine, theirs)], _solves(mine), _solves(theirs),
              ("-" if diff is None else f"{diff:.1e}") + solves, seconds]
@@ -365,13 +366,16 @@ def format_table(rows: Sequence[compat.Row]) -> str:
     """The markdown report: a summary line, then one row per run."""
     ok = sum(r.crocopy.ok for r in rows)
     alike = sum(bool(same_end(r.crocopy, r.crocoddyl)) for r in rows)
+    upstream = sum(bool(same_end(r.crocopy, r.crocoddyl)) and not r.crocopy.ok for r in rows)
     compared = sum(r.crocoddyl is not None for r in rows)
     version = SDIST.removeprefix("mim_solvers-").removesuffix(".tar.gz")
     lines = [
         "## mim-solvers' own examples with crocopy (`crocopy bench --mim-examples`)",
         "",
         f"{ok} of {len(rows)} runs of mim-solvers {version}'s examples (from its sdist) end with `crocoddyl` bound "
-        f"to crocopy and `mim_solvers` to `crocopy.mim_solvers`; {alike} of {compared} end as mim-solvers' runs do.",
+        f"to crocopy and `mim_solvers` to `crocopy.mim_solvers`; {alike} of {compared} end as mim-solvers' runs do"
+        + (f" ({upstream} of these stopping at the same error with mim-solvers and Crocoddyl themselves: the example "
+           "is broken upstream)." if upstream else "."),
         "",
         HEADER,
         "|" + "---|" * HEADER.count(" | ") + "---|",
