@@ -135,6 +135,19 @@ def changes_since(owners: Iterable[object], value: int) -> int:
     return found
 
 
+def touched_since(owners: Iterable[object], value: int) -> list[object] | None:
+    """The ``owners`` touched after the clock read ``value``, in order, or None if one of them was touched other than
+    by a value attribute (:func:`changes_since` would say :data:`LAYOUT`)."""
+    touched = []
+    for owner in owners:
+        stamps = owner.__dict__
+        if stamps.get("_layout_stamp", 0) > value:
+            return None
+        if stamps.get("_stamp", 0) > value:
+            touched.append(owner)
+    return touched
+
+
 class Parametrized:
     """Mixin of model classes: assigning a public attribute touches the model (:func:`touch`), and the names in
     ``_read_only`` can be assigned once (by the constructor), as in Crocoddyl's bindings.  The names in

@@ -117,6 +117,27 @@ def copied_reference_in_place(p):
             r.reference = np.array([0.3, 0.1, 0.5])
 
 
+def reference_set_and_armature_in_place(p):
+    """The state references through their setter (only residuals touched: the nodes re-read those and their live
+    sources) and, in place where it is writeable (deep-copied), the dynamics' armature, a live source."""
+    for r in items(p, "state"):
+        r.reference = np.asarray(r.reference) + 0.01
+    for m in p.runningModels:
+        armature = m.differential.armature
+        if armature.flags.writeable:
+            armature[:] = 0.05
+        else:
+            m.differential.armature = np.full(armature.shape, 0.05)
+
+
+def reference_and_time_step_set(p):
+    """A state reference and the time step through their setters: a residual and a model touched."""
+    for r in items(p, "state"):
+        r.reference = np.asarray(r.reference) + 0.01
+    for m in p.runningModels:
+        m.dt = 0.8 * m.dt
+
+
 CASES = {
     "pinocchio inertia": (arm_with_frames, heavier_link),
     "pinocchio gravity": (arm_with_frames, weaker_gravity),
@@ -127,6 +148,8 @@ CASES = {
     "pinocchio inertia (contacts)": (walk, heavier_link),
     "user residual parameters": (user_reach, user_parameters_in_place),
     "deep-copied reference": (deep_copied_arm, copied_reference_in_place),
+    "reference set, armature in place": (deep_copied_arm, reference_set_and_armature_in_place),
+    "reference and time step set": (arm_with_frames, reference_and_time_step_set),
 }
 
 

@@ -283,6 +283,65 @@ def test_value_attributes_stamp_values_and_others_the_layout():
     assert changes_since(owners, clock) == LAYOUT
 
 
+def test_touched_since_lists_the_objects_whose_values_were_assigned():
+    """:func:`touched_since` names the owners :func:`changes_since` counts as values, in order, and None for a layout
+    change; :func:`residuals_only` tells a node whose touched objects are its residuals from one whose model was."""
+    from crocopy.models.rbd.live_parameters import read_parameters, residuals_only
+    from crocopy.problems import registry
+    from crocopy.versioning import parameter_owners, touched_since
+
+    problem, _, _ = registry.build("arm")
+    model = problem.runningModels[0]
+    owners = parameter_owners(model)
+    costs = model.differential.costs.costs
+    goal, state = costs["goal"].cost.residual, costs["state"].cost.residual
+    live = read_parameters([(0, goal), (0, state)], [], lambda kind, r: r.compiled_parameters())
+    clock = ParametersVersion.value
+    assert touched_since(owners, clock) == []
+    state.reference = state.reference + 0.1
+    goal.reference = goal.reference + 0.1
+    touched = touched_since(owners, clock)
+    assert touched == [o for o in owners if o is goal or o is state] and len(touched) == 2
+    assert residuals_only(touched, live)
+    assert not residuals_only(touched, read_parameters([(0, goal)], [], lambda kind, r: r.compiled_parameters()))
+    model.dt = 0.5 * model.dt
+    touched = touched_since(owners, clock)
+    assert model in touched and not residuals_only(touched, live)
+    goal.id = goal.id - 1
+    assert touched_since(owners, clock) is None
+
+
+@pytest.mark.parametrize("name", ["state", "control", "translation", "com", "placement"])
+def test_reference_arrays_are_the_compiled_parameters(name):
+    """The residuals whose reference a compiled node copies straight into its parameters (``REFERENCE_ARRAY``, and the
+    inverse placement of ``PLACEMENT``) give the same numbers as their ``compiled_parameters()``, to the bit, after a
+    reference set through the setter (and, for the live ``pin.SE3``, moved in place)."""
+    from crocopy.models.rbd.live_parameters import PLACEMENT, REFERENCE_ARRAY, LiveParameters
+
+    model = load("talos_arm")
+    state = crocopy.StateMultibody(model)
+    fid = model.nframes - 1
+    rng = np.random.default_rng(7)
+    residual = {
+        "state": lambda: crocopy.ResidualModelState(state, state.rand(), 3),
+        "control": lambda: crocopy.ResidualModelControl(state, rng.standard_normal(3)),
+        "translation": lambda: crocopy.ResidualModelFrameTranslation(state, fid, rng.standard_normal(3), 3),
+        "com": lambda: crocopy.ResidualModelCoMPosition(state, rng.standard_normal(3), 3),
+        "placement": lambda: crocopy.ResidualModelFramePlacement(state, fid, pin.SE3.Random(), 3),
+    }[name]()
+    assert type(residual) in REFERENCE_ARRAY + PLACEMENT
+    if name == "placement":
+        residual.reference = pin.SE3.Random()
+        residual.reference.translation = rng.standard_normal(3)
+    else:
+        residual.reference = np.asarray(residual.reference) * np.pi
+    expected = np.array(residual.compiled_parameters())
+    par = np.full(expected.shape[0] + 2, np.nan)
+    entry = (1, 1 + expected.shape[0], 0, residual)
+    assert LiveParameters([entry], lambda kind, r: [], [entry]).reread(par)
+    assert np.array_equal(par[1:-1], expected) and np.isnan(par[0]) and np.isnan(par[-1])
+
+
 def test_weights_are_values_and_activity_the_layout_of_a_cost_stack():
     """A cost item's ``weight`` and a weighted activation's ``weights`` are values: :func:`changes_since` says so and
     the cost stack re-reads them into the same arrays, reporting no change of its layout; switching an item off is a

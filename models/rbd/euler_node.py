@@ -51,7 +51,15 @@ from .constraint_rows import ConstraintRows
 from .contact_lowering import ContactSet
 from .euler_horizon import EulerHorizon
 from .joint_types import NotLowerable
-from .live_parameters import actuation_live, contacts_live, frozen, layout_touched, read_parameters, values_touched
+from .live_parameters import (
+    actuation_live,
+    contacts_live,
+    frozen,
+    layout_touched,
+    read_parameters,
+    residuals_only,
+    values_touched,
+)
 from .lowered_model import Lowered, lowered, table_entries
 from .node_kinds import ACTUATIONS, python_residual, residual_kind
 from .python_residuals import PythonResiduals
@@ -178,12 +186,13 @@ class EulerNode:
         was touched since (:func:`~crocopy.versioning.changes_since`: a frame, a residual or an item replaced); else
         re-read in place what changed: nothing but the live parameters (:meth:`refresh_live`) when no object of the
         node was touched (another model's parameter was), else the parameters of the touched residuals (a value
-        attribute such as ``reference``), the time step, the damping, the contacts, the armature and ``S``.  Spends
-        the stamp of the last values."""
+        attribute such as ``reference``), the time step and the damping, and the contacts, the armature and ``S``:
+        all of them when another object of the node was touched, their live sources only when the touched objects
+        are residuals (a model-predictive loop moving references).  Spends the stamp of the last values."""
         self.forget()
         touched = values_touched(self, self._residuals is not None, memo)
         if not touched:
-            return touched is False
+            return touched is not None
         data, low = self._data(), self._lowered
         if data is None or low.version != self._low_version or not low.current(memo):
             return False
@@ -191,12 +200,21 @@ class EulerNode:
             self._residuals = None  # read the items again
             return False
         iam, dam = self.model, self.model.differential
+        live, contacts, armature, actuation = self._live
         self.par[0], self.par[1] = float(iam.dt), self._damping(dam)  # in place: a horizon reads this array
-        if not self._live[0].reread_since(self.par, self._seen):
+        if not live.reread_since(self.par, self._seen):
             self._residuals = None
             return False
-        self.contacts.refresh()
-        self._refresh_dynamics(low, dam, memo)
+        if not residuals_only(touched, live):
+            self.contacts.refresh()
+            self._refresh_dynamics(low, dam, memo)
+        else:  # the dynamics and contacts were not assigned: only their live sources may have moved
+            if contacts:
+                self.contacts.refresh()
+            if armature:
+                np.add(low.rb.armature, dam.armature, out=self.armature)
+            if actuation:
+                self._actuation_matrix(dam, memo)
         self._seen = ParametersVersion.value
         return True
 

@@ -172,7 +172,7 @@ class ImpulseNode:
         ``r_coeff``, the damping and the armature."""
         touched = values_touched(self, self._items is not None, memo)
         if not touched:
-            return touched is False
+            return touched is not None
         data, low, model = self._data(), self._lowered, self.model
         if data is None or low.version != self._low_version or not low.current(memo):
             return False

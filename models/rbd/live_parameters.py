@@ -21,12 +21,12 @@ from collections.abc import Callable
 import numpy as np
 
 from crocopy.residuals import ResidualModelControl, ResidualModelState
-from crocopy.versioning import LAYOUT, ParametersVersion, changes_since
+from crocopy.versioning import LAYOUT, ParametersVersion, changes_since, touched_since
 
 from ..actuations import ActuationModelFloatingBase, ActuationModelFull
 from ..residuals_contact import ResidualModelContactFrictionCone, ResidualModelContactWrenchCone
 from ..residuals_dynamics import ResidualModelCoMPosition
-from ..residuals_frame import ResidualModelFrameRotation, ResidualModelFrameTranslation
+from ..residuals_frame import ResidualModelFramePlacement, ResidualModelFrameRotation, ResidualModelFrameTranslation
 
 REFERENCE_ONLY = (ResidualModelState, ResidualModelControl, ResidualModelFrameTranslation, ResidualModelFrameRotation,
                   ResidualModelCoMPosition)
@@ -36,6 +36,13 @@ CONE_MATRIX = (ResidualModelContactFrictionCone, ResidualModelContactWrenchCone)
 """Residual classes (exact) whose ``compiled_parameters()`` are their cone's matrix ``reference.A``, row-major (read
 here straight into ``par``: the cones of a legged gait are most of its live parameters)."""
 """Actuation classes (exact) whose ``compiled_matrix()`` depends on the state's sizes alone."""
+REFERENCE_ARRAY = (ResidualModelState, ResidualModelControl, ResidualModelFrameTranslation, ResidualModelCoMPosition)
+"""Residual classes (exact) whose ``compiled_parameters()`` are the entries of their ``reference``, a 1-D array (copied
+here straight into ``par``)."""
+PLACEMENT = (ResidualModelFramePlacement,)
+"""Residual classes (exact) whose ``compiled_parameters()`` are their ``pin.SE3`` reference's inverse, rotation
+row-major then translation (written here straight into ``par``: a placement reference is live, re-read at every
+solve)."""
 
 
 def frozen(value: object) -> bool:
@@ -103,7 +110,15 @@ class LiveParameters:
 
     def _write(self, par: np.ndarray, slices: list) -> bool:
         for start, stop, kind, residual in slices:
-            if type(residual) in CONE_MATRIX:
+            kind_of = type(residual)
+            if kind_of in REFERENCE_ARRAY:
+                values = residual.reference
+            elif kind_of in PLACEMENT and stop - start == 12:
+                inverse = residual.reference.inverse()
+                par[start:start + 9] = inverse.rotation.reshape(-1)
+                par[start + 9:stop] = inverse.translation
+                continue
+            elif kind_of in CONE_MATRIX:
                 values = np.asarray(residual.reference.A, dtype=float).reshape(-1)
             else:
                 values = self.parameters(kind, residual)
@@ -119,17 +134,23 @@ def layout_touched(node) -> bool:
     return node._seen != ParametersVersion.value and changes_since(node._owners, node._seen) == LAYOUT
 
 
-def values_touched(node, read: bool, memo: dict) -> bool | None:
+def values_touched(node, read: bool, memo: dict) -> list | None:
     """The start of a compiled node's ``refresh_values`` (:mod:`.euler_node`, :mod:`.impulse_node`) after the
     parameter clock moved: None if the node must be refreshed (``read`` False: its items are to be read again; the
-    layout of one of its objects was touched; its live parameters cannot be re-read), False if none of its objects
-    was touched (its live parameters re-read, ``node.refresh_live``), True if values of its objects were."""
-    changes = changes_since(node._owners, node._seen) if read else LAYOUT
-    if changes == LAYOUT:
-        return None
-    if changes:
-        return True
+    layout of one of its objects was touched; its live parameters cannot be re-read), an empty list if none of its
+    objects was touched (its live parameters re-read, ``node.refresh_live``), else the objects whose values were
+    (:func:`crocopy.versioning.touched_since`)."""
+    touched = touched_since(node._owners, node._seen) if read else None
+    if touched is None or touched:
+        return touched
     if not node.refresh_live(memo):
         return None
     node._seen = ParametersVersion.value
-    return False
+    return touched
+
+
+def residuals_only(touched: list, live: LiveParameters) -> bool:
+    """Whether every object of ``touched`` is a residual whose parameters ``live`` lists (its node then re-reads them
+    and its live sources only: its dynamics, time step and contacts were not assigned)."""
+    ids = {id(entry[3]) for entry in live.every}
+    return all(id(owner) in ids for owner in touched)
