@@ -336,25 +336,28 @@ def mass_inverse(lam: np.ndarray, L: np.ndarray, dinv: np.ndarray, Minv_out: np.
 
 @uncounted
 def _composite_coriolis(rb, ws):
-    """``ws.oIc``, ``ws.oBc``: composite inertias and composite ``B_i = ov_i ×* oI_i - oI_i (ov_i ×) + (· ×* h_i)``."""
-    oI, oIc, oBc, ov, oh, T = ws.oI, ws.oIc, ws.oBc, ws.ov, ws.oh, ws.tmp
+    """``ws.oIc``, ``ws.oBc``: composite inertias and composite ``B_i = ov_i ×* oI_i - oI_i (ov_i ×) + (· ×* h_i)``.
+
+    With ``P = oI_i (ov_i ×)`` and ``oI_i`` symmetric, ``(ov_i ×*) oI_i = -(ov_i ×)ᵀ oI_i = -Pᵀ``, so
+    ``B_i = H - P - Pᵀ`` (``H``'s column ``c``: ``e_c ×* h_i``).  A row ``g = [g_v, g_ω]`` of ``oI_i`` times
+    ``(ov ×) = [[ω×, v×], [0, ω×]]`` is ``[g_v × ω, g_v × v + g_ω × ω]`` (a row times ``a×`` is the row ``× a``)."""
+    oI, oIc, oBc, ov, oh, P = ws.oI, ws.oIc, ws.oBc, ws.ov, ws.oh, ws.tmp
     for i in range(1, rb.njoints):
-        ovi, h = get6(ov, i), get6(oh, i)
-        for c in range(6):  # T: the matrix of ovi ×
-            m = mcross(ovi, unit(c))
-            for k in range(6):
-                T[k, c] = m[k]
+        vx, vy, vz, wx, wy, wz = get6(ov, i)
+        for r in range(6):
+            ax, ay, az = oI[i, r, 0], oI[i, r, 1], oI[i, r, 2]
+            bx, by, bz = oI[i, r, 3], oI[i, r, 4], oI[i, r, 5]
+            P[r, 0] = ay * wz - az * wy
+            P[r, 1] = az * wx - ax * wz
+            P[r, 2] = ax * wy - ay * wx
+            P[r, 3] = ay * vz - az * vy + by * wz - bz * wy
+            P[r, 4] = az * vx - ax * vz + bz * wx - bx * wz
+            P[r, 5] = ax * vy - ay * vx + bx * wy - by * wx
+        h = get6(oh, i)
         for c in range(6):
             hx = fcross(unit(c), h)
             for r in range(6):
-                oBc[i, r, c] = hx[r]
-        for r in range(6):  # (ovi ×*) = -Tᵀ; row r gets -(T[k, r] oI[k] + oI[r, k] T[k]) for k = 0..5 in turn
-            for k in range(6):
-                s1 = T[k, r]
-                s2 = oI[i, r, k]
-                for c in range(6):
-                    oBc[i, r, c] -= s1 * oI[i, k, c] + s2 * T[k, c]
-            for c in range(6):
+                oBc[i, r, c] = hx[r] - P[r, c] - P[c, r]
                 oIc[i, r, c] = oI[i, r, c]
     parent = rb.parent
     for i in range(rb.njoints - 1, 0, -1):
