@@ -243,6 +243,37 @@ def test_stack_accumulate_on_rows_with_zero_ends_equals_the_dense_sums(seed):
     for a, b in zip(L, expected, strict=True):
         np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-13)
 
+@pytest.mark.parametrize("seed", range(3))
+def test_stack_accumulate_equals_the_row_by_row_dense_sums_to_the_bit(seed):
+    """Leaving the zero entries of the Jacobian rows out changes no bit: the kernel equals the row-by-row rank-one
+    sums over every entry, in the same order (a zero term adds ``±0``)."""
+    rng = np.random.default_rng(10 + seed)
+    nr, ndx, nu, u_start = 16, 9, 4, 7
+    Jx = rng.standard_normal((nr, ndx)) * (rng.uniform(size=(nr, ndx)) < 0.4)
+    Ju = rng.standard_normal((nr - u_start, nu)) * (rng.uniform(size=(nr - u_start, nu)) < 0.5)
+    Ar, Arr, weights = rng.standard_normal(nr), rng.uniform(0.0, 2.0, nr), rng.uniform(0.5, 3.0, nr)
+    Arr[3] = 0.0
+    L = [np.zeros(ndx), np.zeros(nu), np.zeros((ndx, ndx)), np.zeros((ndx, nu)), np.zeros((nu, nu))]
+    stack_kernel.accumulate(weights, Ar, Arr, Jx, Ju, u_start, True, *L)
+    Lx, Lu, Lxx, Lxu, Luu = (np.zeros(ndx), np.zeros(nu), np.zeros((ndx, ndx)), np.zeros((ndx, nu)),
+                             np.zeros((nu, nu)))
+    for i in range(nr):
+        g, h = weights[i] * Ar[i], weights[i] * Arr[i]
+        Lx += g * Jx[i]
+        Lxx += (h * Jx[i])[:, None] * Jx[i][None, :]
+        if i >= u_start:
+            ju = Ju[i - u_start]
+            Lu += g * ju
+            Lxu += (h * Jx[i])[:, None] * ju[None, :]
+            Luu += (h * ju)[:, None] * ju[None, :]
+    upper_x, upper_u = np.triu_indices(ndx), np.triu_indices(nu)
+    pairs = ((L[0], Lx), (L[1], Lu), (L[2][upper_x], Lxx[upper_x]), (L[3], Lxu), (L[4][upper_u], Luu[upper_u]))
+    for got, want in pairs:
+        np.testing.assert_array_equal(got, want)
+    np.testing.assert_array_equal(L[2], L[2].T)
+    np.testing.assert_array_equal(L[4], L[4].T)
+
+
 # ------------------------------------------------------------------------------------- numba is missing
 def test_forcing_the_availability_flag_off_uses_the_twins(monkeypatch):
     with crocopy.use_kernels(True):

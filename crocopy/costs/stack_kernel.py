@@ -91,9 +91,9 @@ def _activation_derivatives(r, lb, ub, act_w, Ar, Arr):
 
 def _accumulate(weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu):
     """Weighted Gauss-Newton sums, one rank-one update per row whose weighted curvature ``h = w Arr`` is not zero, each
-    over the nonzero entries of its Jacobian row (a state or control residual's row has one or a few: the products
-    cost the rows' nonzeros times ``ndx``, not ``nr ndx²``); the upper triangles of ``Lxx`` and ``Luu``, then their
-    mirror (exactly symmetric)."""
+    over the nonzero entries of its Jacobian row only (listed once per row: a state or control residual's row has one
+    or a few, so the products cost the square of the rows' nonzeros, not ``nr ndx²``); the upper triangles of ``Lxx``
+    and ``Luu``, then their mirror (exactly symmetric).  A zero entry is left out of a sum it would add ``±0`` to."""
     nr, ndx = Jx.shape
     nu = Ju.shape[1]
     if nu == 0:
@@ -104,32 +104,52 @@ def _accumulate(weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu
         Lu[:] = 0.0
         Lxu[:, :] = 0.0
         Luu[:, :] = 0.0
+    cols = np.empty(ndx, dtype=np.int64)
+    ucols = np.empty(max(nu, 1), dtype=np.int64)
     for i in range(nr):
         g = weights[i] * Ar[i]
         h = weights[i] * Arr[i]
+        if g == 0.0 and h == 0.0:
+            continue
         u_row = with_u and i >= u_start
+        n = 0
+        for j in range(ndx):
+            if Jx[i, j] != 0.0:
+                cols[n] = j
+                n += 1
+        m = 0
+        if u_row:
+            iu = i - u_start
+            for j in range(nu):
+                if Ju[iu, j] != 0.0:
+                    ucols[m] = j
+                    m += 1
         if g != 0.0:
-            for j in range(ndx):
+            for p in range(n):
+                j = cols[p]
                 Lx[j] += g * Jx[i, j]
-            if u_row:
-                for j in range(nu):
-                    Lu[j] += g * Ju[i - u_start, j]
+            for p in range(m):
+                j = ucols[p]
+                Lu[j] += g * Ju[i - u_start, j]
         if h == 0.0:
             continue
-        for a in range(ndx):
+        for p in range(n):
+            a = cols[p]
             s = h * Jx[i, a]
             if s != 0.0:
-                for b in range(a, ndx):
+                for q in range(p, n):
+                    b = cols[q]
                     Lxx[a, b] += s * Jx[i, b]
-                if u_row:
-                    for b in range(nu):
-                        Lxu[a, b] += s * Ju[i - u_start, b]
-        if u_row:
-            for a in range(nu):
-                s = h * Ju[i - u_start, a]
-                if s != 0.0:
-                    for b in range(a, nu):
-                        Luu[a, b] += s * Ju[i - u_start, b]
+                for q in range(m):
+                    b = ucols[q]
+                    Lxu[a, b] += s * Ju[i - u_start, b]
+        for p in range(m):
+            a = ucols[p]
+            s = h * Ju[i - u_start, a]
+            if s != 0.0:
+                for q in range(p, m):
+                    b = ucols[q]
+                    Luu[a, b] += s * Ju[i - u_start, b]
     for a in range(ndx):
         for b in range(a):
             Lxx[a, b] = Lxx[b, a]
