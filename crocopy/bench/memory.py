@@ -59,13 +59,15 @@ def warmup_problem(name: str) -> str:
 
 
 def warm_up(lib, name: str, solver_name: str) -> None:
-    """Two iterations of the solver on :func:`warmup_problem`; for crocopy, once with compiled nodes and
-    once through a solver subclass (the Python node path), so that every kernel either path uses is loaded."""
+    """Two iterations of the solver on :func:`warmup_problem` from its guess and two from the rollout of its controls
+    (a feasible start: crocopy's line search then runs in one compiled call); for crocopy, also once through a solver
+    subclass (the Python node path), so that every kernel either path uses is loaded."""
     from .side_by_side import build_problem, make_solver
 
     problem, xs, us = build_problem(warmup_problem(name), lib)
     solver = make_solver(lib, problem, solver_name)
     solver.solve(xs, us, 2, False)
+    make_solver(lib, problem, solver_name).solve(problem.rollout(us), us, 2, True)
     if lib.__name__ == "crocopy":
         solver = make_solver(lib, problem, solver_name)
         python_nodes = type("PythonNodes" + type(solver).__name__, (type(solver),), {})
