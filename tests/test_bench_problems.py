@@ -116,7 +116,7 @@ def test_default_problems_are_table1_walk_and_arm():
         assert warmup_problem(name) != name and warmup_problem(name) in registry.PROBLEMS
 
 
-def test_memory_warm_up_loads_the_compiled_line_search():
+def test_memory_warm_up_loads_the_compiled_line_search(tmp_path):
     """The warm-up of the memory subprocess reaches a feasible iterate, so the line search's compiled kernel (loaded
     at its first call, about 13 MiB) is not counted in the measured solve."""
     import subprocess
@@ -127,7 +127,8 @@ def test_memory_warm_up_loads_the_compiled_line_search():
             "assert not line_search.signatures\n"
             "warm_up(crocopy, 'pend', 'boxfddp')\n"
             "print(len(line_search.signatures))\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600,
+                         cwd=tmp_path)  # the installed crocopy, not the checkout's folder
     assert out.returncode == 0, out.stderr[-2000:]
     assert int(out.stdout.strip().splitlines()[-1]) >= 1
 
