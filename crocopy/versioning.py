@@ -122,22 +122,9 @@ VALUES, LAYOUT = 1, 2
 """What :func:`changes_since` found: value attributes only were assigned, or something else (0: nothing)."""
 
 
-def changes_since(owners: Iterable[object], value: int) -> int:
-    """What changed among ``owners`` (:func:`parameter_owners`) after the clock read ``value``: :data:`LAYOUT` if
-    one was touched other than by a value attribute, else :data:`VALUES` if one was touched, else 0."""
-    found = 0
-    for owner in owners:
-        stamps = owner.__dict__
-        if stamps.get("_layout_stamp", 0) > value:
-            return LAYOUT
-        if stamps.get("_stamp", 0) > value:
-            found = VALUES
-    return found
-
-
 def touched_since(owners: Iterable[object], value: int) -> list[object] | None:
-    """The ``owners`` touched after the clock read ``value``, in order, or None if one of them was touched other than
-    by a value attribute (:func:`changes_since` would say :data:`LAYOUT`)."""
+    """The ``owners`` (:func:`parameter_owners`) touched after the clock read ``value``, in order, or None if one of
+    them was touched other than by a value attribute (its layout)."""
     touched = []
     for owner in owners:
         stamps = owner.__dict__
@@ -146,6 +133,13 @@ def touched_since(owners: Iterable[object], value: int) -> list[object] | None:
         if stamps.get("_stamp", 0) > value:
             touched.append(owner)
     return touched
+
+
+def changes_since(owners: Iterable[object], value: int) -> int:
+    """What changed among ``owners`` after the clock read ``value`` (:func:`touched_since`): :data:`LAYOUT` if one
+    was touched other than by a value attribute, else :data:`VALUES` if one was touched, else 0."""
+    touched = touched_since(owners, value)
+    return LAYOUT if touched is None else VALUES if touched else 0
 
 
 class Parametrized:

@@ -167,9 +167,9 @@ class ResidualModelContactFrictionCone(_ForceResidual):
     compiled_kind = "cone"
     """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""
 
-    def compiled_parameters(self) -> list[float]:
+    def compiled_parameters(self) -> np.ndarray:
         """The parameters compiled nodes read: the cone matrix ``A`` row-major."""
-        return list(np.asarray(self.reference.A, dtype=float).reshape(-1))
+        return np.asarray(self.reference.A, dtype=float).reshape(-1)
 
 
     min_nc = 2
@@ -193,9 +193,9 @@ class ResidualModelContactWrenchCone(_ForceResidual):
     compiled_kind = "cone"
     """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""
 
-    def compiled_parameters(self) -> list[float]:
+    def compiled_parameters(self) -> np.ndarray:
         """The parameters compiled nodes read: the cone matrix ``A`` row-major."""
-        return list(np.asarray(self.reference.A, dtype=float).reshape(-1))
+        return np.asarray(self.reference.A, dtype=float).reshape(-1)
 
 
     ncf = min_nc = 6

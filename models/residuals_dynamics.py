@@ -58,9 +58,9 @@ class ResidualModelCoMPosition(ResidualModelAbstract):
     compiled_kind = "com"
     """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""
 
-    def compiled_parameters(self) -> list[float]:
-        """The parameters compiled nodes read: ``cref``."""
-        return list(self._cref)
+    def compiled_parameters(self) -> np.ndarray:
+        """The parameters compiled nodes read: ``cref`` (the read-only array itself)."""
+        return self._cref
 
 
     def __init__(self, state: StateMultibody, cref: np.ndarray, nu: int | None = None) -> None:

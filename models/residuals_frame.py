@@ -124,10 +124,10 @@ class ResidualModelFramePlacement(_FrameResidual):
     compiled_kind = "placement"
     """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""
 
-    def compiled_parameters(self) -> list[float]:
+    def compiled_parameters(self) -> np.ndarray:
         """The parameters compiled nodes read: ``pref⁻¹`` (rotation row-major, translation)."""
         inverse = self._pref.inverse()
-        return [*inverse.rotation.reshape(-1), *inverse.translation]
+        return np.concatenate((inverse.rotation.reshape(-1), inverse.translation))
 
 
     _data_class = ResidualDataFramePlacement
@@ -167,9 +167,9 @@ class ResidualModelFrameTranslation(_FrameResidual):
     compiled_kind = "translation"
     """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""
 
-    def compiled_parameters(self) -> list[float]:
-        """The parameters compiled nodes read: ``xref``."""
-        return list(self._xref)
+    def compiled_parameters(self) -> np.ndarray:
+        """The parameters compiled nodes read: ``xref`` (the read-only array itself)."""
+        return self._xref
 
 
     def __init__(self, state: StateMultibody, id: int | str, xref: np.ndarray, nu: int | None = None) -> None:
@@ -206,9 +206,9 @@ class ResidualModelFrameRotation(_FrameResidual):
     compiled_kind = "rotation"
     """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""
 
-    def compiled_parameters(self) -> list[float]:
+    def compiled_parameters(self) -> np.ndarray:
         """The parameters compiled nodes read: ``Rrefᵀ`` row-major."""
-        return list(self._Rref.T.reshape(-1))
+        return self._Rref.T.reshape(-1)
 
 
     _data_class = ResidualDataFrameRotation
@@ -252,9 +252,9 @@ class ResidualModelFrameVelocity(_FrameResidual):
     compiled_kind = "velocity"
     """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""
 
-    def compiled_parameters(self) -> list[float]:
+    def compiled_parameters(self) -> np.ndarray:
         """The parameters compiled nodes read: ``vref`` (linear, angular); ``type`` is the item's reference frame."""
-        return list(self._vref.vector)
+        return self._vref.vector
 
 
     _data_class = ResidualDataFrameVelocity

@@ -201,11 +201,12 @@ def test_stack_kernels_equal_their_twins_on_random_rows():
         getattr(stack_kernel, "activation_derivatives" + suffix)(r, lb, ub, act_w, Ar, Arr)
         L = [np.zeros(ndx), np.zeros(nu), np.zeros((ndx, ndx)), np.zeros((ndx, nu)), np.zeros((nu, nu))]
         getattr(stack_kernel, "accumulate" + suffix)(
-            weights, Ar, Arr, Jx, Ju, u_start, True, *L)
+            weights, Ar, Arr, Jx, Ju, u_start, True, *L, np.zeros(ndx + nu, dtype=np.int64))
         fused = [np.zeros(nr), np.zeros(nr), np.zeros(ndx), np.zeros(nu), np.zeros((ndx, ndx)),
                  np.zeros((ndx, nu)), np.zeros((nu, nu))]
         getattr(stack_kernel, "derivatives_and_sums" + suffix)(
-            r, lb, ub, act_w, weights, *fused[:2], Jx, Ju, u_start, True, *fused[2:])
+            r, lb, ub, act_w, weights, *fused[:2], Jx, Ju, u_start, True, *fused[2:],
+            np.zeros(ndx + nu, dtype=np.int64))
         for a, b in zip([Ar, Arr, *L], fused, strict=True):
             np.testing.assert_array_equal(a, b)
         outs.append([np.array(total), item_costs, Ar, Arr, *L])
@@ -235,7 +236,7 @@ def test_stack_accumulate_on_rows_with_zero_ends_equals_the_dense_sums(seed):
     Arr[5] = 0.0
     weights = rng.uniform(0.5, 3.0, nr)
     L = [np.zeros(ndx), np.zeros(nu), np.full((ndx, ndx), 7.0), np.full((ndx, nu), 7.0), np.full((nu, nu), 7.0)]
-    stack_kernel.accumulate(weights, Ar, Arr, Jx, Ju, u_start, True, *L)
+    stack_kernel.accumulate(weights, Ar, Arr, Jx, Ju, u_start, True, *L, np.zeros(ndx + nu, dtype=np.int64))
     g, h = weights * Ar, weights * Arr
     Hx = h[:, None] * Jx
     expected = [Jx.T @ g, Ju.T @ g[u_start:], Jx.T @ Hx, Jx[u_start:].T @ (h[u_start:, None] * Ju),
@@ -254,7 +255,7 @@ def test_stack_accumulate_equals_the_row_by_row_dense_sums_to_the_bit(seed):
     Ar, Arr, weights = rng.standard_normal(nr), rng.uniform(0.0, 2.0, nr), rng.uniform(0.5, 3.0, nr)
     Arr[3] = 0.0
     L = [np.zeros(ndx), np.zeros(nu), np.zeros((ndx, ndx)), np.zeros((ndx, nu)), np.zeros((nu, nu))]
-    stack_kernel.accumulate(weights, Ar, Arr, Jx, Ju, u_start, True, *L)
+    stack_kernel.accumulate(weights, Ar, Arr, Jx, Ju, u_start, True, *L, np.zeros(ndx + nu, dtype=np.int64))
     Lx, Lu, Lxx, Lxu, Luu = (np.zeros(ndx), np.zeros(nu), np.zeros((ndx, ndx)), np.zeros((ndx, nu)),
                              np.zeros((nu, nu)))
     for i in range(nr):

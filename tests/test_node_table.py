@@ -17,7 +17,7 @@ ACCESSOR = re.compile(r"\b(vec|mat|cube|ivec)\(\s*tbl\s*,\s*ints\s*,\s*(E_[A-Z0-
 DIMENSION = {"vec": (1, np.float64), "mat": (2, np.float64), "cube": (3, np.float64), "ivec": (1, np.int64)}
 SIZES = {"nq": 7, "nv": 6, "nx": 13, "ndx": 12, "nu": 4, "nr": 9, "nr_u": 4, "n_stack": 3, "nc": 6, "n_contacts": 2,
          "n_kin": 40, "nr_user": 1, "n_stamp": 19, "ng": 5, "nh": 3, "nrc": 8, "n_tbl": 120, "n_c_ints": 500,
-         "n_c_rows": 6}
+         "n_c_rows": 6, "n_cols": 16}
 
 
 def test_every_entry_has_one_generated_index():

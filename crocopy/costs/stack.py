@@ -91,6 +91,8 @@ class CostStack:
         self.u_start = next((s.start for (_, it, _), s in zip(self.items, self.slices)
                              if it.cost.residual.u_dependent), nr)
         self.Ju = np.zeros((nr - self.u_start, nu))
+        self.cols = np.zeros(ndx + nu, dtype=np.int64)
+        """Scratch of the sums: a Jacobian row's nonzero columns (:func:`.stack_kernel.accumulate`)."""
         for k, ((_, item, cdata), rows) in enumerate(zip(self.items, self.slices)):
             self._share(item, cdata, rows, k)
         self._seen = ParametersSeen()
@@ -204,7 +206,7 @@ class CostStack:
             fused = stack_kernel.derivatives_and_sums if kernel else stack_kernel.derivatives_and_sums_numpy
             fused(
                 self.r, self.lb, self.ub, self.act_weights, self.weights, self.Ar, self.Arr, self.Jx, self.Ju,
-                self.u_start, u is not None, data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu,
+                self.u_start, u is not None, data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu, self.cols,
             )
             return
         derivatives = stack_kernel.activation_derivatives if kernel else stack_kernel.activation_derivatives_numpy
@@ -214,5 +216,5 @@ class CostStack:
         accumulate = stack_kernel.accumulate if kernel else stack_kernel.accumulate_numpy
         accumulate(
             self.weights, self.Ar, self.Arr, self.Jx, self.Ju, self.u_start, u is not None,
-            data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu,
+            data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu, self.cols,
         )

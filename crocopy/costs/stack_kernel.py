@@ -42,8 +42,8 @@ def activation_derivatives_numpy(r, lb, ub, act_w, Ar, Arr) -> None:
     np.multiply((r <= lb) | (r >= ub), act_w, out=Arr)
 
 
-def accumulate_numpy(weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu) -> None:
-    """Numpy twin of :func:`accumulate`."""
+def accumulate_numpy(weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu, cols) -> None:
+    """Numpy twin of :func:`accumulate` (``cols`` unused)."""
     wArr = weights * Arr
     np.dot(Jx.T, weights * Ar, out=Lx)
     np.dot(Jx.T, wArr[:, None] * Jx, out=Lxx)
@@ -55,10 +55,10 @@ def accumulate_numpy(weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu
 
 
 def derivatives_and_sums_numpy(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu,
-                               Luu) -> None:
+                               Luu, cols) -> None:
     """Numpy twin of :func:`derivatives_and_sums`."""
     activation_derivatives_numpy(r, lb, ub, act_w, Ar, Arr)
-    accumulate_numpy(weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu)
+    accumulate_numpy(weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu, cols)
 
 
 def _activation_values(r, lb, ub, act_w, starts, item_costs, item_weights):
@@ -89,11 +89,12 @@ def _activation_derivatives(r, lb, ub, act_w, Ar, Arr):
         Arr[i] = act_w[i] if (ri <= lb[i] or ri >= ub[i]) else 0.0
 
 
-def _accumulate(weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu):
+def _accumulate(weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu, cols):
     """Weighted Gauss-Newton sums, one rank-one update per row whose weighted curvature ``h = w Arr`` is not zero, each
     over the nonzero entries of its Jacobian row only (listed once per row: a state or control residual's row has one
     or a few, so the products cost the square of the rows' nonzeros, not ``nr ndx²``); the upper triangles of ``Lxx``
-    and ``Luu``, then their mirror (exactly symmetric).  A zero entry is left out of a sum it would add ``±0`` to."""
+    and ``Luu``, then their mirror (exactly symmetric).  A zero entry is left out of a sum it would add ``±0`` to.
+    ``cols (≥ ndx + nu,)`` int64: scratch for a row's nonzero columns (the stack's ``cols``; nothing is allocated)."""
     nr, ndx = Jx.shape
     nu = Ju.shape[1]
     if nu == 0:
@@ -104,8 +105,7 @@ def _accumulate(weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu
         Lu[:] = 0.0
         Lxu[:, :] = 0.0
         Luu[:, :] = 0.0
-    cols = np.empty(ndx, dtype=np.int64)
-    ucols = np.empty(max(nu, 1), dtype=np.int64)
+    ucols = cols[ndx:]
     for i in range(nr):
         g = weights[i] * Ar[i]
         h = weights[i] * Arr[i]
@@ -164,10 +164,10 @@ activation_derivatives = compiled(_activation_derivatives)
 accumulate = compiled(_accumulate)
 
 
-def _derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu):
+def _derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu, cols):
     """:func:`activation_derivatives` then :func:`accumulate`, one call from Python."""
     activation_derivatives(r, lb, ub, act_w, Ar, Arr)
-    accumulate(weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu)
+    accumulate(weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu, cols)
 
 
 derivatives_and_sums = compiled(_derivatives_and_sums)

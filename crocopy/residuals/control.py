@@ -19,9 +19,9 @@ class ResidualModelControl(ResidualModelAbstract):
     compiled_kind = "control"
     """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""
 
-    def compiled_parameters(self) -> list[float]:
-        """The parameters compiled nodes read: ``uref``."""
-        return list(self._uref)
+    def compiled_parameters(self) -> np.ndarray:
+        """The parameters compiled nodes read: ``uref`` (the read-only array itself)."""
+        return self._uref
 
 
     def __init__(self, state: StateAbstract, uref: np.ndarray | int | None = None) -> None:

@@ -19,9 +19,9 @@ class ResidualModelState(ResidualModelAbstract):
     compiled_kind = "state"
     """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""
 
-    def compiled_parameters(self) -> list[float]:
-        """The parameters compiled nodes read: ``xref``."""
-        return list(self._xref)
+    def compiled_parameters(self) -> np.ndarray:
+        """The parameters compiled nodes read: ``xref`` (the read-only array itself)."""
+        return self._xref
 
 
     def __init__(self, state: StateAbstract, xref: np.ndarray | int | None = None, nu: int | None = None) -> None:

@@ -147,9 +147,7 @@ class EulerHorizon:
         returns ``(i, status)``, or None where it does not apply: a range short of the whole horizon, Python residuals,
         another horizon class, or a ``terminal`` evaluator that is not a compiled Euler node without Python
         residuals.  Node ``t``'s cost stays in :attr:`costs`, the terminal node's in ``out[1]``."""
-        from .euler_node import EulerNode
-
-        if not self._searches or type(terminal) is not EulerNode or terminal.python.items:
+        if not self._searches or type(terminal) is not type(self.nodes[0]) or terminal.python.items:
             return None
         return line_search_kernel.line_search(self.tbls, *self._head(), *addresses, self.nus, self.nx, self.ndx,
                                               len(self.nodes), self.costs, terminal.tbl, terminal.ints, terminal.par,

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import math
 import weakref
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from functools import partial
 
 import numpy as np
@@ -200,21 +200,16 @@ class EulerNode:
             self._residuals = None  # read the items again
             return False
         iam, dam = self.model, self.model.differential
-        live, contacts, armature, actuation = self._live
+        live = self._live[0]
         self.par[0], self.par[1] = float(iam.dt), self._damping(dam)  # in place: a horizon reads this array
         if not live.reread_since(self.par, self._seen):
             self._residuals = None
             return False
-        if not residuals_only(touched, live):
+        if residuals_only(touched, live):  # the dynamics and contacts were not assigned
+            self._reread_live_sources(low, memo)
+        else:
             self.contacts.refresh()
             self._refresh_dynamics(low, dam, memo)
-        else:  # the dynamics and contacts were not assigned: only their live sources may have moved
-            if contacts:
-                self.contacts.refresh()
-            if armature:
-                np.add(low.rb.armature, dam.armature, out=self.armature)
-            if actuation:
-                self._actuation_matrix(dam, memo)
         self._seen = ParametersVersion.value
         return True
 
@@ -230,17 +225,23 @@ class EulerNode:
         if low.version != self._low_version or not low.current(memo):
             return False
         data = self._data()
-        live, contacts, armature, actuation = self._live
-        if data is None or data.differential.costs.stack.refresh_if_stale(self.terminal) or not live.reread(self.par):
+        if data is None or data.differential.costs.stack.refresh_if_stale(self.terminal) \
+                or not self._live[0].reread(self.par):
             self._residuals = None  # read the items again
             return False
+        self._reread_live_sources(low, memo)
+        return True
+
+    def _reread_live_sources(self, low: Lowered, memo: dict) -> None:
+        """Re-read the contacts, the armature and ``S`` where they are live (:meth:`_live_sources`)."""
+        _, contacts, armature, actuation = self._live
+        dam = self.model.differential
         if contacts:
             self.contacts.refresh()
         if armature:
-            np.add(low.rb.armature, self.model.differential.armature, out=self.armature)
+            np.add(low.rb.armature, dam.armature, out=self.armature)
         if actuation:
-            self._actuation_matrix(self.model.differential, memo)
-        return True
+            self._actuation_matrix(dam, memo)
 
     def _read_items(self, stack, ddata, read: dict) -> str | None:
         """Read the compiled items of the cost stack (kind, rows, frame, reference frame, parameter offset); returns
@@ -287,7 +288,7 @@ class EulerNode:
         """``parameters(kind, residual)``: the residual's parameters (:meth:`_parameters`), read once per refresh
         (kept in ``read`` by the residual's ``id``)."""
 
-        def parameters(kind: int, residual) -> list[float]:
+        def parameters(kind: int, residual) -> Sequence[float]:
             key = id(residual)
             if key not in read:
                 read[key] = self._parameters(kind, residual)
@@ -312,7 +313,7 @@ class EulerNode:
         return [kind, rows.start, rows.stop - rows.start, frame, reference, offset, *user]
 
     @staticmethod
-    def _parameters(kind: int, residual) -> list[float]:
+    def _parameters(kind: int, residual) -> Sequence[float]:
         """The residual's parameters in the layout :mod:`.euler_node_kernel` reads (its ``compiled_parameters()``,
         a user residual's ``parameters()``)."""
         return list(residual.checked_parameters()) if kind == table.USER else residual.compiled_parameters()
@@ -350,7 +351,7 @@ class EulerNode:
             "dLxx": ddata.Lxx, "dLxu": ddata.Lxu, "dLuu": ddata.Luu,
             "r": stack.r, "lb": stack.lb, "ub": stack.ub, "act_weights": stack.act_weights,
             "item_costs": stack.item_costs, "item_weights": stack.item_weights, "weights": stack.weights,
-            "Ar": stack.Ar, "Arr": stack.Arr, "Jx": stack.Jx, "Ju": stack.Ju,
+            "Ar": stack.Ar, "Arr": stack.Arr, "Jx": stack.Jx, "Ju": stack.Ju, "cols": stack.cols,
             "stamp": self.stamp, **self.parameters,
             **self.rows.fields(data, ddata),
         }
@@ -365,8 +366,9 @@ class EulerNode:
         if len(known) != len(arrays) or any(a is not b for a, b in zip(arrays, known)):
             sizes = {"nx": state.nx, "ndx": state.ndx, "nv": state.nv, "nu": self.model.nu, "nr": stack.r.shape[0],
                      "nr_u": stack.r.shape[0] - stack.u_start, "n_stack": stack.item_costs.shape[0],
-                     "n_contacts": len(self.contacts.models), "n_kin": kinematics_size(state.nv),
-                     "nr_user": self.parameters["user_Ru"].shape[0], "n_stamp": n_stamp, **self.rows.sizes(data)}
+                     "n_cols": stack.cols.shape[0], "n_contacts": len(self.contacts.models),
+                     "n_kin": kinematics_size(state.nv), "nr_user": self.parameters["user_Ru"].shape[0],
+                     "n_stamp": n_stamp, **self.rows.sizes(data)}
             table.check_arrays(table.NODE_ARRAYS, arrays, sizes)
             self._data_entries = table_entries(arrays)
             self._data_arrays = arrays

@@ -50,6 +50,7 @@ from .node_table import (
     E_ACT_WEIGHTS,
     E_AR,
     E_ARR,
+    E_COLS,
     E_DA0_DX,
     E_DF_DU,
     E_DF_DX,
@@ -108,6 +109,7 @@ from .node_table import (
     entry_contact_workspace,
     entry_model,
     entry_workspace,
+    ivec,
     mat,
     vec,
 )
@@ -413,9 +415,9 @@ def _sums_and_chain(tbl, ints, par, x, rb, cost, terminal):
     Lxu, Luu = mat(tbl, ints, E_LXU), mat(tbl, ints, E_LUU)
     r, lb, ub, act_w = vec(tbl, ints, E_R), vec(tbl, ints, E_LB), vec(tbl, ints, E_UB), vec(tbl, ints, E_ACT_WEIGHTS)
     weights, Ar, Arr = vec(tbl, ints, E_WEIGHTS), vec(tbl, ints, E_AR), vec(tbl, ints, E_ARR)
-    Jx, Ju, u_start = mat(tbl, ints, E_JX), mat(tbl, ints, E_JU), ints[U_START]
+    Jx, Ju, u_start, cols = mat(tbl, ints, E_JX), mat(tbl, ints, E_JU), ints[U_START], ivec(tbl, ints, E_COLS)
     if terminal:
-        derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, False, Lx, Lu, Lxx, Lxu, Luu)
+        derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, False, Lx, Lu, Lxx, Lxu, Luu, cols)
         Fx = mat(tbl, ints, E_FX)
         n = Fx.shape[0]
         for i in range(n):
@@ -424,7 +426,7 @@ def _sums_and_chain(tbl, ints, par, x, rb, cost, terminal):
         return cost
     dLx, dLu, dLxx, dLxu, dLuu = (vec(tbl, ints, E_DLX), vec(tbl, ints, E_DLU), mat(tbl, ints, E_DLXX),
                                   mat(tbl, ints, E_DLXU), mat(tbl, ints, E_DLUU))
-    derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, True, dLx, dLu, dLxx, dLxu, dLuu)
+    derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, True, dLx, dLu, dLxx, dLxu, dLuu, cols)
     euclidean = ints[EUCLIDEAN] != 0
     euler_chain(
         mat(tbl, ints, E_DFX), mat(tbl, ints, E_DFU), dLx, dLu, dLxx, dLxu, dLuu, par[0], euclidean,

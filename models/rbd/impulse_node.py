@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 import weakref
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -80,7 +81,7 @@ def impulse_node(model, data, terminal: bool, memo: dict) -> ImpulseNode | None:
     return node if node.refresh(low, memo) else None
 
 
-def _compiled_parameters(kind: int, residual) -> list[float]:
+def _compiled_parameters(kind: int, residual) -> Sequence[float]:
     """A residual's parameters in the layout the kernels read (every kind an impulse node takes has them)."""
     return residual.compiled_parameters()
 
@@ -240,7 +241,7 @@ class ImpulseNode:
             "xnext": data.xnext, "Fx": data.Fx, "Fu": data.Fu, "Lx": data.Lx, "Lu": data.Lu, "Lxx": data.Lxx,
             "Lxu": data.Lxu, "Luu": data.Luu, "r": stack.r, "lb": stack.lb, "ub": stack.ub,
             "act_weights": stack.act_weights, "item_costs": stack.item_costs, "item_weights": stack.item_weights,
-            "weights": stack.weights, "Ar": stack.Ar, "Arr": stack.Arr, "Jx": stack.Jx, "Ju": Ju,
+            "weights": stack.weights, "Ar": stack.Ar, "Arr": stack.Arr, "Jx": stack.Jx, "Ju": Ju, "cols": stack.cols,
             **self.own, **self.rows.fields(data, data),
         }
         n = table.NODE + len(table.NODE_ARRAYS) + len(table.SCRATCH_ARRAYS)
@@ -253,8 +254,8 @@ class ImpulseNode:
             state = self.model.state
             sizes = {"nx": state.nx, "ndx": state.ndx, "nv": state.nv, "nu": 0, "nr": stack.r.shape[0],
                      "nr_u": stack.r.shape[0] - stack.u_start, "n_stack": stack.item_costs.shape[0],
-                     "n_contacts": len(self.impulses) // table.CONTACT_FIELDS, "n_kin": 1, "nr_user": 1, "n_stamp": 0,
-                     **self.rows.sizes(data)}
+                     "n_cols": stack.cols.shape[0], "n_contacts": len(self.impulses) // table.CONTACT_FIELDS,
+                     "n_kin": 1, "nr_user": 1, "n_stamp": 0, **self.rows.sizes(data)}
             table.check_arrays(table.NODE_ARRAYS, arrays, sizes)
             self._data_entries = table_entries(arrays)
             self._data_arrays = arrays

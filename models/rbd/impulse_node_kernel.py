@@ -46,6 +46,7 @@ from .node_table import (
     E_ACT_WEIGHTS,
     E_AR,
     E_ARR,
+    E_COLS,
     E_DA0_DX,
     E_DF_DU,
     E_DF_DX,
@@ -87,6 +88,7 @@ from .node_table import (
     entry_contact_workspace,
     entry_model,
     entry_workspace,
+    ivec,
     mat,
     vec,
 )
@@ -228,6 +230,7 @@ def impulse_calc_diff(tbl, ints, par, x, u):
         r, lb, ub, act_w, vec(tbl, ints, E_WEIGHTS), vec(tbl, ints, E_AR), vec(tbl, ints, E_ARR),
         mat(tbl, ints, E_JX), mat(tbl, ints, E_JU), ints[U_START], False, vec(tbl, ints, E_LX),
         vec(tbl, ints, E_LU), mat(tbl, ints, E_LXX), mat(tbl, ints, E_LXU), mat(tbl, ints, E_LUU),
+        ivec(tbl, ints, E_COLS),
     )
     _impulse_derivatives(tbl, ints, par, x, rb, ws)
     nv, Fx, dFx = ints[NV], mat(tbl, ints, E_FX), mat(tbl, ints, E_DFX)

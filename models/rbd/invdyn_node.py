@@ -28,7 +28,7 @@ values.  Its horizon (:class:`.invdyn_horizon.InvDynHorizon`) runs a range of su
 from __future__ import annotations
 
 import weakref
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from functools import partial
 
 import numpy as np
@@ -160,7 +160,7 @@ class InvDynNode(EulerNode):
         kind = ITEM_KINDS.get(type(residual))
         return residual_kind(residual) if kind is None else INV + kind
 
-    def _parameters(self, kind: int, residual) -> list[float]:
+    def _parameters(self, kind: int, residual) -> Sequence[float]:
         """The residual's parameters in the layout the kernels read."""
         if kind < INV:
             return EulerNode._parameters(kind, residual)

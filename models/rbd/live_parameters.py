@@ -24,25 +24,14 @@ from crocopy.residuals import ResidualModelControl, ResidualModelState
 from crocopy.versioning import LAYOUT, ParametersVersion, changes_since, touched_since
 
 from ..actuations import ActuationModelFloatingBase, ActuationModelFull
-from ..residuals_contact import ResidualModelContactFrictionCone, ResidualModelContactWrenchCone
 from ..residuals_dynamics import ResidualModelCoMPosition
-from ..residuals_frame import ResidualModelFramePlacement, ResidualModelFrameRotation, ResidualModelFrameTranslation
+from ..residuals_frame import ResidualModelFrameRotation, ResidualModelFrameTranslation
 
 REFERENCE_ONLY = (ResidualModelState, ResidualModelControl, ResidualModelFrameTranslation, ResidualModelFrameRotation,
                   ResidualModelCoMPosition)
 """Residual classes (exact) whose ``compiled_parameters()`` are their ``reference`` array alone."""
 CONSTANT_ACTUATIONS = (ActuationModelFull, ActuationModelFloatingBase)
-CONE_MATRIX = (ResidualModelContactFrictionCone, ResidualModelContactWrenchCone)
-"""Residual classes (exact) whose ``compiled_parameters()`` are their cone's matrix ``reference.A``, row-major (read
-here straight into ``par``: the cones of a legged gait are most of its live parameters)."""
 """Actuation classes (exact) whose ``compiled_matrix()`` depends on the state's sizes alone."""
-REFERENCE_ARRAY = (ResidualModelState, ResidualModelControl, ResidualModelFrameTranslation, ResidualModelCoMPosition)
-"""Residual classes (exact) whose ``compiled_parameters()`` are the entries of their ``reference``, a 1-D array (copied
-here straight into ``par``)."""
-PLACEMENT = (ResidualModelFramePlacement,)
-"""Residual classes (exact) whose ``compiled_parameters()`` are their ``pin.SE3`` reference's inverse, rotation
-row-major then translation (written here straight into ``par``: a placement reference is live, re-read at every
-solve)."""
 
 
 def frozen(value: object) -> bool:
@@ -76,7 +65,7 @@ def read_parameters(residuals: list, par: list, parameters: Callable, read: dict
         every.append(where)
         if residual_live(residual):
             slices.append(where)
-        par += values
+        par.extend(values)
     return LiveParameters(slices, parameters, every)
 
 
@@ -97,6 +86,8 @@ class LiveParameters:
         self.slices = slices
         self.parameters = parameters
         self.every = every
+        self.residual_ids = frozenset(id(entry[3]) for entry in every)
+        """The ``id`` of every residual listed (:func:`residuals_only`)."""
 
     def reread(self, par: np.ndarray) -> bool:
         """Write the live residuals' current parameters into ``par``; False (``par`` partly written) if one changed
@@ -110,18 +101,7 @@ class LiveParameters:
 
     def _write(self, par: np.ndarray, slices: list) -> bool:
         for start, stop, kind, residual in slices:
-            kind_of = type(residual)
-            if kind_of in REFERENCE_ARRAY:
-                values = residual.reference
-            elif kind_of in PLACEMENT and stop - start == 12:
-                inverse = residual.reference.inverse()
-                par[start:start + 9] = inverse.rotation.reshape(-1)
-                par[start + 9:stop] = inverse.translation
-                continue
-            elif kind_of in CONE_MATRIX:
-                values = np.asarray(residual.reference.A, dtype=float).reshape(-1)
-            else:
-                values = self.parameters(kind, residual)
+            values = self.parameters(kind, residual)
             if len(values) != stop - start:
                 return False
             par[start:stop] = values
@@ -152,5 +132,5 @@ def values_touched(node, read: bool, memo: dict) -> list | None:
 def residuals_only(touched: list, live: LiveParameters) -> bool:
     """Whether every object of ``touched`` is a residual whose parameters ``live`` lists (its node then re-reads them
     and its live sources only: its dynamics, time step and contacts were not assigned)."""
-    ids = {id(entry[3]) for entry in live.every}
+    ids = live.residual_ids
     return all(id(owner) in ids for owner in touched)

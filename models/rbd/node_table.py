@@ -71,6 +71,7 @@ NODE_ARRAYS = (
     Entry("act_weights", ("nr",), _STACK), Entry("item_costs", ("n_stack",), _STACK),
     Entry("item_weights", ("n_stack",), _STACK), Entry("weights", ("nr",), _STACK), Entry("Ar", ("nr",), _STACK),
     Entry("Arr", ("nr",), _STACK), Entry("Jx", ("nr", "ndx"), _STACK), Entry("Ju", ("nr_u", "nu"), _STACK),
+    Entry("cols", ("n_cols",), _STACK, np.int64),
     Entry("S", ("nv", "nu"), _NODE), Entry("gains", ("n_contacts", 2), _CONTACTS),
     Entry("ref_R", ("n_contacts", 3, 3), _CONTACTS), Entry("ref_p", ("n_contacts", 3), _CONTACTS),
     Entry("kin", ("n_kin",), _NODE), Entry("user_dims", (5,), _NODE, np.int64),
