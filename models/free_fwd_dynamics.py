@@ -97,6 +97,27 @@ class DifferentialActionModelFreeFwdDynamics(ArmatureMixin, DifferentialActionMo
         return DifferentialActionDataFreeFwdDynamics(self)
 
     def calc(self, data: "DifferentialActionDataFreeFwdDynamics", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        self._dynamics_calc(data, x, u)
+        self.costs._raw_calc(data.costs, x, u)
+        data.cost = data.costs.cost
+        if self.constraints is not None:
+            self.constraints._raw_calc(data.constraints, x, u)
+
+    def _fill_after_kernel(self, data: "DifferentialActionDataFreeFwdDynamics", x: np.ndarray, u: np.ndarray | None,
+                           value: float) -> None:
+        """What :meth:`calc` at ``(x, u)`` writes besides what a compiled evaluation there wrote (the cost stack's
+        arrays, of value ``value``, and ``xout``): the torques, the Pinocchio data, the residuals' own data, the
+        constraints and the costs' totals (:meth:`crocopy.models.rbd.euler_node.EulerNode.fill`)."""
+        self._dynamics_calc(data, x, u)
+        data.costs.stack.calc_residual_datas(x, u)
+        data.costs.cost = data.cost = value
+        if self.constraints is not None and self.constraints.constraints:
+            self.constraints._raw_calc(data.constraints, x, u)
+
+    def _dynamics_calc(self, data: "DifferentialActionDataFreeFwdDynamics", x: np.ndarray,
+                       u: np.ndarray | None) -> None:
+        """The Pinocchio and actuation part of :meth:`calc` (the torques, the acceleration ``xout`` and the Pinocchio
+        data; the kinematics alone at a terminal node, ``u = None``)."""
         nq = self.state.nq
         q, v = x[:nq], x[nq:]
         model, pd = self.pinocchio, data.pinocchio
@@ -117,10 +138,6 @@ class DifferentialActionModelFreeFwdDynamics(ArmatureMixin, DifferentialActionMo
             else:
                 data.xout[:] = pin.aba(model, pd, q, v, tau, pin.Convention.LOCAL)
                 pin.updateGlobalPlacements(model, pd)
-        self.costs._raw_calc(data.costs, x, u)
-        data.cost = data.costs.cost
-        if self.constraints is not None:
-            self.constraints._raw_calc(data.constraints, x, u)
 
     def calcDiff(
         self, data: "DifferentialActionDataFreeFwdDynamics", x: np.ndarray, u: np.ndarray | None = None

@@ -90,3 +90,67 @@ def assert_same_solves(builds: list, maxiter: int = 30) -> None:
     for iters, cost in results[1:]:
         assert iters == results[0][0]
         assert cost == pytest.approx(results[0][1], rel=1e-9)
+
+
+PINOCCHIO_FIELDS = ("oMi", "oMf", "liMi", "v", "ov", "oa", "f", "of", "M", "nle", "tau", "ddq", "com", "vcom", "J", "h")
+"""The Pinocchio data fields :func:`data_values` reads.  Not ``a``: after ``aba`` in the LOCAL convention it keeps
+values of the previous call (two ``calc`` at one point after one elsewhere differ there, crocopy or not)."""
+
+
+def data_values(problem) -> dict[str, np.ndarray]:
+    """Every number the node datas of ``problem`` hold, by path (``"d3.differential.costs.cost"``): arrays, floats,
+    Pinocchio placements, motions, forces and the :data:`PINOCCHIO_FIELDS` of a Pinocchio data, walking the
+    attributes and properties of crocopy's data objects (each object once).  Not the compiled nodes' stamps.  The
+    datas are read twice and the second reading returned: a field brought up to date when another is read (a
+    contact's ``f_local`` and ``fext``, when the contact set's ``fext`` is) shows its value whatever the order."""
+    import pinocchio as pin
+
+    values: dict[str, np.ndarray] = {}
+    seen: set[int] = set()
+
+    def walk(obj, path: str) -> None:
+        if isinstance(obj, np.ndarray):
+            values[path] = obj.copy()
+        elif isinstance(obj, (float, int, np.floating)) and not isinstance(obj, bool):
+            values[path] = np.array(float(obj))
+        elif isinstance(obj, pin.SE3):
+            values[path] = obj.homogeneous.copy()
+        elif isinstance(obj, (pin.Motion, pin.Force)):
+            values[path] = obj.vector.copy()
+        elif id(obj) in seen:
+            return
+        elif isinstance(obj, pin.Data):
+            seen.add(id(obj))
+            for name in PINOCCHIO_FIELDS:
+                field = getattr(obj, name)
+                items = field if hasattr(field, "__len__") and not isinstance(field, np.ndarray) else [field]
+                for i, item in enumerate(items):
+                    walk(item, f"{path}.{name}[{i}]")
+        elif isinstance(obj, (list, tuple)):
+            for i, item in enumerate(obj):
+                walk(item, f"{path}[{i}]")
+        elif isinstance(obj, dict):
+            for key, item in obj.items():
+                walk(item, f"{path}[{key!r}]")
+        elif type(obj).__module__.startswith("crocopy."):
+            seen.add(id(obj))
+            names = set(getattr(obj, "__dict__", {}))
+            for cls in type(obj).__mro__:
+                names |= set(getattr(cls, "__slots__", ()))
+                names |= {k for k, v in vars(cls).items() if isinstance(v, property)}
+            for name in sorted(names - {"compiled_stamp"}):
+                if name.startswith("__"):
+                    continue
+                try:
+                    item = getattr(obj, name)
+                except Exception:  # a property with nothing to show for this data
+                    continue
+                if not callable(item):
+                    walk(item, f"{path}.{name}")
+
+    for _ in range(2):
+        values.clear()
+        seen.clear()
+        for t, data in enumerate([*problem.runningDatas, problem.terminalData]):
+            walk(data, f"d{t}")
+    return values

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from node_checks import failed_solve, make_solver
+from node_checks import data_values, failed_solve, make_solver
 
 import crocopy
 from crocopy.problems import registry
@@ -242,3 +242,46 @@ def test_trial_steps_over_compiled_ranges_equal_the_node_loop():
         np.testing.assert_allclose(fast[1], slow[1], rtol=1e-8, atol=1e-12)
         for a, b in zip(fast[2], slow[2]):
             np.testing.assert_allclose(a, b, rtol=1e-8, atol=1e-9)
+
+
+def _with_every_free_residual(problem):
+    """``problem`` with a rotation, velocity, CoM and placement cost added to every node (the arm's frame)."""
+    import pinocchio as pin
+
+    first = problem.runningModels[0].differential
+    state, frame = first.state, first.costs.costs["goal"].cost.residual.id
+    for t, model in enumerate([*problem.runningModels, problem.terminalModel]):
+        dam, nu = model.differential, model.nu
+        residuals = {"rotation": crocopy.ResidualModelFrameRotation(state, frame, np.eye(3), nu),
+                     "velocity": crocopy.ResidualModelFrameVelocity(state, frame, pin.Motion.Zero(), pin.LOCAL, nu),
+                     "com": crocopy.ResidualModelCoMPosition(state, np.zeros(3), nu),
+                     "placement": crocopy.ResidualModelFramePlacement(state, frame, pin.SE3.Identity(), nu)}
+        for name, residual in residuals.items():
+            dam.costs.addCost(name, crocopy.CostModelResidual(state, residual), 1e-3 * (1 + t % 3))
+    return problem
+
+
+FILLED = [("quad-goal", "SolverFDDP", None), ("arm", "SolverBoxFDDP", None), ("arm", "SolverSQP", None),
+          ("arm", "SolverDDP", _with_every_free_residual), ("man", "SolverFDDP", None)]
+
+
+@pytest.mark.parametrize(("name", "solver", "extend"), FILLED)
+def test_every_value_of_the_datas_after_a_solve_is_that_of_a_python_calc_at_the_last_iterate(name, solver, extend):
+    """A compiled solve ends by filling the nested datas (free dynamics: the compiled values kept, the Pinocchio data,
+    torques, residual and constraint datas written on top; other nodes: their Python ``calc``): every number they
+    hold equals what ``problem.calc`` at the returned iterate writes, to round-off."""
+    problem, xs, us = registry.build(name)
+    if extend is not None:
+        extend(problem)
+    s = make_solver(solver, problem, True)
+    s.solve(xs, us, 3)
+    filled = data_values(problem)
+    problem.calc(s.xs, s.us)
+    python = data_values(problem)
+    assert filled.keys() == python.keys()
+    assert len(python) > 1000
+    for path, want in python.items():
+        got = filled[path]
+        assert got.shape == want.shape, path
+        scale = np.abs(want[np.isfinite(want)]).max(initial=1.0)
+        np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9 * scale, err_msg=path)

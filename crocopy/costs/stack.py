@@ -192,6 +192,16 @@ class CostStack:
             activation._raw_calc(adata, r)
         return float(self.item_weights @ self.item_costs)
 
+    def calc_residual_datas(self, x: np.ndarray, u: np.ndarray | None) -> None:
+        """The ``calc`` of every active item's residual whose class keeps more than its rows (not those that declare
+        ``rows_only`` in their own class body): after a compiled evaluation at ``(x, u)`` wrote the stack's arrays,
+        what :meth:`calc` leaves besides them (a frame residual's placement in the Pinocchio data and its relative
+        placement; :meth:`crocopy.models.rbd.euler_node.EulerNode.fill`)."""
+        self.refresh_if_stale(u is None)
+        for residual, rdata in self.active:
+            if not type(residual).__dict__.get("rows_only", False):
+                residual._raw_calc(rdata, x, u)
+
     def calcDiff(self, data, x: np.ndarray, u: np.ndarray | None) -> None:
         """Residual Jacobians, activation derivatives and the weighted sums into ``data``."""
         seen = self._seen

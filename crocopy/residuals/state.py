@@ -18,6 +18,8 @@ class ResidualModelState(ResidualModelAbstract):
 
     compiled_kind = "state"
     """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.euler_node_kernel`)."""
+    rows_only = True
+    """Its ``calc`` writes the rows ``r`` and nothing else (:meth:`.CostStack.calc_residual_datas`)."""
 
     def compiled_parameters(self) -> np.ndarray:
         """The parameters compiled nodes read: ``xref`` (the read-only array itself)."""

@@ -43,8 +43,11 @@ Inside ``solve`` those evaluators replace ``model.calc``/``model.calcDiff`` in t
 rollout.  They write the action data fields above, and the arrays the nested datas share with them (the
 differential data's ``xout``, ``Fx``, ``Fu``, ``Lx`` ... and the cost stack's residuals, Jacobians and
 activation derivatives), not the rest of the nested datas (Pinocchio data, a residual's own
-intermediates).  When ``solve`` returns, one ``problem.calc`` at the final iterate fills every value as
-a solve without compiled nodes leaves them; the derivatives are, as without compiled nodes, those of
+intermediates).  When ``solve`` returns, :meth:`CompiledNodes.fill` at the final iterate fills every value as
+``problem.calc`` there leaves them (to round-off): an evaluator with a ``fill(x, u)`` keeps the compiled values and
+writes the rest (a node of free dynamics: Pinocchio data, torques, residual and constraint datas,
+:meth:`crocopy.models.rbd.euler_node.EulerNode.fill`), the other nodes run their model's ``calc``; the derivatives
+are, as without compiled nodes, those of
 the iterate the last direction was computed at, except the Pinocchio data's derivative fields and the
 residuals' private intermediates (frame Jacobians), which compiled nodes do not write.  The compiled
 nodes are used only while :func:`crocopy.kernels_enabled`, by the solver classes that declare
@@ -75,6 +78,13 @@ def _python_calc(model, data) -> Callable:
     return calc
 
 
+def _python_fill(model, data) -> Callable:
+    def fill(x, u):
+        model._raw_calc(data, x, u)
+
+    return fill
+
+
 def _python_calc_diff(model, data) -> Callable:
     def calc_diff(x, u, synced):
         if not synced:
@@ -89,8 +99,10 @@ class CompiledNodes:
     where the nodes offer one, the models' own methods elsewhere (the terminal node last)."""
 
     def __init__(self, calcs: list[Callable], calc_diffs: list[Callable], steps: list[Callable | None],
-                 horizon: Callable | None = None, problem=None, terminal=None) -> None:
+                 fills: list[Callable], horizon: Callable | None = None, problem=None, terminal=None) -> None:
         self.calcs = calcs
+        self.fills = fills
+        """Per node, what :meth:`fill` calls: the evaluator's ``fill(x, u)``, or the model's own ``calc``."""
         self.terminal = terminal
         """The terminal node's evaluator, or None (its model's own methods)."""
         self.calc_diffs = calc_diffs
@@ -149,6 +161,19 @@ class CompiledNodes:
                 calc(x, u)
                 cost += d.cost
         self.calcs[-1](xs[-1], None)
+        cost += problem.terminalData.cost
+        problem.cost = cost
+        return cost
+
+    def fill(self, problem, xs, us) -> float:
+        """At the end of a solve: every node's data at ``(xs, us)`` as ``problem.calc`` leaves it (each evaluator's
+        ``fill``, which keeps its compiled values and writes the rest of the nested datas; the model's own ``calc``
+        elsewhere); returns the total cost (also ``problem.cost``)."""
+        cost = 0.0
+        for fill, d, x, u in zip(self.fills, problem.runningDatas, xs, us):
+            fill(x, u)
+            cost += d.cost
+        self.fills[-1](xs[-1], None)
         cost += problem.terminalData.cost
         problem.cost = cost
         return cost
@@ -244,7 +269,7 @@ def select(solver) -> CompiledNodes | None:
     if last is not None and last.current(problem):
         _SELECTIONS[problem] = last
         return last.nodes
-    calcs, calc_diffs, steps, evaluators = [], [], [], []
+    calcs, calc_diffs, steps, evaluators, fills = [], [], [], [], []
     found = False
     memo: dict = {}
     nodes = [*zip(problem.runningModels, problem.runningDatas), (problem.terminalModel, problem.terminalData)]
@@ -252,6 +277,8 @@ def select(solver) -> CompiledNodes | None:
         make = getattr(model, "_compiled_node", None)
         evaluator = None if make is None else make(data, t == problem.T, memo)
         evaluators.append(evaluator)
+        fill = getattr(evaluator, "fill", None)
+        fills.append(_python_fill(model, data) if fill is None else fill)
         if evaluator is None:
             calcs.append(_python_calc(model, data))
             calc_diffs.append(_python_calc_diff(model, data))
@@ -273,7 +300,7 @@ def select(solver) -> CompiledNodes | None:
             horizon = make_horizon([e if step is not None else None for e, step in zip(running, steps)],
                                    [m.nu for m in problem.runningModels], problem.nthreads)
             steps = [None if step is None else e.rollout_step for e, step in zip(running, steps)]  # its arrays
-    selected = CompiledNodes(calcs, calc_diffs, steps[:problem.T], horizon, problem, evaluators[-1])
+    selected = CompiledNodes(calcs, calc_diffs, steps[:problem.T], fills, horizon, problem, evaluators[-1])
     if all(e is None or hasattr(e, "refresh_live") for e in evaluators):
         _SELECTIONS[problem] = Selection(problem, selected, evaluators)
     return selected

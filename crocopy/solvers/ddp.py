@@ -231,9 +231,9 @@ class SolverDDP(SolverAbstract):
                         raise ValueError(f"solve: the cost of the initial guess is not finite ({exc})") from exc
                     solved = self._fail(f"{exc} (kept the best finite iterate)", nonfinite=True)
         finally:
-            compiled, self._nodes = self._nodes is not None, None
-        if compiled:
-            self.problem.calc(self.xs, self.us)
+            nodes, self._nodes = self._nodes, None
+        if nodes is not None:
+            nodes.fill(self.problem, self.xs, self.us)
         return solved
 
     def _iterate(self, maxiter: int) -> bool:

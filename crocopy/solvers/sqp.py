@@ -130,9 +130,9 @@ class SolverSQP(SolverDDP):
             try:
                 return self._iterate_sqp(maxiter)
             finally:
-                if self._nodes is not None:
-                    self._nodes = None
-                    self.problem.calc(self.xs, self.us)  # the datas as a solve without compiled nodes leaves them
+                nodes, self._nodes = self._nodes, None
+                if nodes is not None:
+                    nodes.fill(self.problem, self.xs, self.us)  # the datas as problem.calc there leaves them
 
     def _start_sqp(self, init_xs, init_us, regInit) -> None:
         self._check_x0()
