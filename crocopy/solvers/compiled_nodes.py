@@ -59,6 +59,7 @@ callback may read nested datas).
 from __future__ import annotations
 
 import contextlib
+import math
 import weakref
 from collections.abc import Callable
 from itertools import groupby, islice
@@ -128,6 +129,9 @@ class CompiledNodes:
         """1 at the running nodes inside the horizon's ranges, 0 elsewhere and at the terminal node."""
         self.python_nodes = [t for t, inside in enumerate(in_horizon) if not inside]
         """The running nodes outside the horizon's ranges."""
+        self._whole = [(0, len(steps))] if steps else None
+        """:attr:`ranges` when the horizon runs every running node (then :meth:`calcDiff` may take one call)."""
+        self._out = np.zeros(1)
 
     def bounds(self, lbs: list | None, ubs: list | None, unbounded: dict) -> tuple[list, list]:
         """Per running node, the control bounds of the rollout: ``lbs[t]``/``ubs[t]``, or ``unbounded[nu]`` where
@@ -184,6 +188,10 @@ class CompiledNodes:
         (only with a :attr:`horizon`, which computes its nodes' in the same call), also the gaps
         ``fs[t+1] = xnext_t ⊖ xs[t+1]`` (``fs[0]`` is the caller's).  ``at``: where ``xs``, ``us`` and ``fs`` are,
         when they are a solver's trajectories (else they are read here)."""
+        if at is not None and self.ranges == self._whole:
+            cost = self._calc_diff_all(problem, at, fs is not None)
+            if cost is not None:
+                return cost
         if self.horizon is not None:
             cost = 0.0
             datas, horizon = problem.runningDatas, self.horizon
@@ -212,6 +220,43 @@ class CompiledNodes:
         problem.cost = cost
         return cost
 
+    def _calc_diff_all(self, problem, at: TrajectoryAddresses, gaps: bool) -> float | None:
+        """:meth:`calcDiff` in one compiled call (the horizon's ``calc_diff_all``, when it has one that applies and
+        its totals are finite; else None), with the same numbers."""
+        calc_diff_all = getattr(self.horizon, "calc_diff_all", None)
+        total = None if calc_diff_all is None else calc_diff_all(at.xs, at.us, at.fs if gaps else None, self.terminal,
+                                                                 self._out)
+        if total is None or not math.isfinite(total) or not math.isfinite(self._out[0]):
+            return None
+        return self._costs(problem, total)
+
+    def _trial_all(self, problem, xs, dx, alpha: float, trajectories: tuple, at: TrajectoryAddresses,
+                   stacks: tuple) -> float | None:
+        """:meth:`trial` in one compiled call after the terminal state (the horizon's ``trial_all``, when it has one
+        that applies and the costs are finite; else None), with the same numbers."""
+        trial_all = getattr(self.horizon, "trial_all", None)
+        if trial_all is None:
+            return None
+        problem.terminalModel.state._integrate_into(xs[-1], alpha * dx[-1], trajectories[0][-1])
+        total = trial_all((at.xs, at.us, at.xs_try, at.us_try), problem.x0, *stacks[:2], alpha, *stacks[2:],
+                          self.terminal, self._out)
+        if total is None or not math.isfinite(total) or not math.isfinite(self._out[0]):
+            return None
+        return self._costs(problem, total)
+
+    def _costs(self, problem, total: float) -> float:
+        """The running nodes' costs (the horizon's) and the terminal one (``_out[0]``) into the datas after a call
+        over every node whose running total is ``total``; returns the total cost (added as the node by node path
+        adds it)."""
+        for d, c in zip(problem.runningDatas, self.horizon.costs.tolist()):
+            d.cost = c
+        terminal = problem.terminalData.cost = float(self._out[0])
+        cost = 0.0
+        cost += total
+        cost += terminal
+        problem.cost = cost
+        return cost
+
     def trial(self, problem, xs, us, dx, du, alpha: float, trajectories: tuple, at: TrajectoryAddresses,
               stacks: tuple) -> float:
         """SolverSQP/SolverCSQP's trial point: ``x̂_t = x_t ⊕ α δx_t``, ``û_t = u_t + α δu_t``, every node's value
@@ -223,6 +268,10 @@ class CompiledNodes:
         ``trial(addresses, x0, dx, du, alpha, fs, step, trajectories, t0, t1) -> total`` is one call (its nodes' costs
         in ``horizon.costs``); the other nodes go one by one (their states and controls first, so a range reads the
         state after it)."""
+        if self.ranges == self._whole:
+            cost = self._trial_all(problem, xs, dx, alpha, trajectories, at, stacks)
+            if cost is not None:
+                return cost
         xs_try, us_try, fs_try = trajectories
         models, datas, x0 = problem.runningModels, problem.runningDatas, problem.x0
         trial = getattr(self.horizon, "trial", None)

@@ -74,6 +74,37 @@ class EulerHorizon:
 
         return self._finite(self._run(call, ranges), ranges, xs, us, fs if gaps else None, True)
 
+    def calc_diff_all(self, xs_at: np.ndarray, us_at: np.ndarray, fs_at: np.ndarray | None, terminal,
+                      out: np.ndarray) -> float | None:
+        """:meth:`calc_diff` of every running node and the ``terminal`` evaluator's ``calcDiff`` in one call
+        (:func:`.horizon_kernel.calc_diff_all`, the terminal cost into ``out[0]``); returns the running nodes' total,
+        or None where it does not apply (as :meth:`line_search`; several threads): the caller takes the node by node
+        path, as it does after a total that is not finite."""
+        if not self._whole(terminal):
+            return None
+        gaps, gap_at = fs_at is not None, self.no_gaps if fs_at is None else fs_at
+        return horizons.calc_diff_all(self.tbls, *self._head(), xs_at, us_at, self.nus, self.nx, self.ndx, gaps,
+                                      gap_at, len(self.nodes), self.costs, terminal.tbl, terminal.ints, terminal.par,
+                                      terminal.no_control, out)
+
+    def trial_all(self, addresses: tuple, x0: np.ndarray, dx: np.ndarray, du: np.ndarray, alpha: float,
+                  fs: np.ndarray, step: np.ndarray, terminal, out: np.ndarray) -> float | None:
+        """:attr:`trial` of every running node and the ``terminal`` evaluator's ``calc`` at ``x̂_T`` (integrated by the
+        caller) in one call (:func:`.trial_kernel.trial_all`, the terminal cost into ``out[0]``); returns the running
+        nodes' total, or None where it does not apply (as :meth:`calc_diff_all`; a horizon without ``fused_trial``)."""
+        if not self.fused_trial or not self._whole(terminal):
+            return None
+        xs, us, xs_try, us_try = addresses
+        return trial_kernel.trial_all(self.tbls, *self._head(), x0, xs, us, xs_try, us_try, self.nus, self.nx,
+                                      self.ndx, dx, du, alpha, fs, step, len(self.nodes), self.costs, terminal.tbl,
+                                      terminal.ints, terminal.par, terminal.no_control, out)
+
+    def _whole(self, terminal) -> bool:
+        """Whether one call may run every running node and the ``terminal`` evaluator: the conditions of
+        :meth:`line_search`, on one thread."""
+        return (self._searches and self.threads is None and type(terminal) is type(self.nodes[0])
+                and not terminal.python.items)
+
     def calc(self, xs, us, xs_at: np.ndarray, us_at: np.ndarray, t0: int, t1: int) -> float:
         """Values of the nodes ``t0 <= t < t1``."""
         return self.calc_ranges(xs, us, xs_at, us_at, [(t0, t1)])[0]

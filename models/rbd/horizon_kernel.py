@@ -9,6 +9,8 @@ GIL (several threads may run disjoint ranges at once, :mod:`.node_threads`).
 
 from __future__ import annotations
 
+import math
+
 from crocopy.costs.stack_kernel import activation_values
 from crocopy.kernels import matrix_at, uncounted, vector_at
 
@@ -101,6 +103,18 @@ def _horizon_calc_diff(tbls, ints, ioff, par, poff, xs, us, nus, nx, ndx, gaps, 
 
 
 horizon_calc_diff = uncounted(_horizon_calc_diff, nogil=True)
+
+
+@uncounted
+def calc_diff_all(tbls, ints, ioff, par, poff, xs, us, nus, nx, ndx, gaps, fs, T, costs, ttbl, tints, tpar, no_control,
+                  out):
+    """:func:`horizon_calc_diff` over every running node (``0 <= t < T``), then the terminal node's
+    :func:`node_calc_diff` at ``xs[T]`` (tables ``ttbl, tints, tpar``, the empty control ``no_control``) into
+    ``out[0]``; returns the running nodes' total (not finite: the terminal node is not evaluated)."""
+    total = horizon_calc_diff(tbls, ints, ioff, par, poff, xs, us, nus, nx, ndx, gaps, fs, 0, T, costs)
+    if math.isfinite(total):
+        out[0] = node_calc_diff(ttbl, tints, tpar, vector_at(xs[T], nx), no_control)
+    return total
 
 
 def _horizon_calc(tbls, ints, ioff, par, poff, xs, us, nus, nx, t0, t1, costs):

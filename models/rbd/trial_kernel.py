@@ -19,8 +19,9 @@ import math
 
 import numpy as np
 
-from crocopy.kernels import compiled, vector_at
+from crocopy.kernels import compiled, uncounted, vector_at
 
+from .euler_node_kernel import node_calc
 from .horizon_kernel import horizon_calc
 from .lie_kernel import state_diff, state_integrate
 from .node_table import E_XNEXT, NQ, NV, entry_model, vec
@@ -69,6 +70,19 @@ def _trial(tbls, ints, ioff, par, poff, x0, xs, us, xs_try, us_try, nus, nx, ndx
 
 
 horizon_trial = compiled(_trial, nogil=True)
+
+
+@uncounted
+def trial_all(tbls, ints, ioff, par, poff, x0, xs, us, xs_try, us_try, nus, nx, ndx, dx, du, alpha, fs, step, T, costs,
+              ttbl, tints, tpar, no_control, out):
+    """:func:`horizon_trial` over every running node (``0 <= t < T``), then the terminal node at ``x̂_T`` (which the
+    caller integrated) into ``out[0]``; returns the running nodes' total (not finite: the terminal node is not
+    evaluated)."""
+    total = horizon_trial(tbls, ints, ioff, par, poff, x0, xs, us, xs_try, us_try, nus, nx, ndx, dx, du, alpha, fs,
+                          step, 0, T, costs)
+    if math.isfinite(total):
+        out[0] = node_calc(ttbl, tints, tpar, vector_at(xs_try[T], nx), no_control)
+    return total
 
 
 def trial(horizon, addresses: tuple, x0: np.ndarray, dx: np.ndarray, du: np.ndarray, alpha: float, fs: np.ndarray,
