@@ -285,3 +285,45 @@ def test_every_value_of_the_datas_after_a_solve_is_that_of_a_python_calc_at_the_
         assert got.shape == want.shape, path
         scale = np.abs(want[np.isfinite(want)]).max(initial=1.0)
         np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9 * scale, err_msg=path)
+
+
+def _recorded(method, name: str, calls: list):
+    """``method`` that appends ``name`` to ``calls`` first."""
+
+    def call(*args):
+        calls.append(name)
+        return method(*args)
+
+    return call
+
+
+WHOLE = [("quad-goal", "SolverFDDP"), ("arm", "SolverBoxFDDP"), ("arm", "SolverSQP"), ("arm", "SolverCSQP"),
+         ("quad-goal", "SolverSQP")]
+
+
+@pytest.mark.parametrize(("name", "solver"), WHOLE)
+def test_one_call_over_the_whole_horizon_gives_the_numbers_of_the_node_by_node_path(name, solver, monkeypatch):
+    """``calcDiff`` (running nodes, gaps, terminal node) and SQP's trial point in one compiled call give the
+    iterations, costs and trajectories of the range-by-range path, to the bit."""
+    runs = []
+    for whole in (True, False):
+        if not whole:
+            monkeypatch.setattr(compiled_nodes.CompiledNodes, "_calc_diff_all", lambda self, *args: None)
+            monkeypatch.setattr(compiled_nodes.CompiledNodes, "_trial_all", lambda self, *args: None)
+        calls = []
+        problem, xs, us = registry.build(name)
+        nodes = compiled_nodes.select(make_solver(solver, problem, True))
+        assert nodes is not None and nodes.ranges == [(0, problem.T)]
+        horizon = nodes.horizon
+        for method in ("calc_diff_all", "trial_all"):
+            monkeypatch.setattr(horizon, method, _recorded(getattr(horizon, method), method, calls))
+        s = make_solver(solver, problem, True)
+        s.solve(xs, us, 12)
+        runs.append((s.iter, s.cost, [x.copy() for x in s.xs], [u.copy() for u in s.us], set(calls)))
+    (it1, c1, xs1, us1, used), (it2, c2, xs2, us2, unused) = runs
+    assert "calc_diff_all" in used and not unused
+    if solver in ("SolverSQP", "SolverCSQP"):
+        assert "trial_all" in used
+    assert (it1, c1) == (it2, c2)
+    for a, b in zip(xs1 + us1, xs2 + us2):
+        np.testing.assert_array_equal(a, b)
