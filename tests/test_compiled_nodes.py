@@ -327,3 +327,17 @@ def test_one_call_over_the_whole_horizon_gives_the_numbers_of_the_node_by_node_p
     assert (it1, c1) == (it2, c2)
     for a, b in zip(xs1 + us1, xs2 + us2):
         np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("name", ["quad-goal", "arm"])
+def test_the_first_gap_by_the_compiled_state_difference_equals_the_state_model(name):
+    """``f₀ = x0 ⊖ x`` by node 0's compiled difference (free flyer; revolute joints) equals ``state.diff``."""
+    problem, xs, us = registry.build(name)
+    s = make_solver("SolverFDDP", problem, True)
+    horizon = compiled_nodes.select(s).horizon
+    state, rng = problem.runningModels[0].state, np.random.default_rng(3)
+    for _ in range(20):
+        x = state.integrate(problem.x0, rng.standard_normal(state.ndx))
+        f = np.full(state.ndx, np.nan)
+        assert horizon.first_gap(x, problem.x0, f)
+        np.testing.assert_allclose(f, state.diff(x, problem.x0), rtol=1e-12, atol=1e-12)

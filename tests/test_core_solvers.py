@@ -219,6 +219,25 @@ def test_compiled_feedback_control_equals_numpy_twin_and_clamps():
     assert np.any(np.abs(free) > 0.5)
 
 
+@pytest.mark.parametrize("gaps", [False, True])
+@pytest.mark.parametrize("preg", [0.0, 1e-3])
+def test_compiled_terminal_value_equals_numpy_twin(gaps, preg):
+    """``V_T = (Lxx + preg I, Lx (+ Vxx f))`` on strided views, as the solvers' buffers hold them."""
+    kernel = crocopy.solvers.riccati_kernel
+    rng = np.random.default_rng(5)
+    Lxx, Lx, f = rng.standard_normal((6, 6)), rng.standard_normal(6), rng.standard_normal(6)
+    outs = []
+    for value in (kernel.terminal_value, kernel.terminal_value_numpy):
+        Vxx, Vx = np.full((2, 8, 8), np.nan), np.full((2, 8), np.nan)
+        value(Lxx, Lx, preg, f, gaps, Vxx[1, :6, :6], Vx[1, :6])
+        outs.append((Vxx[1, :6, :6], Vx[1, :6]))
+    for a, b in zip(*outs):
+        np.testing.assert_allclose(a, b, rtol=1e-14, atol=1e-14)
+    want = Lxx + preg * np.eye(6)
+    np.testing.assert_array_equal(outs[0][0], want)
+    np.testing.assert_allclose(outs[0][1], Lx + (want @ f if gaps else 0.0), rtol=1e-14, atol=1e-14)
+
+
 def test_fddp_rejects_blown_up_trials_on_double_pendulum():
     """A diverging trial (huge finite cost, very negative gap term in d₀) must not pass the |d₀| < th_grad test.
 

@@ -129,6 +129,7 @@ def _solve_arm():
 CONSUMERS = [
     (riccati_kernel, "riccati_pass", None, _solve_lqr_ddp),
     (riccati_kernel, "feedback_control", "feedback_control_numpy", _solve_lqr_ddp),
+    (riccati_kernel, "terminal_value", "terminal_value_numpy", _solve_lqr_ddp),
     (box_kernel, "box_pass", None, _solve_box),
     (stack_kernel, "activation_values", "activation_values_numpy", _solve_arm),
     (stack_kernel, "derivatives_and_sums", "derivatives_and_sums_numpy", _solve_arm),

@@ -16,6 +16,7 @@ from test_residual_numba import NAMES as USER_NAMES
 from test_residual_numba import NODES as USER_NODES
 
 import crocopy
+from crocopy.models.rbd import euler_node_kernel as kernel
 
 pytestmark = pytest.mark.skipif(not crocopy.kernels_enabled(), reason="compiled nodes need numba")
 
@@ -94,7 +95,10 @@ def test_calc_diff_after_calc_equals_an_evaluation_from_scratch(case, terminal):
     e_other.calcDiff(y, w, False)  # another node of the model: the shared workspace and scratch now hold its point
     e_kept.calcDiff(x, u, True)
     e_fresh.calcDiff(x, u, False)
-    assert e_kept.stamp[0] == 0.0  # spent
+    uu = e_kept.no_control if u is None else u
+    assert not kernel.stamp_current(e_kept.stamp, x, uu)  # the node's own arrays: spent by the derivatives
+    assert kernel.values_current(e_kept.stamp, x, uu)  # its data's values: those of (x, u)
+    assert not kernel.values_current(e_kept.stamp, y, e_kept.no_control if w is None else w)
     mine, expected = _fields(kept), _fields(fresh)
     for name in expected:
         assert np.array_equal(mine[name], expected[name]), name

@@ -316,7 +316,10 @@ class SolverAbstract:
         """``fs[0] = x0 ⊖ xs[0]`` and ``ffeas``, the norm of all the gaps (``fs[1:]`` filled by the caller)."""
         problem = self.problem
         if problem.T:
-            problem.runningModels[0].state._diff_into(self.xs[0], problem.x0, self.fs[0])
+            nodes = getattr(self, "_nodes", None)
+            horizon = None if nodes is None else nodes.horizon
+            if horizon is None or not horizon.first_gap(self.xs[0], problem.x0, self.fs[0]):
+                problem.runningModels[0].state._diff_into(self.xs[0], problem.x0, self.fs[0])
         else:
             self.fs[0][:] = 0.0
         self.ffeas = self._gaps_norm()
@@ -337,6 +340,8 @@ class SolverAbstract:
             datas = [*problem.runningDatas, problem.terminalData]
             rows = self.__dict__["_row_nodes"] = (key, [t for t, d in enumerate(datas) if d.g.size],
                                                   [t for t, d in enumerate(datas) if d.h.size])
+        if not rows[1] and not rows[2]:
+            return [], []
         models, datas, T = problem.runningModels, problem.runningDatas, problem.T
         nodes = [(models[t], datas[t]) if t < T else (problem.terminalModel, problem.terminalData) for t in rows[1]]
         return nodes, [(datas[t] if t < T else problem.terminalData).h for t in rows[2]]

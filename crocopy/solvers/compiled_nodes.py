@@ -232,12 +232,11 @@ class CompiledNodes:
 
     def _trial_all(self, problem, xs, dx, alpha: float, trajectories: tuple, at: TrajectoryAddresses,
                    stacks: tuple) -> float | None:
-        """:meth:`trial` in one compiled call after the terminal state (the horizon's ``trial_all``, when it has one
-        that applies and the costs are finite; else None), with the same numbers."""
+        """:meth:`trial` in one compiled call (the horizon's ``trial_all``, when it has one that applies and the costs
+        are finite; else None), with the same numbers."""
         trial_all = getattr(self.horizon, "trial_all", None)
         if trial_all is None:
             return None
-        problem.terminalModel.state._integrate_into(xs[-1], alpha * dx[-1], trajectories[0][-1])
         total = trial_all((at.xs, at.us, at.xs_try, at.us_try), problem.x0, *stacks[:2], alpha, *stacks[2:],
                           self.terminal, self._out)
         if total is None or not math.isfinite(total) or not math.isfinite(self._out[0]):
@@ -280,7 +279,8 @@ class CompiledNodes:
         for t in outside:
             models[t].state._integrate_into(xs[t], alpha * dx[t], xs_try[t])
             np.add(us[t], alpha * du[t], out=us_try[t])
-        problem.terminalModel.state._integrate_into(xs[-1], alpha * dx[-1], xs_try[-1])
+        integrate = getattr(self.terminal, "integrate", None) or problem.terminalModel.state._integrate_into
+        integrate(xs[-1], alpha * dx[-1], xs_try[-1])
         cost = 0.0
         if segments:
             horizon = self.horizon

@@ -479,14 +479,10 @@ class SolverDDP(SolverAbstract):
         """``V_T`` from the terminal cost (+ ``preg`` I, gap-deflected); returns True when gaps are open."""
         T = self.problem.T
         td = self.problem.terminalData
-        Vxx, Vx = self.Vxx[T], self.Vx[T]
-        Vxx[:] = td.Lxx
-        Vx[:] = td.Lx
-        if self.preg:
-            Vxx.flat[:: Vxx.shape[0] + 1] += self.preg
         gaps = not self.isFeasible
-        if gaps:
-            Vx += Vxx @ self.fs[T]
+        value = riccati_kernel.terminal_value if kernels.active else riccati_kernel.terminal_value_numpy
+        readable = sqp_kernel.readable
+        value(readable(td.Lxx), readable(td.Lx), float(self.preg), self.fs[T], gaps, self.Vxx[T], self.Vx[T])
         return gaps
 
     def _backward_pass_kernel(self) -> None:

@@ -15,11 +15,12 @@ or not finite (the caller tells them apart: it raises the regularisation, or sto
 :mod:`.nonfinite`).  :func:`expected_terms` gives FDDP's ``Σ Quᵀk - Σ Vxᵀf`` and
 ``-Σ kᵀQuu k + Σ fᵀVxx f`` and stores ``Vxx f``; :func:`gap_step_term` the trial step's ``Σ (Vxx f)ᵀ dx``.
 
+:func:`terminal_value` starts the recursion at the terminal node.
 ``feedback_control(u, k, K, dx, α, lb, ub, out)`` writes the rollout's control
 ``clamp(u - α k - K dx, lb, ub)`` (infinite bounds for the unconstrained solvers).
 
 Numpy twins: the chain of :class:`~crocopy.solvers.ddp.SolverDDP`'s ``computeActionValueFunction``,
-``computeGains`` and ``computeValueFunction`` (Cholesky by LAPACK) over the horizon,
+``computeGains`` and ``computeValueFunction`` (Cholesky by LAPACK) over the horizon, :func:`terminal_value_numpy`,
 :meth:`~crocopy.solvers.fddp.SolverFDDP.updateExpectedImprovement`, :func:`feedback_control_numpy`;
 :mod:`crocopy.kernels` chooses.
 """
@@ -50,6 +51,37 @@ def _finish_value_function(Vxx, Vx, preg, fs, gaps):
 
 
 finish_value_function = compiled(_finish_value_function)
+
+
+def _terminal_value(Lxx, Lx, preg, fs, gaps, Vxx, Vx):
+    """``V_T``: ``Vxx = Lxx + preg I``, ``Vx = Lx``, then ``Vx += Vxx fs`` if ``gaps``."""
+    n = Vx.shape[0]
+    for i in range(n):
+        for j in range(n):
+            Vxx[i, j] = Lxx[i, j]
+        Vx[i] = Lx[i]
+    if preg:
+        for i in range(n):
+            Vxx[i, i] += preg
+    if gaps:
+        for i in range(n):
+            acc = 0.0
+            for j in range(n):
+                acc += Vxx[i, j] * fs[j]
+            Vx[i] += acc
+
+
+def terminal_value_numpy(Lxx, Lx, preg, fs, gaps, Vxx, Vx) -> None:
+    """Numpy twin of :func:`terminal_value`."""
+    Vxx[:] = Lxx
+    Vx[:] = Lx
+    if preg:
+        Vxx.flat[:: Vxx.shape[0] + 1] += preg
+    if gaps:
+        Vx += Vxx @ fs
+
+
+terminal_value = compiled(_terminal_value)
 
 
 def _cholesky_lower(A, idx, n, L):

@@ -89,8 +89,8 @@ class EulerHorizon:
 
     def trial_all(self, addresses: tuple, x0: np.ndarray, dx: np.ndarray, du: np.ndarray, alpha: float,
                   fs: np.ndarray, step: np.ndarray, terminal, out: np.ndarray) -> float | None:
-        """:attr:`trial` of every running node and the ``terminal`` evaluator's ``calc`` at ``x̂_T`` (integrated by the
-        caller) in one call (:func:`.trial_kernel.trial_all`, the terminal cost into ``out[0]``); returns the running
+        """The terminal state ``x̂_T``, :attr:`trial` of every running node and the ``terminal`` evaluator's ``calc`` at
+        ``x̂_T`` in one call (:func:`.trial_kernel.trial_all`, the terminal cost into ``out[0]``); returns the running
         nodes' total, or None where it does not apply (as :meth:`calc_diff_all`; a horizon without ``fused_trial``)."""
         if not self.fused_trial or not self._whole(terminal):
             return None
@@ -98,6 +98,14 @@ class EulerHorizon:
         return trial_kernel.trial_all(self.tbls, *self._head(), x0, xs, us, xs_try, us_try, self.nus, self.nx,
                                       self.ndx, dx, du, alpha, fs, step, len(self.nodes), self.costs, terminal.tbl,
                                       terminal.ints, terminal.par, terminal.no_control, out)
+
+    def first_gap(self, x: np.ndarray, x0: np.ndarray, f: np.ndarray) -> bool:
+        """``f = x0 ⊖ x`` by node 0's compiled state difference (:func:`.horizon_kernel.first_gap`, as the trial
+        point's ``f̂₀``); False (nothing written) where node 0 is not a compiled Euler node."""
+        if type(self) is not EulerHorizon or self.nodes[0] is None:
+            return False
+        horizons.first_gap(self.tbls, self.ints, self.ioff, x, x0, f)
+        return True
 
     def _whole(self, terminal) -> bool:
         """Whether one call may run every running node and the ``terminal`` evaluator: the conditions of

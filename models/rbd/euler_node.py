@@ -432,7 +432,8 @@ class EulerNode:
     def fill(self, x: np.ndarray, u: np.ndarray | None) -> None:
         """The node's data at ``(x, u)`` as its model's ``calc`` leaves it, at the end of a solve
         (:meth:`crocopy.solvers.compiled_nodes.CompiledNodes.fill`).  A node of free dynamics without Python residuals
-        keeps the compiled values (evaluated again unless its stamp is ``(x, u)``) and its dynamics model writes the
+        keeps the compiled values (evaluated again unless its data holds those of ``(x, u)``,
+        :func:`.euler_node_kernel.values_current`) and its dynamics model writes the
         rest (``_fill_after_kernel``: Pinocchio data, torques, residual datas, constraints); any other node runs its
         model's ``calc``."""
         model, data = self.model, self._data()
@@ -441,13 +442,17 @@ class EulerNode:
         if fill is None or self.python.items:
             model._raw_calc(data, x, u)
             return
-        if not kernel.stamp_current(self.stamp, x, self.no_control if u is None else u):
+        if not kernel.values_current(self.stamp, x, self.no_control if u is None else u):
             self.calc(x, u)
             if self.stamp[0] != 1.0:  # not finite: the Python path evaluated the node
                 return
         value = self.stamp[1]
         data.cost = value if self.terminal else self.par[0] * value
         fill(dam, data.differential, x, u, value)
+
+    def integrate(self, x: np.ndarray, step: np.ndarray, out: np.ndarray) -> None:
+        """``out = x ⊕ step`` by the node's compiled state integration (as the compiled trial points integrate)."""
+        kernel.node_integrate(self.tbl, self.ints, x, step, out)
 
     def python_path(self, x: np.ndarray, u: np.ndarray | None, derivatives: bool) -> float:
         """Evaluate the node on its Python path (where the kernel's acceleration is not finite: a contact set whose

@@ -208,8 +208,9 @@ def _same(a, b):
 
 
 @uncounted
-def _remember(stamp, x, u, value):
-    """Stamp the node's values as those of ``(x, u)`` (``value``: the stack's)."""
+def _remember(stamp, x, u, value, mark):
+    """Stamp the node's values as those of ``(x, u)`` (``value``: the stack's): ``mark = 1`` its own arrays and its
+    data's, ``mark = 2`` its data's only (after derivatives, which overwrite some of its own arrays)."""
     if stamp.shape[0] == 0:
         return
     nx = x.shape[0]
@@ -218,13 +219,30 @@ def _remember(stamp, x, u, value):
         stamp[2 + i] = x[i]
     for i in range(u.shape[0]):
         stamp[2 + nx + i] = u[i]
-    stamp[0] = 1.0
+    stamp[0] = mark
 
 
 @uncounted
 def stamp_current(stamp, x, u):
     """Whether the node's values (its own arrays, :data:`.node_table.OWN`) are those of ``(x, u)``."""
     if stamp.shape[0] == 0 or stamp[0] != 1.0:
+        return False
+    nx = x.shape[0]
+    return _same(stamp[2: 2 + nx], x) and _same(stamp[2 + nx: 2 + nx + u.shape[0]], u)
+
+
+@uncounted
+def node_integrate(tbl, ints, x, step, out):
+    """``out = x ⊕ step`` on the node's state (its lowered model's joints)."""
+    rb = entry_model(tbl, ints)
+    state_integrate(rb.jtype, rb.idx_q, rb.idx_v, ints[NQ], ints[NV], x, step, out)
+
+
+@uncounted
+def values_current(stamp, x, u):
+    """Whether the values in the node's data (``xnext``, the cost stack's rows and costs; the stack's value in
+    ``stamp[1]``) are those of ``(x, u)``: after a :func:`node_calc` or a :func:`node_calc_diff` there."""
+    if stamp.shape[0] == 0 or (stamp[0] != 1.0 and stamp[0] != 2.0):
         return False
     nx = x.shape[0]
     return _same(stamp[2: 2 + nx], x) and _same(stamp[2 + nx: 2 + nx + u.shape[0]], u)
@@ -245,7 +263,7 @@ def node_calc(tbl, ints, par, x, u):
         return math.nan
     if has_rows(ints):
         _constraints(tbl, ints, par, rb, ws, x, u, False)
-    _remember(stamp, x, u, cost)
+    _remember(stamp, x, u, cost, 1.0)
     return cost if ints[TERMINAL] else par[0] * cost
 
 
@@ -378,8 +396,8 @@ def _integrate_chain(tbl, ints, x, rb):
 def node_calc_diff(tbl, ints, par, x, u):
     """Values and derivatives of the node at ``(x, u)``; returns its cost, NaN when the acceleration is not finite (as
     :func:`node_calc`).  The values are those of the last :func:`node_calc` when its stamp is ``(x, u)`` to the bit
-    (:func:`stamp_current`: the node's own arrays still hold what they left), else evaluated here; the stamp is then
-    spent (the derivatives overwrite some of those arrays)."""
+    (:func:`stamp_current`: the node's own arrays still hold what they left), else evaluated here; the stamp then
+    marks the data's values only (the derivatives overwrite some of the node's own arrays; :func:`values_current`)."""
     rb, ws = entry_model(tbl, ints), entry_workspace(tbl, ints)
     stamp = vec(tbl, ints, E_STAMP)
     if stamp_current(stamp, x, u):
@@ -402,7 +420,10 @@ def node_calc_diff(tbl, ints, par, x, u):
     residual_jacobians(tbl, ints, par, rb, ws, x, u)
     if has_rows(ints):
         _constraints(tbl, ints, par, rb, ws, x, u, True)
-    return _sums_and_chain(tbl, ints, par, x, rb, cost, terminal)
+    total = _sums_and_chain(tbl, ints, par, x, rb, cost, terminal)
+    if math.isfinite(total):
+        _remember(stamp, x, u, cost, 2.0)
+    return total
 
 
 

@@ -21,7 +21,7 @@ import numpy as np
 
 from crocopy.kernels import compiled, uncounted, vector_at
 
-from .euler_node_kernel import node_calc
+from .euler_node_kernel import node_calc, node_integrate
 from .horizon_kernel import horizon_calc
 from .lie_kernel import state_diff, state_integrate
 from .node_table import E_XNEXT, NQ, NV, entry_model, vec
@@ -75,9 +75,12 @@ horizon_trial = compiled(_trial, nogil=True)
 @uncounted
 def trial_all(tbls, ints, ioff, par, poff, x0, xs, us, xs_try, us_try, nus, nx, ndx, dx, du, alpha, fs, step, T, costs,
               ttbl, tints, tpar, no_control, out):
-    """:func:`horizon_trial` over every running node (``0 <= t < T``), then the terminal node at ``x̂_T`` (which the
-    caller integrated) into ``out[0]``; returns the running nodes' total (not finite: the terminal node is not
-    evaluated)."""
+    """``x̂_T = x_T ⊕ α δx_T`` (the terminal node's :func:`.euler_node_kernel.node_integrate`), :func:`horizon_trial`
+    over every running node (``0 <= t < T``), then the terminal node at ``x̂_T`` into ``out[0]``; returns the running
+    nodes' total (not finite: the terminal node is not evaluated)."""
+    for i in range(ndx):
+        step[i] = alpha * dx[T, i]
+    node_integrate(ttbl, tints, vector_at(xs[T], nx), step[:ndx], vector_at(xs_try[T], nx))
     total = horizon_trial(tbls, ints, ioff, par, poff, x0, xs, us, xs_try, us_try, nus, nx, ndx, dx, du, alpha, fs,
                           step, 0, T, costs)
     if math.isfinite(total):
