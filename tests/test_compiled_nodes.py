@@ -262,7 +262,20 @@ def _with_every_free_residual(problem):
 
 
 FILLED = [("quad-goal", "SolverFDDP", None), ("arm", "SolverBoxFDDP", None), ("arm", "SolverSQP", None),
-          ("arm", "SolverDDP", _with_every_free_residual), ("man", "SolverFDDP", None)]
+          ("arm", "SolverDDP", _with_every_free_residual), ("man", "SolverFDDP", None),
+          ("ur5_ee_box", "SolverCSQP", None), ("kinova_ubound", "SolverCSQP", None)]
+"""Free nodes (quadrotor, arm, every frame residual kind), SQP's end after a calcDiff, contact nodes, and constraint
+managers on every node (mim-solvers' comparison problems, :mod:`crocopy.bench.mim`)."""
+
+
+def _build(name: str) -> tuple:
+    """A registry problem with its guess, or a :mod:`crocopy.bench.mim` problem from ``x0`` and zero controls."""
+    if name in registry.names():
+        return registry.build(name)
+    from crocopy.bench.mim import build_problem
+
+    problem = build_problem(crocopy, name)
+    return problem, [problem.x0.copy()] * (problem.T + 1), [np.zeros(m.nu) for m in problem.runningModels]
 
 
 @pytest.mark.parametrize(("name", "solver", "extend"), FILLED)
@@ -270,7 +283,7 @@ def test_every_value_of_the_datas_after_a_solve_is_that_of_a_python_calc_at_the_
     """A compiled solve ends by filling the nested datas (free dynamics: the compiled values kept, the Pinocchio data,
     torques, residual and constraint datas written on top; other nodes: their Python ``calc``): every number they
     hold equals what ``problem.calc`` at the returned iterate writes, to round-off."""
-    problem, xs, us = registry.build(name)
+    problem, xs, us = _build(name)
     if extend is not None:
         extend(problem)
     s = make_solver(solver, problem, True)

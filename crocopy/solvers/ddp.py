@@ -284,11 +284,19 @@ class SolverDDP(SolverAbstract):
     def _take_trial(self, alpha: float) -> tuple[bool, str | None]:
         """Take the trial of step ``alpha``, accepted by the line search: ``(True, None)``; ``(False, why)`` where a
         trial state or control is not finite (the iterate is kept)."""
-        if not trajectory_finite(self.xs_try, self.us_try):
+        if not self._trial_finite():
             self._synced = False
             return False, locate_in_rollout(self.problem, self.xs_try, self.us_try)
         self._accept_trial(alpha)
         return True, None
+
+    def _trial_finite(self) -> bool:
+        """Whether ``xs_try`` and ``us_try`` are finite (one compiled pass over their addresses while
+        :func:`crocopy.kernels_enabled`)."""
+        if kernels.active:
+            a = self._addresses()
+            return sqp_kernel.all_finite(a.xs_try, a.nx) and sqp_kernel.all_finite(a.us_try, a.nu)
+        return trajectory_finite(self.xs_try, self.us_try)
 
     def _close_iteration(self, was_feasible: bool, rollout_error: str | None = None) -> bool | None:
         """After the line search: regularisation update, stopping value, callbacks; True once converged,

@@ -44,7 +44,6 @@ from ..shooting import ShootingProblem
 from . import compiled_nodes, sqp_kernel
 from .base import CountSetting, FlagSetting, Setting, check_solve_arguments
 from .ddp import SolverDDP
-from .nonfinite import trajectory_finite
 from .std_vector import StdVecAttribute, allocate
 from .stopwatch import profiled
 from .trajectories import accept_trial
@@ -279,13 +278,6 @@ class SolverSQP(SolverDDP):
                 return True
         self._synced = False
         return False
-
-    def _trial_finite(self) -> bool:
-        """Whether ``xs_try`` and ``us_try`` are finite."""
-        if kernels.active:
-            a = self._addresses()
-            return sqp_kernel.all_finite(a.xs_try, a.nx) and sqp_kernel.all_finite(a.us_try, a.nu)
-        return trajectory_finite(self.xs_try, self.us_try)
 
     def _after_line_search(self, accepted: bool) -> bool:
         """The regularisation schedule; False when it reaches ``reg_max`` after a too short step."""
