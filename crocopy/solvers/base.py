@@ -362,7 +362,9 @@ class SolverAbstract:
         return self.gfeas
 
     def _norm(self, vectors: Sequence[np.ndarray]) -> float:
-        stacked = np.concatenate(vectors) if len(vectors) else np.zeros(0)
+        if not len(vectors):
+            return 0.0
+        stacked = np.concatenate(vectors)
         if not stacked.size:
             return 0.0
         if self.feasNorm == FeasibilityNorm.LInf:

@@ -419,7 +419,7 @@ class SolverDDP(SolverAbstract):
                 problem.calc(self.xs, self.us)
             self.cost = problem.calcDiff(self.xs, self.us)
         self._synced = True
-        if not np.isfinite(self.cost):
+        if not math.isfinite(self.cost):
             raise locate_cost(problem)
         if gaps_compiled:
             self._close_gaps()
