@@ -95,6 +95,19 @@ def _python_calc_diff(model, data) -> Callable:
     return calc_diff
 
 
+def _node_by_node(problem, steps: list[Callable], xs, us) -> float:
+    """``steps[t](xs[t], us[t])`` for every running node, then ``steps[-1](xs[-1], None)``; returns the sum of the
+    datas' costs in node order (also ``problem.cost``)."""
+    cost = 0.0
+    for step, d, x, u in zip(steps, problem.runningDatas, xs, us):
+        step(x, u)
+        cost += d.cost
+    steps[-1](xs[-1], None)
+    cost += problem.terminalData.cost
+    problem.cost = cost
+    return cost
+
+
 class CompiledNodes:
     """Per-node ``calc(x, u)`` and ``calcDiff(x, u, synced)`` of one solve: the compiled evaluators
     where the nodes offer one, the models' own methods elsewhere (the terminal node last)."""
@@ -147,23 +160,19 @@ class CompiledNodes:
     def calc(self, problem, xs, us, at: TrajectoryAddresses | None = None) -> float:
         """Every node's value at ``(xs, us)`` (``at``: where they are, when they are a solver's trajectories);
         returns the total cost."""
+        if self.horizon is None:
+            return _node_by_node(problem, self.calcs, xs, us)
         cost = 0.0
-        datas = problem.runningDatas
-        if self.horizon is not None:
-            horizon = self.horizon
-            xa, ua = (addresses(xs), addresses(us)) if at is None else (at.xs, at.us)
-            ranges = self.ranges
-            for (t0, t1), total in zip(ranges, horizon.calc_ranges(xs, us, xa, ua, ranges)):
-                cost += total
-                for d, c in zip(islice(datas, t0, t1), horizon.costs[t0:t1].tolist()):
-                    d.cost = c
-            for t in self.python_nodes:
-                self.calcs[t](xs[t], us[t])
-                cost += datas[t].cost
-        else:
-            for calc, d, x, u in zip(self.calcs, datas, xs, us):
-                calc(x, u)
-                cost += d.cost
+        datas, horizon = problem.runningDatas, self.horizon
+        xa, ua = (addresses(xs), addresses(us)) if at is None else (at.xs, at.us)
+        ranges = self.ranges
+        for (t0, t1), total in zip(ranges, horizon.calc_ranges(xs, us, xa, ua, ranges)):
+            cost += total
+            for d, c in zip(islice(datas, t0, t1), horizon.costs[t0:t1].tolist()):
+                d.cost = c
+        for t in self.python_nodes:
+            self.calcs[t](xs[t], us[t])
+            cost += datas[t].cost
         self.calcs[-1](xs[-1], None)
         cost += problem.terminalData.cost
         problem.cost = cost
@@ -173,14 +182,7 @@ class CompiledNodes:
         """At the end of a solve: every node's data at ``(xs, us)`` as ``problem.calc`` leaves it (each evaluator's
         ``fill``, which keeps its compiled values and writes the rest of the nested datas; the model's own ``calc``
         elsewhere); returns the total cost (also ``problem.cost``)."""
-        cost = 0.0
-        for fill, d, x, u in zip(self.fills, problem.runningDatas, xs, us):
-            fill(x, u)
-            cost += d.cost
-        self.fills[-1](xs[-1], None)
-        cost += problem.terminalData.cost
-        problem.cost = cost
-        return cost
+        return _node_by_node(problem, self.fills, xs, us)
 
     def calcDiff(self, problem, xs, us, synced: bool, fs: list | None = None,
                  at: TrajectoryAddresses | None = None) -> float:

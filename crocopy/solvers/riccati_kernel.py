@@ -33,6 +33,19 @@ from ..kernels import compiled, matrix_at, vector_at
 from .horizon import FS, KM, KV, QU, QUU, QX, QXU, QXX, VX, VXX, VXX_F
 
 
+def _deflect(Vxx, Vx, fs):
+    """``Vx += Vxx fs`` (the gap's deflection of the value gradient)."""
+    n = Vx.shape[0]
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            acc += Vxx[i, j] * fs[j]
+        Vx[i] += acc
+
+
+deflect = compiled(_deflect)
+
+
 def _finish_value_function(Vxx, Vx, preg, fs, gaps):
     """Symmetrise ``Vxx``, add ``preg`` to its diagonal and deflect ``Vx`` by the gap (shared by the kernels)."""
     n = Vxx.shape[0]
@@ -43,11 +56,7 @@ def _finish_value_function(Vxx, Vx, preg, fs, gaps):
             Vxx[j, i] = m
         Vxx[i, i] += preg
     if gaps:
-        for i in range(n):
-            acc = 0.0
-            for j in range(n):
-                acc += Vxx[i, j] * fs[j]
-            Vx[i] += acc
+        deflect(Vxx, Vx, fs)
 
 
 finish_value_function = compiled(_finish_value_function)
@@ -64,11 +73,7 @@ def _terminal_value(Lxx, Lx, preg, fs, gaps, Vxx, Vx):
         for i in range(n):
             Vxx[i, i] += preg
     if gaps:
-        for i in range(n):
-            acc = 0.0
-            for j in range(n):
-                acc += Vxx[i, j] * fs[j]
-            Vx[i] += acc
+        deflect(Vxx, Vx, fs)
 
 
 def terminal_value_numpy(Lxx, Lx, preg, fs, gaps, Vxx, Vx) -> None:
