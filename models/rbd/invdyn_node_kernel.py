@@ -235,7 +235,7 @@ def invdyn_calc(tbl, ints, par, iints, x, u):
     euler_step(tbl, ints, par, x, rb)
     if has_rows(ints):
         _constraints(tbl, ints, par, iints, rb, ws, x, u, False)
-    remember_values(stamp, x, u, cost)
+    remember_values(stamp, x, u, cost, 1.0)
     return cost if ints[TERMINAL] else par[0] * cost
 
 
