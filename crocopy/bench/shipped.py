@@ -101,8 +101,9 @@ def phase_calls(solver: Any) -> dict[str, Callable[[], object]]:
              "backward": lambda: solver.computeDirection(False)}
     nodes = compiled_nodes.attach(solver) if type(solver).__module__.startswith("crocopy.") else None
     if nodes is not None:
-        calls["calc"] = lambda: nodes.calc(problem, xs, us)
-        calls["calcDiff"] = lambda: nodes.calcDiff(problem, xs, us, True)
+        at = solver._addresses()  # the solver's own arrays: their addresses, read once as a solve reads them
+        calls["calc"] = lambda: nodes.calc(problem, xs, us, at)
+        calls["calcDiff"] = lambda: nodes.calcDiff(problem, xs, us, True, None, at)
     return calls
 
 

@@ -23,7 +23,8 @@ and the Kinova arm) the same builder makes the problem with each library (Crocod
   ``total`` = calcDiff + backward + forward: the work of one iteration with one line-search trial
   (the forward pass does the iteration's calc).  crocopy's phases run as its solve runs them: with
   the compiled nodes where they apply (:func:`crocopy.solvers.compiled_nodes.attach`; ``calc`` and
-  ``calcDiff`` are then those nodes' evaluations, whose ``calcDiff`` also evaluates the node).
+  ``calcDiff`` are then those nodes' evaluations, whose ``calcDiff`` also evaluates the node, on the solver's
+  trajectories whose addresses are read once, as in a solve).
 
 :mod:`crocopy.bench.report` turns the results into the markdown report.
 """
@@ -188,8 +189,9 @@ def _phase_calls(
         "forward": lambda: solver.tryStep(steplength[0]),
     }
     if nodes is not None:
-        calls["calc"] = lambda: nodes.calc(problem, xs_c, us_c)
-        calls["calcDiff"] = lambda: nodes.calcDiff(problem, xs_c, us_c, True)
+        at = solver._addresses()  # the solver's own arrays: their addresses, read once as a solve reads them
+        calls["calc"] = lambda: nodes.calc(problem, xs_c, us_c, at)
+        calls["calcDiff"] = lambda: nodes.calcDiff(problem, xs_c, us_c, True, None, at)
     return calls, steplength
 
 
