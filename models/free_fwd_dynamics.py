@@ -111,7 +111,7 @@ class DifferentialActionModelFreeFwdDynamics(ArmatureMixin, DifferentialActionMo
         self._dynamics_calc(data, x, u)
         data.costs.stack.calc_residual_datas(x, u)
         data.costs.cost = data.cost = value
-        if self.constraints is not None and self.constraints.constraints:
+        if self.constraints is not None:
             self.constraints._raw_calc(data.constraints, x, u)
 
     def _dynamics_calc(self, data: "DifferentialActionDataFreeFwdDynamics", x: np.ndarray,

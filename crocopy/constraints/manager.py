@@ -115,6 +115,9 @@ class ConstraintModelManager(ModelItems, Guarded):
 
     def calc(self, data: "ConstraintDataManager", x: np.ndarray, u: np.ndarray | None = None) -> None:
         """Stack the active constraints (only ``T_constraint`` ones when ``u`` is None) into ``g``/``h``."""
+        if not self._items:  # nothing to stack (the data's g and h are empty once it is checked)
+            self._check(data)
+            return
         ig = ih = 0
         for c, cd in self._applying(data, u):
             c.calc(cd, x, u)

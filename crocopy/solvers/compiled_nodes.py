@@ -142,8 +142,8 @@ class CompiledNodes:
         """1 at the running nodes inside the horizon's ranges, 0 elsewhere and at the terminal node."""
         self.python_nodes = [t for t, inside in enumerate(in_horizon) if not inside]
         """The running nodes outside the horizon's ranges."""
-        self._whole = [(0, len(steps))] if steps else None
-        """:attr:`ranges` when the horizon runs every running node (then :meth:`calcDiff` may take one call)."""
+        self._whole = bool(steps) and self.ranges == [(0, len(steps))]
+        """Whether the horizon runs every running node (then :meth:`calcDiff` and :meth:`trial` may take one call)."""
         self._out = np.zeros(1)
 
     def bounds(self, lbs: list | None, ubs: list | None, unbounded: dict) -> tuple[list, list]:
@@ -190,7 +190,7 @@ class CompiledNodes:
         (only with a :attr:`horizon`, which computes its nodes' in the same call), also the gaps
         ``fs[t+1] = xnext_t ⊖ xs[t+1]`` (``fs[0]`` is the caller's).  ``at``: where ``xs``, ``us`` and ``fs`` are,
         when they are a solver's trajectories (else they are read here)."""
-        if at is not None and self.ranges == self._whole:
+        if at is not None and self._whole:
             cost = self._calc_diff_all(problem, at, fs is not None)
             if cost is not None:
                 return cost
@@ -223,32 +223,24 @@ class CompiledNodes:
         return cost
 
     def _calc_diff_all(self, problem, at: TrajectoryAddresses, gaps: bool) -> float | None:
-        """:meth:`calcDiff` in one compiled call (the horizon's ``calc_diff_all``, when it has one that applies and
-        its totals are finite; else None), with the same numbers."""
-        calc_diff_all = getattr(self.horizon, "calc_diff_all", None)
-        total = None if calc_diff_all is None else calc_diff_all(at.xs, at.us, at.fs if gaps else None, self.terminal,
-                                                                 self._out)
+        """:meth:`calcDiff` in one compiled call (the horizon's ``calc_diff_all``), with the same numbers; None where
+        it does not apply or a cost is not finite."""
+        total = self.horizon.calc_diff_all(at.xs, at.us, at.fs if gaps else None, self.terminal, self._out)
+        return self._whole_costs(problem, total)
+
+    def _trial_all(self, problem, alpha: float, at: TrajectoryAddresses, stacks: tuple) -> float | None:
+        """:meth:`trial` in one compiled call (the horizon's ``trial_all``), with the same numbers; None where it does
+        not apply or a cost is not finite."""
+        total = self.horizon.trial_all((at.xs, at.us, at.xs_try, at.us_try), problem.x0, *stacks[:2], alpha,
+                                       *stacks[2:], self.terminal, self._out)
+        return self._whole_costs(problem, total)
+
+    def _whole_costs(self, problem, total: float | None) -> float | None:
+        """After a call over every node whose running total is ``total`` (None: it did not apply): the running nodes'
+        costs (the horizon's) and the terminal one (``_out[0]``) into the datas; returns the total cost, added as the
+        node by node path adds it, or None (nothing written) where a cost is not finite."""
         if total is None or not math.isfinite(total) or not math.isfinite(self._out[0]):
             return None
-        return self._costs(problem, total)
-
-    def _trial_all(self, problem, xs, dx, alpha: float, trajectories: tuple, at: TrajectoryAddresses,
-                   stacks: tuple) -> float | None:
-        """:meth:`trial` in one compiled call (the horizon's ``trial_all``, when it has one that applies and the costs
-        are finite; else None), with the same numbers."""
-        trial_all = getattr(self.horizon, "trial_all", None)
-        if trial_all is None:
-            return None
-        total = trial_all((at.xs, at.us, at.xs_try, at.us_try), problem.x0, *stacks[:2], alpha, *stacks[2:],
-                          self.terminal, self._out)
-        if total is None or not math.isfinite(total) or not math.isfinite(self._out[0]):
-            return None
-        return self._costs(problem, total)
-
-    def _costs(self, problem, total: float) -> float:
-        """The running nodes' costs (the horizon's) and the terminal one (``_out[0]``) into the datas after a call
-        over every node whose running total is ``total``; returns the total cost (added as the node by node path
-        adds it)."""
         for d, c in zip(problem.runningDatas, self.horizon.costs.tolist()):
             d.cost = c
         terminal = problem.terminalData.cost = float(self._out[0])
@@ -269,8 +261,8 @@ class CompiledNodes:
         ``trial(addresses, x0, dx, du, alpha, fs, step, trajectories, t0, t1) -> total`` is one call (its nodes' costs
         in ``horizon.costs``); the other nodes go one by one (their states and controls first, so a range reads the
         state after it)."""
-        if self.ranges == self._whole:
-            cost = self._trial_all(problem, xs, dx, alpha, trajectories, at, stacks)
+        if self._whole:
+            cost = self._trial_all(problem, alpha, at, stacks)
             if cost is not None:
                 return cost
         xs_try, us_try, fs_try = trajectories

@@ -100,11 +100,11 @@ class EulerHorizon:
                                       terminal.ints, terminal.par, terminal.no_control, out)
 
     def first_gap(self, x: np.ndarray, x0: np.ndarray, f: np.ndarray) -> bool:
-        """``f = x0 ⊖ x`` by node 0's compiled state difference (:func:`.horizon_kernel.first_gap`, as the trial
-        point's ``f̂₀``); False (nothing written) where node 0 is not a compiled Euler node."""
+        """``f = x0 ⊖ x`` by node 0's compiled state difference (:meth:`.EulerNode.diff`, as the trial point's ``f̂₀``);
+        False (nothing written) where node 0 is not a compiled Euler node."""
         if type(self) is not EulerHorizon or self.nodes[0] is None:
             return False
-        horizons.first_gap(self.tbls, self.ints, self.ioff, x, x0, f)
+        self.nodes[0].diff(x, x0, f)
         return True
 
     def _whole(self, terminal) -> bool:

@@ -454,6 +454,10 @@ class EulerNode:
         """``out = x ⊕ step`` by the node's compiled state integration (as the compiled trial points integrate)."""
         kernel.node_integrate(self.tbl, self.ints, x, step, out)
 
+    def diff(self, x0: np.ndarray, x1: np.ndarray, out: np.ndarray) -> None:
+        """``out = x1 ⊖ x0`` by the node's compiled state difference (as the compiled gaps are taken)."""
+        kernel.node_diff(self.tbl, self.ints, x0, x1, out)
+
     def python_path(self, x: np.ndarray, u: np.ndarray | None, derivatives: bool) -> float:
         """Evaluate the node on its Python path (where the kernel's acceleration is not finite: a contact set whose
         KKT system is singular at this state takes least squares there, as with kernels off); returns its cost."""

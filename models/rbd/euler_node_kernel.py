@@ -239,6 +239,13 @@ def node_integrate(tbl, ints, x, step, out):
 
 
 @uncounted
+def node_diff(tbl, ints, x0, x1, out):
+    """``out = x1 ⊖ x0`` on the node's state (its lowered model's joints)."""
+    rb = entry_model(tbl, ints)
+    state_diff(rb.jtype, rb.idx_q, rb.idx_v, ints[NQ], ints[NV], x0, x1, out)
+
+
+@uncounted
 def values_current(stamp, x, u):
     """Whether the values in the node's data (``xnext``, the cost stack's rows and costs; the stack's value in
     ``stamp[1]``) are those of ``(x, u)``: after a :func:`node_calc` or a :func:`node_calc_diff` there."""

@@ -117,14 +117,6 @@ def calc_diff_all(tbls, ints, ioff, par, poff, xs, us, nus, nx, ndx, gaps, fs, T
     return total
 
 
-@uncounted
-def first_gap(tbls, ints, ioff, x, x0, f):
-    """``f = x0 ⊖ x`` on node 0's state (the gap ``f₀`` at the start of the horizon)."""
-    node_ints = ints[ioff[0]: ioff[1]]
-    rb = entry_model(tbls[0], node_ints)
-    state_diff(rb.jtype, rb.idx_q, rb.idx_v, node_ints[NQ], node_ints[NV], x, x0, f)
-
-
 def _horizon_calc(tbls, ints, ioff, par, poff, xs, us, nus, nx, t0, t1, costs):
     """:func:`node_calc` over the running nodes ``t0 <= t < t1`` in one call (tables as in :func:`horizon_rollout`,
     ``xs``/``us`` addresses); returns the sum of their costs (each into ``costs[t]``)."""
