@@ -45,10 +45,11 @@ assign_rho = compiled(_assign_rho)
 
 def _factorise(n, m, c, n1, Fx, Fu, Lxx, Lxu, Luu, C, D, rho, with_rows, sigma, mu, P1, P, K, L, Qxx, Qxu, Quu, W,
                Wu, idx):
-    """``Quu`` factor ``L``, gains ``K`` and ``P`` of a node from the next ``P1`` (node rows ``C, D, rho``, which
-    enter ``Qxx``/``Qxu`` only when ``with_rows == 2``, i.e. not on node 0); False when ``Quu`` is not positive
-    definite or not finite.  Stack rows (padded) and loops whose inner index is contiguous (vectorised); the
-    products skip zero entries (selection rows, the identity blocks of ``Fx``)."""
+    """``Quu`` factor ``L`` (its diagonal inverted, so that the solves multiply), gains ``K`` and ``P`` of a node
+    from the next ``P1`` (node rows ``C, D, rho``, which enter ``Qxx``/``Qxu`` only when ``with_rows == 2``, i.e. not
+    on node 0); False when ``Quu`` is not positive definite or not finite.  Stack rows (padded) and loops whose inner
+    index is contiguous (vectorised); the products skip zero entries (selection rows, the identity blocks of
+    ``Fx``)."""
     for i in range(n):
         for j in range(n1):
             W[i, j] = 0.0
@@ -126,6 +127,8 @@ def _factorise(n, m, c, n1, Fx, Fu, Lxx, Lxu, Luu, C, D, rho, with_rows, sigma, 
                         Qxu[i, j] += a * D[r, j]
     if not cholesky_lower(Quu, idx, m, L):
         return False
+    for i in range(m):  # the diagonal inverted: the solves multiply
+        L[i, i] = 1.0 / L[i, i]
     for i in range(m):  # K = Quu⁻¹ Qxuᵀ: L⁻¹ then L⁻ᵀ, row by row
         for j in range(n):
             K[i, j] = Qxu[j, i]
@@ -137,7 +140,7 @@ def _factorise(n, m, c, n1, Fx, Fu, Lxx, Lxu, Luu, C, D, rho, with_rows, sigma, 
                 K[i, j] -= a * K[q, j]
         d = L[i, i]
         for j in range(n):
-            K[i, j] /= d
+            K[i, j] *= d
     for i in range(m - 1, -1, -1):
         for q in range(i + 1, m):
             a = L[q, i]
@@ -147,7 +150,7 @@ def _factorise(n, m, c, n1, Fx, Fu, Lxx, Lxu, Luu, C, D, rho, with_rows, sigma, 
                 K[i, j] -= a * K[q, j]
         d = L[i, i]
         for j in range(n):
-            K[i, j] /= d
+            K[i, j] *= d
     for i in range(n):
         for q in range(m):
             a = Qxu[i, q]
@@ -200,6 +203,30 @@ def _row_spans(dims, C, D, spans):
 row_spans = compiled(_row_spans)
 
 
+def _gradient(A, g, base, rows, cols, out):
+    """``out[:cols] = base + Aᵀ g`` (``A (rows, cols)``): columns four at a time, each sum in row order."""
+    i = 0
+    while i + 4 <= cols:
+        a0, a1, a2, a3 = base[i], base[i + 1], base[i + 2], base[i + 3]
+        for q in range(rows):
+            x = g[q]
+            a0 += A[q, i] * x
+            a1 += A[q, i + 1] * x
+            a2 += A[q, i + 2] * x
+            a3 += A[q, i + 3] * x
+        out[i], out[i + 1], out[i + 2], out[i + 3] = a0, a1, a2, a3
+        i += 4
+    while i < cols:
+        a0 = base[i]
+        for q in range(rows):
+            a0 += A[q, i] * g[q]
+        out[i] = a0
+        i += 1
+
+
+gradient = compiled(_gradient)
+
+
 def _riccati(dims, daddr, haddr, fs_col, LxT, LxxT, sigma, mu, rows, full, C, D, rho, eta, dx_bar, du_bar, P, p, Pd,
              K, k, L, S, Sv, idx, spans):
     """The backward pass of :meth:`.csqp_admm.StagewiseADMM.riccati`; -1, or the node whose ``Quu`` failed.
@@ -245,16 +272,8 @@ def _riccati(dims, daddr, haddr, fs_col, LxT, LxxT, sigma, mu, rows, full, C, D,
                 Pd[t + 1, i] = acc
         for i in range(n1):
             g[i] = p[t + 1, i] + Pd[t + 1, i]
-        for i in range(n):
-            Qx[i] = Lx[i]
-        for i in range(m):
-            Qu[i] = Lu[i]
-        for q in range(n1):
-            a_ = g[q]
-            for i in range(n):
-                Qx[i] += Fx[q, i] * a_
-            for i in range(m):
-                Qu[i] += Fu[q, i] * a_
+        gradient(Fx, g, Lx, n1, n, Qx)
+        gradient(Fu, g, Lu, n1, m, Qu)
         if sigma != 0.0:
             for i in range(n):
                 Qx[i] -= sigma * dx_bar[t, i]
@@ -272,20 +291,33 @@ def _riccati(dims, daddr, haddr, fs_col, LxT, LxxT, sigma, mu, rows, full, C, D,
                                   P[t + 1], P[t], K[t], L[t], Qxx, Qxu, Quu, W, Wu, idx):
             return t
         if m > 0:
-            for i in range(m):  # k = Quu⁻¹ Qu with the factor L (L then Lᵀ)
+            for i in range(m):  # k = Quu⁻¹ Qu with the factor L (L then Lᵀ; its diagonal inverted)
                 acc = Qu[i]
                 for q in range(i):
                     acc -= L[t, i, q] * k[t, q]
-                k[t, i] = acc / L[t, i, i]
+                k[t, i] = acc * L[t, i, i]
             for i in range(m - 1, -1, -1):
                 acc = k[t, i]
                 for q in range(i + 1, m):
                     acc -= L[t, q, i] * k[t, q]
-                k[t, i] = acc / L[t, i, i]
-            for q in range(m):
-                a_ = -Qu[q]
-                for i in range(n):
-                    Qx[i] += K[t, q, i] * a_
+                k[t, i] = acc * L[t, i, i]
+            i = 0
+            while i + 4 <= n:
+                a0, a1, a2, a3 = Qx[i], Qx[i + 1], Qx[i + 2], Qx[i + 3]
+                for q in range(m):
+                    a_ = -Qu[q]
+                    a0 += K[t, q, i] * a_
+                    a1 += K[t, q, i + 1] * a_
+                    a2 += K[t, q, i + 2] * a_
+                    a3 += K[t, q, i + 3] * a_
+                Qx[i], Qx[i + 1], Qx[i + 2], Qx[i + 3] = a0, a1, a2, a3
+                i += 4
+            while i < n:
+                a0 = Qx[i]
+                for q in range(m):
+                    a0 += K[t, q, i] * -Qu[q]
+                Qx[i] = a0
+                i += 1
         for i in range(n):
             p[t, i] = Qx[i]
     return -1
@@ -295,7 +327,8 @@ riccati = compiled(_riccati)
 
 
 def _rollout(dims, daddr, haddr, fs_col, K, k, dx, du):
-    """``δx_0 = d_0``, ``δu_t = -k_t - K_t δx_t``, ``δx_{t+1} = Fu δu_t + Fx δx_t + d_{t+1}``."""
+    """``δx_0 = d_0``, ``δu_t = -k_t - K_t δx_t``, ``δx_{t+1} = Fu δu_t + Fx δx_t + d_{t+1}``: rows four at a time
+    (independent sums, each in the order of one row's), the last ones one by one."""
     N = dims.shape[0] - 1
     d0 = vector_at(haddr[0, fs_col], dims[0, 0])
     for i in range(dims[0, 0]):
@@ -304,12 +337,42 @@ def _rollout(dims, daddr, haddr, fs_col, K, k, dx, du):
         n, m, n1 = dims[t, 0], dims[t, 1], dims[t + 1, 0]
         Fx, Fu = matrix_at(daddr[t, 0], n1, n), matrix_at(daddr[t, 1], n1, m)
         d1 = vector_at(haddr[t + 1, fs_col], n1)
-        for i in range(m):
+        i = 0
+        while i + 4 <= m:
+            a0, a1, a2, a3 = -k[t, i], -k[t, i + 1], -k[t, i + 2], -k[t, i + 3]
+            for j in range(n):
+                x = dx[t, j]
+                a0 -= K[t, i, j] * x
+                a1 -= K[t, i + 1, j] * x
+                a2 -= K[t, i + 2, j] * x
+                a3 -= K[t, i + 3, j] * x
+            du[t, i], du[t, i + 1], du[t, i + 2], du[t, i + 3] = a0, a1, a2, a3
+            i += 4
+        while i < m:
             acc = -k[t, i]
             for j in range(n):
                 acc -= K[t, i, j] * dx[t, j]
             du[t, i] = acc
-        for i in range(n1):
+            i += 1
+        i = 0
+        while i + 4 <= n1:
+            a0 = a1 = a2 = a3 = b0 = b1 = b2 = b3 = 0.0
+            for j in range(m):
+                x = du[t, j]
+                a0 += Fu[i, j] * x
+                a1 += Fu[i + 1, j] * x
+                a2 += Fu[i + 2, j] * x
+                a3 += Fu[i + 3, j] * x
+            for j in range(n):
+                x = dx[t, j]
+                b0 += Fx[i, j] * x
+                b1 += Fx[i + 1, j] * x
+                b2 += Fx[i + 2, j] * x
+                b3 += Fx[i + 3, j] * x
+            dx[t + 1, i], dx[t + 1, i + 1] = a0 + b0 + d1[i], a1 + b1 + d1[i + 1]
+            dx[t + 1, i + 2], dx[t + 1, i + 3] = a2 + b2 + d1[i + 2], a3 + b3 + d1[i + 3]
+            i += 4
+        while i < n1:
             acc = 0.0
             for j in range(m):
                 acc += Fu[i, j] * du[t, j]
@@ -317,6 +380,7 @@ def _rollout(dims, daddr, haddr, fs_col, K, k, dx, du):
             for j in range(n):
                 acc2 += Fx[i, j] * dx[t, j]
             dx[t + 1, i] = acc + acc2 + d1[i]
+            i += 1
 
 
 rollout = compiled(_rollout)
