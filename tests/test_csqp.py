@@ -268,3 +268,43 @@ def test_constraint_bounds_are_read_only():
             bound[0] = 0.5
     constraint.updateBounds(-np.full(2, 3.0), np.full(2, 3.0))
     assert constraint.lb.tolist() == [-3.0, -3.0] and not constraint.ub.flags.writeable
+
+
+def _rows_and_equalities() -> crocopy.ShootingProblem:
+    """Random LQ whose states and controls are boxed, with a terminal equality given as ``nh`` rows."""
+    rows = lambda t: (np.r_[np.eye(3)[:1] * (t > 0), np.zeros((1, 3))], np.r_[np.zeros((1, 2)), np.eye(2)[:1]],  # noqa: E731
+                      np.array([-0.2, -0.3]), np.array([0.2, 0.3]))
+    return random_lq(4, T=8, rows=rows, terminal_eqs=(np.eye(3)[:2], np.zeros((2, 2)), np.array([0.1, -0.2])))
+
+
+class _Recorder(crocopy.CallbackAbstract):
+    def __init__(self) -> None:
+        super().__init__()
+        self.seen = []
+
+    def __call__(self, solver) -> None:
+        self.seen.append((solver.gfeas, solver.hfeas, solver.constraint_norm, solver.cost))
+
+
+class _OwnCalcDiff(crocopy.SolverCSQP):
+    calls = 0
+
+    def calcDiff(self):
+        type(self).calls += 1
+        return super().calcDiff()
+
+
+def test_calc_gives_the_constraint_norms_of_calc_diff():
+    # SolverCSQP.calc differentiates the nodes without calcDiff's own constraint norms (its QP rows give gfeas);
+    # a subclass's calcDiff is still the one called, and both give the same norms at every iteration
+    runs = []
+    for cls in (crocopy.SolverCSQP, _OwnCalcDiff):
+        solver = cls(_rows_and_equalities())
+        recorder = _Recorder()
+        solver.setCallbacks([recorder])
+        solver.solve([], [], 20)
+        runs.append((solver, recorder.seen))
+    (plain, seen), (own, seen_own) = runs
+    assert _OwnCalcDiff.calls >= own.iter > 0
+    assert plain.iter == own.iter and seen == seen_own
+    assert any(h > 0.0 for _, h, _, _ in seen) and any(g > 0.0 for g, _, _, _ in seen)

@@ -329,26 +329,33 @@ class SolverAbstract:
         """The norm of all the gaps ``fs`` (``feasNorm``)."""
         return self._norm(self.fs)
 
-    def _rows(self) -> tuple[list, list]:
-        """``(nodes, hs)``: the nodes ``(model, data)`` whose data has inequality rows and the equality rows ``h`` that
-        are not empty.  Which nodes have them is found again when the problem, its nodes (node version) or a
-        registry's item set (:data:`~crocopy.versioning.STRUCTURE`) changed."""
+    def _row_nodes(self) -> tuple[list[int], list[int]]:
+        """The nodes whose data has inequality rows ``g`` and those with equality rows ``h`` (indices, the terminal
+        node ``T``), found again when the problem, its nodes (node version) or a registry's item set
+        (:data:`~crocopy.versioning.STRUCTURE`) changed."""
         problem = self.problem
         key = (id(problem), problem._nodes_version, STRUCTURE[0])
-        rows = self.__dict__.get("_row_nodes")
+        rows = self.__dict__.get("_row_nodes_seen")
         if rows is None or rows[0] != key:
             datas = [*problem.runningDatas, problem.terminalData]
-            rows = self.__dict__["_row_nodes"] = (key, [t for t, d in enumerate(datas) if d.g.size],
-                                                  [t for t, d in enumerate(datas) if d.h.size])
-        if not rows[1] and not rows[2]:
+            rows = self.__dict__["_row_nodes_seen"] = (key, [t for t, d in enumerate(datas) if d.g.size],
+                                                       [t for t, d in enumerate(datas) if d.h.size])
+        return rows[1], rows[2]
+
+    def _rows(self) -> tuple[list, list]:
+        """``(nodes, hs)``: the nodes ``(model, data)`` whose data has inequality rows and the equality rows ``h`` that
+        are not empty (:meth:`_row_nodes`)."""
+        g_nodes, h_nodes = self._row_nodes()
+        if not g_nodes and not h_nodes:
             return [], []
+        problem = self.problem
         models, datas, T = problem.runningModels, problem.runningDatas, problem.T
-        nodes = [(models[t], datas[t]) if t < T else (problem.terminalModel, problem.terminalData) for t in rows[1]]
-        return nodes, [(datas[t] if t < T else problem.terminalData).h for t in rows[2]]
+        nodes = [(models[t], datas[t]) if t < T else (problem.terminalModel, problem.terminalData) for t in g_nodes]
+        return nodes, [(datas[t] if t < T else problem.terminalData).h for t in h_nodes]
 
     def computeEqualityFeasibility(self) -> float:
         """Norm of the equality-constraint values ``h`` over all nodes."""
-        self.hfeas = self._norm(self._rows()[1])
+        self.hfeas = self._norm(self._rows()[1]) if self._row_nodes()[1] else 0.0
         return self.hfeas
 
     def computeInequalityFeasibility(self) -> float:

@@ -39,9 +39,11 @@ from ..versioning import STRUCTURE, ParametersVersion, changes_since, parameter_
 from . import csqp_kernel
 from .base import BackwardPassError, CountSetting, FlagSetting, Setting
 from .csqp_admm import StagewiseADMM
+from .ddp import SolverDDP
 from .horizon import stores
 from .sqp import SolverSQP
 from .std_vector import StdVec_VectorXs
+from .stopwatch import profiling
 
 
 def _manager(model):
@@ -283,10 +285,14 @@ class SolverCSQP(SolverSQP):
 
     def calc(self, recalc: bool = True) -> float:
         """Evaluate and differentiate every node at the current iterate (if ``recalc``); update the gaps,
-        ``gap_norm``, the QP rows' data, ``constraint_norm`` and ``gfeas``."""
+        ``gap_norm``, the QP rows' data, ``constraint_norm``, ``gfeas`` and ``hfeas``."""
         if recalc:
             self._synced = False
-            self.calcDiff()
+            if type(self).calcDiff is SolverDDP.calcDiff and not profiling():
+                self._differentiate()  # calcDiff's gfeas is the one _row_values writes below
+                self.computeEqualityFeasibility()
+            else:
+                self.calcDiff()
         self.gap_norm = self._gap_norm()
         self.constraint_norm = self._row_values(True)
         return self.cost

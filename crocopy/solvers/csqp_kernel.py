@@ -573,14 +573,22 @@ def _node_rows(dims, ngh, saddr, lb, ub, load, C, D, lo, hi, out):
                 v1 += abs(worst)
         if load:
             if ng:
-                C[t, :ng, :n] = matrix_at(a[2], ng, n)
+                copy_rows(C, t, 0, matrix_at(a[2], ng, n))
                 if t < N:
-                    D[t, :ng, :m] = matrix_at(a[3], ng, m)
+                    copy_rows(D, t, 0, matrix_at(a[3], ng, m))
             if nh:
-                C[t, ng:nc, :n] = matrix_at(a[4], nh, n)
+                copy_rows(C, t, ng, matrix_at(a[4], nh, n))
                 if t < N:
-                    D[t, ng:nc, :m] = matrix_at(a[5], nh, m)
+                    copy_rows(D, t, ng, matrix_at(a[5], nh, m))
     out[0], out[1], out[2] = psi, vinf, v1
 
 
+def _copy_rows(S, t, first, M):
+    """``S[t, first:first + rows, :cols] = M`` in loops (no views)."""
+    for r in range(M.shape[0]):
+        for c in range(M.shape[1]):
+            S[t, first + r, c] = M[r, c]
+
+
+copy_rows = compiled(_copy_rows)
 node_rows = compiled(_node_rows)

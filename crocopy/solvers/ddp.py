@@ -405,7 +405,15 @@ class SolverDDP(SolverAbstract):
         self.backwardPass()
 
     def calcDiff(self) -> float:
-        """Evaluate (if needed) and differentiate every node at the current iterate; update the gaps."""
+        """Evaluate (if needed) and differentiate every node at the current iterate; update the gaps and the
+        constraints' norms ``gfeas``, ``hfeas``."""
+        self._differentiate()
+        self.computeInequalityFeasibility()
+        self.computeEqualityFeasibility()
+        return self.cost
+
+    def _differentiate(self) -> None:
+        """:meth:`calcDiff` but the constraints' norms."""
         problem = self.problem
         nodes = self._nodes
         feasible = self.isFeasible
@@ -429,9 +437,6 @@ class SolverDDP(SolverAbstract):
             self._zero_gaps()
             if not reported:
                 self.ffeas = 0.0
-        self.computeInequalityFeasibility()
-        self.computeEqualityFeasibility()
-        return self.cost
 
     def _zero_gaps(self) -> None:
         """``fs[t] = 0`` for every node (one compiled call on the horizon's buffer while
