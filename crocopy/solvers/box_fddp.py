@@ -43,6 +43,9 @@ class SolverBoxFDDP(BoxSolverMixin, SolverFDDP):
     _nodes_compiled = True
     _line_search = (False, True)
     """``(negative, bounded)`` of the compiled line search (:mod:`.line_search`)."""
+    _gap_search = (False, False)
+    """``(every, grad_negative)`` of the compiled line search from an infeasible iterate: gaps kept open where
+    ``α ≠ 1``, a negative ``dVexp`` passing on ``dV > th_acceptNegStep dVexp`` alone (:meth:`_accept`)."""
 
     def __init__(self, problem: ShootingProblem) -> None:
         super().__init__(problem)

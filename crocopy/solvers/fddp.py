@@ -24,6 +24,9 @@ class SolverFDDP(SolverDDP):
     _nodes_compiled = True
     _line_search = (True, False)
     """``(negative, bounded)`` of the compiled line search (:mod:`.line_search`)."""
+    _gap_search = (True, True)
+    """``(every, grad_negative)`` of the compiled line search from an infeasible iterate (:mod:`.line_search`): the
+    gaps kept open at every step length, and ``|d₀| < th_grad`` passing a negative ``dVexp``."""
     th_acceptNegStep = Setting(allow_inf=False)
 
     def __init__(self, problem: ShootingProblem) -> None:
@@ -84,13 +87,19 @@ class SolverFDDP(SolverDDP):
             Vxx_fs = self._Vxx_f or [Vxx @ f for Vxx, f in zip(self.Vxx, self.fs)]
             rest = range(len(models))
             nodes = self._nodes
-            if kernels.active and self._Vxx_f is self._Vxx_f_views and nodes is not None \
-                    and nodes.horizon is not None:  # the compiled ranges of the rollout wrote their nodes' dx
+            compiled = (kernels.active and self._Vxx_f is self._Vxx_f_views and nodes is not None
+                        and nodes.horizon is not None)
+            if compiled:  # the compiled ranges of the rollout wrote their nodes' dx
                 h = self._horizon
                 dv = riccati_kernel.gap_step_term(h.addr, h.dims, self._addresses().dx_try * nodes.inside)
                 rest = [*nodes.python_nodes, problem.T]
             for t in rest:
                 m, Vxx_f = models[t], Vxx_fs[t]
+                if compiled and t == problem.T and hasattr(nodes.terminal, "diff"):
+                    dx = self._terminal_step()[1]  # as the compiled line search takes it
+                    nodes.terminal.diff(self.xs[t], self.xs_try[t], dx)
+                    dv += riccati_kernel.step_term(Vxx_f, dx)
+                    continue
                 dx = self._dx_try[t]
                 if dx is None:
                     dx = m.state.diff(self.xs[t], self.xs_try[t])
@@ -98,6 +107,15 @@ class SolverFDDP(SolverDDP):
         self.d[0] = self._dg + dv
         self.d[1] = self._dq - 2.0 * dv
         return self.d
+
+    def _terminal_step(self) -> tuple[np.ndarray, np.ndarray]:
+        """Two scratch tangent vectors of the terminal node (the compiled line search's ``(α - 1) f₀`` and the
+        terminal trial step ``x̂_T ⊖ x_T``)."""
+        ndx = self.problem.terminalModel.state.ndx
+        scratch = self.__dict__.get("_terminal_scratch")
+        if scratch is None or scratch[0].shape[0] != ndx:
+            scratch = self._terminal_scratch = (np.zeros(ndx), np.zeros(ndx))
+        return scratch
 
     def tryStep(self, steplength: float = 1.0) -> float:
         self.forwardPass(steplength)

@@ -494,7 +494,16 @@ def _gap_step_term(saddr, dims, dx_addr):
     return dv
 
 
+def _step_term(Vxx_f, dx):
+    """``(Vxx f)ᵀ dx`` of one node (a term of FDDP's ``dv`` outside :func:`gap_step_term`), summed in index order."""
+    acc = 0.0
+    for j in range(dx.shape[0]):
+        acc += Vxx_f[j] * dx[j]
+    return acc
+
+
 scratch = compiled(_scratch)
+step_term = compiled(_step_term)
 node_riccati = compiled(_node_riccati)
 riccati_pass = compiled(_riccati_pass)
 expected_terms = compiled(_expected_terms)

@@ -44,15 +44,17 @@ def trial_rollout(solver, steplength: float, gaps: bool = False, bounds: tuple[l
     models = problem.runningModels
     x0 = problem.x0
     x = xs_try[0]
-    if gaps:
-        (models[0] if models else problem.terminalModel).state._integrate_into(x0, (steplength - 1.0) * fs[0], x)
+    nodes = solver._nodes
+    if gaps:  # by node 0's compiled integration where it is compiled, as the compiled line search
+        step = (steplength - 1.0) * fs[0]
+        if nodes is None or nodes.horizon is None or not nodes.horizon.first_state(x0, step, x):
+            (models[0] if models else problem.terminalModel).state._integrate_into(x0, step, x)
     else:
         x[:] = x0
     lbs, ubs = (None, None) if bounds is None else bounds
     us, k, K, unbounded = solver.us, solver.k, solver.K, solver._unbounded
     feedback = riccati_kernel.feedback_control if kernels.active else riccati_kernel.feedback_control_numpy
     gap_at = problem.T if last_gap else -1
-    nodes = solver._nodes
     calcs, steps = (None, None) if nodes is None else (nodes.calcs, nodes.steps)
     segments = {} if nodes is None or nodes.horizon is None else nodes.segments
     addresses = None if not segments else horizon_addresses(solver, nodes, lbs, ubs)

@@ -107,6 +107,14 @@ class EulerHorizon:
         self.nodes[0].diff(x, x0, f)
         return True
 
+    def first_state(self, x0: np.ndarray, step: np.ndarray, x: np.ndarray) -> bool:
+        """``x = x0 ⊕ step`` by node 0's compiled state integration (:meth:`.EulerNode.integrate`, as the compiled line
+        search's ``x̂₀``); False (nothing written) where node 0 is not a compiled Euler node."""
+        if type(self) is not EulerHorizon or self.nodes[0] is None:
+            return False
+        self.nodes[0].integrate(x0, step, x)
+        return True
+
     def _whole(self, terminal) -> bool:
         """Whether one call may run every running node and the ``terminal`` evaluator: the conditions of
         :meth:`line_search`, on one thread."""
@@ -191,6 +199,21 @@ class EulerHorizon:
         return line_search_kernel.line_search(self.tbls, *self._head(), *addresses, self.nus, self.nx, self.ndx,
                                               len(self.nodes), self.costs, terminal.tbl, terminal.ints, terminal.par,
                                               terminal.no_control, alphas, cost, *d, *thresholds, negative, out)
+
+    def line_search_gaps(self, addresses: tuple, terminal, x0: np.ndarray, scratch: tuple[np.ndarray, np.ndarray],
+                         saddr: np.ndarray, alphas: np.ndarray, cost: float, d: tuple[float, float],
+                         thresholds: tuple[float, float, float], rule: tuple[bool, bool],
+                         out: np.ndarray) -> tuple[int, int] | None:
+        """The line search of FDDP and Box-FDDP from an infeasible iterate in one call
+        (:func:`.line_search_kernel.line_search_gaps`; ``d = (dg, dq)``, ``scratch`` two tangent vectors, ``saddr``
+        the solver's horizon buffer, ``rule = (every, grad_negative)``); None where :meth:`line_search` does not
+        apply."""
+        if not self._searches or type(terminal) is not type(self.nodes[0]) or terminal.python.items:
+            return None
+        return line_search_kernel.line_search_gaps(
+            self.tbls, *self._head(), *addresses, self.nus, self.nx, self.ndx, len(self.nodes), self.costs,
+            terminal.tbl, terminal.ints, terminal.par, terminal.no_control, x0, *scratch, saddr, alphas, cost, *d,
+            *thresholds, *rule, out)
 
     calc_diff_kernel = staticmethod(horizons.horizon_calc_diff)
     calc_kernel = staticmethod(horizons.horizon_calc)
