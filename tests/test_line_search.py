@@ -15,34 +15,31 @@ from crocopy.solvers import compiled_nodes, line_search, rollout, stopwatch
 SOLVERS = ["SolverDDP", "SolverFDDP", "SolverBoxDDP", "SolverBoxFDDP"]
 
 
-@pytest.fixture
-def statuses(monkeypatch):
-    """The ``(i, status)`` of every compiled search run while the test runs (None where it did not apply)."""
+def _spy(monkeypatch, name: str) -> list:
+    """The ``(i, status)`` of every call of the horizon's search ``name`` while the test runs (None where it did not
+    apply)."""
     seen = []
-    search = euler_horizon.EulerHorizon.line_search
+    search = getattr(euler_horizon.EulerHorizon, name)
 
     def spy(self, *args):
         found = search(self, *args)
         seen.append(found)
         return found
 
-    monkeypatch.setattr(euler_horizon.EulerHorizon, "line_search", spy)
+    monkeypatch.setattr(euler_horizon.EulerHorizon, name, spy)
     return seen
+
+
+@pytest.fixture
+def statuses(monkeypatch):
+    """The compiled searches from a feasible iterate run while the test runs."""
+    return _spy(monkeypatch, "line_search")
 
 
 @pytest.fixture
 def gap_statuses(monkeypatch):
-    """The ``(i, status)`` of every compiled search from an infeasible iterate run while the test runs."""
-    seen = []
-    search = euler_horizon.EulerHorizon.line_search_gaps
-
-    def spy(self, *args):
-        found = search(self, *args)
-        seen.append(found)
-        return found
-
-    monkeypatch.setattr(euler_horizon.EulerHorizon, "line_search_gaps", spy)
-    return seen
+    """The compiled searches from an infeasible iterate run while the test runs."""
+    return _spy(monkeypatch, "line_search_gaps")
 
 
 def _outcome(solver, solved):

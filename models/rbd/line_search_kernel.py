@@ -51,16 +51,9 @@ def line_search(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, ks, Ks
     last = alphas.shape[0] - 1
     for i in range(alphas.shape[0]):
         alpha = alphas[i]
-        total = horizon_rollout(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs, nus,
-                                nx, ndx, alpha, False, -1, 0, T, costs)
-        if not math.isfinite(total):
-            return i, NONFINITE
-        x = vector_at(xs_try[T], nx)
-        terminal = node_calc(ttbl, tints, tpar, x, no_control)
-        cost_try = 0.0
-        cost_try += total
-        cost_try += terminal
-        if not math.isfinite(cost_try) or not _finite(x):
+        cost_try, terminal = _trial(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs, nus,
+                                    nx, ndx, T, costs, ttbl, tints, tpar, no_control, alpha, False)
+        if not math.isfinite(cost_try):
             return i, NONFINITE
         dV = cost - cost_try
         dVexp = alpha * (d0 + 0.5 * alpha * d1)
@@ -71,6 +64,26 @@ def line_search(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, ks, Ks
         elif negative and (abs(d0) < th_grad or dV > th_negative * dVexp):
             return i, ACCEPTED
     return last, REJECTED
+
+
+@uncounted
+def _trial(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs, nus, nx, ndx, T, costs, ttbl,
+           tints, tpar, no_control, alpha, gaps):
+    """The trial of step ``alpha`` (the running nodes' rollout, every gap kept open if ``gaps``, then the terminal node
+    at the last state); returns ``(cost_try, terminal cost)``, ``cost_try`` NaN where the trial is not finite (a cost,
+    the total or the last state)."""
+    total = horizon_rollout(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs, nus, nx,
+                            ndx, alpha, gaps, -1, 0, T, costs)
+    if not math.isfinite(total):
+        return math.nan, math.nan
+    x = vector_at(xs_try[T], nx)
+    terminal = node_calc(ttbl, tints, tpar, x, no_control)
+    cost_try = 0.0
+    cost_try += total
+    cost_try += terminal
+    if not math.isfinite(cost_try) or not _finite(x):
+        return math.nan, terminal
+    return cost_try, terminal
 
 
 @uncounted
@@ -109,16 +122,9 @@ def line_search_gaps(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, k
         else:
             for j in range(nx):
                 x_first[j] = x0[j]
-        total = horizon_rollout(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs, nus,
-                                nx, ndx, alpha, gaps, -1, 0, T, costs)
-        if not math.isfinite(total):
-            return i, NONFINITE
-        x = vector_at(xs_try[T], nx)
-        terminal = node_calc(ttbl, tints, tpar, x, no_control)
-        cost_try = 0.0
-        cost_try += total
-        cost_try += terminal
-        if not math.isfinite(cost_try) or not _finite(x):
+        cost_try, terminal = _trial(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs, nus,
+                                    nx, ndx, T, costs, ttbl, tints, tpar, no_control, alpha, gaps)
+        if not math.isfinite(cost_try):
             return i, NONFINITE
         dV = cost - cost_try
         dv = 0.0
@@ -126,7 +132,7 @@ def line_search_gaps(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, k
             Vxx_f, dx = vector_at(saddr[t, VXX_F], ndx), vector_at(dxs[t], ndx)
             for j in range(ndx):
                 dv += Vxx_f[j] * dx[j]
-        node_diff(ttbl, tints, vector_at(xs[T], nx), x, dx_T)
+        node_diff(ttbl, tints, vector_at(xs[T], nx), vector_at(xs_try[T], nx), dx_T)
         dv += step_term(vector_at(saddr[T, VXX_F], ndx), dx_T)
         d0 = dg + dv
         d1 = dq - 2.0 * dv
