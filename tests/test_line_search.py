@@ -111,8 +111,8 @@ def test_a_predicted_increase_passes_on_a_small_gradient_for_fddp_only(grad_nega
         out = np.zeros(6)
         found = nodes.horizon.line_search_gaps(
             rollout.horizon_addresses(solver, nodes, None, None), nodes.terminal, problem.x0, solver._terminal_step(),
-            solver._horizon.addr, np.array([0.01, 0.005]), float(solver.cost), (0.0, -1e12), (1e9, 0.1, -1e9),
-            (True, grad_negative), out)
+            (solver._horizon.addr, solver._horizon.dims), np.array([0.01, 0.005]), float(solver.cost), (0.0, -1e12),
+            (1e9, 0.1, -1e9), (True, grad_negative), out)
     finally:
         solver._nodes = None
     assert out[3] < 0.0 and abs(out[4]) < 1e9

@@ -61,7 +61,7 @@ def compiled_trials(solver, first: int) -> tuple[int, bool]:
         return first, False
     else:
         found = horizon.line_search_gaps(at, nodes.terminal, problem.x0, solver._terminal_step(),
-                                         solver._horizon.addr, steps, float(solver.cost),
+                                         (solver._horizon.addr, solver._horizon.dims), steps, float(solver.cost),
                                          (float(solver._dg), float(solver._dq)), thresholds, gap_rule, out)
     if found is None:
         return first, False

@@ -115,11 +115,15 @@ class EulerHorizon:
         self.nodes[0].integrate(x0, step, x)
         return True
 
+    def _searches_with(self, terminal) -> bool:
+        """Whether the line searches apply with the ``terminal`` evaluator: every running node in this horizon's one
+        range without Python residuals, and a compiled Euler terminal node without them either."""
+        return self._searches and type(terminal) is type(self.nodes[0]) and not terminal.python.items
+
     def _whole(self, terminal) -> bool:
         """Whether one call may run every running node and the ``terminal`` evaluator: the conditions of
         :meth:`line_search`, on one thread."""
-        return (self._searches and self.threads is None and type(terminal) is type(self.nodes[0])
-                and not terminal.python.items)
+        return self.threads is None and self._searches_with(terminal)
 
     def calc(self, xs, us, xs_at: np.ndarray, us_at: np.ndarray, t0: int, t1: int) -> float:
         """Values of the nodes ``t0 <= t < t1``."""
@@ -194,25 +198,25 @@ class EulerHorizon:
         returns ``(i, status)``, or None where it does not apply: a range short of the whole horizon, Python residuals,
         another horizon class, or a ``terminal`` evaluator that is not a compiled Euler node without Python
         residuals.  Node ``t``'s cost stays in :attr:`costs`, the terminal node's in ``out[1]``."""
-        if not self._searches or type(terminal) is not type(self.nodes[0]) or terminal.python.items:
+        if not self._searches_with(terminal):
             return None
         return line_search_kernel.line_search(self.tbls, *self._head(), *addresses, self.nus, self.nx, self.ndx,
                                               len(self.nodes), self.costs, terminal.tbl, terminal.ints, terminal.par,
                                               terminal.no_control, alphas, cost, *d, *thresholds, negative, out)
 
     def line_search_gaps(self, addresses: tuple, terminal, x0: np.ndarray, scratch: tuple[np.ndarray, np.ndarray],
-                         saddr: np.ndarray, alphas: np.ndarray, cost: float, d: tuple[float, float],
-                         thresholds: tuple[float, float, float], rule: tuple[bool, bool],
+                         buffer: tuple[np.ndarray, np.ndarray], alphas: np.ndarray, cost: float,
+                         d: tuple[float, float], thresholds: tuple[float, float, float], rule: tuple[bool, bool],
                          out: np.ndarray) -> tuple[int, int] | None:
         """The line search of FDDP and Box-FDDP from an infeasible iterate in one call
-        (:func:`.line_search_kernel.line_search_gaps`; ``d = (dg, dq)``, ``scratch`` two tangent vectors, ``saddr``
-        the solver's horizon buffer, ``rule = (every, grad_negative)``); None where :meth:`line_search` does not
-        apply."""
-        if not self._searches or type(terminal) is not type(self.nodes[0]) or terminal.python.items:
+        (:func:`.line_search_kernel.line_search_gaps`; ``d = (dg, dq)``, ``scratch`` two tangent vectors, ``buffer``
+        the solver's horizon buffer ``(addr, dims)``, ``rule = (every, grad_negative)``); None where
+        :meth:`line_search` does not apply."""
+        if not self._searches_with(terminal):
             return None
         return line_search_kernel.line_search_gaps(
             self.tbls, *self._head(), *addresses, self.nus, self.nx, self.ndx, len(self.nodes), self.costs,
-            terminal.tbl, terminal.ints, terminal.par, terminal.no_control, x0, *scratch, saddr, alphas, cost, *d,
+            terminal.tbl, terminal.ints, terminal.par, terminal.no_control, x0, *scratch, *buffer, alphas, cost, *d,
             *thresholds, *rule, out)
 
     calc_diff_kernel = staticmethod(horizons.horizon_calc_diff)

@@ -24,7 +24,7 @@ import math
 
 from crocopy.kernels import uncounted, vector_at
 from crocopy.solvers.horizon import VXX_F
-from crocopy.solvers.riccati_kernel import step_term
+from crocopy.solvers.riccati_kernel import gap_step_term, step_term
 
 from .euler_node_kernel import node_calc, node_diff, node_integrate
 from .horizon_kernel import horizon_rollout
@@ -96,17 +96,17 @@ def _finite(x):
 
 @uncounted
 def line_search_gaps(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, ks, Ks, fs, lbs, ubs, nus, nx, ndx, T,
-                     costs, ttbl, tints, tpar, no_control, x0, step, dx_T, saddr, alphas, cost, dg, dq, th_grad,
-                     th_accept, th_negative, every, grad_negative, out):
+                     costs, ttbl, tints, tpar, no_control, x0, step, dx_T, saddr, sdims, alphas, cost, dg, dq,
+                     th_grad, th_accept, th_negative, every, grad_negative, out):
     """The trials of ``alphas`` from an infeasible iterate until one is accepted (module docstring); returns
     ``(i, status)``.
 
     The arguments of :func:`line_search` (no ``d``: ``dg``, ``dq``, the trial-independent parts of FDDP's ``d``), the
-    initial state ``x0``, scratch ``step (ndx,)`` and ``dx_T (ndx,)``, the solver's horizon buffer ``saddr`` (``Vxx f``
-    in its column :data:`~crocopy.solvers.horizon.VXX_F`); ``every``: the gaps are kept open at every step length
-    (FDDP; else only where ``α ≠ 1``, Box-FDDP); ``grad_negative``: ``|d₀| < th_grad`` also passes a negative
-    ``dVexp`` (FDDP).  ``out (6,)`` receives the last finite trial's ``cost_try``, terminal cost, ``dV``, ``dVexp``,
-    ``d₀`` and ``d₁``.
+    initial state ``x0``, scratch ``step (ndx,)`` and ``dx_T (ndx,)``, the solver's horizon buffer ``saddr``,
+    ``sdims`` (``Vxx f`` in its column :data:`~crocopy.solvers.horizon.VXX_F`); ``every``: the gaps are kept open at
+    every step length (FDDP; else only where ``α ≠ 1``, Box-FDDP); ``grad_negative``: ``|d₀| < th_grad`` also passes a
+    negative ``dVexp`` (FDDP).  ``out (6,)`` receives the last finite trial's ``cost_try``, terminal cost, ``dV``,
+    ``dVexp``, ``d₀`` and ``d₁``.
     """
     last = alphas.shape[0] - 1
     f0 = vector_at(fs[0], ndx)
@@ -127,11 +127,7 @@ def line_search_gaps(tbls, ints, ioff, par, poff, xs, us, xs_try, us_try, dxs, k
         if not math.isfinite(cost_try):
             return i, NONFINITE
         dV = cost - cost_try
-        dv = 0.0
-        for t in range(T):
-            Vxx_f, dx = vector_at(saddr[t, VXX_F], ndx), vector_at(dxs[t], ndx)
-            for j in range(ndx):
-                dv += Vxx_f[j] * dx[j]
+        dv = gap_step_term(saddr, sdims, dxs)  # the running nodes' (the terminal node's dx address is 0)
         node_diff(ttbl, tints, vector_at(xs[T], nx), vector_at(xs_try[T], nx), dx_T)
         dv += step_term(vector_at(saddr[T, VXX_F], ndx), dx_T)
         d0 = dg + dv
