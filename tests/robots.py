@@ -14,10 +14,38 @@ ROBOTS = ("anymal", "talos_legs", "solo12", "talos_arm", "kinova")
 FLOATING = ("anymal", "talos_legs", "solo12")
 
 
+JOINT_CHAIN = "joint_chain"
+"""The name :func:`load` gives :func:`joint_chain`."""
+
+
 @functools.cache
 def load(name: str) -> pin.Model:
-    """The Pinocchio model of ``example_robot_data.load(name)`` (cached; do not modify it)."""
+    """The Pinocchio model of ``example_robot_data.load(name)``, or :func:`joint_chain` for :data:`JOINT_CHAIN` (cached;
+    do not modify it)."""
+    if name == JOINT_CHAIN:
+        return joint_chain()
     return example_robot_data.load(name).model
+
+
+def joint_chain(seed: int = 4) -> pin.Model:
+    """A free flyer carrying a chain of the joint types the compiled kernels lower besides the revolute and prismatic
+    ones (spherical, planar, translation, helical on an axis and unaligned), each with a random placement, body and
+    armature, and a frame ``tip`` at its end."""
+    rng = np.random.default_rng(seed)
+    model = pin.Model()
+    joints = [pin.JointModelFreeFlyer(), pin.JointModelSpherical(), pin.JointModelPlanar(), pin.JointModelHX(0.2),
+              pin.JointModelTranslation(), pin.JointModelHelicalUnaligned(np.array([0.0, 0.6, 0.8]), -0.15),
+              pin.JointModelRY(), pin.JointModelHZ(0.05)]
+    parent = 0
+    for n, joint in enumerate(joints):
+        placement = pin.SE3(pin.exp3(rng.uniform(-1.0, 1.0, 3)), rng.uniform(-0.2, 0.2, 3))
+        parent = model.addJoint(parent, joint, placement, f"joint_{n}")
+        body = pin.Inertia(rng.uniform(0.5, 2.0), rng.uniform(-0.1, 0.1, 3), np.diag(rng.uniform(0.01, 0.1, 3)))
+        model.appendBodyToJoint(parent, body, pin.SE3.Identity())
+    model.armature = rng.uniform(0.0, 0.05, model.nv)
+    tip = pin.SE3(pin.exp3(rng.uniform(-1.0, 1.0, 3)), rng.uniform(-0.2, 0.2, 3))
+    model.addFrame(pin.Frame("tip", parent, 0, tip, pin.FrameType.OP_FRAME))
+    return model
 
 
 @functools.cache

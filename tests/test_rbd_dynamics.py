@@ -1,7 +1,8 @@
 """The compiled rigid-body kernels (models/rbd/dynamics_kernel.py) give Pinocchio's numbers, the oracle.
 
 Robots: iris (free flyer, one body), double_pendulum, kinova (unbounded RUBZ joints), talos_arm (armature),
-panda (aligned and unaligned prismatic), anymal, solo12, talos (free flyer + 32 revolute, armature).
+panda (aligned and unaligned prismatic), anymal, solo12, talos (free flyer + 32 revolute, armature), and
+``joint_chain`` (:func:`robots.joint_chain`: spherical, planar, translation and helical joints on a free flyer).
 Random states come from Hypothesis seeds; errors are compared with ``tol · max(1, max |reference|)``.
 """
 
@@ -15,13 +16,13 @@ import pinocchio as pin
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from robots import load
+from robots import JOINT_CHAIN, load
 
 from crocopy.models.rbd import dynamics_kernel as K
 from crocopy.models.rbd.joint_types import NotLowerable
 from crocopy.models.rbd.lowering import lower_model, make_workspace
 
-ROBOTS = ("iris", "double_pendulum", "kinova", "talos_arm", "panda", "anymal", "solo12", "talos")
+ROBOTS = ("iris", "double_pendulum", "kinova", "talos_arm", "panda", "anymal", "solo12", "talos", JOINT_CHAIN)
 REFERENCES = (pin.WORLD, pin.LOCAL, pin.LOCAL_WORLD_ALIGNED)
 SEEDS = st.integers(0, 2**32 - 1)
 
@@ -76,8 +77,8 @@ def test_lowered_model_matches_pinocchio():
 
 def test_lower_model_refuses_unsupported_joints():
     model = pin.Model()
-    model.addJoint(0, pin.JointModelSpherical(), pin.SE3.Identity(), "ball")
-    with pytest.raises(NotLowerable, match="'ball' is a JointModelSpherical"):
+    model.addJoint(0, pin.JointModelSphericalZYX(), pin.SE3.Identity(), "ball")
+    with pytest.raises(NotLowerable, match="'ball' is a JointModelSphericalZYX"):
         lower_model(model)
 
 

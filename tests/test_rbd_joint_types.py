@@ -8,10 +8,10 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from node_checks import compare_with_python_node, make_solver
-from robots import reaching_node
+from robots import JOINT_CHAIN, load, reaching_node
 
 import crocopy
-from crocopy.models.rbd.joint_types import NQ, NV, NotLowerable, joint_arrays
+from crocopy.models.rbd.joint_types import HELICAL, NQ, NV, NotLowerable, joint_arrays
 from crocopy.models.rbd.lowering import lower_model
 
 example_robot_data = pytest.importorskip("example_robot_data")
@@ -53,7 +53,8 @@ JOINTS = {
     "composite": _composite,
 }
 COMPILED = {"RX", "RY", "RZ", "revolute_unaligned", "RUBX", "RUBY", "RUBZ", "continuous_unaligned", "PX", "PY",
-            "PZ", "prismatic_unaligned", "free_flyer"}
+            "PZ", "prismatic_unaligned", "free_flyer", "spherical", "planar", "translation", "HX", "HY", "HZ",
+            "helical_unaligned"}
 
 
 def test_every_binding_joint_type_is_listed():
@@ -151,7 +152,7 @@ def test_continuous_joint_on_an_unaligned_axis():
     jtype, _, _, axis = joint_arrays(model)
     assert model.joints[1].shortname() == "JointModelRevoluteUnboundedUnaligned"
     assert jtype[1] == 2
-    np.testing.assert_allclose(axis[1], AXIS, atol=1e-15)
+    np.testing.assert_allclose(axis[1], [*AXIS, 0.0], atol=1e-15)
 
 
 @pytest.mark.parametrize("robot", ["iris", "double_pendulum", "kinova", "panda", "anymal", "talos"])
@@ -164,14 +165,58 @@ def test_joint_arrays_cover_q_and_v(robot):
         q_seen[idx_q[i]: idx_q[i] + NQ[jtype[i]]] += 1
         v_seen[idx_v[i]: idx_v[i] + NV[jtype[i]]] += 1
         if jtype[i] != 0:
-            assert np.linalg.norm(axis[i]) == pytest.approx(1.0)
+            assert np.linalg.norm(axis[i, :3]) == pytest.approx(1.0)
     assert (q_seen == 1).all() and (v_seen == 1).all()
 
 
 def test_unaligned_axis_and_unsupported_joint():
     model = pin.Model()
     model.addJoint(0, pin.JointModelRevoluteUnaligned(0.0, 0.6, 0.8), pin.SE3.Identity(), "hinge")
-    assert np.allclose(joint_arrays(model)[3][1], [0.0, 0.6, 0.8])
-    model.addJoint(1, pin.JointModelSpherical(), pin.SE3.Identity(), "ball")
-    with pytest.raises(NotLowerable, match="'ball' is a JointModelSpherical"):
+    assert np.allclose(joint_arrays(model)[3][1], [0.0, 0.6, 0.8, 0.0])
+    model.addJoint(1, pin.JointModelSphericalZYX(), pin.SE3.Identity(), "ball")
+    with pytest.raises(NotLowerable, match="'ball' is a JointModelSphericalZYX"):
         joint_arrays(model)
+
+
+def test_helical_axis_and_pitch_are_read_from_the_motion_subspace():
+    """A helical joint's axis and pitch (``S = [pitch a; a]``), aligned or not, whatever the sign of the pitch."""
+    model = pin.Model()
+    model.addJoint(0, pin.JointModelHY(0.3), pin.SE3.Identity(), "screw")
+    model.addJoint(1, pin.JointModelHelicalUnaligned(AXIS, -0.15), pin.SE3.Identity(), "tilted")
+    jtype, _, _, axis = joint_arrays(model)
+    assert list(jtype[1:]) == [HELICAL, HELICAL]
+    np.testing.assert_allclose(axis[1:], [[0.0, 1.0, 0.0, 0.3], [*AXIS, -0.15]], atol=1e-15)
+
+
+@pytest.mark.skipif(not crocopy.kernels_enabled(), reason="compiled nodes need numba")
+@pytest.mark.parametrize("impulse", [False, True])
+def test_contact_and_impulse_nodes_on_the_new_joints_match_the_python_nodes(impulse):
+    """A 3D contact (or impulse) at the tip of :func:`robots.joint_chain` (spherical, planar, translation and helical
+    joints on a free flyer): the compiled node equals the Python node."""
+    model = load(JOINT_CHAIN)
+    state = crocopy.StateMultibody(model)
+    fid = model.getFrameId("tip")
+    np.random.seed(11)
+    x = state.rand()
+    x[state.nq:] = np.random.default_rng(11).normal(size=state.nv)
+    residual = crocopy.ResidualModelFrameTranslation(state, fid, np.array([0.1, 0.2, 0.3]), 0)
+    if impulse:
+        impulses = crocopy.ImpulseModelMultiple(state)
+        impulses.addImpulse("tip", crocopy.ImpulseModel3D(state, fid, pin.LOCAL_WORLD_ALIGNED))
+        costs = crocopy.CostModelSum(state, 0)
+        costs.addCost("goal", crocopy.CostModelResidual(state, residual), 1.0)
+        node = crocopy.ActionModelImpulseFwdDynamics(state, impulses, costs)
+        compare_with_python_node(node, x, np.zeros(0), True, rtol=1e-8, atol=1e-9, cost_rel=1e-10)
+        return
+    actuation = crocopy.ActuationModelFloatingBase(state)
+    contacts = crocopy.ContactModelMultiple(state, actuation.nu)
+    contacts.addContact("tip", crocopy.ContactModel3D(state, fid, np.zeros(3), pin.LOCAL_WORLD_ALIGNED, actuation.nu,
+                                                      np.array([0.0, 20.0])))
+    costs = crocopy.CostModelSum(state, actuation.nu)
+    costs.addCost("goal", crocopy.CostModelResidual(state, crocopy.ResidualModelFrameTranslation(
+        state, fid, np.array([0.1, 0.2, 0.3]), actuation.nu)), 1.0)
+    costs.addCost("u", crocopy.CostModelResidual(state, crocopy.ResidualModelControl(state, actuation.nu)), 0.1)
+    dam = crocopy.DifferentialActionModelContactFwdDynamics(state, actuation, contacts, costs)
+    node = crocopy.IntegratedActionModelEuler(dam, 0.01)
+    u = np.random.default_rng(12).normal(size=actuation.nu)
+    compare_with_python_node(node, x, u, False, rtol=1e-7, atol=1e-7, cost_rel=1e-9)

@@ -1,7 +1,8 @@
 """The compiled Lie-group kernels equal Pinocchio (and crocopy's StateMultibody) on SO(3), SE(3) and robots.
 
 Oracles: Pinocchio's ``log3/Jlog3/log6/Jlog6`` and its ``integrate/difference/dIntegrate/dDifference`` on a
-lone free flyer and on example-robot-data models, and :class:`crocopy.StateMultibody`.  The SE(3)
+lone free flyer, on example-robot-data models and on :func:`robots.joint_chain` (spherical, planar, translation and
+helical joints: SO(3), SE(2) and vector spaces), and :class:`crocopy.StateMultibody`.  The SE(3)
 exponential, its Jacobian and the adjoint are private to the kernels; they are checked through
 ``integrate`` and ``dintegrate`` of a free flyer (``q ⊕ ν = M(q) exp6(ν)``, ``∂/∂v = jexp6(ν)``,
 ``∂/∂q = Ad(exp6 ν)⁻¹``).  Pinocchio's ``Jexp6``/``Jlog6`` (and ``Jlog3``) lose up to 1e-7 for rotation
@@ -19,14 +20,14 @@ import pinocchio as pin
 import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
-from robots import load
+from robots import JOINT_CHAIN, load
 
 import crocopy
 from crocopy.kernels import compiled
 from crocopy.models.rbd import lie_kernel as lie
-from crocopy.models.rbd.joint_types import FREEFLYER, REVOLUTE_UB, joint_arrays
+from crocopy.models.rbd.joint_types import FREEFLYER, PLANAR, REVOLUTE_UB, joint_arrays
 
-ROBOTS = ("iris", "double_pendulum", "kinova", "panda", "anymal", "talos")
+ROBOTS = ("iris", "double_pendulum", "kinova", "panda", "anymal", "talos", JOINT_CHAIN)
 ANGLES = (0.0, 1e-9, 1e-6, 0.3, 1.0, 2.0, 3.0, math.pi - 1e-6, math.pi - 1e-9)
 """Rotation angles where Pinocchio's maps are accurate to round-off."""
 TOL = 1e-10
@@ -236,6 +237,18 @@ def near_full_turn(jtype, idx_v, v) -> bool:
     return False
 
 
+PLANAR_CLAMPED = 1e-9
+"""Where a planar joint's relative cosine ``c0 c1 + s0 s1`` rounds above 1 (angles below about 1.5e-8), Pinocchio's
+``difference`` takes the angle as 0 (so do the kernels) but its ``dDifference`` puts the angle ``θ`` where ``jlog2``
+has ``θ/2`` (the kernels' ``jlog2`` is exact at ``θ``): the comparisons of those Jacobians allow this much there."""
+
+
+def planar_clamped(jtype, idx_q, q0, q1) -> bool:
+    """Whether a planar joint's relative cosine rounds above 1 (:data:`PLANAR_CLAMPED`)."""
+    return any(jtype[j] == PLANAR and q0[idx_q[j] + 2] * q1[idx_q[j] + 2] + q0[idx_q[j] + 3] * q1[idx_q[j] + 3] > 1.0
+               for j in range(1, jtype.shape[0]))
+
+
 @settings(max_examples=15, deadline=None)
 @given(seed=st.integers(0, 2**31), near=st.booleans())
 def test_configuration_space_equals_pinocchio(robot, seed, near):
@@ -266,7 +279,8 @@ def test_configuration_space_equals_pinocchio(robot, seed, near):
         np.testing.assert_array_equal(Jb[blocks], J[blocks])
         assert np.all(Jb[~blocks] == 7.0)
         lie.state_jdiff(jtype, idx_q, idx_v, nq, nv, x0, x1, arg == 0, Jx)  # its q block is dDifference
-        close(Jx[:nv, :nv], pin.dDifference(model, q0, q1, pin_arg))
+        close(Jx[:nv, :nv], pin.dDifference(model, q0, q1, pin_arg),
+              PLANAR_CLAMPED if planar_clamped(jtype, idx_q, q0, q1) else TOL)
 
 
 @settings(max_examples=15, deadline=None)

@@ -48,7 +48,7 @@ import numpy as np
 from crocopy.kernels import uncounted
 
 from .free_body_kernel import free_body, free_body_bias, free_body_derivatives
-from .joint_types import FREEFLYER, PRISMATIC, REVOLUTE
+from .joint_types import FREEFLYER, HELICAL, PLANAR, PRISMATIC, REVOLUTE, REVOLUTE_UB, SPHERICAL, TRANSLATION
 from .lowering import RigidBodyModel, RigidBodyWorkspace
 from .spatial import dot, fcross, get6, mcross, minus, plus, set6, times, unit
 
@@ -77,27 +77,35 @@ def forward_kinematics(rb: RigidBodyModel, ws: RigidBodyWorkspace, q: np.ndarray
         ax, ay, az = axis[i, 0], axis[i, 1], axis[i, 2]
         # the joint's own transform M_J(q) (rotation J[0:9] row-major, translation J[9:12])
         iq = idx_q[i]
-        if kind == FREEFLYER:
-            x, y, z, w = q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6]
+        if kind == FREEFLYER or kind == SPHERICAL:
+            k = iq + 3 if kind == FREEFLYER else iq
+            x, y, z, w = q[k], q[k + 1], q[k + 2], q[k + 3]
+            tx, ty, tz = (q[iq], q[iq + 1], q[iq + 2]) if kind == FREEFLYER else (0.0, 0.0, 0.0)
             J = (
                 1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w),
                 2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w),
                 2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y),
-                q[iq], q[iq + 1], q[iq + 2],
+                tx, ty, tz,
             )
+        elif kind == PLANAR:  # q = [x, y, cos θ, sin θ]: a rotation about z and a translation in the plane
+            c, sn = q[iq + 2], q[iq + 3]
+            J = (c, -sn, 0.0, sn, c, 0.0, 0.0, 0.0, 1.0, q[iq], q[iq + 1], 0.0)
+        elif kind == TRANSLATION:
+            J = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, q[iq], q[iq + 1], q[iq + 2])
         elif kind == PRISMATIC:
             J = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, ax * q[iq], ay * q[iq], az * q[iq])
         else:
-            if kind == REVOLUTE:
-                c, sn = math.cos(q[iq]), math.sin(q[iq])
-            else:  # REVOLUTE_UB: q = [cos θ, sin θ]
+            if kind == REVOLUTE_UB:  # q = [cos θ, sin θ]
                 c, sn = q[iq], q[iq + 1]
+            else:  # REVOLUTE, HELICAL
+                c, sn = math.cos(q[iq]), math.sin(q[iq])
             t = 1.0 - c
+            h = axis[i, 3] * q[iq] if kind == HELICAL else 0.0  # the helical joint's advance along its axis
             J = (
                 c + t * ax * ax, t * ax * ay - sn * az, t * ax * az + sn * ay,
                 t * ax * ay + sn * az, c + t * ay * ay, t * ay * az - sn * ax,
                 t * ax * az - sn * ay, t * ay * az + sn * ax, c + t * az * az,
-                0.0, 0.0, 0.0,
+                h * ax, h * ay, h * az,
             )
         for r in range(3):
             acc = op[par, r]
@@ -115,15 +123,24 @@ def forward_kinematics(rb: RigidBodyModel, ws: RigidBodyWorkspace, q: np.ndarray
         wz = oR[i, 2, 0] * ax + oR[i, 2, 1] * ay + oR[i, 2, 2] * az
         for d in range(nvj[i]):
             lin_x = lin_y = lin_z = ang_x = ang_y = ang_z = 0.0
-            if kind == FREEFLYER:
-                if d < 3:
-                    lin_x, lin_y, lin_z = oR[i, 0, d], oR[i, 1, d], oR[i, 2, d]
-                else:
-                    ang_x, ang_y, ang_z = oR[i, 0, d - 3], oR[i, 1, d - 3], oR[i, 2, d - 3]
-            elif kind == PRISMATIC:
+            if kind == PRISMATIC:
                 lin_x, lin_y, lin_z = wx, wy, wz
-            else:
+            elif kind == REVOLUTE or kind == REVOLUTE_UB or kind == HELICAL:
                 ang_x, ang_y, ang_z = wx, wy, wz
+                if kind == HELICAL:
+                    pitch = axis[i, 3]
+                    lin_x, lin_y, lin_z = pitch * wx, pitch * wy, pitch * wz
+            else:  # the joint frame's axis e, a translation or a rotation
+                if kind == SPHERICAL:
+                    e, linear = d, False
+                elif kind == PLANAR:  # x, y, then the rotation about z
+                    e, linear = d, d < 2
+                else:  # FREEFLYER, TRANSLATION: the translations first
+                    e, linear = (d, True) if d < 3 else (d - 3, False)
+                if linear:
+                    lin_x, lin_y, lin_z = oR[i, 0, e], oR[i, 1, e], oR[i, 2, e]
+                else:
+                    ang_x, ang_y, ang_z = oR[i, 0, e], oR[i, 1, e], oR[i, 2, e]
             k = iv + d
             oS[k, 0] = lin_x + py * ang_z - pz * ang_y
             oS[k, 1] = lin_y + pz * ang_x - px * ang_z

@@ -8,15 +8,23 @@ code               value  nq    nv    Pinocchio joint
 ``REVOLUTE_UB``    2      2     1     ``JointModelRUBX/RUBY/RUBZ``, ``JointModelRevoluteUnboundedUnaligned``
                                        (``q = [cos θ, sin θ]``)
 ``PRISMATIC``      3      1     1     ``JointModelPX/PY/PZ``, ``JointModelPrismaticUnaligned``
+``SPHERICAL``      4      4     3     ``JointModelSpherical`` (``q`` a quaternion xyzw, SO(3))
+``PLANAR``         5      4     3     ``JointModelPlanar`` (``q = [x, y, cos θ, sin θ]``, SE(2); ``v = [vx, vy, ω]``)
+``HELICAL``        6      1     1     ``JointModelHX/HY/HZ``, ``JointModelHelicalUnaligned`` (``θ`` about the
+                                       axis and ``pitch · θ`` along it)
+``TRANSLATION``    7      3     3     ``JointModelTranslation``
 =================  =====  ====  ====  ==========================================================
 
-The axis of a revolute or prismatic joint is stored apart (``RigidBodyModel.axis``), so aligned and
-unaligned joints share a code.  The axis of an unaligned joint is read from its motion subspace ``S``
-(Pinocchio's joint data after ``calc``: ``S = [0; axis]`` for a revolute, ``[axis; 0]`` for a prismatic joint),
-since Pinocchio's binding exposes ``axis`` on some unaligned joints only (not on
-``JointModelRevoluteUnboundedUnaligned``).  Every other joint type (spherical, spherical ZYX, planar,
-translation, helical, universal, ellipsoid, composite, mimic) is not lowered: :class:`NotLowerable`, and the
-node keeps its Python path.
+In the joint's own frame the motion subspace ``S`` is constant: the free flyer's and the translation's translations
+are the frame's axes, so are the spherical joint's rotations, the planar joint's are ``x``, ``y`` (translations) and
+``z`` (rotation), a revolute joint's ``[0; a]``, a prismatic joint's ``[a; 0]`` and a helical joint's ``[pitch a; a]``.
+The axis ``a`` of a revolute, prismatic or helical joint is stored apart (``RigidBodyModel.axis[:, :3]``, a helical
+joint's pitch in ``axis[:, 3]``), so aligned and unaligned joints share a code.  The axis of an unaligned joint, and a
+helical joint's axis and pitch, are read from its motion subspace ``S`` (Pinocchio's joint data after ``calc``), since
+Pinocchio's binding exposes ``axis`` on some unaligned joints only (not on ``JointModelRevoluteUnboundedUnaligned``)
+and a model's joints (the generic ``JointModel``) have no ``pitch``.  Every other joint type
+(spherical ZYX, universal, ellipsoid, composite, mimic: their ``S`` moves with ``q``) is not lowered:
+:class:`NotLowerable`, and the node keeps its Python path.
 """
 
 from __future__ import annotations
@@ -28,9 +36,13 @@ FREEFLYER = 0
 REVOLUTE = 1
 REVOLUTE_UB = 2
 PRISMATIC = 3
+SPHERICAL = 4
+PLANAR = 5
+HELICAL = 6
+TRANSLATION = 7
 
-NQ = {FREEFLYER: 7, REVOLUTE: 1, REVOLUTE_UB: 2, PRISMATIC: 1}
-NV = {FREEFLYER: 6, REVOLUTE: 1, REVOLUTE_UB: 1, PRISMATIC: 1}
+NQ = {FREEFLYER: 7, REVOLUTE: 1, REVOLUTE_UB: 2, PRISMATIC: 1, SPHERICAL: 4, PLANAR: 4, HELICAL: 1, TRANSLATION: 3}
+NV = {FREEFLYER: 6, REVOLUTE: 1, REVOLUTE_UB: 1, PRISMATIC: 1, SPHERICAL: 3, PLANAR: 3, HELICAL: 1, TRANSLATION: 3}
 
 _ALIGNED = {
     "JointModelRX": (REVOLUTE, 0),
@@ -47,12 +59,22 @@ _UNALIGNED = {
     "JointModelRevoluteUnaligned": REVOLUTE,
     "JointModelRevoluteUnboundedUnaligned": REVOLUTE_UB,
     "JointModelPrismaticUnaligned": PRISMATIC,
+    "JointModelHelicalUnaligned": HELICAL,
+    "JointModelHX": HELICAL,  # the variant's binding has no ``pitch``: read it from ``S`` too
+    "JointModelHY": HELICAL,
+    "JointModelHZ": HELICAL,
+}
+_WHOLE = {
+    "JointModelFreeFlyer": FREEFLYER,
+    "JointModelSpherical": SPHERICAL,
+    "JointModelPlanar": PLANAR,
+    "JointModelTranslation": TRANSLATION,
 }
 
 
 class NotLowerable(ValueError):
     """A Pinocchio model the compiled kernels cannot represent (the message names the joint and its type;
-    ``reason``, a short category such as ``"joint type JointModelSpherical"``)."""
+    ``reason``, a short category such as ``"joint type JointModelSphericalZYX"``)."""
 
     def __init__(self, message: str, reason: str = "joint tree order") -> None:
         super().__init__(message)
@@ -60,7 +82,8 @@ class NotLowerable(ValueError):
 
 
 def joint_arrays(model: object) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(jtype, idx_q, idx_v, axis)`` of a ``pinocchio.Model``; shapes ``(njoints,)`` ×3 and ``(njoints, 3)``.
+    """``(jtype, idx_q, idx_v, axis)`` of a ``pinocchio.Model``; shapes ``(njoints,)`` ×3 and ``(njoints, 4)`` (the
+    unit axis of a revolute, prismatic or helical joint, then a helical joint's pitch; zeros for the other joints).
 
     Entry 0 is the universe (``jtype[0] = -1``).  Raises :class:`NotLowerable` for any other joint type.
     """
@@ -68,18 +91,18 @@ def joint_arrays(model: object) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.
     jtype = np.full(njoints, -1, dtype=np.int64)
     idx_q = np.zeros(njoints, dtype=np.int64)
     idx_v = np.zeros(njoints, dtype=np.int64)
-    axis = np.zeros((njoints, 3))
+    axis = np.zeros((njoints, 4))
     for i in range(1, njoints):
         joint = model.joints[i]
         kind = joint.shortname()
-        if kind == "JointModelFreeFlyer":
-            jtype[i] = FREEFLYER
+        if kind in _WHOLE:
+            jtype[i] = _WHOLE[kind]
         elif kind in _ALIGNED:
             jtype[i], k = _ALIGNED[kind]
             axis[i, k] = 1.0
         elif kind in _UNALIGNED:
             jtype[i] = _UNALIGNED[kind]
-            axis[i] = _unaligned_axis(model, joint, jtype[i] == PRISMATIC)
+            axis[i] = _unaligned_axis(model, joint, jtype[i])
         else:
             raise NotLowerable(f"joint {model.names[i]!r} is a {kind}, which the compiled kernels do not support",
                                f"joint type {kind}")
@@ -87,10 +110,13 @@ def joint_arrays(model: object) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.
     return jtype, idx_q, idx_v, axis
 
 
-def _unaligned_axis(model: object, joint: object, prismatic: bool) -> np.ndarray:
-    """The unit axis ``(3,)`` of an unaligned revolute or prismatic joint, from its motion subspace at the
-    neutral configuration."""
+def _unaligned_axis(model: object, joint: object, kind: int) -> np.ndarray:
+    """``[a, pitch] (4,)``: the unit axis ``a`` of an unaligned revolute, prismatic or helical joint and a helical
+    joint's pitch (0 otherwise), from its motion subspace ``S`` at the neutral configuration (``[a; 0]``, ``[0; a]``
+    or ``[pitch a; a]``)."""
     jdata = joint.createData()
     joint.calc(jdata, pin.neutral(model))
     S = np.asarray(jdata.S, dtype=float).reshape(6)
-    return S[:3].copy() if prismatic else S[3:].copy()
+    if kind == PRISMATIC:
+        return np.append(S[:3], 0.0)
+    return np.append(S[3:], S[:3] @ S[3:] if kind == HELICAL else 0.0)

@@ -40,7 +40,20 @@ The model is given by ``(jtype, idx_q, idx_v)`` of :func:`~crocopy.models.rbd.jo
   ``exp3(ω)``'s, sign-aligned with ``q``'s and first-order normalised) and ``log6(M(q0)⁻¹ M(q1))``;
   ``∂(q ⊕ v)/∂q = Ad(exp6(v))⁻¹``, ``∂(q ⊕ v)/∂v = jexp6(v)``, ``∂(q1 ⊖ q0)/∂q1 = jlog6(M)`` and
   ``∂(q1 ⊖ q0)/∂q0 = -jlog6(M) Ad(M)⁻¹`` with ``M = M(q0)⁻¹ M(q1)``;
-* ``REVOLUTE``, ``PRISMATIC``: ``q + v`` and ``q1 - q0``, Jacobians ``±1``;
+* ``SPHERICAL``: ``q`` a quaternion; ``R(q) exp3(v)`` (the quaternion as the free flyer's, not sign-aligned: as
+  Pinocchio's SO(3)) and
+  ``log3(R(q0)ᵀ R(q1))``; ``∂(q ⊕ v)/∂q = exp3(v)ᵀ``, ``∂(q ⊕ v)/∂v = Jr(v)``, ``∂(q1 ⊖ q0)/∂q1 = jlog3(R)`` and
+  ``∂(q1 ⊖ q0)/∂q0 = -jlog3(R) Rᵀ`` with ``R = R(q0)ᵀ R(q1)``;
+* ``PLANAR``: ``q = [x, y, cos θ, sin θ]``, a placement ``M(q) = (R(θ), (x, y))`` of SE(2) whose ``[cos θ, sin θ]``
+  need not be unit (as in Pinocchio, ``R(θ)`` is read from them as they are and nothing is normalised); with
+  ``v = [ρ; ω]``, ``exp2(v) = (R(ω), V(ω) ρ)``, ``V(ω) = [[a, -c], [c, a]]``, ``a = sin ω/ω``, ``c = (1 - cos ω)/ω``:
+  ``M(q) exp2(v)`` and ``log2(M(q0)⁻¹ M(q1)) = [V(θ)⁻¹ t; θ]`` for the relative ``(R(θ), t)``; the right Jacobian
+  of ``exp2`` is ``[[a, c, ρ₁ e - ρ₂ f], [-c, a, ρ₁ f + ρ₂ e], [0, 0, 1]]`` with ``f = (1 - cos ω)/ω²``,
+  ``e = (ω - sin ω)/ω²`` (Solà et al. 2018), ``jlog2`` its inverse at ``log2 M``, the adjoint
+  ``Ad(R, t) = [[R, -[1] t], [0, 1]]`` (``[1] = [[0, -1], [1, 0]]``), and the Jacobians are the free flyer's with
+  these maps;
+* ``REVOLUTE``, ``PRISMATIC``, ``HELICAL``: ``q + v`` and ``q1 - q0``, Jacobians ``±1``; ``TRANSLATION`` the same
+  for its three coordinates (Jacobians ``±I``);
 * ``REVOLUTE_UB``: ``q = [cos θ, sin θ]`` rotated by ``v`` (first-order normalised) and the angle
   ``atan2(s, c)`` from ``q0`` to ``q1`` (``c = q0·q1``, ``s = q0 × q1``), Jacobians ``±1``.  As
   Pinocchio does, the angle is 0 when the rounded ``c`` exceeds 1 (angles below about 1.5e-8 apart).
@@ -62,10 +75,12 @@ import math
 
 from crocopy.kernels import uncounted
 
-from .joint_types import FREEFLYER, REVOLUTE_UB
+from .joint_types import FREEFLYER, PLANAR, REVOLUTE_UB, SPHERICAL, TRANSLATION
 
 _SMALL = 1e-2
 """Below this angle the trigonometric coefficients use their Taylor series."""
+
+_IDENTITY = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
 
 
 # --- 3x3 matrices as row-major 9-tuples (values, no allocation) --------------------------------------
@@ -414,9 +429,9 @@ def _relative_t(q0, q1, i):
 
 
 @uncounted
-def _integrate_freeflyer(q, iq, v, iv, q_out):
-    x0, y0, z0, w0 = q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6]
-    wx, wy, wz = v[iv + 3], v[iv + 4], v[iv + 5]
+def _quat_step(x0, y0, z0, w0, wx, wy, wz, align):
+    """The quaternion of ``R(x0, y0, z0, w0) exp3(ω)``: the product with ``exp3(ω)``'s, sign-aligned with the first
+    (``align``: as Pinocchio's SE(3), not its SO(3)) and first-order normalised, as a 4-tuple ``[x, y, z, w]``."""
     t = math.sqrt(wx * wx + wy * wy + wz * wz)
     if t < _SMALL:
         t2 = t * t
@@ -428,14 +443,98 @@ def _integrate_freeflyer(q, iq, v, iv, q_out):
     y = w0 * ey + ew * y0 + z0 * ex - x0 * ez
     z = w0 * ez + ew * z0 + x0 * ey - y0 * ex
     w = w0 * ew - x0 * ex - y0 * ey - z0 * ez
-    if x * x0 + y * y0 + z * z0 + w * w0 < 0.0:
+    if align and x * x0 + y * y0 + z * z0 + w * w0 < 0.0:
         x, y, z, w = -x, -y, -z, -w
     f = 0.5 * (3.0 - (x * x + y * y + z * z + w * w))
+    return f * x, f * y, f * z, f * w
+
+
+@uncounted
+def _integrate_freeflyer(q, iq, v, iv, q_out):
+    x0, y0, z0, w0 = q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6]
+    wx, wy, wz = v[iv + 3], v[iv + 4], v[iv + 5]
+    x, y, z, w = _quat_step(x0, y0, z0, w0, wx, wy, wz, True)
     R0 = _quat_rot_t(x0, y0, z0, w0)
     tx, ty, tz = _mv(_jr_t(wx, wy, wz, 1.0), v[iv], v[iv + 1], v[iv + 2])
     dx, dy, dz = _mv(R0, tx, ty, tz)
     q_out[iq], q_out[iq + 1], q_out[iq + 2] = q[iq] + dx, q[iq + 1] + dy, q[iq + 2] + dz
-    q_out[iq + 3], q_out[iq + 4], q_out[iq + 5], q_out[iq + 6] = f * x, f * y, f * z, f * w
+    q_out[iq + 3], q_out[iq + 4], q_out[iq + 5], q_out[iq + 6] = x, y, z, w
+
+
+@uncounted
+def _sphere_relative_t(q0, q1, i):
+    """``R(q0)ᵀ R(q1)`` of the spherical joint whose quaternion is at ``q[i:i+4]``."""
+    R0 = _quat_rot_t(q0[i], q0[i + 1], q0[i + 2], q0[i + 3])
+    return _mm(_tr(R0), _quat_rot_t(q1[i], q1[i + 1], q1[i + 2], q1[i + 3]))
+
+
+# --- SE(2) (the planar joint) ----------------------------------------------------------------------------
+
+
+@uncounted
+def _se2_coefs(w):
+    """``(a, c, e, f)`` of the module docstring at the angle ``w`` (any sign): ``sin w/w``, ``(1 - cos w)/w``,
+    ``(w - sin w)/w²`` and ``(1 - cos w)/w²``."""
+    a, f, g = _coefs(abs(w))
+    return a, w * f, w * g, f
+
+
+@uncounted
+def _exp2_t(vx, vy, w):
+    """``exp2([vx, vy, w])`` as ``(cos w, sin w, tx, ty)``."""
+    a, c, _, _ = _se2_coefs(w)
+    return math.cos(w), math.sin(w), a * vx - c * vy, c * vx + a * vy
+
+
+@uncounted
+def _planar_relative_t(q0, q1, i):
+    """``M(q0)⁻¹ M(q1)`` of the planar joint at ``q[i:i+4]`` as ``(cos, sin, tx, ty)`` of ``(R0ᵀ R1, R0ᵀ (t1 - t0))``
+    (the rotation's two entries as Pinocchio reads them: ``R0ᵀ R1`` from the raw ``[cos, sin]``)."""
+    c0, s0, c1, s1 = q0[i + 2], q0[i + 3], q1[i + 2], q1[i + 3]
+    dx, dy = q1[i] - q0[i], q1[i + 1] - q0[i + 1]
+    return c0 * c1 + s0 * s1, c0 * s1 - s0 * c1, c0 * dx + s0 * dy, c0 * dy - s0 * dx
+
+
+@uncounted
+def _log2_t(c, s, tx, ty, clamp):
+    """``log2`` of the SE(2) placement ``([[c, -s], [s, c]], t)`` as ``(ρx, ρy, θ)``, then ``α = a/(a² + c²)`` and
+    ``β = θ/2``, the entries of ``V(θ)⁻¹ = [[α, β], [-β, α]]``.  With ``clamp``, as Pinocchio's ``difference``, the
+    angle is 0 where ``c`` rounds above 1 (Pinocchio's ``dDifference`` does not clamp it; unlike the continuous joint's
+    difference, made exact, a planar joint's stays Pinocchio's)."""
+    w = 0.0 if clamp and c > 1.0 else math.atan2(s, c)
+    a, _, _, f = _se2_coefs(w)
+    alpha, beta = a / (2.0 * f), 0.5 * w
+    return alpha * tx + beta * ty, alpha * ty - beta * tx, w, alpha, beta
+
+
+@uncounted
+def _jexp2_t(vx, vy, w):
+    """The right Jacobian of ``exp2`` at ``[vx, vy, w]`` as a row-major 9-tuple."""
+    a, c, e, f = _se2_coefs(w)
+    return a, c, vx * e - vy * f, -c, a, vx * f + vy * e, 0.0, 0.0, 1.0
+
+
+@uncounted
+def _jlog2_t(c, s, tx, ty):
+    """``jlog2(M)``, the inverse of ``exp2``'s right Jacobian at ``log2 M``, as a 9-tuple: ``[[A⁻¹, -A⁻¹ b], [0, 1]]``
+    with ``A⁻¹ = [[α, -β], [β, α]]`` and ``b`` that Jacobian's last column."""
+    rx, ry, w, alpha, beta = _log2_t(c, s, tx, ty, False)
+    _, _, e, f = _se2_coefs(w)
+    bx, by = rx * e - ry * f, rx * f + ry * e
+    return alpha, -beta, beta * by - alpha * bx, beta, alpha, -(beta * bx + alpha * by), 0.0, 0.0, 1.0
+
+
+@uncounted
+def _inverse_adjoint2_t(c, s, tx, ty):
+    """``Ad(M)⁻¹ = [[Rᵀ, [1] Rᵀ t], [0, 1]]`` of the SE(2) placement ``(R(c, s), t)`` as a 9-tuple."""
+    ux, uy = c * tx + s * ty, c * ty - s * tx
+    return c, s, -uy, -s, c, ux, 0.0, 0.0, 1.0
+
+
+@uncounted
+def _neg(a):
+    """``-a`` for a 9-tuple."""
+    return (-a[0], -a[1], -a[2], -a[3], -a[4], -a[5], -a[6], -a[7], -a[8])
 
 
 @uncounted
@@ -445,6 +544,17 @@ def integrate(jtype, idx_q, idx_v, q, v, q_out):
         kind, iq, iv = jtype[j], idx_q[j], idx_v[j]
         if kind == FREEFLYER:
             _integrate_freeflyer(q, iq, v, iv, q_out)
+        elif kind == SPHERICAL:
+            q_out[iq], q_out[iq + 1], q_out[iq + 2], q_out[iq + 3] = _quat_step(
+                q[iq], q[iq + 1], q[iq + 2], q[iq + 3], v[iv], v[iv + 1], v[iv + 2], False)
+        elif kind == PLANAR:
+            c0, s0 = q[iq + 2], q[iq + 3]
+            cw, sw, tx, ty = _exp2_t(v[iv], v[iv + 1], v[iv + 2])
+            q_out[iq], q_out[iq + 1] = q[iq] + c0 * tx - s0 * ty, q[iq + 1] + s0 * tx + c0 * ty
+            q_out[iq + 2], q_out[iq + 3] = c0 * cw - s0 * sw, s0 * cw + c0 * sw
+        elif kind == TRANSLATION:
+            for k in range(3):
+                q_out[iq + k] = q[iq + k] + v[iv + k]
         elif kind == REVOLUTE_UB:
             c0, s0 = q[iq], q[iq + 1]
             ca, sa = math.cos(v[iv]), math.sin(v[iv])
@@ -466,6 +576,14 @@ def difference(jtype, idx_q, idx_v, q0, q1, v_out):
             res = _log6_t(R, p[0], p[1], p[2])
             for k in range(6):
                 v_out[iv + k] = res[k]
+        elif kind == SPHERICAL:
+            v_out[iv], v_out[iv + 1], v_out[iv + 2] = _log3_t(_sphere_relative_t(q0, q1, iq))
+        elif kind == PLANAR:
+            c, s, tx, ty = _planar_relative_t(q0, q1, iq)
+            v_out[iv], v_out[iv + 1], v_out[iv + 2], _, _ = _log2_t(c, s, tx, ty, True)
+        elif kind == TRANSLATION:
+            for k in range(3):
+                v_out[iv + k] = q1[iq + k] - q0[iq + k]
         elif kind == REVOLUTE_UB:
             c0, s0, c1, s1 = q0[iq], q0[iq + 1], q1[iq], q1[iq + 1]
             v_out[iv] = math.atan2(c0 * s1 - s0 * c1, c0 * c1 + s0 * s1)
@@ -478,6 +596,21 @@ def _ddifference_blocks(jtype, idx_q, idx_v, q0, q1, arg, J):
     """The diagonal blocks of ``∂(q1 ⊖ q0)/∂(q0 or q1)`` into ``J`` at ``(idx_v, idx_v)``."""
     for j in range(1, jtype.shape[0]):
         kind, iq, iv = jtype[j], idx_q[j], idx_v[j]
+        if kind == SPHERICAL:
+            R = _sphere_relative_t(q0, q1, iq)
+            x, y, z, k = _log3_k_t(R)
+            w = _skew(x, y, z)
+            A = _poly(0.5, k, w, _mm(w, w))
+            _store(A if arg == 1 else _neg(_mm(A, _tr(R))), J, iv, iv)
+            continue
+        if kind == PLANAR:
+            c, s, tx, ty = _planar_relative_t(q0, q1, iq)
+            A = _jlog2_t(c, s, tx, ty)
+            _store(A if arg == 1 else _neg(_mm(A, _inverse_adjoint2_t(c, s, tx, ty))), J, iv, iv)
+            continue
+        if kind == TRANSLATION:
+            _store(_IDENTITY if arg == 1 else _neg(_IDENTITY), J, iv, iv)
+            continue
         if kind != FREEFLYER:
             J[iv, iv] = 1.0 if arg == 1 else -1.0
             continue
@@ -504,7 +637,19 @@ def dintegrate_blocks(jtype, idx_q, idx_v, v, arg, J):
     entries outside the blocks are not written."""
     for j in range(1, jtype.shape[0]):
         kind, iv = jtype[j], idx_v[j]
-        if kind != FREEFLYER:
+        if kind == SPHERICAL:
+            x, y, z = v[iv], v[iv + 1], v[iv + 2]
+            _store(_jr_t(x, y, z, -1.0) if arg == 1 else _tr(_exp3_t(x, y, z)), J, iv, iv)
+        elif kind == PLANAR:
+            x, y, w = v[iv], v[iv + 1], v[iv + 2]
+            if arg == 1:
+                _store(_jexp2_t(x, y, w), J, iv, iv)
+            else:
+                cw, sw, tx, ty = _exp2_t(x, y, w)
+                _store(_inverse_adjoint2_t(cw, sw, tx, ty), J, iv, iv)
+        elif kind == TRANSLATION:
+            _store(_IDENTITY, J, iv, iv)
+        elif kind != FREEFLYER:
             J[iv, iv] = 1.0
         elif arg == 1:
             _jexp6_into(v[iv], v[iv + 1], v[iv + 2], v[iv + 3], v[iv + 4], v[iv + 5], J, iv, iv)

@@ -11,7 +11,8 @@ field                      shape                 meaning
 ``jtype idx_q idx_v``      ``(njoints,)``        joint code (:mod:`.joint_types`, ``-1`` for the universe), first
                                                  configuration / velocity index
 ``nvj``                    ``(njoints,)``        velocity size of each joint
-``axis``                   ``(njoints, 3)``      unit axis of a revolute / prismatic joint
+``axis``                   ``(njoints, 4)``      unit axis of a revolute / prismatic / helical joint, then
+                                                 a helical joint's pitch (:mod:`.joint_types`)
 ``parent``                 ``(njoints,)``        parent joint (``parent[0] = 0``)
 ``subtree_end``            ``(njoints,)``        one past the last joint of the subtree of each joint
 ``depth``                  ``(njoints,)``        number of moving joints from the root to the joint, itself included
