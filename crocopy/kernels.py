@@ -15,7 +15,9 @@ Each kernel lives beside its twin:
 ``solvers/intro_riccati_kernel.py``    ``intro_pass`` (twin: ``SolverIntro``'s constrained node steps over
                                        the horizon); ``row_norm`` (twin: ``SolverIntro._norm`` of every ``h``)
 ``costs/stack_kernel.py``              ``activation_values``, ``activation_derivatives``,
-                                       ``accumulate`` and their ``*_numpy`` twins
+                                       ``accumulate`` and their ``*_numpy`` twins; ``stack_values``,
+                                       ``stack_derivatives_and_sums`` (compiled nodes only; twin: the
+                                       activations' own ``calc``/``calcDiff``)
 ``integrators/euler_kernel.py``        ``euler_step``, ``euler_chain``, ``add_integrate_jacobian``
                                        and their ``*_numpy`` twins
 ``models/rbd/euler_node_kernel.py``    a whole Euler node of free forward dynamics (twin: the node's

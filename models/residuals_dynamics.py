@@ -192,6 +192,16 @@ class ResidualModelJointEffort(ResidualModelAbstract):
     ``fwddyn=True`` they are the controls themselves and the residual does not depend on ``x``.
     """
 
+    compiled_kind = "effort"
+    """The kind compiled forward-dynamics nodes evaluate this class as (their joint efforts are the controls:
+    :mod:`crocopy.models.rbd.residual_kernel`; an inverse-dynamics node has an item kind of its own for it)."""
+    rows_only = True
+    """Its ``calc`` writes the rows ``r`` and nothing else (:meth:`.CostStack.calc_residual_datas`)."""
+
+    def compiled_parameters(self) -> np.ndarray:
+        """The parameters compiled nodes read: ``uref``."""
+        return self._uref
+
     def __init__(
         self,
         state: StateAbstract,
@@ -250,6 +260,16 @@ class ResidualModelJointAcceleration(ResidualModelAbstract):
     Also ``(state, nu)`` and ``(state)`` with ``aref = 0``.  Reads ``shared.joint`` (``a``,
     ``da_dx``, ``da_du``); on terminal nodes (no acceleration) ``r = 0`` with zero Jacobians.
     """
+
+    compiled_kind = "acceleration"
+    """The kind compiled forward-dynamics nodes evaluate this class as (:mod:`crocopy.models.rbd.residual_kernel`; an
+    inverse-dynamics node has an item kind of its own for it)."""
+    rows_only = True
+    """Its ``calc`` writes the rows ``r`` and nothing else (:meth:`.CostStack.calc_residual_datas`)."""
+
+    def compiled_parameters(self) -> np.ndarray:
+        """The parameters compiled nodes read: ``aref``."""
+        return self._aref
 
     def __init__(self, state: StateAbstract, aref: np.ndarray | int | None = None, nu: int | None = None) -> None:
         aref, nu = _split_ref_nu(aref, nu, state.nv, "aref")

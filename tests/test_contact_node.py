@@ -34,7 +34,8 @@ CASES = {
 
 
 def contact_node(case: str, armature: bool = False, damping: float = 0.0, seed: int = 0, dt: float = 0.01):
-    """An Euler node of contact dynamics of ``case`` with state, control, swing-foot, cone and CoM costs."""
+    """An Euler node of contact dynamics of ``case`` with state, control, swing-foot, cone, CoM, joint-effort and
+    joint-acceleration costs."""
     robot, nfeet, reference, gains = CASES[case]
     rng = np.random.default_rng(seed)
     model = load(robot)
@@ -71,6 +72,10 @@ def contact_node(case: str, armature: bool = False, damping: float = 0.0, seed: 
     costs.addCost("swing", crocopy.CostModelResidual(state, translation), 2.0)
     com = crocopy.ResidualModelCoMPosition(state, rng.standard_normal(3), nu)
     costs.addCost("com", crocopy.CostModelResidual(state, com), 3.0)
+    effort = crocopy.ResidualModelJointEffort(state, actuation, rng.standard_normal(nu), nu)
+    costs.addCost("effort", crocopy.CostModelResidual(state, effort), 0.01)
+    acceleration = crocopy.ResidualModelJointAcceleration(state, rng.standard_normal(state.nv), nu)
+    costs.addCost("acceleration", crocopy.CostModelResidual(state, acceleration), 1e-3)
     dam = crocopy.DifferentialActionModelContactFwdDynamics(state, actuation, contacts, costs, damping, True)
     if armature:
         dam.armature = np.linspace(0.01, 0.1, state.nv)

@@ -12,7 +12,7 @@ import pickle
 import numpy as np
 import pinocchio as pin
 import pytest
-from node_checks import FIELDS, check_finite_differences, compare_with_python_node
+from node_checks import FIELDS, check_finite_differences, compare_with_python_node, make_solver
 from robots import frame, load
 
 import crocopy
@@ -22,7 +22,20 @@ pytestmark = pytest.mark.skipif(not crocopy.kernels_enabled(), reason="compiled 
 ROBOTS = ("iris", "kinova", "talos_arm", "anymal", "double_pendulum")
 FRAMES = {"iris": "iris__rotor_2", "double_pendulum": "link2"}
 KINDS = ("state", "control", "placement", "translation", "rotation", "velocity_local", "velocity_world",
-         "velocity_lwa")
+         "velocity_lwa", "effort", "acceleration")
+
+
+ACTIVATIONS = (
+    lambda nr, rng: crocopy.ActivationModelQuad(nr),
+    lambda nr, rng: crocopy.ActivationModelWeightedQuad(rng.uniform(0.5, 2.0, nr)),
+    lambda nr, rng: crocopy.ActivationModelQuadraticBarrier(crocopy.ActivationBounds(-0.1 * np.ones(nr),
+                                                                                     0.1 * np.ones(nr))),
+    lambda nr, rng: crocopy.ActivationModelSmooth1Norm(nr, rng.uniform(0.1, 2.0)),
+    lambda nr, rng: crocopy.ActivationModelQuadFlatExp(nr, rng.uniform(1.0, 10.0)),
+    lambda nr, rng: crocopy.ActivationModelQuadFlatLog(nr, rng.uniform(1.0, 10.0)),
+)
+"""The activations the node factory cycles through: the fused quadratic-barrier family, then those with an item form
+(evaluated item by item in the node's kernel)."""
 
 
 def robot_frame(robot: str) -> str:
@@ -42,7 +55,8 @@ def actuation(robot: str, state):
     return crocopy.ActuationModelFull(state)
 
 
-def residual(kind: str, state, nu: int, fid: int, rng: np.random.Generator):
+def residual(kind: str, state, act, fid: int, rng: np.random.Generator):
+    nu = act.nu
     if kind == "state":
         np.random.seed(int(rng.integers(1 << 30)))
         return crocopy.ResidualModelState(state, state.rand(), nu)
@@ -54,12 +68,17 @@ def residual(kind: str, state, nu: int, fid: int, rng: np.random.Generator):
         return crocopy.ResidualModelFrameTranslation(state, fid, rng.standard_normal(3), nu)
     if kind == "rotation":
         return crocopy.ResidualModelFrameRotation(state, fid, pin.SE3.Random().rotation, nu)
+    if kind == "effort":
+        return crocopy.ResidualModelJointEffort(state, act, rng.standard_normal(nu), nu)
+    if kind == "acceleration":
+        return crocopy.ResidualModelJointAcceleration(state, rng.standard_normal(state.nv), nu)
     reference = {"local": pin.LOCAL, "world": pin.WORLD, "lwa": pin.LOCAL_WORLD_ALIGNED}[kind.split("_")[1]]
     return crocopy.ResidualModelFrameVelocity(state, fid, pin.Motion.Random(), reference, nu)
 
 
 def node(robot: str, kinds: tuple, seed: int = 0, dt: float = 0.01):
-    """An Euler node of ``robot`` with one cost per kind (activations cycling through the quadratic family)."""
+    """An Euler node of ``robot`` with one cost per kind (activations cycling through :data:`ACTIVATIONS`; the
+    acceleration cost weighted 1e-4, so that the cost's central differences are not lost in its round-off)."""
     rng = np.random.default_rng(seed)
     model = load(robot) if robot not in ("iris", "double_pendulum") else _extra(robot)
     state = crocopy.StateMultibody(model)
@@ -67,15 +86,10 @@ def node(robot: str, kinds: tuple, seed: int = 0, dt: float = 0.01):
     fid = model.getFrameId(robot_frame(robot))
     costs = crocopy.CostModelSum(state, act.nu)
     for n, kind in enumerate(kinds):
-        res = residual(kind, state, act.nu, fid, rng)
-        if n % 3 == 0:
-            activation = crocopy.ActivationModelQuad(res.nr)
-        elif n % 3 == 1:
-            activation = crocopy.ActivationModelWeightedQuad(rng.uniform(0.5, 2.0, res.nr))
-        else:
-            bounds = crocopy.ActivationBounds(-0.1 * np.ones(res.nr), 0.1 * np.ones(res.nr))
-            activation = crocopy.ActivationModelQuadraticBarrier(bounds)
-        costs.addCost(kind, crocopy.CostModelResidual(state, activation, res), rng.uniform(0.5, 3.0))
+        res = residual(kind, state, act, fid, rng)
+        activation = ACTIVATIONS[n % len(ACTIVATIONS)](res.nr, rng)
+        weight = rng.uniform(0.5, 3.0) * (1e-4 if kind == "acceleration" else 1.0)  # accelerations reach 1e2 here
+        costs.addCost(kind, crocopy.CostModelResidual(state, activation, res), weight)
     dam = crocopy.DifferentialActionModelFreeFwdDynamics(state, act, costs)
     if robot == "talos_arm":
         dam.armature = 0.05 * np.ones(state.nv)
@@ -282,3 +296,48 @@ def test_the_actuations_and_contacts_that_lower_themselves_are_covered_and_docum
         contact.compiled_reference(R_out, p_out)
         np.testing.assert_array_equal(R_out, R)
         np.testing.assert_array_equal(p_out, p)
+
+
+def test_activations_with_an_item_form_are_covered_and_others_keep_the_python_path():
+    """Every activation class declaring an item form is in the factory; a full-Hessian quadratic-flat activation, a
+    smooth 2-norm and a subclass overriding ``calc`` keep the node on the Python path, naming the activation."""
+    from crocopy.activations.base import ActivationModelAbstract
+    from crocopy.models.rbd.lowering import declaring
+
+    rng = np.random.default_rng(0)
+    covered = {type(make(3, rng)) for make in ACTIVATIONS}
+    assert set(declaring(ActivationModelAbstract, "item_form")) - {ActivationModelAbstract} <= covered
+
+    class Smooth1(crocopy.ActivationModelSmooth1Norm):
+        def calc(self, data, r):
+            super().calc(data, r)
+
+    for activation, name in ((crocopy.ActivationModelQuadFlatExp(6, 2.0, True), "ActivationModelQuadFlatExp"),
+                             (crocopy.ActivationModelSmooth2Norm(6), "ActivationModelSmooth2Norm"),
+                             (Smooth1(6), "Smooth1")):
+        iam, state = node("kinova", ("state",))
+        costs = iam.differential.costs
+        residual = crocopy.ResidualModelControl(state, iam.nu)
+        costs.addCost("other", crocopy.CostModelResidual(state, activation, residual), 1.0)
+        data = iam.createData()
+        assert iam._compiled_node(data, False, {}) is None
+        problem = crocopy.ShootingProblem(state.zero(), [iam], iam)
+        assert name in crocopy.compiled_coverage(problem)[0].reason
+
+
+def test_an_item_activation_parameter_set_between_solves_is_read_again():
+    """``alpha`` of a quadratic-flat activation assigned between two solves: the compiled solve after it gives the
+    iterations and cost of a solve on the Python nodes."""
+    iam, state = node("kinova", ("state", "control", "placement", "translation", "rotation"), seed=2)
+    flat = iam.differential.costs.costs["rotation"].cost.activation
+    assert isinstance(flat, crocopy.ActivationModelQuadFlatExp)
+    problem = crocopy.ShootingProblem(state.zero(), [iam] * 5, iam)
+    compiled = make_solver("SolverFDDP", problem)
+    compiled.solve([], [], 3)
+    flat.alpha = 0.5
+    results = []
+    for solver in (compiled, make_solver("SolverFDDP", problem, False)):
+        solver.solve([], [], 6)
+        results.append((solver.iter, solver.cost))
+    assert results[0][0] == results[1][0]
+    assert results[0][1] == pytest.approx(results[1][1], rel=1e-10)

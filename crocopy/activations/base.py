@@ -47,6 +47,13 @@ class ActivationModelAbstract(Parametrized, Guarded):
         """
         return None
 
+    def item_form(self) -> tuple[str, float] | None:
+        """``(kind, parameter)`` of a diagonal activation that compiled nodes evaluate item by item
+        (:func:`crocopy.costs.stack_kernel.item_activations`: ``"smooth1"`` with its ``eps``, ``"flat_exp"`` and
+        ``"flat_log"`` with their ``alpha``), else ``None``; a subclass that overrides ``calc``/``calcDiff`` of the
+        class declaring it is not evaluated so."""
+        return None
+
     def calc(self, data: "ActivationDataAbstract", r: np.ndarray) -> None:
         raise NotImplementedError
 

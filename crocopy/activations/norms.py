@@ -51,6 +51,9 @@ class ActivationModelSmooth1Norm(_Smoothing, ActivationModelAbstract):
     def createData(self) -> ActivationDataSmooth1Norm:
         return ActivationDataSmooth1Norm(self)
 
+    def item_form(self) -> tuple[str, float]:
+        return "smooth1", self._eps
+
     def calc(self, data: ActivationDataAbstract, r: np.ndarray) -> None:
         data.a_value = float(np.sum(np.sqrt(self.eps + r * r)))
 

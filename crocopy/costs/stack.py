@@ -15,7 +15,9 @@ weighted quadratic barrier: ``a = ½ Σ aᵢ (rᵢ - clip(rᵢ, lbᵢ, ubᵢ))²
 rᵢ ≥ ubᵢ]``, the quadratic ones with ``lb = ub = 0``; see ``barrier_form``) are evaluated for all
 rows at once; other diagonal activations are called item by item, and so is a subclass that
 overrides ``calc``/``calcDiff`` without declaring its own ``barrier_form`` (logged once at DEBUG
-level on the ``"crocopy"`` logger).
+level on the ``"crocopy"`` logger).  Of those, the ones with an ``item_form`` (smooth 1-norm, quadratic-flat
+exponential and logarithmic) are listed per item in ``act_kinds``/``act_params`` for compiled nodes, which evaluate
+them in their kernel (:mod:`.stack_kernel`).
 
 Rows are ordered with the control-independent residuals first: ``Ju`` holds only the rows of the
 control-dependent residuals (the tail of ``Jx``), so their zero ``Ru`` never enters a product.
@@ -47,6 +49,18 @@ def _fused_form(activation) -> tuple | None:
         log_fallback(type(activation), steps, "the cost stack's fused activation step")
         return None
     return form
+
+
+def _item_form(activation) -> tuple | None:
+    """``(kind code, parameter)`` of ``activation.item_form()`` (:mod:`.stack_kernel`), or None when it has none or its
+    class overrides the ``calc``/``calcDiff`` of the class that declares the form."""
+    form = activation.item_form()
+    if form is None:
+        return None
+    owner = next(c for c in type(activation).__mro__ if "item_form" in vars(c))
+    if overridden(activation, owner, ("calc", "calcDiff")):
+        return None
+    return stack_kernel.ITEM_KINDS[form[0]], float(form[1])
 
 
 def _constant_jacobians(residual) -> bool:
@@ -82,6 +96,9 @@ class CostStack:
         self.act_weights = np.ones(nr)
         self.weights = np.zeros(nr)
         self.item_costs, self.item_weights = np.zeros(n), np.zeros(n)
+        self.act_kinds, self.act_params = np.zeros(n, dtype=np.int64), np.zeros(n)
+        """Per item, the activation kind compiled nodes evaluate it with and its parameter (:mod:`.stack_kernel`:
+        ``BARRIER`` for the fused family, whose rows ``lb``, ``ub``, ``act_weights`` hold its form)."""
         self.slices: list[slice] = []
         start = 0
         for _, item, _ in self.items:
@@ -100,10 +117,12 @@ class CostStack:
         self.active: list = []
         self.varying: list = []
         self.unfused: list = []
+        self.uncompiled: list = []
+        """The active activations of :attr:`unfused` that compiled nodes cannot evaluate either (no item form)."""
 
     def __getstate__(self) -> dict:
         """Copy or pickle without the per-evaluation lists (they hold views; :meth:`refresh` rebuilds them)."""
-        return {**self.__dict__, "active": [], "varying": [], "unfused": []}
+        return {**self.__dict__, "active": [], "varying": [], "unfused": [], "uncompiled": []}
 
     def _share(self, item, cdata, rows: slice, k: int) -> None:
         """Make the item's residual and activation arrays views into the stack."""
@@ -126,7 +145,7 @@ class CostStack:
         whether its layout changed: the node kind, or which items are evaluated and how (active, varying, unfused).
         Otherwise only values changed (weights, activation weights and bounds), in the same arrays."""
         before = self._layout()
-        self.active, self.varying, self.unfused = [], [], []
+        self.active, self.varying, self.unfused, self.uncompiled = [], [], [], []
         for k, ((_, item, cdata), rows) in enumerate(zip(self.items, self.slices)):
             cost = item.cost
             cdata.zero = terminal and cost._terminal_zero
@@ -136,10 +155,16 @@ class CostStack:
             self.weights[rows] = weight
             self.item_weights[k] = weight
             form = _fused_form(cost.activation)
+            self.act_kinds[k], self.act_params[k] = stack_kernel.BARRIER, 0.0
             if form is None:
                 form = (0.0, 0.0, 1.0)
                 if on:
                     self.unfused.append((cost.activation, cdata.activation, cdata.residual.r))
+                    item = _item_form(cost.activation)
+                    if item is None:
+                        self.uncompiled.append(cost.activation)
+                    else:
+                        self.act_kinds[k], self.act_params[k] = item
             self.lb[rows], self.ub[rows], self.act_weights[rows] = form
             if on:
                 self.active.append((cost.residual, cdata.residual))

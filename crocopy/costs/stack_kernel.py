@@ -12,9 +12,21 @@ row inside its bounds, an inactive item) are left out of the matrix products, an
 zero entries of each Jacobian row.  Each kernel has a
 numpy twin (``*_numpy``, same arguments) giving the same numbers to round-off (tested);
 :mod:`crocopy.kernels` chooses.
+
+Compiled nodes also evaluate, item by item, the diagonal activations of another form (an item's ``kinds[k]`` not
+:data:`BARRIER`, its parameter ``params[k]``; ``n = Σ rᵢ²`` over the item's rows, Crocoddyl's diagonal ``Arr``):
+
+* :data:`SMOOTH1` (``ε``): ``a = Σ √(ε + rᵢ²)``, ``Arᵢ = rᵢ/sᵢ``, ``Arrᵢ = ε/sᵢ³`` with ``sᵢ = √(ε + rᵢ²)``;
+* :data:`FLAT_EXP` (``α``): ``a = 1 - e``, ``e = exp(-n/α)``, ``Ar = c r``, ``Arrᵢ = c - (2/α) c rᵢ²``, ``c = (2/α) e``;
+* :data:`FLAT_LOG` (``α``): ``a = log(1 + n/α)``, ``Ar = c r``, ``Arrᵢ = c - c² rᵢ²``, ``c = 2/(α + n)``
+
+(:func:`stack_values`, :func:`stack_derivatives_and_sums`: the barrier-family pass, then those items'; the same
+numbers as the activations' own ``calc``/``calcDiff`` to round-off, tested through the nodes).
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -171,3 +183,85 @@ def _derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, w
 
 
 derivatives_and_sums = compiled(_derivatives_and_sums)
+
+
+BARRIER, SMOOTH1, FLAT_EXP, FLAT_LOG = range(4)
+"""Activation kinds of a stack item: the barrier family (every row by the fused formula), then the item forms
+(:meth:`crocopy.activations.base.ActivationModelAbstract.item_form`)."""
+ITEM_KINDS = {"smooth1": SMOOTH1, "flat_exp": FLAT_EXP, "flat_log": FLAT_LOG}
+"""The kind of each item form's name."""
+
+
+def _item_activations(r, starts, kinds, params, item_costs, item_weights, Ar, Arr, derivatives):
+    """The cost (and, if ``derivatives``, the rows of ``Ar``, ``Arr``) of every item whose kind is not
+    :data:`BARRIER`; returns ``Σₖ wₖ costₖ`` over every item, in item order."""
+    nr, n = r.shape[0], starts.shape[0]
+    total = 0.0
+    for k in range(n):
+        kind = kinds[k]
+        if kind != BARRIER:
+            stop = starts[k + 1] if k + 1 < n else nr
+            p = params[k]
+            if kind == SMOOTH1:
+                acc = 0.0
+                for i in range(starts[k], stop):
+                    ri = r[i]
+                    si = math.sqrt(p + ri * ri)
+                    acc += si
+                    if derivatives:
+                        Ar[i] = ri / si
+                        Arr[i] = p / (si * si * si)
+                item_costs[k] = acc
+            else:
+                n2 = 0.0
+                for i in range(starts[k], stop):
+                    n2 += r[i] * r[i]
+                if kind == FLAT_EXP:
+                    e = math.exp(-n2 / p)
+                    item_costs[k] = 1.0 - e
+                    c = 2.0 / p * e
+                    curvature = 2.0 / p * c
+                else:
+                    item_costs[k] = math.log1p(n2 / p)
+                    c = 2.0 / (p + n2)
+                    curvature = c * c
+                if derivatives:
+                    for i in range(starts[k], stop):
+                        Ar[i] = r[i] * c
+                        Arr[i] = c - curvature * (r[i] * r[i])
+        total += item_weights[k] * item_costs[k]
+    return total
+
+
+def _any_item(kinds):
+    for k in range(kinds.shape[0]):
+        if kinds[k] != BARRIER:
+            return True
+    return False
+
+
+def _stack_values(r, lb, ub, act_w, starts, kinds, params, item_costs, item_weights):
+    """:func:`activation_values`, then the items of another kind (:func:`_item_activations`); returns
+    ``Σₖ wₖ costₖ`` (the barrier pass's own total when every item is of the barrier family)."""
+    total = activation_values(r, lb, ub, act_w, starts, item_costs, item_weights)
+    if not any_item(kinds):
+        return total
+    return item_activations(r, starts, kinds, params, item_costs, item_weights, r, r, False)
+
+
+def _stack_derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu,
+                                cols, starts, kinds, params, item_costs, item_weights):
+    """:func:`derivatives_and_sums` with the items of another kind's ``Ar``, ``Arr`` (and costs) written between the
+    barrier pass and the sums."""
+    if not any_item(kinds):
+        derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu, cols)
+        return
+    activation_derivatives(r, lb, ub, act_w, Ar, Arr)
+    item_activations(r, starts, kinds, params, item_costs, item_weights, Ar, Arr, True)
+    accumulate(weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu, cols)
+
+
+item_activations = compiled(_item_activations)
+any_item = compiled(_any_item)
+stack_values = compiled(_stack_values)
+stack_derivatives_and_sums = compiled(_stack_derivatives_and_sums)

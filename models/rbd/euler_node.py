@@ -39,7 +39,7 @@ from functools import partial
 
 import numpy as np
 
-from crocopy.costs.stack_kernel import activation_values
+from crocopy.costs.stack_kernel import stack_values
 from crocopy.not_compiled import class_reason, decline
 from crocopy.versioning import ParametersVersion, parameter_owners
 
@@ -251,7 +251,7 @@ class EulerNode:
         parameters = self._reader(read)
         self._residuals = None
         items, residuals, offset, rows_u, python = [], [], 2, 1, []
-        for entry in compiled_items(stack, ddata.costs, self.model.differential.costs):
+        for entry in compiled_items(stack, ddata.costs, self.model.differential.costs, item_forms=True):
             if isinstance(entry, str):
                 return entry
             residual, cdata, rows = entry
@@ -352,7 +352,7 @@ class EulerNode:
             "r": stack.r, "lb": stack.lb, "ub": stack.ub, "act_weights": stack.act_weights,
             "item_costs": stack.item_costs, "item_weights": stack.item_weights, "weights": stack.weights,
             "Ar": stack.Ar, "Arr": stack.Arr, "Jx": stack.Jx, "Ju": stack.Ju, "cols": stack.cols,
-            "stamp": self.stamp, **self.parameters,
+            "act_kinds": stack.act_kinds, "act_params": stack.act_params, "stamp": self.stamp, **self.parameters,
             **self.rows.fields(data, ddata),
         }
         n = table.NODE + len(table.NODE_ARRAYS) + len(table.SCRATCH_ARRAYS)
@@ -489,8 +489,8 @@ class EulerNode:
         rows stale: those rows, then the stack's activations and sum again (:mod:`.python_residuals`)."""
         self.python.evaluate(x, u, False)
         stack = self._data().differential.costs.stack
-        value = activation_values(stack.r, stack.lb, stack.ub, stack.act_weights, stack.starts, stack.item_costs,
-                                  stack.item_weights)
+        value = stack_values(stack.r, stack.lb, stack.ub, stack.act_weights, stack.starts, stack.act_kinds,
+                             stack.act_params, stack.item_costs, stack.item_weights)
         if self.stamp[0] == 1.0:
             self.stamp[1] = value
         return self.par[0] * value

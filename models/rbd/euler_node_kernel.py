@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 
-from crocopy.costs.stack_kernel import activation_values, derivatives_and_sums
+from crocopy.costs.stack_kernel import stack_derivatives_and_sums, stack_values
 from crocopy.integrators.euler_kernel import euler_chain
 from crocopy.kernels import compiled, uncounted
 from crocopy.solvers.riccati_kernel import feedback_control
@@ -47,6 +47,8 @@ from .lie_kernel import dintegrate_blocks, state_diff, state_integrate
 from .node_table import (
     E_A,
     E_A0,
+    E_ACT_KINDS,
+    E_ACT_PARAMS,
     E_ACT_WEIGHTS,
     E_AR,
     E_ARR,
@@ -138,9 +140,10 @@ def _values(tbl, ints, par, x, u, rb, ws):
             _contact_dynamics(tbl, ints, par, rb, ws, tau, a)
     residual_rows(tbl, ints, par, rb, ws, x, u)
     starts = ints[ints[STARTS]: ints[STARTS] + ints[N_STACK]]
-    return activation_values(
+    return stack_values(
         vec(tbl, ints, E_R), vec(tbl, ints, E_LB), vec(tbl, ints, E_UB), vec(tbl, ints, E_ACT_WEIGHTS), starts,
-        vec(tbl, ints, E_ITEM_COSTS), vec(tbl, ints, E_ITEM_WEIGHTS),
+        ivec(tbl, ints, E_ACT_KINDS), vec(tbl, ints, E_ACT_PARAMS), vec(tbl, ints, E_ITEM_COSTS),
+        vec(tbl, ints, E_ITEM_WEIGHTS),
     )
 
 
@@ -444,8 +447,11 @@ def _sums_and_chain(tbl, ints, par, x, rb, cost, terminal):
     r, lb, ub, act_w = vec(tbl, ints, E_R), vec(tbl, ints, E_LB), vec(tbl, ints, E_UB), vec(tbl, ints, E_ACT_WEIGHTS)
     weights, Ar, Arr = vec(tbl, ints, E_WEIGHTS), vec(tbl, ints, E_AR), vec(tbl, ints, E_ARR)
     Jx, Ju, u_start, cols = mat(tbl, ints, E_JX), mat(tbl, ints, E_JU), ints[U_START], ivec(tbl, ints, E_COLS)
+    items = (ints[ints[STARTS]: ints[STARTS] + ints[N_STACK]], ivec(tbl, ints, E_ACT_KINDS),
+             vec(tbl, ints, E_ACT_PARAMS), vec(tbl, ints, E_ITEM_COSTS), vec(tbl, ints, E_ITEM_WEIGHTS))
     if terminal:
-        derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, False, Lx, Lu, Lxx, Lxu, Luu, cols)
+        stack_derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, False, Lx, Lu, Lxx, Lxu, Luu,
+                                   cols, *items)
         Fx = mat(tbl, ints, E_FX)
         n = Fx.shape[0]
         for i in range(n):
@@ -454,7 +460,8 @@ def _sums_and_chain(tbl, ints, par, x, rb, cost, terminal):
         return cost
     dLx, dLu, dLxx, dLxu, dLuu = (vec(tbl, ints, E_DLX), vec(tbl, ints, E_DLU), mat(tbl, ints, E_DLXX),
                                   mat(tbl, ints, E_DLXU), mat(tbl, ints, E_DLUU))
-    derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, True, dLx, dLu, dLxx, dLxu, dLuu, cols)
+    stack_derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, True, dLx, dLu, dLxx, dLxu, dLuu,
+                               cols, *items)
     euclidean = ints[EUCLIDEAN] != 0
     euler_chain(
         mat(tbl, ints, E_DFX), mat(tbl, ints, E_DFU), dLx, dLu, dLxx, dLxu, dLuu, par[0], euclidean,

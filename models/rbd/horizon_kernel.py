@@ -11,12 +11,14 @@ from __future__ import annotations
 
 import math
 
-from crocopy.costs.stack_kernel import activation_values
+from crocopy.costs.stack_kernel import stack_values
 from crocopy.kernels import matrix_at, uncounted, vector_at
 
 from .euler_node_kernel import node_calc, node_calc_diff, node_rollout_step
 from .lie_kernel import state_diff
 from .node_table import (
+    E_ACT_KINDS,
+    E_ACT_PARAMS,
     E_ACT_WEIGHTS,
     E_ITEM_COSTS,
     E_ITEM_WEIGHTS,
@@ -30,6 +32,7 @@ from .node_table import (
     NV,
     STARTS,
     entry_model,
+    ivec,
     vec,
 )
 
@@ -69,10 +72,10 @@ def horizon_recost(tbls, ints, ioff, par, poff, nodes, costs):
     for t in nodes:
         tbl, node_ints = tbls[t], ints[ioff[t]: ioff[t + 1]]
         starts = node_ints[node_ints[STARTS]: node_ints[STARTS] + node_ints[N_STACK]]
-        value = activation_values(
+        value = stack_values(
             vec(tbl, node_ints, E_R), vec(tbl, node_ints, E_LB), vec(tbl, node_ints, E_UB),
-            vec(tbl, node_ints, E_ACT_WEIGHTS), starts, vec(tbl, node_ints, E_ITEM_COSTS),
-            vec(tbl, node_ints, E_ITEM_WEIGHTS),
+            vec(tbl, node_ints, E_ACT_WEIGHTS), starts, ivec(tbl, node_ints, E_ACT_KINDS),
+            vec(tbl, node_ints, E_ACT_PARAMS), vec(tbl, node_ints, E_ITEM_COSTS), vec(tbl, node_ints, E_ITEM_WEIGHTS),
         )
         stamp = vec(tbl, node_ints, E_STAMP)
         if stamp.shape[0] and stamp[0] == 1.0:

@@ -242,7 +242,7 @@ class ImpulseNode:
             "Lxu": data.Lxu, "Luu": data.Luu, "r": stack.r, "lb": stack.lb, "ub": stack.ub,
             "act_weights": stack.act_weights, "item_costs": stack.item_costs, "item_weights": stack.item_weights,
             "weights": stack.weights, "Ar": stack.Ar, "Arr": stack.Arr, "Jx": stack.Jx, "Ju": Ju, "cols": stack.cols,
-            **self.own, **self.rows.fields(data, data),
+            "act_kinds": stack.act_kinds, "act_params": stack.act_params, **self.own, **self.rows.fields(data, data),
         }
         n = table.NODE + len(table.NODE_ARRAYS) + len(table.SCRATCH_ARRAYS)
         self.rows.allocate(n, table.SHAPES + 3 * n + len(self._items) + len(stack.starts) + len(self.impulses))

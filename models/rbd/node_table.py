@@ -24,15 +24,18 @@ from crocopy.kernels import carray, compiled, float64_pointer, int64_pointer, ma
 from .contact_kernel import CONTACT_WORKSPACE, ContactWorkspace
 from .lowering import RigidBodyModel, RigidBodyWorkspace
 
-STATE, CONTROL, PLACEMENT, TRANSLATION, ROTATION, VELOCITY, CONE, COM, USER = range(9)
+STATE, CONTROL, PLACEMENT, TRANSLATION, ROTATION, VELOCITY, CONE, COM, USER, EFFORT, ACCELERATION = range(11)
 """Residual kinds.  ``CONE``: ``r = A λ_c`` (friction and wrench cones; the item's frame field is the contact's first
 row, its reference field the force components ``ncf``, ``A`` row-major in ``par``); ``COM``: ``r = com - cref``;
+``EFFORT``: ``r = u - uref`` (a forward-dynamics node's joint efforts are its controls), ``ACCELERATION``:
+``r = a - aref`` with the node's acceleration and its derivatives (both 0 at a terminal node);
 ``USER``: a :class:`~crocopy.models.residual_numba.ResidualModelNumba`, whose two C callbacks (item fields
 ``RESIDUAL_ADDRESS``, ``JACOBIANS_ADDRESS``) the node calls with its kinematics (item field ``FLAGS``: what they
 read, and ``u`` dependence; ``N_PARAMETERS``: the length of its parameters in ``par``)."""
 
 KIND = {"state": STATE, "control": CONTROL, "placement": PLACEMENT, "translation": TRANSLATION,
-        "rotation": ROTATION, "velocity": VELOCITY, "cone": CONE, "com": COM}
+        "rotation": ROTATION, "velocity": VELOCITY, "cone": CONE, "com": COM, "effort": EFFORT,
+        "acceleration": ACCELERATION}
 """The kinds written into this kernel, by the ``compiled_kind`` name a residual class declares beside its maths
 (with its ``compiled_parameters()``); ``USER`` residuals bring their own functions."""
 
@@ -71,7 +74,8 @@ NODE_ARRAYS = (
     Entry("act_weights", ("nr",), _STACK), Entry("item_costs", ("n_stack",), _STACK),
     Entry("item_weights", ("n_stack",), _STACK), Entry("weights", ("nr",), _STACK), Entry("Ar", ("nr",), _STACK),
     Entry("Arr", ("nr",), _STACK), Entry("Jx", ("nr", "ndx"), _STACK), Entry("Ju", ("nr_u", "nu"), _STACK),
-    Entry("cols", ("n_cols",), _STACK, np.int64),
+    Entry("cols", ("n_cols",), _STACK, np.int64), Entry("act_kinds", ("n_stack",), _STACK, np.int64),
+    Entry("act_params", ("n_stack",), _STACK),
     Entry("S", ("nv", "nu"), _NODE), Entry("gains", ("n_contacts", 2), _CONTACTS),
     Entry("ref_R", ("n_contacts", 3, 3), _CONTACTS), Entry("ref_p", ("n_contacts", 3), _CONTACTS),
     Entry("kin", ("n_kin",), _NODE), Entry("user_dims", (5,), _NODE, np.int64),

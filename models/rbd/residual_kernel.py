@@ -10,6 +10,9 @@ v)``), the contact forces ``λ`` and their derivatives, and the residuals' param
 * frame placement ``r = log6(M_ref⁻¹ oMf)``, translation ``r = p_f - p_ref``, rotation ``r = log3(R_refᵀ R_f)``,
   velocity ``r = v_f - v_ref`` in the item's reference frame;
 * cones ``r = A λ_c`` (friction and wrench cones of an active contact), centre of mass ``r = c - c_ref``;
+* joint efforts ``r = u - u_ref`` (``Ju = I``) and joint accelerations ``r = a - a_ref`` (``Jx = ∂a/∂x``,
+  ``Ju = ∂a/∂u``, after :func:`.euler_node_kernel._dynamics_jacobians`) of a forward-dynamics node, both 0 with zero
+  Jacobians at a terminal node;
 * a user's :class:`~crocopy.models.residual_numba.ResidualModelNumba` through its callbacks
   (:mod:`.user_residual_kernel`).
 """
@@ -27,12 +30,16 @@ from .dynamics_kernel import (
 )
 from .lie_kernel import jlog3, jlog6, log3, log6, state_diff, state_jdiff
 from .node_table import (
+    ACCELERATION,
     COM,
     CONE,
     CONTROL,
+    E_A,
     E_COM,
     E_DF_DU,
     E_DF_DX,
+    E_DFU,
+    E_DFX,
     E_J6,
     E_JCOM,
     E_JU,
@@ -45,6 +52,7 @@ from .node_table import (
     E_R3,
     E_USER_RU,
     E_V6,
+    EFFORT,
     FLAGS,
     ITEM_FIELDS,
     ITEMS,
@@ -143,6 +151,14 @@ def residual_rows(tbl, ints, par, rb, ws, x, u):
             center_of_mass(rb, ws, com, mat(tbl, ints, E_JCOM))
             for i in range(3):
                 rows[i] = com[i] - par[o + i]
+        elif kind == EFFORT or kind == ACCELERATION:
+            if ints[TERMINAL]:
+                for i in range(nr):
+                    rows[i] = 0.0
+            else:
+                value = u if kind == EFFORT else vec(tbl, ints, E_A)
+                for i in range(nr):
+                    rows[i] = value[i] - par[o + i]
         elif kind == USER:
             user_kinematics(tbl, ints, rb, ws, fid, ref, ints[b + FLAGS], False)
             user_call(tbl, ints, par, b, x, u, ints[b + RESIDUAL_ADDRESS], rows, mat(tbl, ints, E_USER_RU))
@@ -173,6 +189,24 @@ def _force_jacobians(tbl, ints, par, nr, row, ncf, o, Jx_rows, start):
 
 
 @uncounted
+def _dynamics_rows(tbl, ints, kind, nr, Jx_rows, start):
+    """The Jacobian rows of a joint-effort (``Jx = 0``, ``Ju = I``) or joint-acceleration item (``Jx = ∂a/∂x``,
+    ``Ju = ∂a/∂u``) of stack row ``start``: ``Jx_rows`` and, at a running node, its rows of the stacked ``Ju``."""
+    terminal = ints[TERMINAL] != 0
+    acceleration = kind == ACCELERATION and not terminal
+    dFx = mat(tbl, ints, E_DFX)
+    for i in range(nr):
+        for c in range(Jx_rows.shape[1]):
+            Jx_rows[i, c] = dFx[i, c] if acceleration else 0.0
+    if terminal:
+        return
+    dFu, Ju, u0 = mat(tbl, ints, E_DFU), mat(tbl, ints, E_JU), start - ints[U_START]
+    for i in range(nr):
+        for c in range(ints[NU]):
+            Ju[u0 + i, c] = dFu[i, c] if acceleration else (1.0 if i == c else 0.0)
+
+
+@uncounted
 def residual_jacobians(tbl, ints, par, rb, ws, x, u):
     """Every compiled item's rows of the stacked ``Jx`` (a control residual's are zero and stay so) and the force
     residuals' rows of ``Ju`` (after :func:`.euler_node_kernel._dynamics_jacobians` at a running node)."""
@@ -197,6 +231,9 @@ def residual_jacobians(tbl, ints, par, rb, ws, x, u):
             continue
         if kind == USER:
             user_jacobians(tbl, ints, par, rb, ws, b, x, u, rows)
+            continue
+        if kind == EFFORT or kind == ACCELERATION:
+            _dynamics_rows(tbl, ints, kind, nr, rows, start)
             continue
         for i in range(nr):
             for j in range(nv, ndx):

@@ -20,12 +20,14 @@ def generic_reason(cost) -> str:
     return class_reason(cost.residual, "residual with no rows")
 
 
-def compiled_items(stack, costs_data, costs) -> Iterator:
+def compiled_items(stack, costs_data, costs, item_forms: bool = False) -> Iterator:
     """The items of a cost stack a compiled node evaluates: ``(residual, cdata, rows)`` of each active, non-zero
     ``CostModelResidual`` in order; or, as the last entry, why the node cannot compile (a str: an activation the
-    stack does not fuse, a generic cost, another cost class)."""
-    if stack.unfused:
-        yield class_reason(stack.unfused[0][0], "activation")
+    stack does not fuse, or with ``item_forms`` (a node whose kernel evaluates them) one without an item form either,
+    a generic cost, another cost class)."""
+    unfused = stack.uncompiled if item_forms else [a for a, _, _ in stack.unfused]
+    if unfused:
+        yield class_reason(unfused[0], "activation")
         return
     if costs_data.generic:
         yield generic_reason(costs.costs[costs_data.generic[0]].cost)
