@@ -29,6 +29,9 @@ from crocopy.versioning import frozen_copy
 from .residuals_frame import check_same_robot, check_state, shared_pinocchio
 from .state_multibody import StateMultibody
 
+_NO_PARAMETERS = frozen_copy(np.zeros(0))
+"""The (empty) parameters compiled nodes read of a residual without any."""
+
 
 def _split_ref_nu(ref: np.ndarray | int | None, nu: int | None, default_size: int,
                   name: str) -> tuple[np.ndarray, int | None]:
@@ -148,6 +151,13 @@ class ResidualModelControlGrav(ResidualModelAbstract):
 
     Needs an actuated data collector (``shared.actuation`` holds ``tau``, ``dtau_dx``, ``dtau_du``).
     """
+
+    compiled_kind = "control_grav"
+    """The kind compiled forward-dynamics nodes evaluate this class as (:mod:`crocopy.models.rbd.residual_kernel`)."""
+
+    def compiled_parameters(self) -> np.ndarray:
+        """The parameters compiled nodes read: none."""
+        return _NO_PARAMETERS
 
     def __init__(self, state: StateMultibody, nu: int | None = None) -> None:
         super().__init__(check_state(state), state.nv, nu, True, False, True)

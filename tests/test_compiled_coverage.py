@@ -46,21 +46,23 @@ def free_reasons_problem():
     manager = crocopy.ConstraintModelManager(state, nu)
     bounds = crocopy.ConstraintModelResidual(state, crocopy.ResidualModelControl(state, nu), -np.ones(nu), np.ones(nu))
     manager.addConstraint("u", bounds)
-    manager.addConstraint("v", crocopy.ConstraintModelResidual(state, crocopy.ResidualModelControlGrav(state, nu)))
+    manager.addConstraint("v", crocopy.ConstraintModelResidual(
+        state, crocopy.ResidualModelCentroidalMomentum(state, np.zeros(6), nu)))
     constrained = crocopy.DifferentialActionModelFreeFwdDynamics(state, dam.actuation, costs, manager)
     models[3] = crocopy.IntegratedActionModelEuler(constrained, 0.01)
     user = crocopy.DifferentialActionModelFreeFwdDynamics(state, UserActuation(state), costs)
     models[4] = crocopy.IntegratedActionModelEuler(user, 0.01)
     grav = crocopy.CostModelSum(state, nu)
-    grav.addCost("grav", crocopy.CostModelResidual(state, crocopy.ResidualModelControlGrav(state, nu)), 1.0)
+    momentum = crocopy.ResidualModelCentroidalMomentum(state, np.zeros(6), nu)
+    grav.addCost("grav", crocopy.CostModelResidual(state, momentum), 1.0)
     models[5] = crocopy.IntegratedActionModelEuler(
         crocopy.DifferentialActionModelFreeFwdDynamics(state, dam.actuation, grav), 0.01)
     return crocopy.ShootingProblem(problem.x0, models, problem.terminalModel)
 
 
 FREE_REASONS = [None, "RK4 integrator", "control parametrization ControlParametrizationModelPolyOne",
-                "constraint residual ResidualModelControlGrav", "user Python subclass: actuation UserActuation",
-                "residual ResidualModelControlGrav", None, None]
+                "constraint residual ResidualModelCentroidalMomentum", "user Python subclass: actuation UserActuation",
+                "residual ResidualModelCentroidalMomentum", None, None]
 
 
 def contact_reasons_problem():

@@ -367,10 +367,10 @@ def test_nodes_the_lowering_cannot_take_are_declined_with_their_reason():
     base = arm_node(("control",))
     state, nu = base.state, base.nu
     dam = base.differential
-    grav = crocopy.ResidualModelControlGrav(state, nu)
+    grav = crocopy.ResidualModelCentroidalMomentum(state, np.zeros(6), nu)
     cases = {
         "user Python subclass: constraint UserConstraint": crocopy.ConstraintModelResidual,
-        "constraint residual ResidualModelControlGrav": None,
+        "constraint residual ResidualModelCentroidalMomentum": None,
     }
     reasons = []
     for cls in cases.values():

@@ -263,3 +263,16 @@ def test_kernels_do_not_allocate():
         _nrt_python.memsys_disable_stats()
     assert control >= 4  # the counters do count
     assert counts[0] == counts[1]
+
+
+@per_robot
+def test_generalized_gravity_and_its_derivatives(robot, seed):
+    """``g(q) = RNEA(q, 0, 0)`` and ``∂g/∂q`` on the kinematics of any ``(q, v)``: Pinocchio's."""
+    model, data, rb, ws = lowered(robot)
+    q, v, _, _ = state(model, seed)
+    K.forward_kinematics(rb, ws, q, v)
+    g, dg = np.zeros(model.nv), np.full((model.nv, model.nv), np.nan)
+    K.generalized_gravity(rb, ws, g)
+    K.gravity_derivatives(rb, ws, dg)
+    close(g, pin.computeGeneralizedGravity(model, data, q))
+    close(dg, pin.computeGeneralizedGravityDerivatives(model, data, q))

@@ -156,9 +156,13 @@ class InvDynNode(EulerNode):
         return True
 
     def _kind(self, residual) -> int | None:
-        """The item kind of ``residual``: an inverse-dynamics item's (``INV + k``), the Euler node's, or None."""
+        """The item kind of ``residual``: an inverse-dynamics item's (``INV + k``), the Euler node's (but the
+        gravity-compensating control's, whose torques are a forward-dynamics node's ``S u``), or None."""
         kind = ITEM_KINDS.get(type(residual))
-        return residual_kind(residual) if kind is None else INV + kind
+        if kind is not None:
+            return INV + kind
+        kind = residual_kind(residual)
+        return None if kind == table.CONTROL_GRAV else kind
 
     def _parameters(self, kind: int, residual) -> Sequence[float]:
         """The residual's parameters in the layout the kernels read."""

@@ -12,7 +12,8 @@ v)``), the contact forces ``λ`` and their derivatives, and the residuals' param
 * cones ``r = A λ_c`` (friction and wrench cones of an active contact), centre of mass ``r = c - c_ref``;
 * joint efforts ``r = u - u_ref`` (``Ju = I``) and joint accelerations ``r = a - a_ref`` (``Jx = ∂a/∂x``,
   ``Ju = ∂a/∂u``, after :func:`.euler_node_kernel._dynamics_jacobians`) of a forward-dynamics node, both 0 with zero
-  Jacobians at a terminal node;
+  Jacobians at a terminal node; the gravity-compensating control ``r = S u - g(q)`` (``-g(q)`` at a terminal node;
+  ``Jx = [-∂g/∂q, 0]``, ``Ju = S``: :func:`.dynamics_kernel.generalized_gravity`, ``gravity_derivatives``);
 * a user's :class:`~crocopy.models.residual_numba.ResidualModelNumba` through its callbacks
   (:mod:`.user_residual_kernel`).
 """
@@ -27,6 +28,8 @@ from .dynamics_kernel import (
     frame_placement,
     frame_velocity,
     frame_velocity_derivatives,
+    generalized_gravity,
+    gravity_derivatives,
 )
 from .lie_kernel import jlog3, jlog6, log3, log6, state_diff, state_jdiff
 from .node_table import (
@@ -34,6 +37,7 @@ from .node_table import (
     COM,
     CONE,
     CONTROL,
+    CONTROL_GRAV,
     E_A,
     E_COM,
     E_DF_DU,
@@ -50,6 +54,8 @@ from .node_table import (
     E_P3,
     E_R,
     E_R3,
+    E_S,
+    E_TAU,
     E_USER_RU,
     E_V6,
     EFFORT,
@@ -151,6 +157,11 @@ def residual_rows(tbl, ints, par, rb, ws, x, u):
             center_of_mass(rb, ws, com, mat(tbl, ints, E_JCOM))
             for i in range(3):
                 rows[i] = com[i] - par[o + i]
+        elif kind == CONTROL_GRAV:
+            generalized_gravity(rb, ws, rows)
+            tau = vec(tbl, ints, E_TAU)
+            for i in range(nr):
+                rows[i] = (0.0 if ints[TERMINAL] else tau[i]) - rows[i]
         elif kind == EFFORT or kind == ACCELERATION:
             if ints[TERMINAL]:
                 for i in range(nr):
@@ -207,6 +218,25 @@ def _dynamics_rows(tbl, ints, kind, nr, Jx_rows, start):
 
 
 @uncounted
+def _gravity_rows(tbl, ints, rb, ws, nr, Jx_rows, start):
+    """The Jacobian rows of a gravity-compensating control item of stack row ``start``: ``Jx = [-∂g/∂q, 0]`` and, at a
+    running node, ``Ju = S`` (its rows of the stacked ``Ju``)."""
+    gravity_derivatives(rb, ws, Jx_rows)
+    nv = ints[NV]
+    for i in range(nr):
+        for c in range(nv):
+            Jx_rows[i, c] = -Jx_rows[i, c]
+        for c in range(nv, Jx_rows.shape[1]):
+            Jx_rows[i, c] = 0.0
+    if ints[TERMINAL]:
+        return
+    Sm, Ju, u0 = mat(tbl, ints, E_S), mat(tbl, ints, E_JU), start - ints[U_START]
+    for i in range(nr):
+        for c in range(ints[NU]):
+            Ju[u0 + i, c] = Sm[i, c]
+
+
+@uncounted
 def residual_jacobians(tbl, ints, par, rb, ws, x, u):
     """Every compiled item's rows of the stacked ``Jx`` (a control residual's are zero and stay so) and the force
     residuals' rows of ``Ju`` (after :func:`.euler_node_kernel._dynamics_jacobians` at a running node)."""
@@ -234,6 +264,9 @@ def residual_jacobians(tbl, ints, par, rb, ws, x, u):
             continue
         if kind == EFFORT or kind == ACCELERATION:
             _dynamics_rows(tbl, ints, kind, nr, rows, start)
+            continue
+        if kind == CONTROL_GRAV:
+            _gravity_rows(tbl, ints, rb, ws, nr, rows, start)
             continue
         for i in range(nr):
             for j in range(nv, ndx):
