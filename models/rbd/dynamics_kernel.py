@@ -358,7 +358,7 @@ def _composite_coriolis(rb, ws):
     With ``P = oI_i (ov_i ×)`` and ``oI_i`` symmetric, ``(ov_i ×*) oI_i = -(ov_i ×)ᵀ oI_i = -Pᵀ``, so
     ``B_i = H - P - Pᵀ`` (``H``'s column ``c``: ``e_c ×* h_i``).  A row ``g = [g_v, g_ω]`` of ``oI_i`` times
     ``(ov ×) = [[ω×, v×], [0, ω×]]`` is ``[g_v × ω, g_v × v + g_ω × ω]`` (a row times ``a×`` is the row ``× a``)."""
-    oI, oIc, oBc, ov, oh, P = ws.oI, ws.oIc, ws.oBc, ws.ov, ws.oh, ws.tmp
+    oI, oBc, ov, oh, P = ws.oI, ws.oBc, ws.ov, ws.oh, ws.tmp
     for i in range(1, rb.njoints):
         vx, vy, vz, wx, wy, wz = get6(ov, i)
         for r in range(6):
@@ -375,15 +375,8 @@ def _composite_coriolis(rb, ws):
             hx = fcross(unit(c), h)
             for r in range(6):
                 oBc[i, r, c] = hx[r] - P[r, c] - P[c, r]
-                oIc[i, r, c] = oI[i, r, c]
-    parent = rb.parent
-    for i in range(rb.njoints - 1, 0, -1):
-        par = parent[i]
-        if par > 0:
-            for r in range(6):
-                for c in range(6):
-                    oIc[par, r, c] += oIc[i, r, c]
-                    oBc[par, r, c] += oBc[i, r, c]
+    _to_parents(rb.parent, oBc)
+    _composite_inertias(rb, ws)
 
 
 @uncounted
@@ -394,13 +387,18 @@ def _composite_inertias(rb, ws):
         for r in range(6):
             for c in range(6):
                 oIc[i, r, c] = oI[i, r, c]
-    parent = rb.parent
-    for i in range(rb.njoints - 1, 0, -1):
+    _to_parents(rb.parent, oIc)
+
+
+@uncounted
+def _to_parents(parent, A):
+    """``A (njoints, 6, 6)`` summed over subtrees in place: each joint's entry added to its parent's, leaves first."""
+    for i in range(A.shape[0] - 1, 0, -1):
         par = parent[i]
         if par > 0:
             for r in range(6):
                 for c in range(6):
-                    oIc[par, r, c] += oIc[i, r, c]
+                    A[par, r, c] += A[i, r, c]
 
 
 @uncounted
