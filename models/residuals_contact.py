@@ -216,6 +216,14 @@ class ResidualModelContactCoPPosition(_ForceResidual):
     """Crocoddyl's ``ResidualModelContactCoPPosition(state, id, cref, nu=state.nv, fwddyn=True)``
     with ``cref`` a :class:`CoPSupport`; ``r = A f`` (4, 6D contacts)."""
 
+    compiled_kind = "cone"
+    """The kind compiled nodes evaluate this class as (``r = A f``, as the cones:
+    :mod:`crocopy.models.rbd.residual_kernel`)."""
+
+    def compiled_parameters(self) -> np.ndarray:
+        """The parameters compiled nodes read: the support's matrix ``A`` row-major."""
+        return np.asarray(self.reference.A, dtype=float).reshape(-1)
+
     ncf = min_nc = 6
 
     def __init__(

@@ -34,8 +34,8 @@ CASES = {
 
 
 def contact_node(case: str, armature: bool = False, damping: float = 0.0, seed: int = 0, dt: float = 0.01):
-    """An Euler node of contact dynamics of ``case`` with state, control, swing-foot, cone, CoM, joint-effort and
-    joint-acceleration costs."""
+    """An Euler node of contact dynamics of ``case`` with state, control, swing-foot, cone (and, on 6D contacts,
+    centre-of-pressure), CoM, joint-effort and joint-acceleration costs."""
     robot, nfeet, reference, gains = CASES[case]
     rng = np.random.default_rng(seed)
     model = load(robot)
@@ -59,6 +59,9 @@ def contact_node(case: str, armature: bool = False, damping: float = 0.0, seed: 
             contact = crocopy.ContactModel6D(state, fid, placement * pin.SE3.Random(), reference, nu, np.array(gains))
             cone = crocopy.WrenchCone(np.eye(3), 0.7, np.array([0.1, 0.05]), 4, False)
             residual = crocopy.ResidualModelContactWrenchCone(state, fid, cone, nu)
+            cop = crocopy.ResidualModelContactCoPPosition(state, fid, crocopy.CoPSupport(np.eye(3),
+                                                                                         np.array([0.2, 0.1])), nu)
+            costs.addCost(name + "_cop", crocopy.CostModelResidual(state, cop), 0.5)
         contacts.addContact(name, contact)
         barrier = crocopy.ActivationModelQuadraticBarrier(crocopy.ActivationBounds(cone.lb, cone.ub))
         costs.addCost(name + "_cone", crocopy.CostModelResidual(state, barrier, residual), rng.uniform(0.5, 2.0))

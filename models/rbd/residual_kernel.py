@@ -9,7 +9,8 @@ v)``), the contact forces ``λ`` and their derivatives, and the residuals' param
 * state ``r = x ⊖ x_ref``; control ``r = u - u_ref``;
 * frame placement ``r = log6(M_ref⁻¹ oMf)``, translation ``r = p_f - p_ref``, rotation ``r = log3(R_refᵀ R_f)``,
   velocity ``r = v_f - v_ref`` in the item's reference frame;
-* cones ``r = A λ_c`` (friction and wrench cones of an active contact), centre of mass ``r = c - c_ref``;
+* cones ``r = A λ_c`` (friction and wrench cones, the centre-of-pressure support, of an active contact), centre of
+  mass ``r = c - c_ref``;
 * joint efforts ``r = u - u_ref`` (``Ju = I``) and joint accelerations ``r = a - a_ref`` (``Jx = ∂a/∂x``,
   ``Ju = ∂a/∂u``, after :func:`.euler_node_kernel._dynamics_jacobians`) of a forward-dynamics node, both 0 with zero
   Jacobians at a terminal node; the gravity-compensating control ``r = S u - g(q)`` (``-g(q)`` at a terminal node;
