@@ -114,6 +114,9 @@ class ResidualDataContactWrenchCone(ResidualDataContactForce):
 class ResidualModelContactForce(_ForceResidual):
     """Crocoddyl's ``ResidualModelContactForce(state, id, fref, nc, nu=state.nv, fwddyn=True)``.
 
+    Compiled nodes evaluate it as ``r = A f - fref`` (kind ``"force"``: ``A`` the rows of ``I`` that select its
+    components, as a cone's matrix, then ``fref``; 0 at a terminal node).
+
     Parameters
     ----------
     fref : pinocchio.Force
@@ -146,6 +149,13 @@ class ResidualModelContactForce(_ForceResidual):
         check_finite(value.vector, "fref")
         self._fref = value.copy()
         self._fref_vec = value.vector[self._components].copy()
+
+    compiled_kind = "force"
+    """The kind compiled nodes evaluate this class as (:mod:`crocopy.models.rbd.residual_kernel`)."""
+
+    def compiled_parameters(self) -> np.ndarray:
+        """The parameters compiled nodes read: the selection ``A (nr, ncf)`` row-major, then ``fref``'s components."""
+        return np.concatenate([np.eye(self.ncf)[self._components].reshape(-1), self._fref_vec])
 
     def calc(self, data: ResidualDataContactForce, x: np.ndarray, u: np.ndarray | None = None) -> None:
         if u is None and data.impulses is None:  # terminal node of contact dynamics: no force, as Crocoddyl

@@ -35,7 +35,7 @@ CASES = {
 
 def contact_node(case: str, armature: bool = False, damping: float = 0.0, seed: int = 0, dt: float = 0.01):
     """An Euler node of contact dynamics of ``case`` with state, control, swing-foot, cone (and, on 6D contacts,
-    centre-of-pressure), CoM, joint-effort and joint-acceleration costs."""
+    centre-of-pressure), contact-force, CoM, joint-effort and joint-acceleration costs."""
     robot, nfeet, reference, gains = CASES[case]
     rng = np.random.default_rng(seed)
     model = load(robot)
@@ -75,6 +75,10 @@ def contact_node(case: str, armature: bool = False, damping: float = 0.0, seed: 
     costs.addCost("swing", crocopy.CostModelResidual(state, translation), 2.0)
     com = crocopy.ResidualModelCoMPosition(state, rng.standard_normal(3), nu)
     costs.addCost("com", crocopy.CostModelResidual(state, com), 3.0)
+    loaded = model.getFrameId(feet[1])  # a foot the tests below keep in contact
+    force = crocopy.ResidualModelContactForce(state, loaded, pin.Force(rng.standard_normal(6)),
+                                              3 if robot == "anymal" else 6, nu)
+    costs.addCost("force", crocopy.CostModelResidual(state, force), 1e-3)
     effort = crocopy.ResidualModelJointEffort(state, actuation, rng.standard_normal(nu), nu)
     costs.addCost("effort", crocopy.CostModelResidual(state, effort), 0.01)
     acceleration = crocopy.ResidualModelJointAcceleration(state, rng.standard_normal(state.nv), nu)

@@ -262,7 +262,7 @@ def test_the_registry_of_compiled_kinds_is_covered_and_documented():
     from crocopy.models.rbd.node_kinds import compiled_residual_classes
 
     registry = compiled_residual_classes()
-    factory = {"velocity" if kind.startswith("velocity_") else kind for kind in KINDS} | {"com", "cone"}
+    factory = {"velocity" if kind.startswith("velocity_") else kind for kind in KINDS} | {"com", "cone", "force"}
     assert set(registry.values()) == factory == set(node_table.KIND)
     developing = (Path(__file__).resolve().parents[1] / "docs" / "DEVELOPING.md").read_text()
     for cls in registry:

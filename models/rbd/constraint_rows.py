@@ -89,7 +89,7 @@ class ConstraintRows:
                 frame, reference = residual.frame, int(residual.frame_reference)
                 user = [residual.flags, *residual.callbacks(), len(parameters(kind, residual))]
                 self.user_rows = max(self.user_rows, nr)
-            if kind == table.CONE:
+            if kind == table.CONE or kind == table.FORCE:
                 first, nc = contact_rows.get(frame, (0, 0))
                 if nc < residual.ncf:
                     return "cone constraint without its active contact"

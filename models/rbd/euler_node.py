@@ -305,7 +305,7 @@ class EulerNode:
         if kind == table.USER:
             frame, reference = residual.frame, int(residual.frame_reference)
             user = [residual.flags, *residual.callbacks(), len(parameters(kind, residual))]
-        if kind == table.CONE:
+        if kind == table.CONE or kind == table.FORCE:
             row, nc = self.contacts.rows.get(frame, (0, 0))
             if nc < residual.ncf:
                 return "cone without its active contact"

@@ -9,8 +9,8 @@ v)``), the contact forces ``λ`` and their derivatives, and the residuals' param
 * state ``r = x ⊖ x_ref``; control ``r = u - u_ref``;
 * frame placement ``r = log6(M_ref⁻¹ oMf)``, translation ``r = p_f - p_ref``, rotation ``r = log3(R_refᵀ R_f)``,
   velocity ``r = v_f - v_ref`` in the item's reference frame;
-* cones ``r = A λ_c`` (friction and wrench cones, the centre-of-pressure support, of an active contact), centre of
-  mass ``r = c - c_ref``;
+* cones ``r = A λ_c`` (friction and wrench cones, the centre-of-pressure support, of an active contact), a contact
+  force ``r = A λ_c - f_ref`` (``A`` selecting its components; 0 at a terminal node), centre of mass ``r = c - c_ref``;
 * joint efforts ``r = u - u_ref`` (``Ju = I``) and joint accelerations ``r = a - a_ref`` (``Jx = ∂a/∂x``,
   ``Ju = ∂a/∂u``, after :func:`.euler_node_kernel._dynamics_jacobians`) of a forward-dynamics node, both 0 with zero
   Jacobians at a terminal node; the gravity-compensating control ``r = S u - g(q)`` (``-g(q)`` at a terminal node;
@@ -61,6 +61,7 @@ from .node_table import (
     E_V6,
     EFFORT,
     FLAGS,
+    FORCE,
     ITEM_FIELDS,
     ITEMS,
     LOCAL,
@@ -146,12 +147,14 @@ def residual_rows(tbl, ints, par, rb, ws, x, u):
             frame_velocity(rb, ws, fid, ref, v6)
             for i in range(6):
                 rows[i] = v6[i] - par[o + i]
-        elif kind == CONE:
+        elif kind == CONE or kind == FORCE:
             lam = vec(tbl, ints, E_LAM)
             for i in range(nr):
                 acc = 0.0
                 for j in range(ref):
                     acc += par[o + ref * i + j] * lam[fid + j]
+                if kind == FORCE:
+                    acc = 0.0 if ints[TERMINAL] else acc - par[o + ref * nr + i]
                 rows[i] = acc
         elif kind == COM:
             com = vec(tbl, ints, E_COM)
@@ -257,7 +260,7 @@ def residual_jacobians(tbl, ints, par, rb, ws, x, u):
         if kind == VELOCITY:
             _velocity_jacobian(rb, ws, fid, ref, J6, K6, m6, v6, rows, nv)
             continue
-        if kind == CONE:
+        if kind == CONE or kind == FORCE:
             _force_jacobians(tbl, ints, par, nr, fid, ref, o, rows, start)
             continue
         if kind == USER:
