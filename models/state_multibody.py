@@ -5,7 +5,7 @@
 ``pinocchio.difference``/``pinocchio.integrate``, except on continuous joints (``q = [cos θ, sin θ]``), whose
 difference is ``atan2(c0 s1 - s0 c1, c0 c1 + s0 s1)`` computed here: Pinocchio returns exactly 0 when
 ``c0 c1 + s0 s1`` rounds above 1, i.e. for some angles below about 1e-8 (the compiled
-:func:`~crocopy.models.rbd.lie_kernel.difference` uses the same formula).  The Jacobians are block diagonal:
+:func:`~crocopy.models.rbd.configuration_kernel.difference` uses the same formula).  The Jacobians are block diagonal:
 
     Jdiff   = (diag(∂(q1 ⊖ q0)/∂q0, -I), diag(∂(q1 ⊖ q0)/∂q1, I))
     Jintegrate = (diag(∂(q ⊕ dq)/∂q, I), diag(∂(q ⊕ dq)/∂dq, I))

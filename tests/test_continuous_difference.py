@@ -10,7 +10,7 @@ import pinocchio as pin
 from robots import load
 
 import crocopy
-from crocopy.models.rbd.lie_kernel import state_diff
+from crocopy.models.rbd.configuration_kernel import state_diff
 from crocopy.models.rbd.lowering import lower_model
 
 

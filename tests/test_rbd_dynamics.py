@@ -19,6 +19,7 @@ from hypothesis import strategies as st
 from robots import JOINT_CHAIN, load
 
 from crocopy.models.rbd import dynamics_kernel as K
+from crocopy.models.rbd import gravity_kernel as G
 from crocopy.models.rbd.joint_types import NotLowerable
 from crocopy.models.rbd.lowering import lower_model, make_workspace
 
@@ -272,7 +273,7 @@ def test_generalized_gravity_and_its_derivatives(robot, seed):
     q, v, _, _ = state(model, seed)
     K.forward_kinematics(rb, ws, q, v)
     g, dg = np.zeros(model.nv), np.full((model.nv, model.nv), np.nan)
-    K.generalized_gravity(rb, ws, g)
-    K.gravity_derivatives(rb, ws, dg)
+    G.generalized_gravity(rb, ws, g)
+    G.gravity_derivatives(rb, ws, dg)
     close(g, pin.computeGeneralizedGravity(model, data, q))
     close(dg, pin.computeGeneralizedGravityDerivatives(model, data, q))

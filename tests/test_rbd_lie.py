@@ -24,6 +24,7 @@ from robots import JOINT_CHAIN, load
 
 import crocopy
 from crocopy.kernels import compiled
+from crocopy.models.rbd import configuration_kernel as conf
 from crocopy.models.rbd import lie_kernel as lie
 from crocopy.models.rbd.joint_types import FREEFLYER, PLANAR, REVOLUTE_UB, joint_arrays
 
@@ -132,11 +133,11 @@ def test_free_flyer_exponential_and_its_jacobians_equal_pinocchio(angle, seed):
     nu = twist(seed, angle)
     q = random_q(model, np.random.default_rng(seed))
     q_out, J = np.empty(7), np.full((6, 6), np.nan)
-    lie.integrate(jtype, idx_q, idx_v, q, nu, q_out)
+    conf.integrate(jtype, idx_q, idx_v, q, nu, q_out)
     close(q_out, pin.integrate(model, q, nu))
     close(pin.XYZQUATToSE3(q_out).homogeneous, (pin.XYZQUATToSE3(q) * pin.exp6(nu)).homogeneous)
     for arg, pin_arg in ((0, pin.ARG0), (1, pin.ARG1)):
-        lie.dintegrate(jtype, idx_q, idx_v, q, nu, arg, J)
+        conf.dintegrate(jtype, idx_q, idx_v, q, nu, arg, J)
         close(J, pin.dIntegrate(model, q, nu, pin_arg))
     close(J, pin.Jexp6(nu))
 
@@ -146,7 +147,7 @@ def test_zero_twist_and_identity():
     J6, out6 = np.empty((6, 6)), np.empty(6)
     q = pin.neutral(model)
     for arg in (0, 1):
-        lie.dintegrate(jtype, idx_q, idx_v, q, np.zeros(6), arg, J6)
+        conf.dintegrate(jtype, idx_q, idx_v, q, np.zeros(6), arg, J6)
         assert np.array_equal(J6, np.eye(6))
     assert np.array_equal(J6, pin.Jexp6(np.zeros(6)))
     lie.log6(np.eye(3), np.zeros(3), out6)
@@ -179,14 +180,14 @@ def test_se3_maps_equal_series_references(seed, angle):
     model, jtype, idx_q, idx_v = free_flyer()
     q, q_out, J, back = pin.neutral(model), np.empty(7), np.full((6, 6), np.nan), np.empty(6)
     Rs, ps = series_exp6(nu)
-    lie.integrate(jtype, idx_q, idx_v, q, nu, q_out)
+    conf.integrate(jtype, idx_q, idx_v, q, nu, q_out)
     M = pin.XYZQUATToSE3(q_out)
     close(M.rotation, Rs, 1e-13)
     close(M.translation, ps, 1e-13)
-    lie.dintegrate(jtype, idx_q, idx_v, q, nu, 0, J)
+    conf.dintegrate(jtype, idx_q, idx_v, q, nu, 0, J)
     close(J, inverse_adjoint(Rs, ps), 1e-13)
     Jr = series_jexp6(nu)
-    lie.dintegrate(jtype, idx_q, idx_v, q, nu, 1, J)
+    conf.dintegrate(jtype, idx_q, idx_v, q, nu, 1, J)
     close(J, Jr, 1e-13)
     lie.log6(Rs, ps, back)
     close(back, nu, 1e-9 if angle > 3.0 else 1e-12)
@@ -262,23 +263,23 @@ def test_configuration_space_equals_pinocchio(robot, seed, near):
         q1 = pin.integrate(model, q0, rng.normal(size=model.nv) * rng.choice([0.0, 1e-9]))
     nq, nv = model.nq, model.nv
     q_out, v_out, J = np.empty(nq), np.empty(nv), np.full((nv, nv), np.nan)
-    lie.integrate(jtype, idx_q, idx_v, q0, v, q_out)
+    conf.integrate(jtype, idx_q, idx_v, q0, v, q_out)
     close(q_out, pin.integrate(model, q0, v))
     x0, x1, Jx = np.r_[q0, np.zeros(nv)], np.r_[q1, np.zeros(nv)], np.full((2 * nv, 2 * nv), np.nan)
-    lie.difference(jtype, idx_q, idx_v, q0, q1, v_out)
+    conf.difference(jtype, idx_q, idx_v, q0, q1, v_out)
     close(v_out, state.diff(x0, x1)[:nv])
     blocks = np.zeros((nv, nv), dtype=bool)
     for j in range(1, len(jtype)):
         first, last = idx_v[j], idx_v[j] + model.joints[j].nv
         blocks[first:last, first:last] = True
     for arg, pin_arg in ((0, pin.ARG0), (1, pin.ARG1)):
-        lie.dintegrate(jtype, idx_q, idx_v, q0, v, arg, J)
+        conf.dintegrate(jtype, idx_q, idx_v, q0, v, arg, J)
         close(J, pin.dIntegrate(model, q0, v, pin_arg))
         Jb = np.full((nv, nv), 7.0)
-        lie.dintegrate_blocks(jtype, idx_q, idx_v, v, arg, Jb)  # the joints' diagonal blocks only
+        conf.dintegrate_blocks(jtype, idx_q, idx_v, v, arg, Jb)  # the joints' diagonal blocks only
         np.testing.assert_array_equal(Jb[blocks], J[blocks])
         assert np.all(Jb[~blocks] == 7.0)
-        lie.state_jdiff(jtype, idx_q, idx_v, nq, nv, x0, x1, arg == 0, Jx)  # its q block is dDifference
+        conf.state_jdiff(jtype, idx_q, idx_v, nq, nv, x0, x1, arg == 0, Jx)  # its q block is dDifference
         close(Jx[:nv, :nv], pin.dDifference(model, q0, q1, pin_arg),
               PLANAR_CLAMPED if planar_clamped(jtype, idx_q, q0, q1) else TOL)
 
@@ -293,15 +294,15 @@ def test_state_operations_equal_state_multibody(robot, seed):
     x0, x1 = np.r_[q0, rng.normal(size=nv)], np.r_[q1, rng.normal(size=nv)]
     dx = np.r_[v, rng.normal(size=nv)]
     out_x, out_dx, J = np.empty(state.nx), np.empty(state.ndx), np.full((state.ndx, state.ndx), np.nan)
-    lie.state_diff(jtype, idx_q, idx_v, nq, nv, x0, x1, out_dx)
+    conf.state_diff(jtype, idx_q, idx_v, nq, nv, x0, x1, out_dx)
     close(out_dx, state.diff(x0, x1))
-    lie.state_integrate(jtype, idx_q, idx_v, nq, nv, x0, dx, out_x)
+    conf.state_integrate(jtype, idx_q, idx_v, nq, nv, x0, dx, out_x)
     close(out_x, state.integrate(x0, dx))
     Jq = np.full((nv, nv), np.nan)
     for k, first in enumerate((True, False)):
-        lie.state_jdiff(jtype, idx_q, idx_v, nq, nv, x0, x1, first, J)
+        conf.state_jdiff(jtype, idx_q, idx_v, nq, nv, x0, x1, first, J)
         close(J, state.Jdiff(x0, x1)[k])
-        lie.dintegrate(jtype, idx_q, idx_v, x0, dx, k, Jq)  # a whole state x and tangent dx as q and v
+        conf.dintegrate(jtype, idx_q, idx_v, x0, dx, k, Jq)  # a whole state x and tangent dx as q and v
         close(Jq, state.Jintegrate(x0, dx)[k][:nv, :nv])
 
 
@@ -319,7 +320,7 @@ def test_non_unit_joint_configurations_are_handled_as_pinocchio_does():
                 q[idx_q[j]: idx_q[j] + 2] *= 1.0 - 1e-6
         v = rng.normal(size=model.nv)
         out = np.empty(model.nq)
-        lie.integrate(jtype, idx_q, idx_v, q, v, out)
+        conf.integrate(jtype, idx_q, idx_v, q, v, out)
         close(out, pin.integrate(model, q, v), 1e-12)
 
 
@@ -333,7 +334,7 @@ def test_unbounded_joint_difference_is_exact_where_pinocchio_rounds():
     for _ in range(400):
         q0 = pin.normalize(model, rng.normal(size=2))
         q1 = pin.integrate(model, q0, rng.normal(size=1) * 1e-9)
-        lie.difference(jtype, idx_q, idx_v, q0, q1, out)
+        conf.difference(jtype, idx_q, idx_v, q0, q1, out)
         (c0, s0), (c1, s1) = q0, q1
         assert out[0] == math.atan2(c0 * s1 - s0 * c1, c0 * c1 + s0 * s1)
         reference = pin.difference(model, q0, q1)[0]
@@ -350,10 +351,10 @@ def test_unbounded_joint_difference_is_exact_where_pinocchio_rounds():
 @compiled
 def _round_trip(jtype, idx_q, idx_v, nq, nv, x, dx, x_out, dx_out, J, Jq, R, p, out6, J6):
     """``x ⊕ dx ⊖ x``, its Jacobians and ``log6``/``jlog6`` of ``(R, p)`` inside one compiled call."""
-    lie.state_integrate(jtype, idx_q, idx_v, nq, nv, x, dx, x_out)
-    lie.state_diff(jtype, idx_q, idx_v, nq, nv, x, x_out, dx_out)
-    lie.state_jdiff(jtype, idx_q, idx_v, nq, nv, x, x_out, False, J)
-    lie.dintegrate(jtype, idx_q, idx_v, x, dx, 1, Jq)
+    conf.state_integrate(jtype, idx_q, idx_v, nq, nv, x, dx, x_out)
+    conf.state_diff(jtype, idx_q, idx_v, nq, nv, x, x_out, dx_out)
+    conf.state_jdiff(jtype, idx_q, idx_v, nq, nv, x, x_out, False, J)
+    conf.dintegrate(jtype, idx_q, idx_v, x, dx, 1, Jq)
     lie.log6(R, p, out6)
     lie.jlog6(R, p, J6)
 
@@ -389,7 +390,7 @@ def test_dintegrate_near_full_turns_matches_finite_differences(turns, gap):
     v = np.r_[0.4, -1.0, 2.0, (2 * math.pi * turns - gap) * u, np.zeros(model.nv - 6)]
     q0 = pin.neutral(model)
     J = np.empty((model.nv, model.nv))
-    lie.dintegrate(jtype, idx_q, idx_v, q0, v, 1, J)
+    conf.dintegrate(jtype, idx_q, idx_v, q0, v, 1, J)
     x = pin.integrate(model, q0, v)
     h = 1e-5
     for j in range(6):

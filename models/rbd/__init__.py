@@ -8,7 +8,9 @@
 - :mod:`.contact_kernel`: contact Jacobian and drift (3D/6D, Baumgarte) with derivatives, the contact forces'
   term of the RNEA derivatives, contact forward dynamics (KKT through the tree-sparse factor) and its derivatives.
 - :mod:`.com_kernel`: centre of mass and its Jacobian.
-- :mod:`.lie_kernel`: ``log3``/``jlog3``/``log6``/``jlog6``, configuration-space ``integrate``/``difference``/
-  ``dintegrate`` and the multibody state's ``state_diff``/``state_integrate``/``state_jdiff``.
+- :mod:`.lie_kernel`: ``log3``/``jlog3``/``log6``/``jlog6`` and the SE(2) maps; :mod:`.configuration_kernel`: the
+  configuration space's ``integrate``/``difference``/``dintegrate`` and the multibody state's ``state_diff``/
+  ``state_integrate``/``state_jdiff``.
+- :mod:`.gravity_kernel`: the generalized gravity ``g(q)`` and its derivatives.
 - :mod:`.euler_node`, :mod:`.euler_node_kernel`: the compiled Euler node of free forward dynamics.
 """

@@ -29,6 +29,7 @@ from crocopy.integrators.euler_kernel import euler_chain
 from crocopy.kernels import compiled, uncounted
 from crocopy.solvers.riccati_kernel import feedback_control
 
+from .configuration_kernel import dintegrate_blocks, state_diff, state_integrate
 from .constraint_rows_kernel import constraint_table, has_rows, stack_rows
 from .contact_kernel import (
     contact_calc,
@@ -43,7 +44,6 @@ from .dynamics_kernel import (
     mass_inverse,
     rnea_derivatives,
 )
-from .lie_kernel import dintegrate_blocks, state_diff, state_integrate
 from .node_table import (
     E_A,
     E_A0,

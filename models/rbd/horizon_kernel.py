@@ -14,8 +14,8 @@ import math
 from crocopy.costs.stack_kernel import stack_values
 from crocopy.kernels import matrix_at, uncounted, vector_at
 
+from .configuration_kernel import state_diff
 from .euler_node_kernel import node_calc, node_calc_diff, node_rollout_step
-from .lie_kernel import state_diff
 from .node_table import (
     E_ACT_KINDS,
     E_ACT_PARAMS,

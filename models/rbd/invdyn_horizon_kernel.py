@@ -12,8 +12,8 @@ from __future__ import annotations
 
 from crocopy.kernels import matrix_at, uncounted, vector_at
 
+from .configuration_kernel import state_diff
 from .invdyn_node_kernel import invdyn_calc, invdyn_calc_diff, invdyn_rollout_step
-from .lie_kernel import state_diff
 from .node_table import E_XNEXT, NQ, NV, entry_model, vec
 
 

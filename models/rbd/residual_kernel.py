@@ -14,7 +14,7 @@ v)``), the contact forces ``λ`` and their derivatives, and the residuals' param
 * joint efforts ``r = u - u_ref`` (``Ju = I``) and joint accelerations ``r = a - a_ref`` (``Jx = ∂a/∂x``,
   ``Ju = ∂a/∂u``, after :func:`.euler_node_kernel._dynamics_jacobians`) of a forward-dynamics node, both 0 with zero
   Jacobians at a terminal node; the gravity-compensating control ``r = S u - g(q)`` (``-g(q)`` at a terminal node;
-  ``Jx = [-∂g/∂q, 0]``, ``Ju = S``: :func:`.dynamics_kernel.generalized_gravity`, ``gravity_derivatives``);
+  ``Jx = [-∂g/∂q, 0]``, ``Ju = S``: :func:`.gravity_kernel.generalized_gravity`, ``gravity_derivatives``);
 * a user's :class:`~crocopy.models.residual_numba.ResidualModelNumba` through its callbacks
   (:mod:`.user_residual_kernel`).
 """
@@ -24,15 +24,15 @@ from __future__ import annotations
 from crocopy.kernels import uncounted
 
 from .com_kernel import center_of_mass
+from .configuration_kernel import state_diff, state_jdiff
 from .dynamics_kernel import (
     frame_jacobian,
     frame_placement,
     frame_velocity,
     frame_velocity_derivatives,
-    generalized_gravity,
-    gravity_derivatives,
 )
-from .lie_kernel import jlog3, jlog6, log3, log6, state_diff, state_jdiff
+from .gravity_kernel import generalized_gravity, gravity_derivatives
+from .lie_kernel import jlog3, jlog6, log3, log6
 from .node_table import (
     ACCELERATION,
     COM,

@@ -21,9 +21,9 @@ import numpy as np
 
 from crocopy.kernels import compiled, uncounted, vector_at
 
+from .configuration_kernel import state_diff, state_integrate
 from .euler_node_kernel import node_calc, node_integrate
 from .horizon_kernel import horizon_calc
-from .lie_kernel import state_diff, state_integrate
 from .node_table import E_XNEXT, NQ, NV, entry_model, vec
 
 
