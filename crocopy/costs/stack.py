@@ -37,30 +37,27 @@ from ..versioning import ParametersSeen, ParametersVersion
 from . import stack_kernel
 
 
-def _fused_form(activation) -> tuple | None:
-    """``activation.barrier_form()``, or None when its class overrides the ``calc``/``calcDiff`` of the
-    class that declares the form (the override runs item by item; logged once at DEBUG level)."""
-    form = activation.barrier_form()
+def _declared_form(activation, name: str, step: str | None = None) -> tuple | None:
+    """``activation.<name>()`` (its ``barrier_form`` or ``item_form``), or None when it has none or its class overrides
+    the ``calc``/``calcDiff`` of the class that declares the form (the override runs item by item; logged once at
+    DEBUG level as ``step``, when given)."""
+    form = getattr(activation, name)()
     if form is None:
         return None
-    owner = next(c for c in type(activation).__mro__ if "barrier_form" in vars(c))
+    owner = next(c for c in type(activation).__mro__ if name in vars(c))
     steps = overridden(activation, owner, ("calc", "calcDiff"))
     if steps:
-        log_fallback(type(activation), steps, "the cost stack's fused activation step")
+        if step is not None:
+            log_fallback(type(activation), steps, step)
         return None
     return form
 
 
 def _item_form(activation) -> tuple | None:
-    """``(kind code, parameter)`` of ``activation.item_form()`` (:mod:`.stack_kernel`), or None when it has none or its
-    class overrides the ``calc``/``calcDiff`` of the class that declares the form."""
-    form = activation.item_form()
-    if form is None:
-        return None
-    owner = next(c for c in type(activation).__mro__ if "item_form" in vars(c))
-    if overridden(activation, owner, ("calc", "calcDiff")):
-        return None
-    return stack_kernel.ITEM_KINDS[form[0]], float(form[1])
+    """``(kind code, parameter)`` of the activation's ``item_form`` (:mod:`.stack_kernel`), or None
+    (:func:`_declared_form`)."""
+    form = _declared_form(activation, "item_form")
+    return None if form is None else (stack_kernel.ITEM_KINDS[form[0]], float(form[1]))
 
 
 def _constant_jacobians(residual) -> bool:
@@ -154,7 +151,7 @@ class CostStack:
             weight = item.weight if on else 0.0
             self.weights[rows] = weight
             self.item_weights[k] = weight
-            form = _fused_form(cost.activation)
+            form = _declared_form(cost.activation, "barrier_form", "the cost stack's fused activation step")
             self.act_kinds[k], self.act_params[k] = stack_kernel.BARRIER, 0.0
             if form is None:
                 form = (0.0, 0.0, 1.0)
