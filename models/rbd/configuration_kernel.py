@@ -52,32 +52,32 @@ from crocopy.kernels import uncounted
 
 from .joint_types import FREEFLYER, PLANAR, REVOLUTE_UB, SPHERICAL, TRANSLATION
 from .lie_kernel import (
-    _IDENTITY,
-    _SMALL,
-    _adjoint_into,
-    _exp2_t,
-    _exp3_t,
-    _exp6_t,
-    _inverse_adjoint2_t,
-    _inverse_t,
-    _jexp2_t,
-    _jexp6_into,
-    _jlog2_t,
-    _jlog6_into,
-    _jr_t,
-    _log2_t,
-    _log3_k_t,
-    _log3_t,
-    _log6_t,
-    _mm,
-    _mv,
-    _neg,
-    _planar_relative_t,
-    _poly,
-    _quat_rot_t,
-    _skew,
-    _store,
-    _tr,
+    IDENTITY,
+    SMALL,
+    adjoint_into,
+    exp2_t,
+    exp3_t,
+    exp6_t,
+    inverse_adjoint2_t,
+    inverse_t,
+    jexp2_t,
+    jexp6_into,
+    jlog2_t,
+    jlog6_into,
+    jr_t,
+    log2_t,
+    log3_k_t,
+    log3_t,
+    log6_t,
+    mm,
+    mv,
+    neg,
+    planar_relative_t,
+    poly,
+    quat_rot_t,
+    skew,
+    store,
+    tr,
 )
 
 # --- configuration space --------------------------------------------------------------------------------
@@ -86,7 +86,7 @@ from .lie_kernel import (
 @uncounted
 def _placement_t(q, i):
     """``M(q[i:i+7])`` of a free-flyer configuration as ``(R, p)`` tuples."""
-    return _quat_rot_t(q[i + 3], q[i + 4], q[i + 5], q[i + 6]), (q[i], q[i + 1], q[i + 2])
+    return quat_rot_t(q[i + 3], q[i + 4], q[i + 5], q[i + 6]), (q[i], q[i + 1], q[i + 2])
 
 
 @uncounted
@@ -94,8 +94,8 @@ def _relative_t(q0, q1, i):
     """``M(q0)⁻¹ M(q1)`` of the free flyer at ``q[i:i+7]`` as ``(R, p)`` tuples."""
     R0, p0 = _placement_t(q0, i)
     R1, p1 = _placement_t(q1, i)
-    R0t = _tr(R0)
-    return _mm(R0t, R1), _mv(R0t, p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2])
+    R0t = tr(R0)
+    return mm(R0t, R1), mv(R0t, p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2])
 
 
 @uncounted
@@ -103,7 +103,7 @@ def _quat_step(x0, y0, z0, w0, wx, wy, wz, align):
     """The quaternion of ``R(x0, y0, z0, w0) exp3(ω)``: the product with ``exp3(ω)``'s, sign-aligned with the first
     (``align``: as Pinocchio's SE(3), not its SO(3)) and first-order normalised, as a 4-tuple ``[x, y, z, w]``."""
     t = math.sqrt(wx * wx + wy * wy + wz * wz)
-    if t < _SMALL:
+    if t < SMALL:
         t2 = t * t
         k = 0.5 - t2 / 48.0 + t2 * t2 / 3840.0
     else:
@@ -124,9 +124,9 @@ def _integrate_freeflyer(q, iq, v, iv, q_out):
     x0, y0, z0, w0 = q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6]
     wx, wy, wz = v[iv + 3], v[iv + 4], v[iv + 5]
     x, y, z, w = _quat_step(x0, y0, z0, w0, wx, wy, wz, True)
-    R0 = _quat_rot_t(x0, y0, z0, w0)
-    tx, ty, tz = _mv(_jr_t(wx, wy, wz, 1.0), v[iv], v[iv + 1], v[iv + 2])
-    dx, dy, dz = _mv(R0, tx, ty, tz)
+    R0 = quat_rot_t(x0, y0, z0, w0)
+    tx, ty, tz = mv(jr_t(wx, wy, wz, 1.0), v[iv], v[iv + 1], v[iv + 2])
+    dx, dy, dz = mv(R0, tx, ty, tz)
     q_out[iq], q_out[iq + 1], q_out[iq + 2] = q[iq] + dx, q[iq + 1] + dy, q[iq + 2] + dz
     q_out[iq + 3], q_out[iq + 4], q_out[iq + 5], q_out[iq + 6] = x, y, z, w
 
@@ -134,8 +134,8 @@ def _integrate_freeflyer(q, iq, v, iv, q_out):
 @uncounted
 def _sphere_relative_t(q0, q1, i):
     """``R(q0)ᵀ R(q1)`` of the spherical joint whose quaternion is at ``q[i:i+4]``."""
-    R0 = _quat_rot_t(q0[i], q0[i + 1], q0[i + 2], q0[i + 3])
-    return _mm(_tr(R0), _quat_rot_t(q1[i], q1[i + 1], q1[i + 2], q1[i + 3]))
+    R0 = quat_rot_t(q0[i], q0[i + 1], q0[i + 2], q0[i + 3])
+    return mm(tr(R0), quat_rot_t(q1[i], q1[i + 1], q1[i + 2], q1[i + 3]))
 
 
 @uncounted
@@ -150,7 +150,7 @@ def integrate(jtype, idx_q, idx_v, q, v, q_out):
                 q[iq], q[iq + 1], q[iq + 2], q[iq + 3], v[iv], v[iv + 1], v[iv + 2], False)
         elif kind == PLANAR:
             c0, s0 = q[iq + 2], q[iq + 3]
-            cw, sw, tx, ty = _exp2_t(v[iv], v[iv + 1], v[iv + 2])
+            cw, sw, tx, ty = exp2_t(v[iv], v[iv + 1], v[iv + 2])
             q_out[iq], q_out[iq + 1] = q[iq] + c0 * tx - s0 * ty, q[iq + 1] + s0 * tx + c0 * ty
             q_out[iq + 2], q_out[iq + 3] = c0 * cw - s0 * sw, s0 * cw + c0 * sw
         elif kind == TRANSLATION:
@@ -174,14 +174,14 @@ def difference(jtype, idx_q, idx_v, q0, q1, v_out):
         kind, iq, iv = jtype[j], idx_q[j], idx_v[j]
         if kind == FREEFLYER:
             R, p = _relative_t(q0, q1, iq)
-            res = _log6_t(R, p[0], p[1], p[2])
+            res = log6_t(R, p[0], p[1], p[2])
             for k in range(6):
                 v_out[iv + k] = res[k]
         elif kind == SPHERICAL:
-            v_out[iv], v_out[iv + 1], v_out[iv + 2] = _log3_t(_sphere_relative_t(q0, q1, iq))
+            v_out[iv], v_out[iv + 1], v_out[iv + 2] = log3_t(_sphere_relative_t(q0, q1, iq))
         elif kind == PLANAR:
-            c, s, tx, ty = _planar_relative_t(q0, q1, iq)
-            v_out[iv], v_out[iv + 1], v_out[iv + 2], _, _ = _log2_t(c, s, tx, ty, True)
+            c, s, tx, ty = planar_relative_t(q0, q1, iq)
+            v_out[iv], v_out[iv + 1], v_out[iv + 2], _, _ = log2_t(c, s, tx, ty, True)
         elif kind == TRANSLATION:
             for k in range(3):
                 v_out[iv + k] = q1[iq + k] - q0[iq + k]
@@ -199,29 +199,29 @@ def _ddifference_blocks(jtype, idx_q, idx_v, q0, q1, arg, J):
         kind, iq, iv = jtype[j], idx_q[j], idx_v[j]
         if kind == SPHERICAL:
             R = _sphere_relative_t(q0, q1, iq)
-            x, y, z, k = _log3_k_t(R)
-            w = _skew(x, y, z)
-            A = _poly(0.5, k, w, _mm(w, w))
-            _store(A if arg == 1 else _neg(_mm(A, _tr(R))), J, iv, iv)
+            x, y, z, k = log3_k_t(R)
+            w = skew(x, y, z)
+            A = poly(0.5, k, w, mm(w, w))
+            store(A if arg == 1 else neg(mm(A, tr(R))), J, iv, iv)
             continue
         if kind == PLANAR:
-            c, s, tx, ty = _planar_relative_t(q0, q1, iq)
-            A = _jlog2_t(c, s, tx, ty)
-            _store(A if arg == 1 else _neg(_mm(A, _inverse_adjoint2_t(c, s, tx, ty))), J, iv, iv)
+            c, s, tx, ty = planar_relative_t(q0, q1, iq)
+            A = jlog2_t(c, s, tx, ty)
+            store(A if arg == 1 else neg(mm(A, inverse_adjoint2_t(c, s, tx, ty))), J, iv, iv)
             continue
         if kind == TRANSLATION:
-            _store(_IDENTITY if arg == 1 else _neg(_IDENTITY), J, iv, iv)
+            store(IDENTITY if arg == 1 else neg(IDENTITY), J, iv, iv)
             continue
         if kind != FREEFLYER:
             J[iv, iv] = 1.0 if arg == 1 else -1.0
             continue
         R, p = _relative_t(q0, q1, iq)
-        _jlog6_into(R, p[0], p[1], p[2], J, iv, iv)
+        jlog6_into(R, p[0], p[1], p[2], J, iv, iv)
         if arg == 1:
             continue
         # J ← -Jlog6 Ad(M⁻¹), row by row, with Ad(M⁻¹) = [[Rᵀ, -Rᵀ[p]], [0, Rᵀ]]
-        Rt = _tr(R)
-        B = _mm(Rt, _skew(p[0], p[1], p[2]))
+        Rt = tr(R)
+        B = mm(Rt, skew(p[0], p[1], p[2]))
         for r in range(6):
             a0, a1, a2 = J[iv + r, iv], J[iv + r, iv + 1], J[iv + r, iv + 2]
             b0, b1, b2 = J[iv + r, iv + 3], J[iv + r, iv + 4], J[iv + r, iv + 5]
@@ -240,24 +240,24 @@ def dintegrate_blocks(jtype, idx_q, idx_v, v, arg, J):
         kind, iv = jtype[j], idx_v[j]
         if kind == SPHERICAL:
             x, y, z = v[iv], v[iv + 1], v[iv + 2]
-            _store(_jr_t(x, y, z, -1.0) if arg == 1 else _tr(_exp3_t(x, y, z)), J, iv, iv)
+            store(jr_t(x, y, z, -1.0) if arg == 1 else tr(exp3_t(x, y, z)), J, iv, iv)
         elif kind == PLANAR:
             x, y, w = v[iv], v[iv + 1], v[iv + 2]
             if arg == 1:
-                _store(_jexp2_t(x, y, w), J, iv, iv)
+                store(jexp2_t(x, y, w), J, iv, iv)
             else:
-                cw, sw, tx, ty = _exp2_t(x, y, w)
-                _store(_inverse_adjoint2_t(cw, sw, tx, ty), J, iv, iv)
+                cw, sw, tx, ty = exp2_t(x, y, w)
+                store(inverse_adjoint2_t(cw, sw, tx, ty), J, iv, iv)
         elif kind == TRANSLATION:
-            _store(_IDENTITY, J, iv, iv)
+            store(IDENTITY, J, iv, iv)
         elif kind != FREEFLYER:
             J[iv, iv] = 1.0
         elif arg == 1:
-            _jexp6_into(v[iv], v[iv + 1], v[iv + 2], v[iv + 3], v[iv + 4], v[iv + 5], J, iv, iv)
+            jexp6_into(v[iv], v[iv + 1], v[iv + 2], v[iv + 3], v[iv + 4], v[iv + 5], J, iv, iv)
         else:
-            R, p = _exp6_t(v[iv], v[iv + 1], v[iv + 2], v[iv + 3], v[iv + 4], v[iv + 5])
-            Rt, pt = _inverse_t(R, p[0], p[1], p[2])
-            _adjoint_into(Rt, pt[0], pt[1], pt[2], J, iv, iv)
+            R, p = exp6_t(v[iv], v[iv + 1], v[iv + 2], v[iv + 3], v[iv + 4], v[iv + 5])
+            Rt, pt = inverse_t(R, p[0], p[1], p[2])
+            adjoint_into(Rt, pt[0], pt[1], pt[2], J, iv, iv)
 
 
 @uncounted

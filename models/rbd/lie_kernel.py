@@ -37,17 +37,17 @@ import math
 
 from crocopy.kernels import uncounted
 
-_SMALL = 1e-2
+SMALL = 1e-2
 """Below this angle the trigonometric coefficients use their Taylor series."""
 
-_IDENTITY = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+IDENTITY = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
 
 
 # --- 3x3 matrices as row-major 9-tuples (values, no allocation) --------------------------------------
 
 
 @uncounted
-def _mm(a, b):
+def mm(a, b):
     """``a @ b``."""
     return (
         a[0] * b[0] + a[1] * b[3] + a[2] * b[6], a[0] * b[1] + a[1] * b[4] + a[2] * b[7],
@@ -60,19 +60,19 @@ def _mm(a, b):
 
 
 @uncounted
-def _tr(a):
+def tr(a):
     """``aᵀ``."""
     return (a[0], a[3], a[6], a[1], a[4], a[7], a[2], a[5], a[8])
 
 
 @uncounted
-def _skew(x, y, z):
+def skew(x, y, z):
     """``[(x, y, z)]``, the matrix of the cross product."""
     return (0.0, -z, y, z, 0.0, -x, -y, x, 0.0)
 
 
 @uncounted
-def _poly(a, b, w, ww):
+def poly(a, b, w, ww):
     """``I + a W + b WW``."""
     return (
         1.0 + a * w[0] + b * ww[0], a * w[1] + b * ww[1], a * w[2] + b * ww[2],
@@ -101,7 +101,7 @@ def _add(a, b):
 
 
 @uncounted
-def _mv(a, x, y, z):
+def mv(a, x, y, z):
     """``a @ (x, y, z)``."""
     return (
         a[0] * x + a[1] * y + a[2] * z,
@@ -117,7 +117,7 @@ def _load(R):
 
 
 @uncounted
-def _store(a, out, r0, c0):
+def store(a, out, r0, c0):
     """``out[r0:r0+3, c0:c0+3] = a``."""
     for i in range(3):
         for j in range(3):
@@ -159,7 +159,7 @@ def _coefs(t):
 @uncounted
 def _inv_coef(t):
     """``1/t² - (1 + cos t)/(2 t sin t)``, the ``[ω]²`` coefficient of ``Jr(ω)⁻¹`` (``t ∈ [0, π]``)."""
-    if t < _SMALL:
+    if t < SMALL:
         t2 = t * t
         return 1.0 / 12.0 + t2 / 720.0 + t2 * t2 / 30240.0
     h = 0.5 * t
@@ -167,24 +167,24 @@ def _inv_coef(t):
 
 
 @uncounted
-def _exp3_t(x, y, z):
+def exp3_t(x, y, z):
     t = math.sqrt(x * x + y * y + z * z)
     a, b, _ = _coefs(t)
-    w = _skew(x, y, z)
-    return _poly(a, b, w, _mm(w, w))
+    w = skew(x, y, z)
+    return poly(a, b, w, mm(w, w))
 
 
 @uncounted
-def _jr_t(x, y, z, sign):
+def jr_t(x, y, z, sign):
     """``Jr(ω)`` (``sign = -1``) or ``Jl(ω) = Jr(ω)ᵀ`` (``sign = 1``)."""
     t = math.sqrt(x * x + y * y + z * z)
     _, b, c = _coefs(t)
-    w = _skew(x, y, z)
-    return _poly(sign * b, c, w, _mm(w, w))
+    w = skew(x, y, z)
+    return poly(sign * b, c, w, mm(w, w))
 
 
 @uncounted
-def _log3_k_t(R):
+def log3_k_t(R):
     """``log3(R)`` as ``(x, y, z)`` and the ``[ω]²`` coefficient of ``Jr(ω)⁻¹`` at its angle (:func:`_inv_coef`); below
     ``θ = 2π/3`` from ``R``'s own ``sin θ, cos θ``: ``1/θ² - (1 + cos θ)/(2 θ sin θ)`` (no trigonometric call)."""
     ax, ay, az = 0.5 * (R[7] - R[5]), 0.5 * (R[2] - R[6]), 0.5 * (R[3] - R[1])
@@ -192,7 +192,7 @@ def _log3_k_t(R):
     c = 0.5 * (R[0] + R[4] + R[8] - 1.0)
     t = math.atan2(s, c)
     if c > -0.5:
-        if t < _SMALL:
+        if t < SMALL:
             t2 = t * t
             f = 1.0 + t2 / 6.0 + 7.0 * t2 * t2 / 360.0
             k = 1.0 / 12.0 + t2 / 720.0 + t2 * t2 / 30240.0
@@ -219,9 +219,9 @@ def _log3_k_t(R):
 
 
 @uncounted
-def _log3_t(R):
+def log3_t(R):
     """``log3(R)`` as ``(x, y, z)``."""
-    x, y, z, _ = _log3_k_t(R)
+    x, y, z, _ = log3_k_t(R)
     return x, y, z
 
 
@@ -243,8 +243,8 @@ def _q_t(rx, ry, rz, x, y, z):
     n = (y * rz - z * ry, z * rx - x * rz, x * ry - y * rx)
     f = (x, y, z)
     r = (rx, ry, rz)
-    P = _skew(rx, ry, rz)
-    W = _skew(x, y, z)
+    P = skew(rx, ry, rz)
+    W = skew(x, y, z)
     dw = (c2 - c3) * d
     ff = 2.0 * c4 * d
     diag = 2.0 * d * (c4 * t2 - c2)
@@ -267,30 +267,30 @@ def _q_t(rx, ry, rz, x, y, z):
 @uncounted
 def log3(R, w_out):
     """``w_out (3,) = log3(R (3, 3))``, angle in ``[0, π]``."""
-    w_out[0], w_out[1], w_out[2] = _log3_t(_load(R))
+    w_out[0], w_out[1], w_out[2] = log3_t(_load(R))
 
 
 @uncounted
 def jlog3(R, J_out):
     """``J_out (3, 3) = Jlog3(R) = Jexp3(log3 R)⁻¹``."""
-    x, y, z, k = _log3_k_t(_load(R))
-    w = _skew(x, y, z)
-    _store(_poly(0.5, k, w, _mm(w, w)), J_out, 0, 0)
+    x, y, z, k = log3_k_t(_load(R))
+    w = skew(x, y, z)
+    store(poly(0.5, k, w, mm(w, w)), J_out, 0, 0)
 
 
 # --- SE(3) ---------------------------------------------------------------------------------------------
 
 
 @uncounted
-def _exp6_t(vx, vy, vz, x, y, z):
+def exp6_t(vx, vy, vz, x, y, z):
     """``exp6([v; ω])`` as ``(R, p)`` tuples."""
-    return _exp3_t(x, y, z), _mv(_jr_t(x, y, z, 1.0), vx, vy, vz)
+    return exp3_t(x, y, z), mv(jr_t(x, y, z, 1.0), vx, vy, vz)
 
 
 @uncounted
-def _log6_t(R, px, py, pz):
-    """``log6(R, p)`` as ``(ρx, ρy, ρz, φx, φy, φz)``, then ``Jr(φ)⁻¹``'s coefficient ``k`` (:func:`_log3_k_t`)."""
-    x, y, z, k = _log3_k_t(R)
+def log6_t(R, px, py, pz):
+    """``log6(R, p)`` as ``(ρx, ρy, ρz, φx, φy, φz)``, then ``Jr(φ)⁻¹``'s coefficient ``k`` (:func:`log3_k_t`)."""
+    x, y, z, k = log3_k_t(R)
     cx, cy, cz = y * pz - z * py, z * px - x * pz, x * py - y * px  # Jl(ω)⁻¹ p = p - ω × p / 2 + k ω × (ω × p)
     dx, dy, dz = y * cz - z * cy, z * cx - x * cz, x * cy - y * cx
     rx, ry, rz = px - 0.5 * cx + k * dx, py - 0.5 * cy + k * dy, pz - 0.5 * cz + k * dz
@@ -298,26 +298,26 @@ def _log6_t(R, px, py, pz):
 
 
 @uncounted
-def _jexp6_into(vx, vy, vz, x, y, z, J, r0, c0):
+def jexp6_into(vx, vy, vz, x, y, z, J, r0, c0):
     """``J[r0:r0+6, c0:c0+6] = jexp6([v; ω])``."""
-    A = _jr_t(x, y, z, -1.0)
-    _store(A, J, r0, c0)
-    _store(A, J, r0 + 3, c0 + 3)
-    _store(_q_t(-vx, -vy, -vz, -x, -y, -z), J, r0, c0 + 3)
+    A = jr_t(x, y, z, -1.0)
+    store(A, J, r0, c0)
+    store(A, J, r0 + 3, c0 + 3)
+    store(_q_t(-vx, -vy, -vz, -x, -y, -z), J, r0, c0 + 3)
     for i in range(3):
         for j in range(3):
             J[r0 + 3 + i, c0 + j] = 0.0
 
 
 @uncounted
-def _jlog6_into(R, px, py, pz, J, r0, c0):
+def jlog6_into(R, px, py, pz, J, r0, c0):
     """``J[r0:r0+6, c0:c0+6] = jlog6(R, p)``."""
-    rx, ry, rz, x, y, z, k = _log6_t(R, px, py, pz)
-    w = _skew(x, y, z)
-    A = _poly(0.5, k, w, _mm(w, w))
-    _store(A, J, r0, c0)
-    _store(A, J, r0 + 3, c0 + 3)
-    B = _mm(_mm(A, _q_t(-rx, -ry, -rz, -x, -y, -z)), A)
+    rx, ry, rz, x, y, z, k = log6_t(R, px, py, pz)
+    w = skew(x, y, z)
+    A = poly(0.5, k, w, mm(w, w))
+    store(A, J, r0, c0)
+    store(A, J, r0 + 3, c0 + 3)
+    B = mm(mm(A, _q_t(-rx, -ry, -rz, -x, -y, -z)), A)
     for i in range(3):
         for j in range(3):
             J[r0 + i, c0 + 3 + j] = -B[3 * i + j]
@@ -325,28 +325,28 @@ def _jlog6_into(R, px, py, pz, J, r0, c0):
 
 
 @uncounted
-def _adjoint_into(R, px, py, pz, J, r0, c0):
+def adjoint_into(R, px, py, pz, J, r0, c0):
     """``J[r0:r0+6, c0:c0+6] = Ad(R, p) = [[R, [p] R], [0, R]]``."""
-    _store(R, J, r0, c0)
-    _store(R, J, r0 + 3, c0 + 3)
-    _store(_mm(_skew(px, py, pz), R), J, r0, c0 + 3)
+    store(R, J, r0, c0)
+    store(R, J, r0 + 3, c0 + 3)
+    store(mm(skew(px, py, pz), R), J, r0, c0 + 3)
     for i in range(3):
         for j in range(3):
             J[r0 + 3 + i, c0 + j] = 0.0
 
 
 @uncounted
-def _inverse_t(R, px, py, pz):
+def inverse_t(R, px, py, pz):
     """``(R, p)⁻¹ = (Rᵀ, -Rᵀ p)`` as tuples."""
-    Rt = _tr(R)
-    qx, qy, qz = _mv(Rt, px, py, pz)
+    Rt = tr(R)
+    qx, qy, qz = mv(Rt, px, py, pz)
     return Rt, (-qx, -qy, -qz)
 
 
 @uncounted
 def log6(R, p, out6):
     """``out6 (6,) = log6(R, p) = [v; ω]``."""
-    res = _log6_t(_load(R), p[0], p[1], p[2])
+    res = log6_t(_load(R), p[0], p[1], p[2])
     for k in range(6):
         out6[k] = res[k]
 
@@ -354,14 +354,14 @@ def log6(R, p, out6):
 @uncounted
 def jlog6(R, p, J_out):
     """``J_out (6, 6) = Jlog6(R, p)``."""
-    _jlog6_into(_load(R), p[0], p[1], p[2], J_out, 0, 0)
+    jlog6_into(_load(R), p[0], p[1], p[2], J_out, 0, 0)
 
 
 # --- quaternions [x, y, z, w] -------------------------------------------------------------------------
 
 
 @uncounted
-def _quat_rot_t(x, y, z, w):
+def quat_rot_t(x, y, z, w):
     """The rotation of a unit quaternion (Eigen's ``toRotationMatrix`` formula)."""
     return (
         1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w),
@@ -382,14 +382,14 @@ def _se2_coefs(w):
 
 
 @uncounted
-def _exp2_t(vx, vy, w):
+def exp2_t(vx, vy, w):
     """``exp2([vx, vy, w])`` as ``(cos w, sin w, tx, ty)``."""
     a, c, _, _ = _se2_coefs(w)
     return math.cos(w), math.sin(w), a * vx - c * vy, c * vx + a * vy
 
 
 @uncounted
-def _planar_relative_t(q0, q1, i):
+def planar_relative_t(q0, q1, i):
     """``M(q0)⁻¹ M(q1)`` of the planar joint at ``q[i:i+4]`` as ``(cos, sin, tx, ty)`` of ``(R0ᵀ R1, R0ᵀ (t1 - t0))``
     (the rotation's two entries as Pinocchio reads them: ``R0ᵀ R1`` from the raw ``[cos, sin]``)."""
     c0, s0, c1, s1 = q0[i + 2], q0[i + 3], q1[i + 2], q1[i + 3]
@@ -398,7 +398,7 @@ def _planar_relative_t(q0, q1, i):
 
 
 @uncounted
-def _log2_t(c, s, tx, ty, clamp):
+def log2_t(c, s, tx, ty, clamp):
     """``log2`` of the SE(2) placement ``([[c, -s], [s, c]], t)`` as ``(ρx, ρy, θ)``, then ``α = a/(a² + c²)`` and
     ``β = θ/2``, the entries of ``V(θ)⁻¹ = [[α, β], [-β, α]]``.  With ``clamp``, as Pinocchio's ``difference``, the
     angle is 0 where ``c`` rounds above 1 (Pinocchio's ``dDifference`` does not clamp it; unlike the continuous joint's
@@ -410,30 +410,30 @@ def _log2_t(c, s, tx, ty, clamp):
 
 
 @uncounted
-def _jexp2_t(vx, vy, w):
+def jexp2_t(vx, vy, w):
     """The right Jacobian of ``exp2`` at ``[vx, vy, w]`` as a row-major 9-tuple."""
     a, c, e, f = _se2_coefs(w)
     return a, c, vx * e - vy * f, -c, a, vx * f + vy * e, 0.0, 0.0, 1.0
 
 
 @uncounted
-def _jlog2_t(c, s, tx, ty):
+def jlog2_t(c, s, tx, ty):
     """``jlog2(M)``, the inverse of ``exp2``'s right Jacobian at ``log2 M``, as a 9-tuple: ``[[A⁻¹, -A⁻¹ b], [0, 1]]``
     with ``A⁻¹ = [[α, -β], [β, α]]`` and ``b`` that Jacobian's last column."""
-    rx, ry, w, alpha, beta = _log2_t(c, s, tx, ty, False)
+    rx, ry, w, alpha, beta = log2_t(c, s, tx, ty, False)
     _, _, e, f = _se2_coefs(w)
     bx, by = rx * e - ry * f, rx * f + ry * e
     return alpha, -beta, beta * by - alpha * bx, beta, alpha, -(beta * bx + alpha * by), 0.0, 0.0, 1.0
 
 
 @uncounted
-def _inverse_adjoint2_t(c, s, tx, ty):
+def inverse_adjoint2_t(c, s, tx, ty):
     """``Ad(M)⁻¹ = [[Rᵀ, [1] Rᵀ t], [0, 1]]`` of the SE(2) placement ``(R(c, s), t)`` as a 9-tuple."""
     ux, uy = c * tx + s * ty, c * ty - s * tx
     return c, s, -uy, -s, c, ux, 0.0, 0.0, 1.0
 
 
 @uncounted
-def _neg(a):
+def neg(a):
     """``-a`` for a 9-tuple."""
     return (-a[0], -a[1], -a[2], -a[3], -a[4], -a[5], -a[6], -a[7], -a[8])
