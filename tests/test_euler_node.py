@@ -33,6 +33,8 @@ ACTIVATIONS = (
     lambda nr, rng: crocopy.ActivationModelSmooth1Norm(nr, rng.uniform(0.1, 2.0)),
     lambda nr, rng: crocopy.ActivationModelQuadFlatExp(nr, rng.uniform(1.0, 10.0)),
     lambda nr, rng: crocopy.ActivationModelQuadFlatLog(nr, rng.uniform(1.0, 10.0)),
+    lambda nr, rng: crocopy.ActivationModelSmooth2Norm(nr, rng.uniform(0.1, 2.0)),
+    lambda nr, rng: crocopy.ActivationModel2NormBarrier(nr, rng.uniform(2.0, 20.0), bool(rng.integers(2))),
 )
 """The activations the node factory cycles through: the fused quadratic-barrier family, then those with an item form
 (evaluated item by item in the node's kernel)."""
@@ -302,8 +304,8 @@ def test_the_actuations_and_contacts_that_lower_themselves_are_covered_and_docum
 
 
 def test_activations_with_an_item_form_are_covered_and_others_keep_the_python_path():
-    """Every activation class declaring an item form is in the factory; a full-Hessian quadratic-flat activation, a
-    smooth 2-norm and a subclass overriding ``calc`` keep the node on the Python path, naming the activation."""
+    """Every activation class declaring an item form is in the factory; a full-Hessian quadratic-flat activation and a
+    subclass overriding ``calc`` keep the node on the Python path, naming the activation."""
     from crocopy.activations.base import ActivationModelAbstract
     from crocopy.models.rbd.lowering import declaring
 
@@ -316,7 +318,6 @@ def test_activations_with_an_item_form_are_covered_and_others_keep_the_python_pa
             super().calc(data, r)
 
     for activation, name in ((crocopy.ActivationModelQuadFlatExp(6, 2.0, True), "ActivationModelQuadFlatExp"),
-                             (crocopy.ActivationModelSmooth2Norm(6), "ActivationModelSmooth2Norm"),
                              (Smooth1(6), "Smooth1")):
         iam, state = node("kinova", ("state",))
         costs = iam.differential.costs
@@ -326,6 +327,62 @@ def test_activations_with_an_item_form_are_covered_and_others_keep_the_python_pa
         assert iam._compiled_node(data, False, {}) is None
         problem = crocopy.ShootingProblem(state.zero(), [iam], iam)
         assert name in crocopy.compiled_coverage(problem)[0].reason
+
+
+@pytest.mark.parametrize("terminal", [False, True])
+def test_dense_item_activations_compile_and_match_the_python_node(terminal):
+    """The smooth 2-norm and the 2-norm barrier (Gauss-Newton and true Hessian, inside its ball) on a state-only and
+    a control-dependent residual: the node compiles, and its values and derivatives (the dense Hessian ``d I + c r
+    rᵀ`` through ``Jᵀ Arr J``) equal the Python node's; outside the ball the barrier adds nothing (a terminal node
+    has no control cost)."""
+    model = load("kinova")
+    state = crocopy.StateMultibody(model)
+    act = actuation("kinova", state)
+    x, u = point(state, act.nu, 4)
+    ref = state.rand()
+    for alpha, inside in ((1e3, True), (1e-3, False)):
+        costs, nu = crocopy.CostModelSum(state, act.nu), act.nu
+        for n, (activation, residual) in enumerate((
+                (crocopy.ActivationModelSmooth2Norm(state.ndx, 0.3), crocopy.ResidualModelState(state, ref, nu)),
+                (crocopy.ActivationModelSmooth2Norm(nu), crocopy.ResidualModelControl(state, nu)),
+                (crocopy.ActivationModel2NormBarrier(state.ndx, alpha), crocopy.ResidualModelState(state, nu)),
+                (crocopy.ActivationModel2NormBarrier(nu, alpha, True), crocopy.ResidualModelControl(state, nu)))):
+            costs.addCost(f"c{n}", crocopy.CostModelResidual(state, activation, residual), 1.0 + n)
+        dam = crocopy.DifferentialActionModelFreeFwdDynamics(state, act, costs)
+        iam = crocopy.IntegratedActionModelEuler(dam, 0.01)
+        problem = crocopy.ShootingProblem(state.zero(), [iam], iam)
+        assert all(entry.compiled for entry in crocopy.compiled_coverage(problem))
+        compare_with_python_node(iam, x, u, terminal, rtol=1e-9, atol=1e-10, cost_rel=1e-12)
+        data = iam.createData()
+        iam.calc(data, x, None if terminal else u)
+        barrier = [data.differential.costs.costs[f"c{n}"].cost for n in ((2,) if terminal else (2, 3))]
+        assert (min(barrier) > 0.0) if inside else (max(barrier) == 0.0)
+
+
+def test_the_stack_adds_a_dense_hessian_as_the_items_own_cost_datas_do():
+    """A cost sum holding dense activations: the stack's derivatives equal the sum of each item's own
+    ``w Lx``/``w Lxx``/``w Lxu``/``w Luu`` (Crocoddyl's ``Rᵀ Arr R``), kernels on and off."""
+    state = crocopy.StateMultibody(load("kinova"))
+    nu = state.nv
+    rng = np.random.default_rng(3)
+    costs = crocopy.CostModelSum(state, nu)
+    costs.addCost("s", crocopy.CostModelResidual(state, crocopy.ActivationModelSmooth2Norm(state.ndx, 0.2),
+                                                 crocopy.ResidualModelState(state, state.rand(), nu)), 2.0)
+    costs.addCost("b", crocopy.CostModelResidual(state, crocopy.ActivationModel2NormBarrier(nu, 1e3, True),
+                                                 crocopy.ResidualModelControl(state, rng.standard_normal(nu))), 0.5)
+    x, u = point(state, nu, 5)
+    try:
+        for enabled in (True, False):
+            crocopy.set_kernels(enabled)
+            data = costs.createData(crocopy.DataCollectorMultibody(pin.Data(state.pinocchio)))
+            costs.calc(data, x, u)
+            costs.calcDiff(data, x, u)
+            assert data.Luu.any() and data.Lxx.any()
+            for name in ("Lx", "Lu", "Lxx", "Lxu", "Luu"):
+                expected = sum(item.weight * getattr(data.costs[key], name) for key, item in costs.costs.items())
+                np.testing.assert_allclose(getattr(data, name), expected, rtol=1e-12, atol=1e-12, err_msg=name)
+    finally:
+        crocopy.set_kernels(True)
 
 
 def test_an_item_activation_parameter_set_between_solves_is_read_again():

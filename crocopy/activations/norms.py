@@ -70,6 +70,9 @@ class ActivationModelSmooth2Norm(_Smoothing, ActivationModelAbstract):
         super().__init__(nr)
         self.eps = eps
 
+    def item_form(self) -> tuple[str, float]:
+        return "smooth2", self._eps
+
     def calc(self, data: ActivationDataAbstract, r: np.ndarray) -> None:
         data.a_value = float(np.sqrt(self.eps + r @ r))
 
@@ -86,6 +89,9 @@ class ActivationModel2NormBarrier(ActivationModelAbstract):
         super().__init__(nr)
         self.alpha = as_number(alpha, "alpha", 0.0)
         self.true_hessian = bool(true_hessian)
+
+    def item_form(self) -> tuple[str, float]:
+        return ("norm_barrier_true" if self.true_hessian else "norm_barrier"), self.alpha
 
     def calc(self, data: ActivationDataAbstract, r: np.ndarray) -> None:
         n = np.linalg.norm(r)

@@ -60,6 +60,17 @@ def _item_form(activation) -> tuple | None:
     return None if form is None else (stack_kernel.ITEM_KINDS[form[0]], float(form[1]))
 
 
+def stackable_cost(cost) -> bool:
+    """Whether a residual cost joins the stack: its activation is diagonal, or one of the dense item forms (Hessian
+    ``d I + c r rᵀ``, :data:`.stack_kernel.DENSE`), and its residual has rows."""
+    if not cost.residual.nr:
+        return False
+    if cost.activation.diagonal:
+        return True
+    form = _item_form(cost.activation)
+    return form is not None and form[0] in stack_kernel.DENSE
+
+
 def _constant_jacobians(residual) -> bool:
     """True for a :class:`~crocopy.residuals.ResidualModelControl` whose ``calcDiff`` is the class's own
     (it does nothing: ``Ru = I`` is set by ``createData``), which the stack then does not call."""
@@ -116,10 +127,12 @@ class CostStack:
         self.unfused: list = []
         self.uncompiled: list = []
         """The active activations of :attr:`unfused` that compiled nodes cannot evaluate either (no item form)."""
+        self.dense: list = []
+        """The active items of a dense activation: ``(rows, activation data, residual data, with controls)``."""
 
     def __getstate__(self) -> dict:
         """Copy or pickle without the per-evaluation lists (they hold views; :meth:`refresh` rebuilds them)."""
-        return {**self.__dict__, "active": [], "varying": [], "unfused": [], "uncompiled": []}
+        return {**self.__dict__, "active": [], "varying": [], "unfused": [], "uncompiled": [], "dense": []}
 
     def _share(self, item, cdata, rows: slice, k: int) -> None:
         """Make the item's residual and activation arrays views into the stack."""
@@ -142,7 +155,7 @@ class CostStack:
         whether its layout changed: the node kind, or which items are evaluated and how (active, varying, unfused).
         Otherwise only values changed (weights, activation weights and bounds), in the same arrays."""
         before = self._layout()
-        self.active, self.varying, self.unfused, self.uncompiled = [], [], [], []
+        self.active, self.varying, self.unfused, self.uncompiled, self.dense = [], [], [], [], []
         for k, ((_, item, cdata), rows) in enumerate(zip(self.items, self.slices)):
             cost = item.cost
             cdata.zero = terminal and cost._terminal_zero
@@ -162,6 +175,8 @@ class CostStack:
                         self.uncompiled.append(cost.activation)
                     else:
                         self.act_kinds[k], self.act_params[k] = item
+                        if item[0] in stack_kernel.DENSE:
+                            self.dense.append((rows, cdata.activation, cdata.residual, cdata.with_u))
             self.lb[rows], self.ub[rows], self.act_weights[rows] = form
             if on:
                 self.active.append((cost.residual, cdata.residual))
@@ -245,8 +260,18 @@ class CostStack:
         derivatives(self.r, self.lb, self.ub, self.act_weights, self.Ar, self.Arr)
         for activation, adata, r in self.unfused:
             activation._raw_calcDiff(adata, r)
+        for rows, _, _, _ in self.dense:
+            self.Arr[rows] = 0.0  # their gradient only: the dense Hessian follows
         accumulate = stack_kernel.accumulate if kernel else stack_kernel.accumulate_numpy
         accumulate(
             self.weights, self.Ar, self.Arr, self.Jx, self.Ju, self.u_start, u is not None,
             data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu, self.cols,
         )
+        for rows, adata, rdata, with_u in self.dense:
+            w = self.weights[rows.start]
+            ArrRx = adata.Arr @ rdata.Rx
+            data.Lxx += w * (rdata.Rx.T @ ArrRx)
+            if with_u and u is not None:
+                ArrRu = adata.Arr @ rdata.Ru
+                data.Lxu += w * (rdata.Rx.T @ ArrRu)
+                data.Luu += w * (rdata.Ru.T @ ArrRu)

@@ -18,7 +18,16 @@ Compiled nodes also evaluate, item by item, the diagonal activations of another 
 
 * :data:`SMOOTH1` (``ε``): ``a = Σ √(ε + rᵢ²)``, ``Arᵢ = rᵢ/sᵢ``, ``Arrᵢ = ε/sᵢ³`` with ``sᵢ = √(ε + rᵢ²)``;
 * :data:`FLAT_EXP` (``α``): ``a = 1 - e``, ``e = exp(-n/α)``, ``Ar = c r``, ``Arrᵢ = c - (2/α) c rᵢ²``, ``c = (2/α) e``;
-* :data:`FLAT_LOG` (``α``): ``a = log(1 + n/α)``, ``Ar = c r``, ``Arrᵢ = c - c² rᵢ²``, ``c = 2/(α + n)``
+* :data:`FLAT_LOG` (``α``): ``a = log(1 + n/α)``, ``Ar = c r``, ``Arrᵢ = c - c² rᵢ²``, ``c = 2/(α + n)``;
+
+and two dense activations, whose Hessian ``Arr = d I + c r rᵀ`` is a diagonal and a rank-one term (the diagonal ``d``
+goes into the rows' ``Arr`` and the sums; then :func:`rank_one_sums` adds ``w c (Jᵀ r)(Jᵀ r)ᵀ`` over the item's
+rows, ``J = [Jx Ju]``):
+
+* :data:`SMOOTH2` (``ε``): ``a = √(ε + n)``, ``Ar = r/a``, ``d = 1/a``, ``c = -1/a³``;
+* :data:`NORM_BARRIER` (``α``, Gauss-Newton) and :data:`NORM_BARRIER_TRUE` (``α``, true Hessian): with ``ρ = √n``,
+  inside the ball (``0 < ρ < α``) ``a = ½ (ρ - α)²``, ``Ar = (1 - α/ρ) r``, ``d = 0`` and ``c = 1/ρ²`` (Gauss-Newton),
+  or ``d = 1 - α/ρ`` and ``c = α/ρ³`` (true Hessian); zero elsewhere
 
 (:func:`stack_values`, :func:`stack_derivatives_and_sums`: the barrier-family pass, then those items'; the same
 numbers as the activations' own ``calc``/``calcDiff`` to round-off, tested through the nodes).
@@ -185,11 +194,29 @@ def _derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, w
 derivatives_and_sums = compiled(_derivatives_and_sums)
 
 
-BARRIER, SMOOTH1, FLAT_EXP, FLAT_LOG = range(4)
+BARRIER, SMOOTH1, FLAT_EXP, FLAT_LOG, SMOOTH2, NORM_BARRIER, NORM_BARRIER_TRUE = range(7)
 """Activation kinds of a stack item: the barrier family (every row by the fused formula), then the item forms
-(:meth:`crocopy.activations.base.ActivationModelAbstract.item_form`)."""
-ITEM_KINDS = {"smooth1": SMOOTH1, "flat_exp": FLAT_EXP, "flat_log": FLAT_LOG}
+(:meth:`crocopy.activations.base.ActivationModelAbstract.item_form`); from :data:`SMOOTH2` on, dense ones."""
+ITEM_KINDS = {"smooth1": SMOOTH1, "flat_exp": FLAT_EXP, "flat_log": FLAT_LOG, "smooth2": SMOOTH2,
+              "norm_barrier": NORM_BARRIER, "norm_barrier_true": NORM_BARRIER_TRUE}
 """The kind of each item form's name."""
+DENSE = (SMOOTH2, NORM_BARRIER, NORM_BARRIER_TRUE)
+"""The kinds whose Hessian is dense (diagonal plus rank one, :func:`rank_one_sums`)."""
+
+
+def _dense_terms(kind, p, n2):
+    """``(a, s, d, c)`` of a dense item whose rows have ``Σ rᵢ² = n2``: its value, ``Ar = s r`` and ``Arr = d I +
+    c r rᵀ`` (module docstring)."""
+    if kind == SMOOTH2:
+        a = math.sqrt(p + n2)
+        return a, 1.0 / a, 1.0 / a, -1.0 / (a * a * a)
+    rho = math.sqrt(n2)
+    if rho >= p or rho == 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    s = (rho - p) / rho
+    if kind == NORM_BARRIER:
+        return 0.5 * (rho - p) ** 2, s, 0.0, 1.0 / n2
+    return 0.5 * (rho - p) ** 2, s, s, p / (n2 * rho)
 
 
 def _item_activations(r, starts, kinds, params, item_costs, item_weights, Ar, Arr, derivatives):
@@ -216,6 +243,15 @@ def _item_activations(r, starts, kinds, params, item_costs, item_weights, Ar, Ar
                 n2 = 0.0
                 for i in range(starts[k], stop):
                     n2 += r[i] * r[i]
+                if kind >= SMOOTH2:
+                    a, s, d, _ = dense_terms(kind, p, n2)
+                    item_costs[k] = a
+                    if derivatives:
+                        for i in range(starts[k], stop):
+                            Ar[i] = s * r[i]
+                            Arr[i] = d
+                    total += item_weights[k] * item_costs[k]
+                    continue
                 if kind == FLAT_EXP:
                     e = math.exp(-n2 / p)
                     item_costs[k] = 1.0 - e
@@ -231,6 +267,62 @@ def _item_activations(r, starts, kinds, params, item_costs, item_weights, Ar, Ar
                         Arr[i] = c - curvature * (r[i] * r[i])
         total += item_weights[k] * item_costs[k]
     return total
+
+
+def _gradient_entry(r, Jx, Ju, u_start, start, ustart, stop, a, ndx):
+    """``Σᵢ rᵢ Jᵢₐ`` over an item's rows ``start <= i < stop`` (column ``a`` of ``[Jx Ju]``; the ``Ju`` rows from
+    ``ustart`` on)."""
+    g = 0.0
+    if a < ndx:
+        for i in range(start, stop):
+            g += r[i] * Jx[i, a]
+    else:
+        for i in range(ustart, stop):
+            g += r[i] * Ju[i - u_start, a - ndx]
+    return g
+
+
+def _rank_one_sums(r, starts, kinds, params, item_weights, Jx, Ju, u_start, with_u, Lxx, Lxu, Luu):
+    """``w c gᵀg`` of every dense item (module docstring; ``g = Σᵢ rᵢ [Jx Ju]ᵢ`` over its rows, the ``Ju`` rows from
+    ``u_start`` on) added to the upper triangles of ``Lxx`` and ``Luu`` and to ``Lxu``, then their mirror (after
+    :func:`accumulate`, which leaves them exactly symmetric); nothing when no item is dense."""
+    nr, n, ndx = r.shape[0], starts.shape[0], Jx.shape[1]
+    nu = Ju.shape[1] if with_u else 0
+    touched = False
+    for k in range(n):
+        kind = kinds[k]
+        if kind < SMOOTH2 or item_weights[k] == 0.0:
+            continue
+        start = starts[k]
+        stop = starts[k + 1] if k + 1 < n else nr
+        n2 = 0.0
+        for i in range(start, stop):
+            n2 += r[i] * r[i]
+        c = item_weights[k] * dense_terms(kind, params[k], n2)[3]
+        if c == 0.0:
+            continue
+        touched = True
+        ustart = max(start, u_start) if nu else stop
+        for a in range(ndx + nu):
+            ga = gradient_entry(r, Jx, Ju, u_start, start, ustart, stop, a, ndx)
+            if ga == 0.0:
+                continue
+            s = c * ga
+            for b in range(a, ndx + nu):
+                gb = gradient_entry(r, Jx, Ju, u_start, start, ustart, stop, b, ndx)
+                if b < ndx:
+                    Lxx[a, b] += s * gb
+                elif a < ndx:
+                    Lxu[a, b - ndx] += s * gb
+                else:
+                    Luu[a - ndx, b - ndx] += s * gb
+    if touched:
+        for a in range(ndx):
+            for b in range(a):
+                Lxx[a, b] = Lxx[b, a]
+        for a in range(nu):
+            for b in range(a):
+                Luu[a, b] = Luu[b, a]
 
 
 def _any_item(kinds):
@@ -259,8 +351,12 @@ def _stack_derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_st
     activation_derivatives(r, lb, ub, act_w, Ar, Arr)
     item_activations(r, starts, kinds, params, item_costs, item_weights, Ar, Arr, True)
     accumulate(weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu, cols)
+    rank_one_sums(r, starts, kinds, params, item_weights, Jx, Ju, u_start, with_u, Lxx, Lxu, Luu)
 
 
+dense_terms = compiled(_dense_terms)
+gradient_entry = compiled(_gradient_entry)
+rank_one_sums = compiled(_rank_one_sums)
 item_activations = compiled(_item_activations)
 any_item = compiled(_any_item)
 stack_values = compiled(_stack_values)

@@ -13,7 +13,7 @@ from ..named_items import ModelItems
 from ..validation import as_bool, as_number, warn_after
 from ..versioning import ParametersSeen, ParametersVersion, made_from, touch
 from .base import CostModelAbstract, CostModelResidual
-from .stack import CostStack
+from .stack import CostStack, stackable_cost
 
 
 @dataclass
@@ -163,7 +163,7 @@ class CostDataSum:
         stackable = [
             (name, item, self.costs[name])
             for name, item in model.costs.items()
-            if isinstance(item.cost, CostModelResidual) and item.cost.activation.diagonal and item.cost.residual.nr
+            if isinstance(item.cost, CostModelResidual) and stackable_cost(item.cost)
         ]
         self.stack = CostStack(stackable, ndx, nu)
         stacked = {name for name, _, _ in stackable}
