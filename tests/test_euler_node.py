@@ -31,8 +31,8 @@ ACTIVATIONS = (
     lambda nr, rng: crocopy.ActivationModelQuadraticBarrier(crocopy.ActivationBounds(-0.1 * np.ones(nr),
                                                                                      0.1 * np.ones(nr))),
     lambda nr, rng: crocopy.ActivationModelSmooth1Norm(nr, rng.uniform(0.1, 2.0)),
-    lambda nr, rng: crocopy.ActivationModelQuadFlatExp(nr, rng.uniform(1.0, 10.0)),
-    lambda nr, rng: crocopy.ActivationModelQuadFlatLog(nr, rng.uniform(1.0, 10.0)),
+    lambda nr, rng: crocopy.ActivationModelQuadFlatExp(nr, rng.uniform(1.0, 10.0), bool(rng.integers(2))),
+    lambda nr, rng: crocopy.ActivationModelQuadFlatLog(nr, rng.uniform(1.0, 10.0), bool(rng.integers(2))),
     lambda nr, rng: crocopy.ActivationModelSmooth2Norm(nr, rng.uniform(0.1, 2.0)),
     lambda nr, rng: crocopy.ActivationModel2NormBarrier(nr, rng.uniform(2.0, 20.0), bool(rng.integers(2))),
 )
@@ -304,7 +304,7 @@ def test_the_actuations_and_contacts_that_lower_themselves_are_covered_and_docum
 
 
 def test_activations_with_an_item_form_are_covered_and_others_keep_the_python_path():
-    """Every activation class declaring an item form is in the factory; a full-Hessian quadratic-flat activation and a
+    """Every activation class declaring an item form is in the factory; the numerical-differentiation activation and a
     subclass overriding ``calc`` keep the node on the Python path, naming the activation."""
     from crocopy.activations.base import ActivationModelAbstract
     from crocopy.models.rbd.lowering import declaring
@@ -317,7 +317,7 @@ def test_activations_with_an_item_form_are_covered_and_others_keep_the_python_pa
         def calc(self, data, r):
             super().calc(data, r)
 
-    for activation, name in ((crocopy.ActivationModelQuadFlatExp(6, 2.0, True), "ActivationModelQuadFlatExp"),
+    for activation, name in ((crocopy.ActivationModelNumDiff(crocopy.ActivationModelQuad(6)), "ActivationModelNumDiff"),
                              (Smooth1(6), "Smooth1")):
         iam, state = node("kinova", ("state",))
         costs = iam.differential.costs
@@ -331,10 +331,10 @@ def test_activations_with_an_item_form_are_covered_and_others_keep_the_python_pa
 
 @pytest.mark.parametrize("terminal", [False, True])
 def test_dense_item_activations_compile_and_match_the_python_node(terminal):
-    """The smooth 2-norm and the 2-norm barrier (Gauss-Newton and true Hessian, inside its ball) on a state-only and
-    a control-dependent residual: the node compiles, and its values and derivatives (the dense Hessian ``d I + c r
-    rᵀ`` through ``Jᵀ Arr J``) equal the Python node's; outside the ball the barrier adds nothing (a terminal node
-    has no control cost)."""
+    """The smooth 2-norm, the 2-norm barrier (Gauss-Newton and true Hessian, inside its ball) and the full-Hessian
+    quadratic-flat activations on a state-only and a control-dependent residual: the node compiles, and its values
+    and derivatives (the dense Hessian ``d I + c r rᵀ`` through ``Jᵀ Arr J``) equal the Python node's; outside the
+    ball the barrier adds nothing (a terminal node has no control cost)."""
     model = load("kinova")
     state = crocopy.StateMultibody(model)
     act = actuation("kinova", state)
@@ -346,7 +346,9 @@ def test_dense_item_activations_compile_and_match_the_python_node(terminal):
                 (crocopy.ActivationModelSmooth2Norm(state.ndx, 0.3), crocopy.ResidualModelState(state, ref, nu)),
                 (crocopy.ActivationModelSmooth2Norm(nu), crocopy.ResidualModelControl(state, nu)),
                 (crocopy.ActivationModel2NormBarrier(state.ndx, alpha), crocopy.ResidualModelState(state, nu)),
-                (crocopy.ActivationModel2NormBarrier(nu, alpha, True), crocopy.ResidualModelControl(state, nu)))):
+                (crocopy.ActivationModel2NormBarrier(nu, alpha, True), crocopy.ResidualModelControl(state, nu)),
+                (crocopy.ActivationModelQuadFlatExp(state.ndx, 30.0, True), crocopy.ResidualModelState(state, ref, nu)),
+                (crocopy.ActivationModelQuadFlatLog(nu, 0.5, True), crocopy.ResidualModelControl(state, nu)))):
             costs.addCost(f"c{n}", crocopy.CostModelResidual(state, activation, residual), 1.0 + n)
         dam = crocopy.DifferentialActionModelFreeFwdDynamics(state, act, costs)
         iam = crocopy.IntegratedActionModelEuler(dam, 0.01)

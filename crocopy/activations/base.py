@@ -48,10 +48,12 @@ class ActivationModelAbstract(Parametrized, Guarded):
         return None
 
     def item_form(self) -> tuple[str, float] | None:
-        """``(kind, parameter)`` of a diagonal activation that compiled nodes evaluate item by item
-        (:func:`crocopy.costs.stack_kernel.item_activations`: ``"smooth1"`` with its ``eps``, ``"flat_exp"`` and
-        ``"flat_log"`` with their ``alpha``), else ``None``; a subclass that overrides ``calc``/``calcDiff`` of the
-        class declaring it is not evaluated so."""
+        """``(kind, parameter)`` of an activation that compiled nodes evaluate item by item
+        (:func:`crocopy.costs.stack_kernel.item_activations`: ``"smooth1"`` and ``"smooth2"`` with their ``eps``,
+        ``"flat_exp"``, ``"flat_log"`` and their full-Hessian ``"flat_exp_true"``, ``"flat_log_true"`` with their
+        ``alpha``, ``"norm_barrier"`` and ``"norm_barrier_true"`` with theirs), else ``None``; a subclass that
+        overrides ``calc``/``calcDiff`` of the class declaring it is not evaluated so.  The ``*_true`` kinds and the
+        smooth 2-norm have a dense Hessian (a diagonal plus a rank-one term, which the cost stack adds)."""
         return None
 
     def calc(self, data: "ActivationDataAbstract", r: np.ndarray) -> None:

@@ -72,8 +72,8 @@ class ActivationModelQuadFlatExp(_QuadFlat):
     Parameters ``(nr, alpha=1.0, true_hessian=False)`` (see the base class ``_QuadFlat``).
     """
 
-    def item_form(self) -> tuple[str, float] | None:
-        return None if self._true_hessian else ("flat_exp", self._alpha)
+    def item_form(self) -> tuple[str, float]:
+        return ("flat_exp_true" if self._true_hessian else "flat_exp"), self._alpha
 
     def calc(self, data: ActivationDataAbstract, r: np.ndarray) -> None:
         data.a_value = 1.0 - np.exp(-float(r @ r) / self._alpha)
@@ -91,8 +91,8 @@ class ActivationModelQuadFlatLog(_QuadFlat):
     Parameters ``(nr, alpha=1.0, true_hessian=False)`` (see the base class ``_QuadFlat``).
     """
 
-    def item_form(self) -> tuple[str, float] | None:
-        return None if self._true_hessian else ("flat_log", self._alpha)
+    def item_form(self) -> tuple[str, float]:
+        return ("flat_log_true" if self._true_hessian else "flat_log"), self._alpha
 
     def calc(self, data: ActivationDataAbstract, r: np.ndarray) -> None:
         data.a_value = float(np.log1p(float(r @ r) / self._alpha))

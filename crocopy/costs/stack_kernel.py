@@ -20,14 +20,16 @@ Compiled nodes also evaluate, item by item, the diagonal activations of another 
 * :data:`FLAT_EXP` (``α``): ``a = 1 - e``, ``e = exp(-n/α)``, ``Ar = c r``, ``Arrᵢ = c - (2/α) c rᵢ²``, ``c = (2/α) e``;
 * :data:`FLAT_LOG` (``α``): ``a = log(1 + n/α)``, ``Ar = c r``, ``Arrᵢ = c - c² rᵢ²``, ``c = 2/(α + n)``;
 
-and two dense activations, whose Hessian ``Arr = d I + c r rᵀ`` is a diagonal and a rank-one term (the diagonal ``d``
+and the dense activations, whose Hessian ``Arr = d I + c r rᵀ`` is a diagonal and a rank-one term (the diagonal ``d``
 goes into the rows' ``Arr`` and the sums; then :func:`rank_one_sums` adds ``w c (Jᵀ r)(Jᵀ r)ᵀ`` over the item's
 rows, ``J = [Jx Ju]``):
 
 * :data:`SMOOTH2` (``ε``): ``a = √(ε + n)``, ``Ar = r/a``, ``d = 1/a``, ``c = -1/a³``;
 * :data:`NORM_BARRIER` (``α``, Gauss-Newton) and :data:`NORM_BARRIER_TRUE` (``α``, true Hessian): with ``ρ = √n``,
   inside the ball (``0 < ρ < α``) ``a = ½ (ρ - α)²``, ``Ar = (1 - α/ρ) r``, ``d = 0`` and ``c = 1/ρ²`` (Gauss-Newton),
-  or ``d = 1 - α/ρ`` and ``c = α/ρ³`` (true Hessian); zero elsewhere
+  or ``d = 1 - α/ρ`` and ``c = α/ρ³`` (true Hessian); zero elsewhere;
+* :data:`FLAT_EXP_TRUE` and :data:`FLAT_LOG_TRUE` (``α``): the quadratic-flat activations with their full Hessian,
+  ``d`` the coefficient ``c`` of their ``Ar = c r`` above and ``c = -(2/α) c``, ``-c²`` respectively
 
 (:func:`stack_values`, :func:`stack_derivatives_and_sums`: the barrier-family pass, then those items'; the same
 numbers as the activations' own ``calc``/``calcDiff`` to round-off, tested through the nodes).
@@ -194,13 +196,14 @@ def _derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, w
 derivatives_and_sums = compiled(_derivatives_and_sums)
 
 
-BARRIER, SMOOTH1, FLAT_EXP, FLAT_LOG, SMOOTH2, NORM_BARRIER, NORM_BARRIER_TRUE = range(7)
+BARRIER, SMOOTH1, FLAT_EXP, FLAT_LOG, SMOOTH2, NORM_BARRIER, NORM_BARRIER_TRUE, FLAT_EXP_TRUE, FLAT_LOG_TRUE = range(9)
 """Activation kinds of a stack item: the barrier family (every row by the fused formula), then the item forms
 (:meth:`crocopy.activations.base.ActivationModelAbstract.item_form`); from :data:`SMOOTH2` on, dense ones."""
 ITEM_KINDS = {"smooth1": SMOOTH1, "flat_exp": FLAT_EXP, "flat_log": FLAT_LOG, "smooth2": SMOOTH2,
-              "norm_barrier": NORM_BARRIER, "norm_barrier_true": NORM_BARRIER_TRUE}
+              "norm_barrier": NORM_BARRIER, "norm_barrier_true": NORM_BARRIER_TRUE, "flat_exp_true": FLAT_EXP_TRUE,
+              "flat_log_true": FLAT_LOG_TRUE}
 """The kind of each item form's name."""
-DENSE = (SMOOTH2, NORM_BARRIER, NORM_BARRIER_TRUE)
+DENSE = (SMOOTH2, NORM_BARRIER, NORM_BARRIER_TRUE, FLAT_EXP_TRUE, FLAT_LOG_TRUE)
 """The kinds whose Hessian is dense (diagonal plus rank one, :func:`rank_one_sums`)."""
 
 
@@ -210,6 +213,13 @@ def _dense_terms(kind, p, n2):
     if kind == SMOOTH2:
         a = math.sqrt(p + n2)
         return a, 1.0 / a, 1.0 / a, -1.0 / (a * a * a)
+    if kind == FLAT_EXP_TRUE:
+        e = math.exp(-n2 / p)
+        c = 2.0 / p * e
+        return 1.0 - e, c, c, -(2.0 / p * c)
+    if kind == FLAT_LOG_TRUE:
+        c = 2.0 / (p + n2)
+        return math.log1p(n2 / p), c, c, -(c * c)
     rho = math.sqrt(n2)
     if rho >= p or rho == 0.0:
         return 0.0, 0.0, 0.0, 0.0
