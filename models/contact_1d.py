@@ -118,6 +118,13 @@ class ContactModel1D(PointContactProjection, FrameForce, ContactModelAbstract):
         self._point.gains = value
         touch(self)
 
+    def compiled_reference(self, R: np.ndarray, p: np.ndarray) -> None:
+        """This contact's lowering (:mod:`crocopy.models.rbd.contact_kernel`): its row ``e_zᵀ Raxis`` into ``R[0]``
+        (the other rows zero) and its point contact's reference ``xref Raxis e_z`` into ``p (3,)``."""
+        R[:] = 0.0
+        R[0] = self._row[0]
+        p[:] = self._point.reference
+
     def createData(self, data: pin.Data) -> "ContactData1D":
         return ContactData1D(self, data)
 

@@ -80,6 +80,14 @@ class ContactModel2D(PointContactProjection, ContactModelAbstract):
         self._point.gains = np.array([0.0, self._gains[1]])
         touch(self)
 
+    def compiled_reference(self, R: np.ndarray, p: np.ndarray) -> None:
+        """This contact's lowering (:mod:`crocopy.models.rbd.contact_kernel`): its rows ``(e_x, e_z)ᵀ`` into
+        ``R[:2]`` (the last row zero) and ``xref`` into ``p[:2]`` (``p[2] = 0``)."""
+        R[:] = 0.0
+        R[0, 0] = R[1, 2] = 1.0
+        p[:2] = self._xref
+        p[2] = 0.0
+
     def createData(self, data: pin.Data) -> "ContactData2D":
         return ContactData2D(self, data)
 

@@ -66,8 +66,8 @@ FREE_REASONS = [None, "RK4 integrator", "control parametrization ControlParametr
 
 
 def contact_reasons_problem():
-    """A short ANYmal walk (its impulse nodes compile too) with a 1D contact in one node and a user's Python residual
-    in another."""
+    """A short ANYmal walk (its impulse nodes compile too) with a 1D contact on a foot already in contact in one node
+    (a redundant set: the least-squares path) and a user's Python residual in another."""
     problem, _, _ = quadruped.build_gait(crocopy, "walk", step_knots=2, support_knots=1, cycles=1)
     models = list(problem.runningModels)
     first, second = models[0].differential, models[1].differential
@@ -86,10 +86,10 @@ def test_every_reason_of_a_free_node():
     assert [c.compiled for c in crocopy.compiled_coverage(problem)] == [r is None for r in FREE_REASONS]
 
 
-def test_contact_nodes_1d_contact_user_residual_and_compiled_impulses():
+def test_contact_nodes_redundant_contacts_user_residual_and_compiled_impulses():
     problem = contact_reasons_problem()
     cov = crocopy.compiled_coverage(problem)
-    assert cov[0] == (False, "contact ContactModel1D")
+    assert cov[0] == (False, "redundant contacts")
     assert cov[1] == (False, "user Python subclass: residual PythonFrameTranslation in a contact node")
     impulses = [t for t, m in enumerate(problem.runningModels) if isinstance(m, crocopy.ActionModelImpulseFwdDynamics)]
     assert impulses

@@ -141,8 +141,11 @@ def test_contact_nodes_that_do_not_qualify():
     dam.JMinvJt_damping = 0.0
     dam.contacts.addContact("line", crocopy.ContactModel1D(state, foot, 0.0, pin.LOCAL, np.eye(3), nu))
     dam.contacts.changeContactStatus("LF_FOOT", False)
-    one_d = crocopy.IntegratedActionModelEuler(dam, 0.01)
+    one_d = crocopy.IntegratedActionModelEuler(dam, 0.01)  # the LF cone reads the 1D contact on its foot
     assert one_d._compiled_node(one_d.createData(), False, {}) is None
+    dam.costs.changeCostStatus("LF_FOOT_cone", False)
+    assert one_d._compiled_node(one_d.createData(), False, {}) is not None  # see test_contact_node_1d2d.py
+    dam.costs.changeCostStatus("LF_FOOT_cone", True)
     dam.contacts.removeContact("line")
     inactive = crocopy.IntegratedActionModelEuler(dam, 0.01)  # the LF cone reads an inactive contact
     assert inactive._compiled_node(inactive.createData(), False, {}) is None

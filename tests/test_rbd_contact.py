@@ -154,7 +154,7 @@ def test_rnea_derivatives_with_a_contact_force(robot, nc, seed):
         pin.computeRNEADerivatives(model, pd, q, v, a, cdata.fext)
         contacts.updateRneaDiff(cdata, pd)
         K.dynamics_derivatives(rb, ws, q, v, a, dq, dv)
-        C.contact_force_derivatives(rb, ws, fid, nc, int(reference), lam, 0, dq)
+        C.contact_force_derivatives(rb, ws, fid, nc, int(reference), np.zeros((3, 3)), lam, 0, dq)
         close(dq, pd.dtau_dq, 1e-10)
         close(dv, pd.dtau_dv, 1e-10)
 
@@ -228,7 +228,7 @@ def contact_dynamics_diff(rb, ws, cw, contacts, q, v, S, a, lam, Jc):
     K.dynamics_derivatives(rb, ws, q, v, a, dq, dv)
     row = 0
     for fid, m, reference, gains, R_ref, p_ref in contacts:
-        C.contact_force_derivatives(rb, ws, fid, m, reference, lam, row, dq)
+        C.contact_force_derivatives(rb, ws, fid, m, reference, np.zeros((3, 3)), lam, row, dq)
         C.contact_calc_diff(rb, ws, cw, fid, m, reference, gains[0], gains[1], R_ref, p_ref, row, da0)
         row += m
     C.contact_dynamics_derivatives(rb, ws, cw, Jc, nc, dq, dv, da0, S, *out)
@@ -293,7 +293,7 @@ def _node(rb, ws, cw, q, v, tau, S, fids, R_ref, p_ref, out):
     C.contact_forward_dynamics(rb, ws, cw, tau, Jc, a0, 3 * len(fids), 0.0, a, lam)
     K.dynamics_derivatives(rb, ws, q, v, a, dq, dv)
     for k in range(len(fids)):
-        C.contact_force_derivatives(rb, ws, fids[k], 3, 2, lam, 3 * k, dq)
+        C.contact_force_derivatives(rb, ws, fids[k], 3, 2, np.zeros((3, 3)), lam, 3 * k, dq)
         C.contact_calc_diff(rb, ws, cw, fids[k], 3, 2, 2.0, 1.0, R_ref, p_ref, 3 * k, da0)
     C.contact_dynamics_derivatives(rb, ws, cw, Jc, 3 * len(fids), dq, dv, da0, S, Fx, Fu, df_dx, df_du)
 

@@ -5,7 +5,7 @@
 - :mod:`.spatial`: 6-vector helpers (spatial motions and forces as tuples) shared by the kernels.
 - :mod:`.dynamics_kernel`: forward kinematics, forward dynamics (CRBA + tree-sparse factor), mass inverse,
   RNEA derivatives, frame placement / Jacobian / velocity / velocity derivatives.
-- :mod:`.contact_kernel`: contact Jacobian and drift (3D/6D, Baumgarte) with derivatives, the contact forces'
+- :mod:`.contact_kernel`: contact Jacobian and drift (1D/2D/3D/6D, Baumgarte) with derivatives, the contact forces'
   term of the RNEA derivatives, contact forward dynamics (KKT through the tree-sparse factor) and its derivatives.
 - :mod:`.com_kernel`: centre of mass and its Jacobian.
 - :mod:`.lie_kernel`: ``log3``/``jlog3``/``log6``/``jlog6`` and the SE(2) maps; :mod:`.configuration_kernel`: the

@@ -91,6 +91,8 @@ class ConstraintRows:
                 self.user_rows = max(self.user_rows, nr)
             if kind == table.CONE or kind == table.FORCE:
                 first, nc = contact_rows.get(frame, (0, 0))
+                if nc in (1, 2):
+                    return "force constraint on a 1D or 2D contact"
                 if nc < residual.ncf:
                     return "cone constraint without its active contact"
                 frame, reference = first, residual.ncf

@@ -26,6 +26,12 @@ the frame's joint ``i`` moves (see :mod:`.dynamics_kernel`)::
 ``∂c/∂(q, v)`` at the ``a`` the kinematics hold: ``da0_dx`` at ``a = 0`` and, at the contact solution, what
 Crocoddyl's contact dynamics differentiate (``∂(Jc a + a0)/∂x`` with ``a`` fixed).
 
+A 1D or 2D contact (``nc`` 1 or 2) is rows of a point contact: with ``P (nc, 3)`` the first ``nc`` rows of its
+``ref_R`` (the projection, which it lowers there: ``e_zᵀ Raxis`` for a 1D contact, ``(e_x, e_z)ᵀ`` for a 2D one), its
+rows are ``P`` times the 3D contact's (after the LOCAL_WORLD_ALIGNED rotation) and its force is ``Pᵀ λ`` in the 3D
+contact's coordinates.  A 2D contact (LOCAL) compares the world position instead: its 3D rows have no ``kp`` term,
+and ``kp (P p - ref_p)`` (``ref_p`` its first two entries) is added to the drift, ``kp P R J_l`` to ``∂c/∂q``.
+
 Contact forces ``λ`` (``nc`` rows, in the contact's coordinates) enter the dynamics as ``M a + b = τ + Jcᵀ λ``.
 With ``F = [R f_l; p × R f_l + R f_ω]`` (LOCAL) or ``[f_l; p × f_l + f_ω]`` (LOCAL_WORLD_ALIGNED) the world
 wrench of ``λ = (f_l, f_ω)`` (``f_ω = 0`` in 3D), ``Jcᵀ λ = Σ_k oS_kᵀ F`` over the support and, for a dof ``k``
@@ -125,6 +131,14 @@ def _rotate(R, m):
 
 
 @uncounted
+def _project(P, nc, m):
+    """The rows of a 1D or 2D contact (``nc`` 1 or 2): ``P[:nc] m_l`` in a 6-tuple (zeros after)."""
+    first = P[0, 0] * m[0] + P[0, 1] * m[1] + P[0, 2] * m[2]
+    second = P[1, 0] * m[0] + P[1, 1] * m[1] + P[1, 2] * m[2] if nc == 2 else 0.0
+    return first, second, 0.0, 0.0, 0.0, 0.0
+
+
+@uncounted
 def _no_gravity(rb, ws, i):
     """``oa_i + g``: the spatial acceleration of joint ``i`` without the gravity RNEA puts at the root."""
     g = rb.gravity
@@ -184,20 +198,28 @@ def contact_calc(
 ) -> None:
     """Rows ``row`` to ``row + nc - 1`` of the stacked ``Jc_out (·, nv)`` and drift ``a0_out (·,)`` of a contact.
 
-    ``nc`` is 3 (point contact, reference position ``ref_p (3,)``; ``ref_R`` unused) or 6 (reference placement
-    ``(ref_R (3, 3), ref_p (3,))``); ``reference`` LOCAL or LOCAL_WORLD_ALIGNED.  Needs the kinematics at zero
+    ``nc`` is 3 (point contact, reference position ``ref_p (3,)``; ``ref_R`` unused), 6 (reference placement
+    ``(ref_R (3, 3), ref_p (3,))``) or 1, 2 (rows ``ref_R[:nc]`` of a point contact, module docstring); ``reference``
+    LOCAL or LOCAL_WORLD_ALIGNED.  Needs the kinematics at zero
     joint acceleration in ``ws`` (:func:`~.dynamics_kernel.forward_dynamics`).
     """
-    _, _, c = _frame_motion(rb, ws, cw, fid, nc, kp, kd, ref_R, ref_p)
-    R, J, lwa = ws.Rf, cw.J6, reference != LOCAL
+    _, _, c = _frame_motion(rb, ws, cw, fid, 6 if nc == 6 else 3, 0.0 if nc == 2 else kp, kd, ref_R, ref_p)
+    R, p, J, lwa = ws.Rf, ws.pf, cw.J6, reference != LOCAL
     if lwa:
         c = _rotate(R, c)
+    if nc < 3:
+        c = _project(ref_R, nc, c)
+        if nc == 2:
+            c = plus(c, times(minus(_project(ref_R, 2, (p[0], p[1], p[2])), (ref_p[0], ref_p[1], 0.0, 0.0, 0.0, 0.0)),
+                              kp))
     for r in range(nc):
         a0_out[row + r] = c[r]
     for k in range(rb.nv):
         col = (J[0, k], J[1, k], J[2, k], J[3, k], J[4, k], J[5, k])
         if lwa:
             col = _rotate(R, col)
+        if nc < 3:
+            col = _project(ref_R, nc, col)
         for r in range(nc):
             Jc_out[row + r, k] = col[r]
 
@@ -222,7 +244,9 @@ def contact_calc_diff(
     kinematics in ``ws``: ``da0_dx`` after :func:`~.dynamics_kernel.forward_dynamics` (``a = 0``), the
     derivative Crocoddyl's contact dynamics use after :func:`~.dynamics_kernel.dynamics_derivatives` at ``a``.
     """
-    i, vf, c = _frame_motion(rb, ws, cw, fid, nc, kp, kd, ref_R, ref_p)
+    kp_point = 0.0 if nc == 2 else kp
+    point = nc != 6
+    i, vf, c = _frame_motion(rb, ws, cw, fid, 3 if point else 6, kp_point, kd, ref_R, ref_p)
     R, p, J, oS, ov = ws.Rf, ws.pf, cw.J6, ws.oS, ws.ov
     nv, lwa = rb.nv, reference != LOCAL
     if nc == 6 and kp != 0.0:
@@ -243,14 +267,14 @@ def contact_calc_diff(
             vq = to_reference(R, p, psi, LOCAL)
             aq = to_reference(R, p, plus(mcross(oap, s), mcross(psi, minus(ovi, ovp))), LOCAL)
             av = to_reference(R, p, plus(mcross(s, minus(ovi, ovp)), mcross(ovj, s)), LOCAL)
-            if nc == 3:
+            if point:
                 x = _cross(vf[3], vf[4], vf[5], vq[0], vq[1], vq[2])
                 y = _cross(vq[3], vq[4], vq[5], vf[0], vf[1], vf[2])
                 e = _cross(cw.p3[0], cw.p3[1], cw.p3[2], Jk[3], Jk[4], Jk[5])
                 dq = (
-                    aq[0] + x[0] + y[0] + kd * vq[0] + kp * (Jk[0] + e[0]),
-                    aq[1] + x[1] + y[1] + kd * vq[1] + kp * (Jk[1] + e[1]),
-                    aq[2] + x[2] + y[2] + kd * vq[2] + kp * (Jk[2] + e[2]),
+                    aq[0] + x[0] + y[0] + kd * vq[0] + kp_point * (Jk[0] + e[0]),
+                    aq[1] + x[1] + y[1] + kd * vq[1] + kp_point * (Jk[1] + e[1]),
+                    aq[2] + x[2] + y[2] + kd * vq[2] + kp_point * (Jk[2] + e[2]),
                     0.0, 0.0, 0.0,
                 )
                 x = _cross(vf[3], vf[4], vf[5], Jk[0], Jk[1], Jk[2])
@@ -269,6 +293,10 @@ def contact_calc_diff(
                 y = _cross(Jk[3], Jk[4], Jk[5], c[3], c[4], c[5])
                 dq = _rotate(R, (dq[0] + x[0], dq[1] + x[1], dq[2] + x[2], dq[3] + y[0], dq[4] + y[1], dq[5] + y[2]))
                 dv = _rotate(R, dv)
+            if nc < 3:
+                dq, dv = _project(ref_R, nc, dq), _project(ref_R, nc, dv)
+                if nc == 2:
+                    dq = plus(dq, times(_project(ref_R, 2, _rotate(R, Jk)), kp))
             for r in range(nc):
                 da0_dx_out[row + r, k] = dq[r]
                 da0_dx_out[row + r, nv + k] = dv[r]
@@ -282,18 +310,24 @@ def contact_force_derivatives(
     fid: int,
     nc: int,
     reference: int,
+    P: np.ndarray,
     lam: np.ndarray,
     row: int,
     dtau_dq_inout: np.ndarray,
 ) -> None:
     """``dtau_dq_inout (nv, nv) -= ∂(Jcᵀ λ)/∂q`` for the contact force ``λ = lam[row : row + nc]`` (in the
-    contact's coordinates, ``nc`` 3 or 6, ``reference`` LOCAL or LOCAL_WORLD_ALIGNED), ``λ`` held fixed: added
+    contact's coordinates, ``nc`` 3 or 6, or 1, 2 with the projection ``P[:nc]`` (the force ``Pᵀ λ`` of a point
+    contact), ``reference`` LOCAL or LOCAL_WORLD_ALIGNED), ``λ`` held fixed: added
     to :func:`~.dynamics_kernel.dynamics_derivatives`' ``∂RNEA/∂q`` it gives ``∂(RNEA - Σ Jcᵀ λ)/∂q`` (what
     ``computeRNEADerivatives`` with the contact forces as ``fext`` and ``updateRneaDiff`` give).  Needs the
     kinematics in ``ws``; ``O(depth²)``."""
     i = frame_pose(rb, ws, fid)
     R, p, oS = ws.Rf, ws.pf, ws.oS
-    fl = (lam[row], lam[row + 1], lam[row + 2])
+    if nc < 3:
+        l1 = lam[row + 1] if nc == 2 else 0.0
+        fl = (P[0, 0] * lam[row] + P[1, 0] * l1, P[0, 1] * lam[row] + P[1, 1] * l1, P[0, 2] * lam[row] + P[1, 2] * l1)
+    else:
+        fl = (lam[row], lam[row + 1], lam[row + 2])
     fa = (lam[row + 3], lam[row + 4], lam[row + 5]) if nc == 6 else (0.0, 0.0, 0.0)
     if reference == LOCAL:
         w = _rotate(R, (fl[0], fl[1], fl[2], fa[0], fa[1], fa[2]))

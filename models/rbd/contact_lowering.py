@@ -1,7 +1,7 @@
 """The rigid contacts of a contact-dynamics node, lowered for :mod:`.euler_node_kernel`.
 
-A ``DifferentialActionModelContactFwdDynamics`` node compiles when its active contacts are all
-``ContactModel3D``/``ContactModel6D`` (exact classes), it has no constraints, and the set is not redundant
+A ``DifferentialActionModelContactFwdDynamics`` node compiles when its active contacts are all ``ContactModel1D``,
+``ContactModel2D``, ``ContactModel3D`` or ``ContactModel6D`` (exact classes), and the set is not redundant
 (``_redundant_contacts``: without damping, contacts sharing a body or a stacked Jacobian of deficient rank at a
 generic configuration; such a set takes the least-squares path of the Python model, which the kernels do not
 implement).  Its contacts
@@ -10,10 +10,12 @@ become, in the order of the contact model (by name):
 * ``ints``: per contact ``(frame, rows, reference frame, first row)`` (:data:`.node_table.CONTACT_FIELDS`;
   ``WORLD`` is read as ``LOCAL_WORLD_ALIGNED``, as the contacts do);
 * arrays ``gains (n, 2)`` (Baumgarte ``kp, kd``), ``ref_R (n, 3, 3)`` and ``ref_p (n, 3)`` (the reference
-  placement; a 3D contact's rotation is unused and left zero), rewritten in place at each solve.
+  placement; a 3D contact's rotation is unused and left zero; a 1D or 2D contact's ``ref_R`` holds its rows of the
+  point contact, :mod:`.contact_kernel`), rewritten in place at each solve.
 
-The force residuals (``ResidualModelContactFrictionCone``, ``ResidualModelContactWrenchCone``) find their
-contact's first row here.
+The force residuals (``ResidualModelContactFrictionCone``, ``ResidualModelContactWrenchCone``,
+``ResidualModelContactForce``) find their contact's first row here (not on a 1D or 2D contact: they decline it).
+Inverse-dynamics nodes take the 3D and 6D contacts only (:data:`FULL_CONTACTS`).
 """
 
 from __future__ import annotations
@@ -28,6 +30,8 @@ from .lowering import declaring
 
 CONTACTS = declaring(contacts.ContactModelAbstract, "compiled_reference")
 """The contacts compiled nodes take: those that lower their reference themselves (``compiled_reference(R, p)``)."""
+FULL_CONTACTS = {contacts.ContactModel3D, contacts.ContactModel6D}
+"""The contacts with all their rows (3 or 6): those an inverse-dynamics node takes."""
 
 
 def active_contacts(dam, memo: dict) -> list | None:

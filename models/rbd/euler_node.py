@@ -7,8 +7,8 @@ exact classes (a subclass may override a step, so it keeps the Python path):
 * ``IntegratedActionModelEuler`` with the identity control parametrization, over a
   ``DifferentialActionModelFreeFwdDynamics`` or a ``DifferentialActionModelContactFwdDynamics`` (with a constraint
   manager whose active constraints :mod:`.constraint_rows` lowers, or none), whose active contacts are
-  ``ContactModel3D``/``ContactModel6D`` on distinct joints (or with a positive ``JMinvJt_damping``; see
-  :mod:`.contact_lowering`);
+  ``ContactModel1D``/``ContactModel2D``/``ContactModel3D``/``ContactModel6D`` on distinct joints (or with a positive
+  ``JMinvJt_damping``; see :mod:`.contact_lowering`);
 * its ``StateMultibody``'s Pinocchio model lowers (:func:`.lowering.lower_model`);
 * its actuation is ``ActuationModelFull``, ``ActuationModelFloatingBase``,
   ``ActuationModelFloatingBaseThrusters`` or ``ActuationModelLinear`` (``τ = S u`` with a constant ``S``);
@@ -70,7 +70,7 @@ _NODES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def euler_node(iam, data, terminal: bool, memo: dict, contacts: list = ()) -> EulerNode | None:
-    """The refreshed evaluator of node ``(iam, data)`` with the active rigid ``contacts`` (3D/6D contact models), or
+    """The refreshed evaluator of node ``(iam, data)`` with the active rigid ``contacts`` (1D to 6D contacts), or
     None if the node does not qualify (the reason recorded in ``memo``, :mod:`crocopy.not_compiled`; the caller,
     the free or contact dynamics model, has checked its own class, the integrator's and the contacts')."""
     dam = iam.differential
@@ -307,6 +307,8 @@ class EulerNode:
             user = [residual.flags, *residual.callbacks(), len(parameters(kind, residual))]
         if kind == table.CONE or kind == table.FORCE:
             row, nc = self.contacts.rows.get(frame, (0, 0))
+            if nc in (1, 2):
+                return "force residual on a 1D or 2D contact"
             if nc < residual.ncf:
                 return "cone without its active contact"
             frame, reference = row, residual.ncf

@@ -325,7 +325,7 @@ def _dynamics_jacobians(tbl, ints, x, rb, ws):
         gains, ref_R, ref_p = mat(tbl, ints, E_GAINS), cube(tbl, ints, E_REF_R), mat(tbl, ints, E_REF_P)
         for n in range(ints[N_CONTACTS]):
             fid, nc, ref, row = contact_fields(ints, n)
-            contact_force_derivatives(rb, ws, fid, nc, ref, lam, row, dq)
+            contact_force_derivatives(rb, ws, fid, nc, ref, ref_R[n], lam, row, dq)
             contact_calc_diff(rb, ws, cw, fid, nc, ref, gains[n, 0], gains[n, 1], ref_R[n], ref_p[n], row, da0_dx)
         contact_dynamics_derivatives(rb, ws, cw, Jcs, ints[NC], dq, dv, da0_dx, Sm, dFx, dFu,
                                      mat(tbl, ints, E_DF_DX), mat(tbl, ints, E_DF_DU))

@@ -70,6 +70,7 @@ from .node_table import (
     E_LXU,
     E_LXX,
     E_R,
+    E_REF_R,
     E_S,
     E_TAU,
     E_UB,
@@ -85,6 +86,7 @@ from .node_table import (
     STARTS,
     U_START,
     contact_fields,
+    cube,
     entry_contact_workspace,
     entry_model,
     entry_workspace,
@@ -205,9 +207,10 @@ def _impulse_derivatives(tbl, ints, par, x, rb, ws):
         w[k] = xnext[nq + k] - v[k]
     dq, dv = mat(tbl, ints, E_DTAU_DQ), mat(tbl, ints, E_DTAU_DV)
     dynamics_derivatives(rb, ws, q, ws.zero, w, dq, dv)
+    projections = cube(tbl, ints, E_REF_R)
     for n in range(ints[N_CONTACTS]):
         fid, nci, ref, row = contact_fields(ints, n)
-        contact_force_derivatives(rb, ws, fid, nci, ref, lam, row, dq)
+        contact_force_derivatives(rb, ws, fid, nci, ref, projections[n], lam, row, dq)
     M = ws.M
     for i in range(nv):
         for j in range(nv):

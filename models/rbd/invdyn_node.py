@@ -42,7 +42,7 @@ from ..state_multibody import StateMultibody
 from . import invdyn_node_kernel as kernel
 from . import node_table as table
 from .constraint_rows import ConstraintRows
-from .contact_lowering import CONTACTS
+from .contact_lowering import FULL_CONTACTS
 from .euler_node import EulerNode
 from .invdyn_horizon import InvDynHorizon
 from .joint_types import NotLowerable
@@ -95,7 +95,7 @@ def invdyn_node(iam, data, terminal: bool, memo: dict) -> InvDynNode | None:
         if not all(item.active for item in items):
             return decline(memo, "inactive contact in an inverse-dynamics node")
         contacts = [item.contact for item in items]
-        other = next((m for m in contacts if type(m) not in CONTACTS), None)
+        other = next((m for m in contacts if type(m) not in FULL_CONTACTS), None)
         if other is not None:
             return decline(memo, class_reason(other, "contact"))
     low = lowered(dam.state.pinocchio, memo)

@@ -273,7 +273,7 @@ def _torque_derivatives(tbl, ints, par, rb, ws):
         gains, ref_R, ref_p = mat(tbl, ints, E_GAINS), cube(tbl, ints, E_REF_R), mat(tbl, ints, E_REF_P)
         for n in range(ints[N_CONTACTS]):
             fid, ncn, ref, row = contact_fields(ints, n)
-            contact_force_derivatives(rb, ws, fid, ncn, ref, lam, row, dq)
+            contact_force_derivatives(rb, ws, fid, ncn, ref, ref_R[n], lam, row, dq)
             contact_calc_diff(rb, ws, cw, fid, ncn, ref, gains[n, 0], gains[n, 1], ref_R[n], ref_p[n], row, dc)
     df_dx, df_du = mat(tbl, ints, E_DF_DX), mat(tbl, ints, E_DF_DU)
     for i in range(nc):

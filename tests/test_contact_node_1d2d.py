@@ -1,0 +1,74 @@
+"""Compiled Euler nodes with 1D and 2D contacts (alone and mixed with 3D and 6D ones, in LOCAL, LOCAL_WORLD_ALIGNED
+and WORLD coordinates, with and without Baumgarte gains) against the Python node, finite differences and solves.
+
+The nodes are those of ``test_contacts_1d2d.py`` (ANYmal, one contact per foot).  The compiled contacts take a 1D or
+2D contact as rows of its point contact (:mod:`crocopy.models.rbd.contact_kernel`); force residuals on such a
+contact keep the node on the Python path.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from node_checks import check_finite_differences, compare_with_python_node, make_solver
+from test_contacts_1d2d import CASES, IDS, make_dam
+
+import crocopy
+from crocopy.solvers import compiled_nodes
+
+pytestmark = pytest.mark.skipif(not crocopy.kernels_enabled(), reason="compiled nodes need numba")
+
+
+def euler(case, seed: int = 0):
+    dam = make_dam(*case, seed=seed)
+    return crocopy.IntegratedActionModelEuler(dam, 0.01), dam.state
+
+
+def point(state, nu: int, seed: int):
+    rng = np.random.default_rng(50 + seed)
+    np.random.seed(50 + seed)
+    x = state.rand()
+    x[state.nq:] = 0.5 * rng.standard_normal(state.nv)
+    return x, 0.5 * rng.standard_normal(nu)
+
+
+@pytest.mark.parametrize("case", CASES, ids=IDS)
+@pytest.mark.parametrize("terminal", [False, True])
+def test_projected_contacts_compile_and_match_the_python_node(case, terminal):
+    iam, state = euler(case)
+    problem = crocopy.ShootingProblem(state.zero(), [iam], iam)
+    assert all(entry.compiled for entry in crocopy.compiled_coverage(problem))
+    x, u = point(state, iam.nu, 0)
+    compare_with_python_node(iam, x, u, terminal, rtol=1e-7, atol=1e-7, cost_rel=1e-9)
+
+
+@pytest.mark.parametrize("case", [CASES[1], CASES[3], CASES[4]], ids=[IDS[1], IDS[3], IDS[4]])
+def test_projected_contact_derivatives_match_finite_differences(case):
+    iam, state = euler(case, seed=1)
+    x, u = point(state, iam.nu, 1)
+    check_finite_differences(iam, state, x, u, h=1e-6, atol=1e-5, roundoff=1e-10)
+
+
+@pytest.mark.parametrize("case", [CASES[1], CASES[3]], ids=[IDS[1], IDS[3]])
+def test_solves_with_projected_contacts_match_the_python_nodes(case):
+    outcomes = []
+    for compiled in (True, False):
+        iam, state = euler(case, seed=2)
+        x0, _ = point(state, iam.nu, 2)
+        problem = crocopy.ShootingProblem(x0, [iam] * 8, iam)
+        solver = make_solver("SolverFDDP", problem, compiled)
+        if compiled:
+            assert compiled_nodes.select(solver).horizon is not None
+        solver.solve([], [], 6)
+        outcomes.append((solver.iter, solver.cost))
+    assert outcomes[0][0] == outcomes[1][0] and outcomes[0][0] > 1
+    assert outcomes[0][1] == pytest.approx(outcomes[1][1], rel=1e-9)
+
+
+def test_a_force_residual_on_a_1d_contact_keeps_the_python_path():
+    dam = make_dam("1L1A1W1L", (0.0, 0.0), lambda state, fid, nu: crocopy.ResidualModelContactForce(
+        state, fid, pin.Force.Zero(), 1, nu))
+    iam = crocopy.IntegratedActionModelEuler(dam, 0.01)
+    problem = crocopy.ShootingProblem(dam.state.zero(), [iam], iam)
+    assert "1D or 2D contact" in crocopy.compiled_coverage(problem)[0].reason
