@@ -72,3 +72,25 @@ def test_a_force_residual_on_a_1d_contact_keeps_the_python_path():
     iam = crocopy.IntegratedActionModelEuler(dam, 0.01)
     problem = crocopy.ShootingProblem(dam.state.zero(), [iam], iam)
     assert "1D or 2D contact" in crocopy.compiled_coverage(problem)[0].reason
+
+
+def test_projected_contact_parameters_are_read_again():
+    """A 1D contact's ``reference`` and ``Raxis`` and a 2D contact's ``reference`` and gains assigned after an
+    evaluator was made: the next one evaluates the new contacts (as the Python node)."""
+    iam, state = euler(("1A23W6W", (3.0, 1.0)), seed=3)
+    data = iam.createData()
+    x, u = point(state, iam.nu, 3)
+    iam._compiled_node(data, False, {})
+    contacts = iam.differential.contacts.contacts
+    one, two = contacts["LF_FOOT"].contact, contacts["RF_FOOT"].contact
+    one.reference = 0.3
+    one.Raxis = pin.rpy.rpyToMatrix(-0.2, 0.5, 0.1)
+    two.reference = np.array([0.2, -0.1])
+    two.gains = np.array([6.0, 2.0])
+    iam._compiled_node(data, False, {}).calcDiff(x, u, False)
+    slow = iam.createData()
+    iam.calc(slow, x, u)
+    iam.calcDiff(slow, x, u)
+    assert data.cost == pytest.approx(slow.cost, rel=1e-9)
+    np.testing.assert_allclose(data.Fx, slow.Fx, rtol=1e-7, atol=1e-7 * np.abs(slow.Fx).max())
+    np.testing.assert_allclose(data.Fu, slow.Fu, rtol=1e-7, atol=1e-7 * np.abs(slow.Fu).max())
