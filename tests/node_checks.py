@@ -34,6 +34,19 @@ def compare_with_python_node(iam, x: np.ndarray, u: np.ndarray, terminal: bool, 
     np.testing.assert_allclose(fast.xnext, other.xnext, rtol=1e-10, atol=1e-12)
 
 
+def check_new_evaluator(iam, data, x: np.ndarray, u: np.ndarray) -> None:
+    """An evaluator of ``(iam, data)`` made now (after the caller changed the model's parameters) gives the Python
+    node's cost, ``Fx`` and ``Fu`` at ``(x, u)``: it read the parameters again."""
+    iam._compiled_node(data, False, {}).calcDiff(x, u, False)
+    slow = iam.createData()
+    iam.calc(slow, x, u)
+    iam.calcDiff(slow, x, u)
+    assert data.cost == pytest.approx(slow.cost, rel=1e-9)
+    for name in ("Fx", "Fu"):
+        a, b = getattr(data, name), getattr(slow, name)
+        np.testing.assert_allclose(a, b, rtol=1e-7, atol=1e-7 * np.abs(b).max(), err_msg=name)
+
+
 def check_finite_differences(iam, state, x: np.ndarray, u: np.ndarray, h: float, atol: float,
                              roundoff: float = 0.0) -> None:
     """``Fx, Fu, Lx, Lu`` of the compiled node against central differences (step ``h``) of its own ``calc``:

@@ -14,7 +14,13 @@ import re
 import numpy as np
 import pinocchio as pin
 import pytest
-from node_checks import check_finite_differences, compare_with_python_node, failed_solve, make_solver
+from node_checks import (
+    check_finite_differences,
+    check_new_evaluator,
+    compare_with_python_node,
+    failed_solve,
+    make_solver,
+)
 from robots import load
 
 import crocopy
@@ -185,12 +191,7 @@ def test_contact_references_are_read_again_at_each_solve():
     contact.reference = pin.SE3.Random()
     contact.gains = np.array([3.0, 7.0])
     iam.differential.costs.costs["com"].cost.residual.reference = np.array([0.1, 0.2, 0.3])
-    iam._compiled_node(data, False, {}).calcDiff(x, u, False)
-    slow = iam.createData()
-    iam.calc(slow, x, u)
-    iam.calcDiff(slow, x, u)
-    assert data.cost == pytest.approx(slow.cost, rel=1e-9)
-    np.testing.assert_allclose(data.Fx, slow.Fx, rtol=1e-7, atol=1e-7 * np.abs(slow.Fx).max())
+    check_new_evaluator(iam, data, x, u)
 
 
 def _standing_problem(T: int = 12):

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
-from node_checks import check_finite_differences, compare_with_python_node, make_solver
+from node_checks import check_finite_differences, check_new_evaluator, compare_with_python_node, make_solver
 from test_contacts_1d2d import CASES, IDS, make_dam
 
 import crocopy
@@ -87,10 +87,4 @@ def test_projected_contact_parameters_are_read_again():
     one.Raxis = pin.rpy.rpyToMatrix(-0.2, 0.5, 0.1)
     two.reference = np.array([0.2, -0.1])
     two.gains = np.array([6.0, 2.0])
-    iam._compiled_node(data, False, {}).calcDiff(x, u, False)
-    slow = iam.createData()
-    iam.calc(slow, x, u)
-    iam.calcDiff(slow, x, u)
-    assert data.cost == pytest.approx(slow.cost, rel=1e-9)
-    np.testing.assert_allclose(data.Fx, slow.Fx, rtol=1e-7, atol=1e-7 * np.abs(slow.Fx).max())
-    np.testing.assert_allclose(data.Fu, slow.Fu, rtol=1e-7, atol=1e-7 * np.abs(slow.Fu).max())
+    check_new_evaluator(iam, data, x, u)
