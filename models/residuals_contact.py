@@ -263,6 +263,13 @@ class ResidualModelContactControlGrav(ResidualModelAbstract):
     Reads ``shared.actuation`` (``tau``, ``dtau_dx``, ``dtau_du``) and ``shared.contacts.fext``.
     """
 
+    compiled_kind = "contact_control_grav"
+    """The kind compiled contact-dynamics nodes evaluate this class as (:mod:`crocopy.models.rbd.residual_kernel`)."""
+
+    def compiled_parameters(self) -> np.ndarray:
+        """The parameters compiled nodes read: none."""
+        return np.zeros(0)
+
     def __init__(self, state: StateAbstract, nu: int | None = None) -> None:
         if not isinstance(getattr(state, "pinocchio", None), pin.Model):
             raise ValueError(f"state must be a StateMultibody, got {type(state).__name__}")

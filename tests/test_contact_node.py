@@ -41,7 +41,8 @@ CASES = {
 
 def contact_node(case: str, armature: bool = False, damping: float = 0.0, seed: int = 0, dt: float = 0.01):
     """An Euler node of contact dynamics of ``case`` with state, control, swing-foot, cone (and, on 6D contacts,
-    centre-of-pressure), contact-force, CoM, joint-effort and joint-acceleration costs."""
+    centre-of-pressure), contact-force, CoM, joint-effort, joint-acceleration and gravity-and-contact-force
+    compensating control costs."""
     robot, nfeet, reference, gains = CASES[case]
     rng = np.random.default_rng(seed)
     model = load(robot)
@@ -89,6 +90,8 @@ def contact_node(case: str, armature: bool = False, damping: float = 0.0, seed: 
     costs.addCost("effort", crocopy.CostModelResidual(state, effort), 0.01)
     acceleration = crocopy.ResidualModelJointAcceleration(state, rng.standard_normal(state.nv), nu)
     costs.addCost("acceleration", crocopy.CostModelResidual(state, acceleration), 1e-3)
+    gravity = crocopy.ResidualModelContactControlGrav(state, nu)
+    costs.addCost("gravity", crocopy.CostModelResidual(state, gravity), 1e-3)
     dam = crocopy.DifferentialActionModelContactFwdDynamics(state, actuation, contacts, costs, damping, True)
     if armature:
         dam.armature = np.linspace(0.01, 0.1, state.nv)

@@ -257,14 +257,16 @@ def test_nodes_of_one_model_share_their_scratch_and_keep_their_own_arrays():
 
 def test_the_registry_of_compiled_kinds_is_covered_and_documented():
     """Every residual class that declares a compiled kind beside its maths is built by this file's factory (or by
-    the contact-node tests for the cones) and named in docs/DEVELOPING.md; the kernel knows each kind."""
+    the contact-node tests for the cones, the contact force and the contact gravity compensation) and named in
+    docs/DEVELOPING.md; the kernel knows each kind."""
     from pathlib import Path
 
     from crocopy.models.rbd import node_table
     from crocopy.models.rbd.node_kinds import compiled_residual_classes
 
     registry = compiled_residual_classes()
-    factory = {"velocity" if kind.startswith("velocity_") else kind for kind in KINDS} | {"com", "cone", "force"}
+    factory = {"velocity" if kind.startswith("velocity_") else kind for kind in KINDS} | {"com", "cone", "force",
+                                                                                          "contact_control_grav"}
     assert set(registry.values()) == factory == set(node_table.KIND)
     developing = (Path(__file__).resolve().parents[1] / "docs" / "DEVELOPING.md").read_text()
     for cls in registry:
@@ -273,15 +275,16 @@ def test_the_registry_of_compiled_kinds_is_covered_and_documented():
 
 def test_the_actuations_and_contacts_that_lower_themselves_are_covered_and_documented():
     """The registries built from the models' own lowerings (``compiled_matrix``, ``compiled_reference``) are the
-    classes this file's factory (actuations) and the contact-node tests (3D and 6D contacts) build, each named in the
-    compiled node's docstring, and each lowering agrees with the model's own maths."""
+    classes this file's factory (actuations) and the contact-node tests (1D, 2D, 3D and 6D contacts) build, each named
+    in the compiled node's docstring, and each lowering agrees with the model's own maths."""
     from crocopy.models.rbd import contact_lowering, euler_node, node_kinds
 
     states = {robot: crocopy.StateMultibody(load(robot) if robot not in ("iris", "double_pendulum") else _extra(robot))
               for robot in ROBOTS}
     built = {robot: actuation(robot, state) for robot, state in states.items()}
     assert set(node_kinds.ACTUATIONS) == {type(a) for a in built.values()}
-    assert set(contact_lowering.CONTACTS) == {crocopy.ContactModel3D, crocopy.ContactModel6D}
+    assert set(contact_lowering.CONTACTS) == {crocopy.ContactModel1D, crocopy.ContactModel2D, crocopy.ContactModel3D,
+                                              crocopy.ContactModel6D}
     for cls in (*node_kinds.ACTUATIONS, *contact_lowering.CONTACTS):
         assert f"``{cls.__name__}``" in euler_node.__doc__, cls.__name__
     for robot, act in built.items():
@@ -301,6 +304,18 @@ def test_the_actuations_and_contacts_that_lower_themselves_are_covered_and_docum
         contact.compiled_reference(R_out, p_out)
         np.testing.assert_array_equal(R_out, R)
         np.testing.assert_array_equal(p_out, p)
+    axis = pin.rpy.rpyToMatrix(0.3, -0.2, 0.5)
+    for contact, rows, p in ((crocopy.ContactModel1D(state, 5, 0.4, pin.LOCAL, axis), axis[2:3], 0.4 * axis[:, 2]),
+                             (crocopy.ContactModel2D(state, 5, np.array([0.1, 0.2])), np.eye(3)[[0, 2]],
+                              np.array([0.1, 0.2, 0.0]))):
+        R_out, p_out = np.ones((3, 3)), np.ones(3)
+        contact.compiled_reference(R_out, p_out)
+        data = contact.createData(state.pinocchio.createData())
+        contact.calc(data, state.rand())
+        np.testing.assert_allclose(data.Jc, R_out[: contact.nc] @ data.point.Jc, rtol=0, atol=1e-15)
+        np.testing.assert_array_equal(R_out[: contact.nc], rows)
+        np.testing.assert_array_equal(R_out[contact.nc:], 0.0)
+        np.testing.assert_allclose(p_out, p, rtol=0, atol=1e-15)
 
 
 def test_activations_with_an_item_form_are_covered_and_others_keep_the_python_path():

@@ -162,7 +162,7 @@ class InvDynNode(EulerNode):
         if kind is not None:
             return INV + kind
         kind = residual_kind(residual)
-        return None if kind == table.CONTROL_GRAV else kind
+        return None if kind in (table.CONTROL_GRAV, table.CONTACT_CONTROL_GRAV) else kind
 
     def _parameters(self, kind: int, residual) -> Sequence[float]:
         """The residual's parameters in the layout the kernels read."""

@@ -14,7 +14,10 @@ v)``), the contact forces ``λ`` and their derivatives, and the residuals' param
 * joint efforts ``r = u - u_ref`` (``Ju = I``) and joint accelerations ``r = a - a_ref`` (``Jx = ∂a/∂x``,
   ``Ju = ∂a/∂u``, after :func:`.euler_node_kernel._dynamics_jacobians`) of a forward-dynamics node, both 0 with zero
   Jacobians at a terminal node; the gravity-compensating control ``r = S u - g(q)`` (``-g(q)`` at a terminal node;
-  ``Jx = [-∂g/∂q, 0]``, ``Ju = S``: :func:`.gravity_kernel.generalized_gravity`, ``gravity_derivatives``);
+  ``Jx = [-∂g/∂q, 0]``, ``Ju = S``: :func:`.gravity_kernel.generalized_gravity`, ``gravity_derivatives``), and in a
+  contact node ``r = S u - g(q) + Jcᵀ λ`` (``Jx = [-∂g/∂q + ∂(Jcᵀ λ)/∂q, 0] + Jcᵀ ∂λ/∂x``, ``λ`` held fixed in the
+  first term as :func:`.contact_kernel.contact_force_derivatives` takes it, ``Ju = S + Jcᵀ ∂λ/∂u``; a terminal node
+  has no force);
 * a user's :class:`~crocopy.models.residual_numba.ResidualModelNumba` through its callbacks
   (:mod:`.user_residual_kernel`).
 """
@@ -25,6 +28,7 @@ from crocopy.kernels import uncounted
 
 from .com_kernel import center_of_mass
 from .configuration_kernel import state_diff, state_jdiff
+from .contact_kernel import contact_force_derivatives
 from .dynamics_kernel import (
     frame_jacobian,
     frame_placement,
@@ -37,6 +41,7 @@ from .node_table import (
     ACCELERATION,
     COM,
     CONE,
+    CONTACT_CONTROL_GRAV,
     CONTROL,
     CONTROL_GRAV,
     E_A,
@@ -47,6 +52,7 @@ from .node_table import (
     E_DFX,
     E_J6,
     E_JCOM,
+    E_JCS,
     E_JU,
     E_JX,
     E_K6,
@@ -55,6 +61,7 @@ from .node_table import (
     E_P3,
     E_R,
     E_R3,
+    E_REF_R,
     E_S,
     E_TAU,
     E_USER_RU,
@@ -66,7 +73,9 @@ from .node_table import (
     ITEMS,
     LOCAL,
     LOCAL_WORLD_ALIGNED,
+    N_CONTACTS,
     N_ITEMS,
+    NC,
     NQ,
     NU,
     NV,
@@ -79,6 +88,8 @@ from .node_table import (
     U_START,
     USER,
     VELOCITY,
+    contact_fields,
+    cube,
     mat,
     vec,
 )
@@ -161,11 +172,18 @@ def residual_rows(tbl, ints, par, rb, ws, x, u):
             center_of_mass(rb, ws, com, mat(tbl, ints, E_JCOM))
             for i in range(3):
                 rows[i] = com[i] - par[o + i]
-        elif kind == CONTROL_GRAV:
+        elif kind == CONTROL_GRAV or kind == CONTACT_CONTROL_GRAV:
             generalized_gravity(rb, ws, rows)
             tau = vec(tbl, ints, E_TAU)
             for i in range(nr):
                 rows[i] = (0.0 if ints[TERMINAL] else tau[i]) - rows[i]
+            if kind == CONTACT_CONTROL_GRAV and not ints[TERMINAL]:
+                Jcs, lam = mat(tbl, ints, E_JCS), vec(tbl, ints, E_LAM)
+                for i in range(nr):
+                    acc = 0.0
+                    for c in range(ints[NC]):
+                        acc += Jcs[c, i] * lam[c]
+                    rows[i] += acc
         elif kind == EFFORT or kind == ACCELERATION:
             if ints[TERMINAL]:
                 for i in range(nr):
@@ -241,6 +259,38 @@ def _gravity_rows(tbl, ints, rb, ws, nr, Jx_rows, start):
 
 
 @uncounted
+def _contact_gravity_rows(tbl, ints, rb, ws, nr, Jx_rows, start):
+    """The Jacobian rows of a contact node's gravity-and-contact-force compensating control of stack row ``start``
+    (module docstring): :func:`_gravity_rows`, then at a running node the contact forces' terms."""
+    _gravity_rows(tbl, ints, rb, ws, nr, Jx_rows, start)
+    if ints[TERMINAL]:
+        return
+    nv, nu = ints[NV], ints[NU]
+    for i in range(nr):
+        for c in range(nv):
+            Jx_rows[i, c] = -Jx_rows[i, c]
+    lam, projections = vec(tbl, ints, E_LAM), cube(tbl, ints, E_REF_R)
+    for n in range(ints[N_CONTACTS]):
+        fid, nc, ref, row = contact_fields(ints, n)
+        contact_force_derivatives(rb, ws, fid, nc, ref, projections[n], lam, row, Jx_rows)
+    Jcs, df_dx, df_du = mat(tbl, ints, E_JCS), mat(tbl, ints, E_DF_DX), mat(tbl, ints, E_DF_DU)
+    Ju, u0 = mat(tbl, ints, E_JU), start - ints[U_START]
+    for i in range(nr):
+        for c in range(nv):
+            Jx_rows[i, c] = -Jx_rows[i, c]
+        for c in range(2 * nv):
+            acc = 0.0
+            for k in range(ints[NC]):
+                acc += Jcs[k, i] * df_dx[k, c]
+            Jx_rows[i, c] += acc
+        for c in range(nu):
+            acc = 0.0
+            for k in range(ints[NC]):
+                acc += Jcs[k, i] * df_du[k, c]
+            Ju[u0 + i, c] += acc
+
+
+@uncounted
 def residual_jacobians(tbl, ints, par, rb, ws, x, u):
     """Every compiled item's rows of the stacked ``Jx`` (a control residual's are zero and stay so) and the force
     residuals' rows of ``Ju`` (after :func:`.euler_node_kernel._dynamics_jacobians` at a running node)."""
@@ -271,6 +321,9 @@ def residual_jacobians(tbl, ints, par, rb, ws, x, u):
             continue
         if kind == CONTROL_GRAV:
             _gravity_rows(tbl, ints, rb, ws, nr, rows, start)
+            continue
+        if kind == CONTACT_CONTROL_GRAV:
+            _contact_gravity_rows(tbl, ints, rb, ws, nr, rows, start)
             continue
         for i in range(nr):
             for j in range(nv, ndx):
