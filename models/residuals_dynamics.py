@@ -99,6 +99,13 @@ class ResidualModelCentroidalMomentum(ResidualModelAbstract):
     derivatives (at zero acceleration).
     """
 
+    compiled_kind = "centroidal"
+    """The kind compiled forward-dynamics nodes evaluate this class as (:mod:`crocopy.models.rbd.residual_kernel`)."""
+
+    def compiled_parameters(self) -> np.ndarray:
+        """The parameters compiled nodes read: ``href``."""
+        return self._href
+
     def __init__(self, state: StateMultibody, href: np.ndarray, nu: int | None = None) -> None:
         super().__init__(check_state(state), 6, as_optional_count(nu, "nu"), True, True, False)
         self.reference = href

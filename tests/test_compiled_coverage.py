@@ -46,23 +46,25 @@ def free_reasons_problem():
     manager = crocopy.ConstraintModelManager(state, nu)
     bounds = crocopy.ConstraintModelResidual(state, crocopy.ResidualModelControl(state, nu), -np.ones(nu), np.ones(nu))
     manager.addConstraint("u", bounds)
+    tip = state.pinocchio.nframes - 1
     manager.addConstraint("v", crocopy.ConstraintModelResidual(
-        state, crocopy.ResidualModelCentroidalMomentum(state, np.zeros(6), nu)))
+        state, python_frame_translation(crocopy)(state, tip, np.zeros(3), nu)))
     constrained = crocopy.DifferentialActionModelFreeFwdDynamics(state, dam.actuation, costs, manager)
     models[3] = crocopy.IntegratedActionModelEuler(constrained, 0.01)
     user = crocopy.DifferentialActionModelFreeFwdDynamics(state, UserActuation(state), costs)
     models[4] = crocopy.IntegratedActionModelEuler(user, 0.01)
     grav = crocopy.CostModelSum(state, nu)
+    numdiff = crocopy.ActivationModelNumDiff(crocopy.ActivationModelQuad(6))
     momentum = crocopy.ResidualModelCentroidalMomentum(state, np.zeros(6), nu)
-    grav.addCost("grav", crocopy.CostModelResidual(state, momentum), 1.0)
+    grav.addCost("grav", crocopy.CostModelResidual(state, numdiff, momentum), 1.0)
     models[5] = crocopy.IntegratedActionModelEuler(
         crocopy.DifferentialActionModelFreeFwdDynamics(state, dam.actuation, grav), 0.01)
     return crocopy.ShootingProblem(problem.x0, models, problem.terminalModel)
 
 
 FREE_REASONS = [None, "RK4 integrator", "control parametrization ControlParametrizationModelPolyOne",
-                "constraint residual ResidualModelCentroidalMomentum", "user Python subclass: actuation UserActuation",
-                "residual ResidualModelCentroidalMomentum", None, None]
+                "user Python subclass: constraint residual PythonFrameTranslation",
+                "user Python subclass: actuation UserActuation", "activation ActivationModelNumDiff", None, None]
 
 
 def contact_reasons_problem():

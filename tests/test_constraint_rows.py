@@ -17,6 +17,7 @@ from robots import QUADRUPED_FEET, frame, load
 
 import crocopy
 from crocopy.models.rbd import constraint_rows_kernel
+from crocopy.problems.user_residual import python_frame_translation
 
 ROW_FIELDS = ("g", "Gx", "Gu", "h", "Hx", "Hu")
 
@@ -367,16 +368,16 @@ def test_nodes_the_lowering_cannot_take_are_declined_with_their_reason():
     base = arm_node(("control",))
     state, nu = base.state, base.nu
     dam = base.differential
-    grav = crocopy.ResidualModelCentroidalMomentum(state, np.zeros(6), nu)
+    python = python_frame_translation(crocopy)(state, state.pinocchio.nframes - 1, np.zeros(3), nu)
     cases = {
         "user Python subclass: constraint UserConstraint": crocopy.ConstraintModelResidual,
-        "constraint residual ResidualModelCentroidalMomentum": None,
+        "user Python subclass: constraint residual PythonFrameTranslation": None,
     }
     reasons = []
     for cls in cases.values():
         manager = crocopy.ConstraintModelManager(state, nu)
         if cls is None:
-            manager.addConstraint("grav", crocopy.ConstraintModelResidual(state, grav))
+            manager.addConstraint("python", crocopy.ConstraintModelResidual(state, python))
         else:
             manager.addConstraint("user", UserConstraint(state, crocopy.ResidualModelControl(state, nu)))
         iam = crocopy.IntegratedActionModelEuler(

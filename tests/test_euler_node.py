@@ -22,7 +22,7 @@ pytestmark = pytest.mark.skipif(not crocopy.kernels_enabled(), reason="compiled 
 ROBOTS = ("iris", "kinova", "talos_arm", "anymal", "double_pendulum")
 FRAMES = {"iris": "iris__rotor_2", "double_pendulum": "link2"}
 KINDS = ("state", "control", "placement", "translation", "rotation", "velocity_local", "velocity_world",
-         "velocity_lwa", "effort", "acceleration", "control_grav")
+         "velocity_lwa", "effort", "acceleration", "control_grav", "centroidal")
 
 
 ACTIVATIONS = (
@@ -76,6 +76,8 @@ def residual(kind: str, state, act, fid: int, rng: np.random.Generator):
         return crocopy.ResidualModelJointAcceleration(state, rng.standard_normal(state.nv), nu)
     if kind == "control_grav":
         return crocopy.ResidualModelControlGrav(state, nu)
+    if kind == "centroidal":
+        return crocopy.ResidualModelCentroidalMomentum(state, rng.standard_normal(6), nu)
     reference = {"local": pin.LOCAL, "world": pin.WORLD, "lwa": pin.LOCAL_WORLD_ALIGNED}[kind.split("_")[1]]
     return crocopy.ResidualModelFrameVelocity(state, fid, pin.Motion.Random(), reference, nu)
 
@@ -152,8 +154,12 @@ def test_nodes_that_do_not_qualify():
     rk = crocopy.IntegratedActionModelRK(iam.differential, crocopy.RKType.four, 0.01)
     assert not hasattr(rk, "_compiled_node") or rk._compiled_node(rk.createData(), False, {}) is None
     costs = iam.differential.costs
+    class Smooth1(crocopy.ActivationModelSmooth1Norm):  # a user's override: its item runs in Python
+        def calc(self, data, r):
+            super().calc(data, r)
+
     costs.addCost("grav", crocopy.CostModelResidual(
-        state, crocopy.ResidualModelCentroidalMomentum(state, np.zeros(6), iam.nu)), 1.0)
+        state, Smooth1(6), crocopy.ResidualModelCentroidalMomentum(state, np.zeros(6), iam.nu)), 1.0)
     dam = crocopy.DifferentialActionModelFreeFwdDynamics(state, iam.differential.actuation, costs)
     other = crocopy.IntegratedActionModelEuler(dam, 0.01)
     assert other._compiled_node(other.createData(), False, {}) is None

@@ -293,7 +293,7 @@ def _node(rb, ws, cw, q, v, tau, S, fids, R_ref, p_ref, out):
     C.contact_forward_dynamics(rb, ws, cw, tau, Jc, a0, 3 * len(fids), 0.0, a, lam)
     K.dynamics_derivatives(rb, ws, q, v, a, dq, dv)
     for k in range(len(fids)):
-        C.contact_force_derivatives(rb, ws, fids[k], 3, 2, np.zeros((3, 3)), lam, 3 * k, dq)
+        C.contact_force_derivatives(rb, ws, fids[k], 3, 2, R_ref, lam, 3 * k, dq)  # R_ref: unused by a 3D contact
         C.contact_calc_diff(rb, ws, cw, fids[k], 3, 2, 2.0, 1.0, R_ref, p_ref, 3 * k, da0)
     C.contact_dynamics_derivatives(rb, ws, cw, Jc, 3 * len(fids), dq, dv, da0, S, Fx, Fu, df_dx, df_du)
 

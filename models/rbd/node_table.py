@@ -25,14 +25,15 @@ from .contact_kernel import CONTACT_WORKSPACE, ContactWorkspace
 from .lowering import RigidBodyModel, RigidBodyWorkspace
 
 (STATE, CONTROL, PLACEMENT, TRANSLATION, ROTATION, VELOCITY, CONE, COM, USER, EFFORT, ACCELERATION,
- CONTROL_GRAV, FORCE, CONTACT_CONTROL_GRAV) = range(14)
+ CONTROL_GRAV, FORCE, CONTACT_CONTROL_GRAV, CENTROIDAL) = range(15)
 """Residual kinds.  ``CONE``: ``r = A λ_c`` (friction and wrench cones; the item's frame field is the contact's first
 row, its reference field the force components ``ncf``, ``A`` row-major in ``par``); ``COM``: ``r = com - cref``;
 ``EFFORT``: ``r = u - uref`` (a forward-dynamics node's joint efforts are its controls), ``ACCELERATION``:
 ``r = a - aref`` with the node's acceleration and its derivatives (both 0 at a terminal node); ``CONTROL_GRAV``:
 ``r = S u - g(q)`` (``-g(q)`` at a terminal node); ``FORCE``: ``r = A λ_c - fref`` (a cone's fields and ``A``, then
 ``fref``; 0 at a terminal node, which has no force); ``CONTACT_CONTROL_GRAV``: ``r = S u - g(q) + Jcᵀ λ`` (a contact
-node's gravity-and-contact-force compensating control; ``-g(q)`` at a terminal node);
+node's gravity-and-contact-force compensating control; ``-g(q)`` at a terminal node); ``CENTROIDAL``: ``r = h(q, v)
+- href`` (the centroidal momentum, :mod:`.com_kernel`);
 ``USER``: a :class:`~crocopy.models.residual_numba.ResidualModelNumba`, whose two C callbacks (item fields
 ``RESIDUAL_ADDRESS``, ``JACOBIANS_ADDRESS``) the node calls with its kinematics (item field ``FLAGS``: what they
 read, and ``u`` dependence; ``N_PARAMETERS``: the length of its parameters in ``par``)."""
@@ -40,7 +41,7 @@ read, and ``u`` dependence; ``N_PARAMETERS``: the length of its parameters in ``
 KIND = {"state": STATE, "control": CONTROL, "placement": PLACEMENT, "translation": TRANSLATION,
         "rotation": ROTATION, "velocity": VELOCITY, "cone": CONE, "com": COM, "effort": EFFORT,
         "acceleration": ACCELERATION, "control_grav": CONTROL_GRAV, "force": FORCE,
-        "contact_control_grav": CONTACT_CONTROL_GRAV}
+        "contact_control_grav": CONTACT_CONTROL_GRAV, "centroidal": CENTROIDAL}
 """The kinds written into this kernel, by the ``compiled_kind`` name a residual class declares beside its maths
 (with its ``compiled_parameters()``); ``USER`` residuals bring their own functions."""
 

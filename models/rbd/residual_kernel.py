@@ -18,6 +18,7 @@ v)``), the contact forces ``λ`` and their derivatives, and the residuals' param
   contact node ``r = S u - g(q) + Jcᵀ λ`` (``Jx = [-∂g/∂q + ∂(Jcᵀ λ)/∂q, 0] + Jcᵀ ∂λ/∂x``, ``λ`` held fixed in the
   first term as :func:`.contact_kernel.contact_force_derivatives` takes it, ``Ju = S + Jcᵀ ∂λ/∂u``; a terminal node
   has no force);
+* the centroidal momentum ``r = h(q, v) - h_ref`` (``Jx = [∂h/∂q, Ag]``, :mod:`.com_kernel`);
 * a user's :class:`~crocopy.models.residual_numba.ResidualModelNumba` through its callbacks
   (:mod:`.user_residual_kernel`).
 """
@@ -26,7 +27,7 @@ from __future__ import annotations
 
 from crocopy.kernels import uncounted
 
-from .com_kernel import center_of_mass
+from .com_kernel import center_of_mass, centroidal_momentum, centroidal_momentum_derivatives
 from .configuration_kernel import state_diff, state_jdiff
 from .contact_kernel import contact_force_derivatives
 from .dynamics_kernel import (
@@ -39,6 +40,7 @@ from .gravity_kernel import generalized_gravity, gravity_derivatives
 from .lie_kernel import jlog3, jlog6, log3, log6
 from .node_table import (
     ACCELERATION,
+    CENTROIDAL,
     COM,
     CONE,
     CONTACT_CONTROL_GRAV,
@@ -172,6 +174,10 @@ def residual_rows(tbl, ints, par, rb, ws, x, u):
             center_of_mass(rb, ws, com, mat(tbl, ints, E_JCOM))
             for i in range(3):
                 rows[i] = com[i] - par[o + i]
+        elif kind == CENTROIDAL:
+            centroidal_momentum(rb, ws, vec(tbl, ints, E_COM), mat(tbl, ints, E_JCOM), rows)
+            for i in range(6):
+                rows[i] -= par[o + i]
         elif kind == CONTROL_GRAV or kind == CONTACT_CONTROL_GRAV:
             generalized_gravity(rb, ws, rows)
             tau = vec(tbl, ints, E_TAU)
@@ -324,6 +330,11 @@ def residual_jacobians(tbl, ints, par, rb, ws, x, u):
             continue
         if kind == CONTACT_CONTROL_GRAV:
             _contact_gravity_rows(tbl, ints, rb, ws, nr, rows, start)
+            continue
+        if kind == CENTROIDAL:
+            com, Jcom = vec(tbl, ints, E_COM), mat(tbl, ints, E_JCOM)
+            centroidal_momentum(rb, ws, com, Jcom, v6)
+            centroidal_momentum_derivatives(rb, ws, com, Jcom, rows)
             continue
         for i in range(nr):
             for j in range(nv, ndx):
