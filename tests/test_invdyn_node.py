@@ -30,7 +30,7 @@ pytestmark = pytest.mark.skipif(not crocopy.kernels_enabled(), reason="compiled 
 FIELDS = ("xnext", "Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu", "g", "Gx", "Gu", "h", "Hx", "Hu")
 TERMINAL_FIELDS = ("xnext", "Fx", "Lx", "Lxx", "g", "Gx", "h", "Hx")
 FREE = ("talos_arm", "kinova", "anymal", "iris")
-CONTACT = ("anymal-local", "anymal-lwa", "talos-6d", "talos-6d-lwa")
+CONTACT = ("anymal-local", "anymal-lwa", "talos-6d", "talos-6d-lwa", "anymal-1d")
 RTOL = 1e-10
 FEET = {"anymal": ("LF_FOOT", "RF_FOOT", "LH_FOOT"), "talos_legs": ("left_sole_link", "right_sole_link")}
 
@@ -103,7 +103,8 @@ def free_node(robot: str, terminal: bool = False, dt: float = 0.01):
 
 def contact_node(case: str, terminal: bool = False, inactive: bool = False, dt: float = 0.01):
     """An Euler node of contact inverse dynamics: ANYmal on three 3D feet (``case`` ``anymal-local``: the first in
-    LOCAL coordinates) or Talos legs on two 6D soles, with Baumgarte gains."""
+    LOCAL coordinates; ``anymal-1d``: the first a 1D contact along a rotated axis; the model takes no 2D contact) or
+    Talos legs on two 6D soles, with Baumgarte gains."""
     robot = "talos_legs" if case.startswith("talos") else "anymal"
     model = load(robot)
     state = crocopy.StateMultibody(model)
@@ -111,7 +112,8 @@ def contact_node(case: str, terminal: bool = False, inactive: bool = False, dt: 
     six = robot == "talos_legs"
     names = FEET[robot]
     nc = 6 if six else 3
-    nu = state.nv + nc * len(names)
+    mixed = case == "anymal-1d"
+    nu = state.nv + (7 if mixed else nc * len(names))
     contacts = crocopy.ContactModelMultiple(state, nu)
     rng = np.random.default_rng(7)
     lwa = case.endswith("lwa")
@@ -122,6 +124,10 @@ def contact_node(case: str, terminal: bool = False, inactive: bool = False, dt: 
         if six:
             ref = pin.SE3(pin.exp3(0.3 * rng.normal(size=3)), rng.normal(size=3))
             contact = crocopy.ContactModel6D(state, fid, ref, reference, nu, np.array(gains[i]))
+        elif mixed and i == 0:
+            axis = pin.rpy.rpyToMatrix(0.3, -0.2, 0.4)
+            contact = crocopy.ContactModel1D(state, fid, rng.normal(), pin.LOCAL_WORLD_ALIGNED, axis, nu,
+                                             np.array(gains[i]))
         else:
             contact = crocopy.ContactModel3D(state, fid, rng.normal(size=3), reference, nu, np.array(gains[i]))
         contacts.addContact(f"{name}_contact", contact, not (inactive and i == len(names) - 1))

@@ -15,7 +15,7 @@ become, in the order of the contact model (by name):
 
 The force residuals (``ResidualModelContactFrictionCone``, ``ResidualModelContactWrenchCone``,
 ``ResidualModelContactForce``) find their contact's first row here (not on a 1D or 2D contact: they decline it).
-Inverse-dynamics nodes take the 3D and 6D contacts only (:data:`FULL_CONTACTS`).
+Inverse-dynamics nodes take the same contacts (their model takes no 2D contact).
 """
 
 from __future__ import annotations
@@ -30,8 +30,6 @@ from .lowering import declaring
 
 CONTACTS = declaring(contacts.ContactModelAbstract, "compiled_reference")
 """The contacts compiled nodes take: those that lower their reference themselves (``compiled_reference(R, p)``)."""
-FULL_CONTACTS = {contacts.ContactModel3D, contacts.ContactModel6D}
-"""The contacts with all their rows (3 or 6): those an inverse-dynamics node takes."""
 
 
 def active_contacts(dam, memo: dict) -> list | None:

@@ -8,7 +8,8 @@
   ``StateMultibody`` whose Pinocchio model lowers (:func:`.lowering.lower_model`);
 * its actuation is one the Euler node takes (``τ = S u`` with a constant ``S``, :data:`.node_kinds.ACTUATIONS`):
   the joint efforts are then ``P τ`` with a constant ``P`` (the actuation's ``Mtau``);
-* its contacts (contact model) are all active ``ContactModel3D``/``ContactModel6D`` (:mod:`.contact_lowering`);
+* its contacts (contact model) are all active ``ContactModel1D``/``ContactModel3D``/``ContactModel6D``
+  (:mod:`.contact_lowering`);
 * every cost is a ``CostModelResidual`` in the cost stack with an activation of the quadratic-barrier family, and
   every active one's residual, and every active constraint's (a ``ConstraintModelResidual``), is of a kind the Euler
   node evaluates (:func:`.node_kinds.residual_kind`; the cones read the forces of the control) or one of
@@ -42,7 +43,7 @@ from ..state_multibody import StateMultibody
 from . import invdyn_node_kernel as kernel
 from . import node_table as table
 from .constraint_rows import ConstraintRows
-from .contact_lowering import FULL_CONTACTS
+from .contact_lowering import CONTACTS
 from .euler_node import EulerNode
 from .invdyn_horizon import InvDynHorizon
 from .joint_types import NotLowerable
@@ -95,7 +96,7 @@ def invdyn_node(iam, data, terminal: bool, memo: dict) -> InvDynNode | None:
         if not all(item.active for item in items):
             return decline(memo, "inactive contact in an inverse-dynamics node")
         contacts = [item.contact for item in items]
-        other = next((m for m in contacts if type(m) not in FULL_CONTACTS), None)
+        other = next((m for m in contacts if type(m) not in CONTACTS), None)
         if other is not None:
             return decline(memo, class_reason(other, "contact"))
     low = lowered(dam.state.pinocchio, memo)
