@@ -38,7 +38,8 @@ CASES = {
 
 def impulse_model(case: str, armature: bool = False, costs_nu: int = 0, seed: int = 0):
     """The impulse node of ``case`` (robot, impulse sizes, reference frame, ``r_coeff``, damping) with state, swing
-    foot, placement, rotation, velocity and centre-of-mass costs (built with ``costs_nu`` controls)."""
+    foot, placement, rotation, velocity, centre-of-mass costs and, on the first foot's impulse, a force and a friction
+    cone (3D) or a wrench cone and a centre of pressure (6D) (built with ``costs_nu`` controls)."""
     robot, kinds, reference, r_coeff, damping = CASES[case]
     rng = np.random.default_rng(seed)
     model = load(robot)
@@ -67,6 +68,18 @@ def impulse_model(case: str, armature: bool = False, costs_nu: int = 0, seed: in
         crocopy.ResidualModelFrameVelocity(state, foot, pin.Motion(rng.uniform(-1, 1, 6)), LWA, nu)), 2.0)
     costs.addCost("com", crocopy.CostModelResidual(
         state, crocopy.ResidualModelCoMPosition(state, rng.uniform(-0.2, 0.2, 3), nu)), 5.0)
+    first = model.getFrameId(FEET[robot][0])
+    nc = 3 if kinds[0] == "3" else 6
+    force = crocopy.ResidualModelContactForce(state, first, pin.Force(rng.uniform(-5.0, 5.0, 6)), nc, nu)
+    costs.addCost("f", crocopy.CostModelResidual(state, force), 1e-3)
+    if nc == 3:
+        cone = crocopy.ResidualModelContactFrictionCone(state, first, crocopy.FrictionCone(np.eye(3), 0.7), nu)
+    else:
+        cone = crocopy.ResidualModelContactWrenchCone(state, first, crocopy.WrenchCone(np.eye(3), 0.7,
+                                                                                          np.array([0.1, 0.05])), nu)
+        costs.addCost("cop", crocopy.CostModelResidual(state, crocopy.ResidualModelContactCoPPosition(
+            state, first, crocopy.CoPSupport(np.eye(3), np.array([0.2, 0.1])), nu)), 1e-2)
+    costs.addCost("cone", crocopy.CostModelResidual(state, cone), 1e-2)
     model_ = crocopy.ActionModelImpulseFwdDynamics(state, impulses, costs, r_coeff, damping, True)
     if armature:
         model_.armature = rng.uniform(0.0, 0.1, state.nv)
@@ -102,6 +115,10 @@ def test_without_impulses_the_velocity_passes_through():
     model = impulse_model("anymal-lwa")
     for name in FEET["anymal"]:
         model.impulses.changeImpulseStatus(name, False)
+    problem = crocopy.ShootingProblem(model.state.zero(), [model], model)
+    assert "without its active impulse" in crocopy.compiled_coverage(problem)[0].reason  # the force and cone costs
+    for name in ("f", "cone"):
+        model.costs.changeCostStatus(name, False)
     x = random_x(model)
     compare_with_python_node(model, x, np.zeros(0), False, 1e-7, 1e-9, 1e-10)
     data = model.createData()

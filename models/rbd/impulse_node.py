@@ -12,9 +12,12 @@ classes (a subclass may override a step):
   ``LOCAL_WORLD_ALIGNED``, as the impulses do) on distinct joints, or with a positive ``JMinvJt_damping`` (else
   the Python model takes its least-squares path, which the kernels do not implement);
 * every cost is a ``CostModelResidual`` in the cost stack with an activation of the quadratic-barrier family, and
-  every active one's residual is of a kind the Euler node's kernels evaluate without control or contact forces
+  every active one's residual is of a kind the Euler node's kernels evaluate without control
   (``ResidualModelState``, ``ResidualModelFramePlacement``, ``ResidualModelFrameTranslation``,
-  ``ResidualModelFrameRotation``, ``ResidualModelFrameVelocity``, ``ResidualModelCoMPosition``).
+  ``ResidualModelFrameRotation``, ``ResidualModelFrameVelocity``, ``ResidualModelCoMPosition``), or a force residual
+  on an active impulse (``ResidualModelContactForce``, ``ResidualModelContactFrictionCone``,
+  ``ResidualModelContactWrenchCone``, ``ResidualModelContactCoPPosition``: rows of the impulses ``Λ``, whose
+  Jacobians follow the impulses' derivatives).
 
 The costs are those of a node without control when the costs were built with ``nu > 0`` (as the Python model
 evaluates them) or at the terminal node.  The node has no rollout step: the rollout calls its ``calc``, and it
@@ -50,8 +53,10 @@ from .stack_items import compiled_items
 
 IMPULSES = (ImpulseModel3D, ImpulseModel6D)
 """The impulse classes compiled impulse nodes take (exact classes)."""
-KINDS = (table.STATE, table.PLACEMENT, table.TRANSLATION, table.ROTATION, table.VELOCITY, table.COM)
-"""The residual kinds of :mod:`.euler_node_kernel` an impulse node evaluates (no control, no contact forces)."""
+KINDS = (table.STATE, table.PLACEMENT, table.TRANSLATION, table.ROTATION, table.VELOCITY, table.COM, table.CONE,
+         table.FORCE)
+"""The residual kinds of :mod:`.euler_node_kernel` an impulse node evaluates (no control; the force residuals read
+its impulses, their items flagged so that the kernel keeps a contact force's value at this node without control)."""
 RB_GRAVITY = RigidBodyModel._fields.index("gravity") - 4
 """Entry of the gravity (each impulse node's own zero vector: the RNEA derivatives of the impulse run without it)."""
 
@@ -215,9 +220,13 @@ class ImpulseNode:
             kind = residual_kind(residual)
             if kind not in KINDS:
                 return class_reason(residual, "residual") + " in an impulse node"
-            reference = int(residual.type) if kind == table.VELOCITY else 0
-            items += [kind, rows.start, rows.stop - rows.start, getattr(residual, "id", 0), reference, offset,
-                      0, 0, 0, 0]
+            frame, reference, flags = getattr(residual, "id", 0), int(residual.type) if kind == table.VELOCITY else 0, 0
+            if kind == table.CONE or kind == table.FORCE:
+                row, nc = self._impulse_rows().get(frame, (0, 0))
+                if nc < residual.ncf:
+                    return class_reason(residual, "residual") + " without its active impulse"
+                frame, reference, flags = row, residual.ncf, 1
+            items += [kind, rows.start, rows.stop - rows.start, frame, reference, offset, flags, 0, 0, 0]
             residuals.append(residual)
             offset += len(residual.compiled_parameters())
         manager = self.model.constraints
@@ -231,6 +240,13 @@ class ImpulseNode:
             return class_reason(other, "constraint residual") + " in an impulse node"
         self._items, self._residuals = items, residuals + [r for _, r in self.rows.residuals]
         return None
+
+    def _impulse_rows(self) -> dict[int, tuple[int, int]]:
+        """Each impulse frame's ``(first row, rows)`` (the first impulse on a frame)."""
+        rows: dict[int, tuple[int, int]] = {}
+        for frame, nc, _, row in zip(*[iter(self.impulses)] * table.CONTACT_FIELDS):
+            rows.setdefault(frame, (row, nc))
+        return rows
 
     def _table(self, low: Lowered, data, stack, changed: bool) -> None:
         """The addresses and dimensions of every array the kernels read or write (the Euler node's layout,

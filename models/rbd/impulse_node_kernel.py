@@ -94,7 +94,7 @@ from .node_table import (
     mat,
     vec,
 )
-from .residual_kernel import residual_jacobians, residual_rows
+from .residual_kernel import force_jacobians, residual_jacobians, residual_rows
 
 
 @uncounted
@@ -228,6 +228,8 @@ def impulse_calc_diff(tbl, ints, par, x, u):
     residual_jacobians(tbl, ints, par, rb, ws, x, u)
     if has_rows(ints):
         constraint_values(tbl, ints, par, rb, ws, x, u, True)
+    _impulse_derivatives(tbl, ints, par, x, rb, ws)
+    force_jacobians(tbl, ints, par)  # from the impulses' derivatives just computed
     r, lb, ub, act_w = vec(tbl, ints, E_R), vec(tbl, ints, E_LB), vec(tbl, ints, E_UB), vec(tbl, ints, E_ACT_WEIGHTS)
     derivatives_and_sums(
         r, lb, ub, act_w, vec(tbl, ints, E_WEIGHTS), vec(tbl, ints, E_AR), vec(tbl, ints, E_ARR),
@@ -235,7 +237,6 @@ def impulse_calc_diff(tbl, ints, par, x, u):
         vec(tbl, ints, E_LU), mat(tbl, ints, E_LXX), mat(tbl, ints, E_LXU), mat(tbl, ints, E_LUU),
         ivec(tbl, ints, E_COLS),
     )
-    _impulse_derivatives(tbl, ints, par, x, rb, ws)
     nv, Fx, dFx = ints[NV], mat(tbl, ints, E_FX), mat(tbl, ints, E_DFX)
     for i in range(nv):
         for j in range(2 * nv):

@@ -31,9 +31,10 @@ row, its reference field the force components ``ncf``, ``A`` row-major in ``par`
 ``EFFORT``: ``r = u - uref`` (a forward-dynamics node's joint efforts are its controls), ``ACCELERATION``:
 ``r = a - aref`` with the node's acceleration and its derivatives (both 0 at a terminal node); ``CONTROL_GRAV``:
 ``r = S u - g(q)`` (``-g(q)`` at a terminal node); ``FORCE``: ``r = A λ_c - fref`` (a cone's fields and ``A``, then
-``fref``; 0 at a terminal node, which has no force); ``CONTACT_CONTROL_GRAV``: ``r = S u - g(q) + Jcᵀ λ`` (a contact
-node's gravity-and-contact-force compensating control; ``-g(q)`` at a terminal node); ``CENTROIDAL``: ``r = h(q, v)
-- href`` (the centroidal momentum, :mod:`.com_kernel`);
+``fref``; 0 at a terminal node, which has no force, unless the item's ``FLAGS`` is 1: an impulse node's impulses);
+``CONTACT_CONTROL_GRAV``: ``r = S u - g(q) + Jcᵀ λ`` (a contact node's gravity-and-contact-force compensating
+control; ``-g(q)`` at a terminal node); ``CENTROIDAL``: ``r = h(q, v) - href`` (the centroidal momentum,
+:mod:`.com_kernel`);
 ``USER``: a :class:`~crocopy.models.residual_numba.ResidualModelNumba`, whose two C callbacks (item fields
 ``RESIDUAL_ADDRESS``, ``JACOBIANS_ADDRESS``) the node calls with its kinematics (item field ``FLAGS``: what they
 read, and ``u`` dependence; ``N_PARAMETERS``: the length of its parameters in ``par``)."""

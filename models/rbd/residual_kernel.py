@@ -166,8 +166,8 @@ def residual_rows(tbl, ints, par, rb, ws, x, u):
                 acc = 0.0
                 for j in range(ref):
                     acc += par[o + ref * i + j] * lam[fid + j]
-                if kind == FORCE:
-                    acc = 0.0 if ints[TERMINAL] else acc - par[o + ref * nr + i]
+                if kind == FORCE:  # no force at a terminal node, but an impulse node's items are flagged
+                    acc = 0.0 if ints[TERMINAL] and not ints[b + FLAGS] else acc - par[o + ref * nr + i]
                 rows[i] = acc
         elif kind == COM:
             com = vec(tbl, ints, E_COM)
@@ -225,6 +225,19 @@ def _force_jacobians(tbl, ints, par, nr, row, ncf, o, Jx_rows, start):
             for j in range(ncf):
                 acc += par[o + ncf * i + j] * df_du[row + j, c]
             Ju[u0 + i, c] = acc
+
+
+@uncounted
+def force_jacobians(tbl, ints, par):
+    """The force items' rows of the stacked ``Jx`` (and ``Ju``) again, from the forces' derivatives as they stand (an
+    impulse node computes those after its other residuals' Jacobians, whose kinematics its impulse derivatives
+    replace)."""
+    Jx = mat(tbl, ints, E_JX)
+    for n in range(ints[N_ITEMS]):
+        b = ints[ITEMS] + ITEM_FIELDS * n
+        kind, start, nr = ints[b], ints[b + 1], ints[b + 2]
+        if kind == CONE or kind == FORCE:
+            _force_jacobians(tbl, ints, par, nr, ints[b + 3], ints[b + 4], ints[b + 5], Jx[start: start + nr], start)
 
 
 @uncounted
