@@ -70,18 +70,12 @@ def _subtree_momentum(rb, ws, j):
     h0 = h1 = h2 = h3 = h4 = h5 = 0.0
     for i in range(max(j, 1), rb.subtree_end[j]):
         v = get6(ov, i)
-        h0 += oI[i, 0, 0] * v[0] + oI[i, 0, 1] * v[1] + oI[i, 0, 2] * v[2] + oI[i, 0, 3] * v[3] + oI[i, 0, 4] * v[4] \
-            + oI[i, 0, 5] * v[5]
-        h1 += oI[i, 1, 0] * v[0] + oI[i, 1, 1] * v[1] + oI[i, 1, 2] * v[2] + oI[i, 1, 3] * v[3] + oI[i, 1, 4] * v[4] \
-            + oI[i, 1, 5] * v[5]
-        h2 += oI[i, 2, 0] * v[0] + oI[i, 2, 1] * v[1] + oI[i, 2, 2] * v[2] + oI[i, 2, 3] * v[3] + oI[i, 2, 4] * v[4] \
-            + oI[i, 2, 5] * v[5]
-        h3 += oI[i, 3, 0] * v[0] + oI[i, 3, 1] * v[1] + oI[i, 3, 2] * v[2] + oI[i, 3, 3] * v[3] + oI[i, 3, 4] * v[4] \
-            + oI[i, 3, 5] * v[5]
-        h4 += oI[i, 4, 0] * v[0] + oI[i, 4, 1] * v[1] + oI[i, 4, 2] * v[2] + oI[i, 4, 3] * v[3] + oI[i, 4, 4] * v[4] \
-            + oI[i, 4, 5] * v[5]
-        h5 += oI[i, 5, 0] * v[0] + oI[i, 5, 1] * v[1] + oI[i, 5, 2] * v[2] + oI[i, 5, 3] * v[3] + oI[i, 5, 4] * v[4] \
-            + oI[i, 5, 5] * v[5]
+        h0 += _row(oI, i, 0, v)
+        h1 += _row(oI, i, 1, v)
+        h2 += _row(oI, i, 2, v)
+        h3 += _row(oI, i, 3, v)
+        h4 += _row(oI, i, 4, v)
+        h5 += _row(oI, i, 5, v)
     return h0, h1, h2, h3, h4, h5
 
 
