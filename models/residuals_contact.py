@@ -339,6 +339,13 @@ class ResidualModelImpulseCoM(ResidualModelAbstract):
     ``shared.impulses.dvnext_dx``.
     """
 
+    compiled_kind = "impulse_com"
+    """The kind compiled impulse nodes evaluate this class as (:mod:`crocopy.models.rbd.residual_kernel`)."""
+
+    def compiled_parameters(self) -> np.ndarray:
+        """The parameters compiled nodes read: none."""
+        return np.zeros(0)
+
     def __init__(self, state: StateAbstract) -> None:
         if not isinstance(getattr(state, "pinocchio", None), pin.Model):
             raise ValueError(f"state must be a StateMultibody, got {type(state).__name__}")

@@ -263,16 +263,16 @@ def test_nodes_of_one_model_share_their_scratch_and_keep_their_own_arrays():
 
 def test_the_registry_of_compiled_kinds_is_covered_and_documented():
     """Every residual class that declares a compiled kind beside its maths is built by this file's factory (or by
-    the contact-node tests for the cones, the contact force and the contact gravity compensation) and named in
-    docs/DEVELOPING.md; the kernel knows each kind."""
+    the contact-node tests for the cones, the contact force and the contact gravity compensation, the impulse-node
+    tests for the centre-of-mass velocity jump) and named in docs/DEVELOPING.md; the kernel knows each kind."""
     from pathlib import Path
 
     from crocopy.models.rbd import node_table
     from crocopy.models.rbd.node_kinds import compiled_residual_classes
 
     registry = compiled_residual_classes()
-    factory = {"velocity" if kind.startswith("velocity_") else kind for kind in KINDS} | {"com", "cone", "force",
-                                                                                          "contact_control_grav"}
+    factory = {"velocity" if kind.startswith("velocity_") else kind for kind in KINDS} | {
+        "com", "cone", "force", "contact_control_grav", "impulse_com"}
     assert set(registry.values()) == factory == set(node_table.KIND)
     developing = (Path(__file__).resolve().parents[1] / "docs" / "DEVELOPING.md").read_text()
     for cls in registry:

@@ -38,8 +38,9 @@ CASES = {
 
 def impulse_model(case: str, armature: bool = False, costs_nu: int = 0, seed: int = 0):
     """The impulse node of ``case`` (robot, impulse sizes, reference frame, ``r_coeff``, damping) with state, swing
-    foot, placement, rotation, velocity, centre-of-mass costs and, on the first foot's impulse, a force and a friction
-    cone (3D) or a wrench cone and a centre of pressure (6D) (built with ``costs_nu`` controls)."""
+    foot, placement, rotation, velocity, centre-of-mass and centre-of-mass velocity jump costs and, on the first
+    foot's impulse, a force and a friction cone (3D) or a wrench cone and a centre of pressure (6D) (built with
+    ``costs_nu`` controls)."""
     robot, kinds, reference, r_coeff, damping = CASES[case]
     rng = np.random.default_rng(seed)
     model = load(robot)
@@ -80,6 +81,8 @@ def impulse_model(case: str, armature: bool = False, costs_nu: int = 0, seed: in
         costs.addCost("cop", crocopy.CostModelResidual(state, crocopy.ResidualModelContactCoPPosition(
             state, first, crocopy.CoPSupport(np.eye(3), np.array([0.2, 0.1])), nu)), 1e-2)
     costs.addCost("cone", crocopy.CostModelResidual(state, cone), 1e-2)
+    if nu == 0:  # the residual has no control
+        costs.addCost("jump", crocopy.CostModelResidual(state, crocopy.ResidualModelImpulseCoM(state)), 0.5)
     model_ = crocopy.ActionModelImpulseFwdDynamics(state, impulses, costs, r_coeff, damping, True)
     if armature:
         model_.armature = rng.uniform(0.0, 0.1, state.nv)
@@ -161,15 +164,16 @@ def test_the_nodes_it_declines_say_why():
     model.JMinvJt_damping = 1e-3
     assert model._compiled_node(model.createData(), False, {}) is not None
     costs = crocopy.CostModelSum(state, 0)
-    costs.addCost("com", crocopy.CostModelResidual(state, crocopy.ResidualModelImpulseCoM(state)), 1.0)
+    momentum = crocopy.ResidualModelCentroidalMomentum(state, np.zeros(6), 0)
+    costs.addCost("h", crocopy.CostModelResidual(state, momentum), 1.0)
     other = crocopy.ActionModelImpulseFwdDynamics(state, model.impulses, costs, inv_damping=1e-3)
-    assert _declined(other) == "residual ResidualModelImpulseCoM in an impulse node"
+    assert _declined(other) == "residual ResidualModelCentroidalMomentum in an impulse node"
     manager = crocopy.ConstraintModelManager(state, 0)
     constrained = crocopy.ActionModelImpulseFwdDynamics(state, model.impulses, model.costs, manager, inv_damping=1e-3)
     assert constrained._compiled_node(constrained.createData(), False, {}) is not None  # no rows: compiles
     manager.addConstraint("com", crocopy.ConstraintModelResidual(state, crocopy.ResidualModelImpulseCoM(state)))
     constrained = crocopy.ActionModelImpulseFwdDynamics(state, model.impulses, model.costs, manager, inv_damping=1e-3)
-    assert _declined(constrained) == "constraint residual ResidualModelImpulseCoM"
+    assert _declined(constrained) == "constraint residual ResidualModelImpulseCoM in an impulse node"
 
     class UserImpulse(crocopy.ActionModelImpulseFwdDynamics):
         pass

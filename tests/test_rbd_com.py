@@ -10,7 +10,12 @@ from hypothesis import strategies as st
 from test_rbd_dynamics import close, lowered, state
 
 from crocopy.models.rbd import dynamics_kernel as K
-from crocopy.models.rbd.com_kernel import center_of_mass, centroidal_momentum, centroidal_momentum_derivatives
+from crocopy.models.rbd.com_kernel import (
+    center_of_mass,
+    centroidal_momentum,
+    centroidal_momentum_derivatives,
+    com_velocity_derivatives,
+)
 
 ROBOTS = ("anymal", "solo12", "talos_legs", "talos", "talos_arm", "kinova", "panda")
 
@@ -63,3 +68,17 @@ def test_centroidal_momentum_and_derivatives(robot, seed):
             centroidal_momentum(rb, ws, np.zeros(3), np.zeros((3, nv)), hh)
             fd[:, k] += sign * hh / (2 * eps)
     close(dh[:, :nv], fd, 1e-6)
+
+
+@pytest.mark.parametrize("robot", (*ROBOTS, "iris", "joint_chain"))
+@settings(max_examples=2, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_com_velocity_derivatives(robot, seed):
+    """As ``pin.getCenterOfMassVelocityDerivatives`` after ``pin.centerOfMass(q, v)``."""
+    model, data, rb, ws = lowered(robot)
+    q, v, _, _ = state(model, seed)
+    out = np.zeros((3, model.nv))
+    K.forward_kinematics(rb, ws, q, v)
+    com_velocity_derivatives(rb, ws, out)
+    pin.centerOfMass(model, data, q, v)
+    close(out, pin.getCenterOfMassVelocityDerivatives(model, data), 1e-10)

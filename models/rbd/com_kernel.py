@@ -15,7 +15,10 @@ axes) from the world momentum ``H = Σ oI_i ov_i`` at the origin: ``h_l = H_l``,
 of dof ``k`` of joint ``j`` (``s = oS_k``) moves the subtree of ``j`` (``d oI_i = s ×* oI_i - oI_i s×``, ``d ov_i =
 s × (ov_i - ov_λ(j))``), so ``∂H/∂q_k = s ×* H_j - Ic_j (s × ov_λ(j))`` and ``∂H/∂v_k = Ic_j s`` with ``H_j`` the
 subtree's momentum and ``Ic_j`` its composite inertia; then ``∂h_ω = ∂H_ω - Jcom_k × H_l - com × ∂H_l``
-(Pinocchio's ``dh_dq`` and ``Ag``).  Shape ``h_out (6,)``, ``dh_out (6, 2 nv)``.
+(Pinocchio's ``dh_dq`` and ``Ag``).  Shape ``h_out (6,)``, ``dh_out (6, 2 nv)``.  The linear part alone,
+``∂H_l/∂q_k = s_ω × L_j - (m_j y_l - h_j × y_ω)`` with ``y = s × ov_λ(j)``, ``L_j`` the subtree's linear momentum,
+``m_j``, ``h_j`` its mass and first moment, is the derivative of the centre of mass velocity ``Jcom v = H_l / m``
+at a fixed ``v`` (Pinocchio's ``getCenterOfMassVelocityDerivatives``; :func:`com_velocity_derivatives`).
 """
 
 from __future__ import annotations
@@ -134,3 +137,22 @@ def _row(A, j, r, m):
     """``A[j, r] · m`` (a row of joint ``j``'s 6×6 matrix times a 6-tuple)."""
     return A[j, r, 0] * m[0] + A[j, r, 1] * m[1] + A[j, r, 2] * m[2] + A[j, r, 3] * m[3] + A[j, r, 4] * m[4] + \
         A[j, r, 5] * m[5]
+
+
+@uncounted
+def com_velocity_derivatives(rb: RigidBodyModel, ws: RigidBodyWorkspace, dvc_out: np.ndarray) -> None:
+    """``dvc_out[:, :nv] = ∂(Jcom(q) v)/∂q`` at the velocity ``v`` of the kinematics in ``ws`` (module docstring;
+    after :func:`~.dynamics_kernel.forward_kinematics` at ``(q, v)``)."""
+    oS, ov = ws.oS, ws.ov
+    m = _subtree_moment(rb, ws, 0)[0]
+    inv = 1.0 / m if m > 0.0 else math.nan
+    for j in range(1, rb.njoints):
+        mj, hx, hy, hz = _subtree_moment(rb, ws, j)
+        L = _subtree_momentum(rb, ws, j)
+        vp = get6(ov, rb.parent[j])
+        for k in range(rb.idx_v[j], rb.idx_v[j] + rb.nvj[j]):
+            s = get6(oS, k)
+            y = mcross(s, vp)
+            dvc_out[0, k] = (s[4] * L[2] - s[5] * L[1] - (mj * y[0] - (hy * y[5] - hz * y[4]))) * inv
+            dvc_out[1, k] = (s[5] * L[0] - s[3] * L[2] - (mj * y[1] - (hz * y[3] - hx * y[5]))) * inv
+            dvc_out[2, k] = (s[3] * L[1] - s[4] * L[0] - (mj * y[2] - (hx * y[4] - hy * y[3]))) * inv

@@ -16,8 +16,8 @@ classes (a subclass may override a step):
   (``ResidualModelState``, ``ResidualModelFramePlacement``, ``ResidualModelFrameTranslation``,
   ``ResidualModelFrameRotation``, ``ResidualModelFrameVelocity``, ``ResidualModelCoMPosition``), or a force residual
   on an active impulse (``ResidualModelContactForce``, ``ResidualModelContactFrictionCone``,
-  ``ResidualModelContactWrenchCone``, ``ResidualModelContactCoPPosition``: rows of the impulses ``Λ``, whose
-  Jacobians follow the impulses' derivatives).
+  ``ResidualModelContactWrenchCone``, ``ResidualModelContactCoPPosition``: rows of the impulses ``Λ``), or the
+  centre-of-mass velocity jump ``ResidualModelImpulseCoM`` (their Jacobians follow the impulses' derivatives).
 
 The costs are those of a node without control when the costs were built with ``nu > 0`` (as the Python model
 evaluates them) or at the terminal node.  The node has no rollout step: the rollout calls its ``calc``, and it
@@ -54,9 +54,11 @@ from .stack_items import compiled_items
 IMPULSES = (ImpulseModel3D, ImpulseModel6D)
 """The impulse classes compiled impulse nodes take (exact classes)."""
 KINDS = (table.STATE, table.PLACEMENT, table.TRANSLATION, table.ROTATION, table.VELOCITY, table.COM, table.CONE,
-         table.FORCE)
+         table.FORCE, table.IMPULSE_COM)
 """The residual kinds of :mod:`.euler_node_kernel` an impulse node evaluates (no control; the force residuals read
 its impulses, their items flagged so that the kernel keeps a contact force's value at this node without control)."""
+CONSTRAINT_KINDS = KINDS[:6]
+"""The kinds an impulse node's constraint rows take (not those whose Jacobians follow the impulses' derivatives)."""
 RB_GRAVITY = RigidBodyModel._fields.index("gravity") - 4
 """Entry of the gravity (each impulse node's own zero vector: the RNEA derivatives of the impulse run without it)."""
 
@@ -235,7 +237,7 @@ class ImpulseNode:
             lambda kind, residual: residual.compiled_parameters() if kind in KINDS else [], {})
         if why is not None:
             return why
-        other = next((r for kind, r in self.rows.residuals if kind not in KINDS), None)
+        other = next((r for kind, r in self.rows.residuals if kind not in CONSTRAINT_KINDS), None)
         if other is not None:
             return class_reason(other, "constraint residual") + " in an impulse node"
         self._items, self._residuals = items, residuals + [r for _, r in self.rows.residuals]

@@ -94,7 +94,7 @@ from .node_table import (
     mat,
     vec,
 )
-from .residual_kernel import force_jacobians, residual_jacobians, residual_rows
+from .residual_kernel import late_jacobians, residual_jacobians, residual_rows
 
 
 @uncounted
@@ -229,7 +229,7 @@ def impulse_calc_diff(tbl, ints, par, x, u):
     if has_rows(ints):
         constraint_values(tbl, ints, par, rb, ws, x, u, True)
     _impulse_derivatives(tbl, ints, par, x, rb, ws)
-    force_jacobians(tbl, ints, par)  # from the impulses' derivatives just computed
+    late_jacobians(tbl, ints, par, rb, ws, x)  # from the impulses' derivatives just computed
     r, lb, ub, act_w = vec(tbl, ints, E_R), vec(tbl, ints, E_LB), vec(tbl, ints, E_UB), vec(tbl, ints, E_ACT_WEIGHTS)
     derivatives_and_sums(
         r, lb, ub, act_w, vec(tbl, ints, E_WEIGHTS), vec(tbl, ints, E_AR), vec(tbl, ints, E_ARR),

@@ -25,7 +25,7 @@ from .contact_kernel import CONTACT_WORKSPACE, ContactWorkspace
 from .lowering import RigidBodyModel, RigidBodyWorkspace
 
 (STATE, CONTROL, PLACEMENT, TRANSLATION, ROTATION, VELOCITY, CONE, COM, USER, EFFORT, ACCELERATION,
- CONTROL_GRAV, FORCE, CONTACT_CONTROL_GRAV, CENTROIDAL) = range(15)
+ CONTROL_GRAV, FORCE, CONTACT_CONTROL_GRAV, CENTROIDAL, IMPULSE_COM) = range(16)
 """Residual kinds.  ``CONE``: ``r = A λ_c`` (friction and wrench cones; the item's frame field is the contact's first
 row, its reference field the force components ``ncf``, ``A`` row-major in ``par``); ``COM``: ``r = com - cref``;
 ``EFFORT``: ``r = u - uref`` (a forward-dynamics node's joint efforts are its controls), ``ACCELERATION``:
@@ -34,7 +34,7 @@ row, its reference field the force components ``ncf``, ``A`` row-major in ``par`
 ``fref``; 0 at a terminal node, which has no force, unless the item's ``FLAGS`` is 1: an impulse node's impulses);
 ``CONTACT_CONTROL_GRAV``: ``r = S u - g(q) + Jcᵀ λ`` (a contact node's gravity-and-contact-force compensating
 control; ``-g(q)`` at a terminal node); ``CENTROIDAL``: ``r = h(q, v) - href`` (the centroidal momentum,
-:mod:`.com_kernel`);
+:mod:`.com_kernel`); ``IMPULSE_COM``: ``r = Jcom (v⁺ - v)`` (an impulse node's centre-of-mass velocity jump);
 ``USER``: a :class:`~crocopy.models.residual_numba.ResidualModelNumba`, whose two C callbacks (item fields
 ``RESIDUAL_ADDRESS``, ``JACOBIANS_ADDRESS``) the node calls with its kinematics (item field ``FLAGS``: what they
 read, and ``u`` dependence; ``N_PARAMETERS``: the length of its parameters in ``par``)."""
@@ -42,7 +42,7 @@ read, and ``u`` dependence; ``N_PARAMETERS``: the length of its parameters in ``
 KIND = {"state": STATE, "control": CONTROL, "placement": PLACEMENT, "translation": TRANSLATION,
         "rotation": ROTATION, "velocity": VELOCITY, "cone": CONE, "com": COM, "effort": EFFORT,
         "acceleration": ACCELERATION, "control_grav": CONTROL_GRAV, "force": FORCE,
-        "contact_control_grav": CONTACT_CONTROL_GRAV, "centroidal": CENTROIDAL}
+        "contact_control_grav": CONTACT_CONTROL_GRAV, "centroidal": CENTROIDAL, "impulse_com": IMPULSE_COM}
 """The kinds written into this kernel, by the ``compiled_kind`` name a residual class declares beside its maths
 (with its ``compiled_parameters()``); ``USER`` residuals bring their own functions."""
 

@@ -18,7 +18,9 @@ v)``), the contact forces ``λ`` and their derivatives, and the residuals' param
   contact node ``r = S u - g(q) + Jcᵀ λ`` (``Jx = [-∂g/∂q + ∂(Jcᵀ λ)/∂q, 0] + Jcᵀ ∂λ/∂x``, ``λ`` held fixed in the
   first term as :func:`.contact_kernel.contact_force_derivatives` takes it, ``Ju = S + Jcᵀ ∂λ/∂u``; a terminal node
   has no force);
-* the centroidal momentum ``r = h(q, v) - h_ref`` (``Jx = [∂h/∂q, Ag]``, :mod:`.com_kernel`);
+* the centroidal momentum ``r = h(q, v) - h_ref`` (``Jx = [∂h/∂q, Ag]``, :mod:`.com_kernel`); an impulse node's
+  centre-of-mass velocity jump ``r = Jcom (v⁺ - v)`` (``Jx = [∂(Jcom Δv)/∂q|Δv, 0] + Jcom [∂v⁺/∂q, ∂v⁺/∂v - I]``,
+  written by :func:`late_jacobians` after the impulses' derivatives);
 * a user's :class:`~crocopy.models.residual_numba.ResidualModelNumba` through its callbacks
   (:mod:`.user_residual_kernel`).
 """
@@ -27,10 +29,11 @@ from __future__ import annotations
 
 from crocopy.kernels import uncounted
 
-from .com_kernel import center_of_mass, centroidal_momentum, centroidal_momentum_derivatives
+from .com_kernel import center_of_mass, centroidal_momentum, centroidal_momentum_derivatives, com_velocity_derivatives
 from .configuration_kernel import state_diff, state_jdiff
 from .contact_kernel import contact_force_derivatives
 from .dynamics_kernel import (
+    forward_kinematics,
     frame_jacobian,
     frame_placement,
     frame_velocity,
@@ -68,9 +71,11 @@ from .node_table import (
     E_TAU,
     E_USER_RU,
     E_V6,
+    E_XNEXT,
     EFFORT,
     FLAGS,
     FORCE,
+    IMPULSE_COM,
     ITEM_FIELDS,
     ITEMS,
     LOCAL,
@@ -178,6 +183,14 @@ def residual_rows(tbl, ints, par, rb, ws, x, u):
             centroidal_momentum(rb, ws, vec(tbl, ints, E_COM), mat(tbl, ints, E_JCOM), rows)
             for i in range(6):
                 rows[i] -= par[o + i]
+        elif kind == IMPULSE_COM:
+            Jcom, xnext = mat(tbl, ints, E_JCOM), vec(tbl, ints, E_XNEXT)
+            center_of_mass(rb, ws, vec(tbl, ints, E_COM), Jcom)
+            for i in range(3):
+                acc = 0.0
+                for k in range(nv):
+                    acc += Jcom[i, k] * (xnext[nq + k] - x[nq + k])
+                rows[i] = acc
         elif kind == CONTROL_GRAV or kind == CONTACT_CONTROL_GRAV:
             generalized_gravity(rb, ws, rows)
             tau = vec(tbl, ints, E_TAU)
@@ -228,16 +241,41 @@ def _force_jacobians(tbl, ints, par, nr, row, ncf, o, Jx_rows, start):
 
 
 @uncounted
-def force_jacobians(tbl, ints, par):
-    """The force items' rows of the stacked ``Jx`` (and ``Ju``) again, from the forces' derivatives as they stand (an
-    impulse node computes those after its other residuals' Jacobians, whose kinematics its impulse derivatives
-    replace)."""
+def late_jacobians(tbl, ints, par, rb, ws, x):
+    """The rows of the stacked ``Jx`` (and ``Ju``) of the items that read an impulse node's impulse derivatives (the
+    force items, again, and the centre-of-mass velocity jump), after :func:`residual_jacobians`: the node computes
+    those derivatives after its other residuals' Jacobians, whose kinematics they replace.  Leaves the kinematics of
+    the last centre-of-mass item (at ``(q, v⁺ - v)``) in ``ws``."""
     Jx = mat(tbl, ints, E_JX)
     for n in range(ints[N_ITEMS]):
         b = ints[ITEMS] + ITEM_FIELDS * n
         kind, start, nr = ints[b], ints[b + 1], ints[b + 2]
         if kind == CONE or kind == FORCE:
             _force_jacobians(tbl, ints, par, nr, ints[b + 3], ints[b + 4], ints[b + 5], Jx[start: start + nr], start)
+        elif kind == IMPULSE_COM:
+            _impulse_com_rows(tbl, ints, rb, ws, x, Jx[start: start + nr])
+
+
+@uncounted
+def _impulse_com_rows(tbl, ints, rb, ws, x, rows):
+    """``[∂(Jcom Δv)/∂q|Δv, 0] + Jcom [∂v⁺/∂q, ∂v⁺/∂v - I]`` (``Δv = v⁺ - v``, ``∂v⁺/∂x`` in ``dFx``) into ``rows
+    (3, 2 nv)``; the kinematics at ``(q, Δv)`` stay in ``ws``."""
+    nq, nv = ints[NQ], ints[NV]
+    xnext, dv, dFx = vec(tbl, ints, E_XNEXT), vec(tbl, ints, E_TAU), mat(tbl, ints, E_DFX)
+    Jcom = mat(tbl, ints, E_JCOM)
+    for k in range(nv):
+        dv[k] = xnext[nq + k] - x[nq + k]
+    forward_kinematics(rb, ws, x[:nq], dv)
+    center_of_mass(rb, ws, vec(tbl, ints, E_COM), Jcom)
+    com_velocity_derivatives(rb, ws, rows)
+    for i in range(3):
+        for c in range(2 * nv):
+            acc = 0.0
+            for k in range(nv):
+                acc += Jcom[i, k] * dFx[k, c]
+            rows[i, c] = (rows[i, c] if c < nv else 0.0) + acc
+        for k in range(nv):
+            rows[i, nv + k] -= Jcom[i, k]
 
 
 @uncounted
@@ -320,7 +358,7 @@ def residual_jacobians(tbl, ints, par, rb, ws, x, u):
     for n in range(ints[N_ITEMS]):
         b = ints[ITEMS] + ITEM_FIELDS * n
         kind, start, nr, fid, ref, o = ints[b], ints[b + 1], ints[b + 2], ints[b + 3], ints[b + 4], ints[b + 5]
-        if kind == CONTROL:
+        if kind == CONTROL or kind == IMPULSE_COM:  # an impulse CoM's rows: late_jacobians
             continue
         rows = Jx[start: start + nr]
         if kind == STATE:
