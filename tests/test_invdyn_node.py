@@ -60,6 +60,7 @@ def _costs(state, actuation, nu: int, fid: int, terminal: bool, contact: tuple |
         "effort-fwd": crocopy.ResidualModelJointEffort(state, actuation, np.zeros(actuation.nu), nu, True),
         "acc": crocopy.ResidualModelJointAcceleration(state, np.linspace(-1, 1, state.nv), nu),
         "com": crocopy.ResidualModelCoMPosition(state, np.ones(3), nu),
+        "h": crocopy.ResidualModelCentroidalMomentum(state, np.linspace(-1, 1, 6), nu),
     }
     nc_total = nu - state.nv
     if not terminal and actuation.nu < state.nv:

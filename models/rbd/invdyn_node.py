@@ -158,13 +158,12 @@ class InvDynNode(EulerNode):
 
     def _kind(self, residual) -> int | None:
         """The item kind of ``residual``: an inverse-dynamics item's (``INV + k``), the Euler node's (but the
-        gravity-compensating controls', whose torques are a forward-dynamics node's ``S u``, and the centroidal
-        momentum's, not tested there), or None."""
+        gravity-compensating controls', whose torques are a forward-dynamics node's ``S u``), or None."""
         kind = ITEM_KINDS.get(type(residual))
         if kind is not None:
             return INV + kind
         kind = residual_kind(residual)
-        return None if kind in (table.CONTROL_GRAV, table.CONTACT_CONTROL_GRAV, table.CENTROIDAL) else kind
+        return None if kind in (table.CONTROL_GRAV, table.CONTACT_CONTROL_GRAV) else kind
 
     def _parameters(self, kind: int, residual) -> Sequence[float]:
         """The residual's parameters in the layout the kernels read."""
