@@ -15,6 +15,7 @@ import pinocchio as pin
 import pytest
 from node_checks import check_finite_differences, compare_with_python_node, make_solver
 from robots import load
+from test_residual_numba import user_residuals
 
 import crocopy
 from crocopy.models.rbd.impulse_node import ImpulseNode
@@ -38,9 +39,9 @@ CASES = {
 
 def impulse_model(case: str, armature: bool = False, costs_nu: int = 0, seed: int = 0):
     """The impulse node of ``case`` (robot, impulse sizes, reference frame, ``r_coeff``, damping) with state, swing
-    foot, placement, rotation, velocity, centre-of-mass and centre-of-mass velocity jump costs and, on the first
-    foot's impulse, a force and a friction cone (3D) or a wrench cone and a centre of pressure (6D) (built with
-    ``costs_nu`` controls)."""
+    foot, placement, rotation, velocity, centre-of-mass, centroidal momentum and centre-of-mass velocity jump costs
+    and, on the first foot's impulse, a force and a friction cone (3D) or a wrench cone and a centre of pressure (6D)
+    (built with ``costs_nu`` controls)."""
     robot, kinds, reference, r_coeff, damping = CASES[case]
     rng = np.random.default_rng(seed)
     model = load(robot)
@@ -69,6 +70,8 @@ def impulse_model(case: str, armature: bool = False, costs_nu: int = 0, seed: in
         crocopy.ResidualModelFrameVelocity(state, foot, pin.Motion(rng.uniform(-1, 1, 6)), LWA, nu)), 2.0)
     costs.addCost("com", crocopy.CostModelResidual(
         state, crocopy.ResidualModelCoMPosition(state, rng.uniform(-0.2, 0.2, 3), nu)), 5.0)
+    costs.addCost("h", crocopy.CostModelResidual(
+        state, crocopy.ResidualModelCentroidalMomentum(state, rng.uniform(-1.0, 1.0, 6), nu)), 0.7)
     first = model.getFrameId(FEET[robot][0])
     nc = 3 if kinds[0] == "3" else 6
     force = crocopy.ResidualModelContactForce(state, first, pin.Force(rng.uniform(-5.0, 5.0, 6)), nc, nu)
@@ -164,10 +167,9 @@ def test_the_nodes_it_declines_say_why():
     model.JMinvJt_damping = 1e-3
     assert model._compiled_node(model.createData(), False, {}) is not None
     costs = crocopy.CostModelSum(state, 0)
-    momentum = crocopy.ResidualModelCentroidalMomentum(state, np.zeros(6), 0)
-    costs.addCost("h", crocopy.CostModelResidual(state, momentum), 1.0)
+    costs.addCost("user", crocopy.CostModelResidual(state, user_residuals(state, foot, 0)["com height"]), 1.0)
     other = crocopy.ActionModelImpulseFwdDynamics(state, model.impulses, costs, inv_damping=1e-3)
-    assert _declined(other) == "residual ResidualModelCentroidalMomentum in an impulse node"
+    assert _declined(other) == "user Python subclass: residual CoMHeight in an impulse node"
     manager = crocopy.ConstraintModelManager(state, 0)
     constrained = crocopy.ActionModelImpulseFwdDynamics(state, model.impulses, model.costs, manager, inv_damping=1e-3)
     assert constrained._compiled_node(constrained.createData(), False, {}) is not None  # no rows: compiles

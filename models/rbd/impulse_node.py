@@ -14,7 +14,8 @@ classes (a subclass may override a step):
 * every cost is a ``CostModelResidual`` in the cost stack with an activation of the quadratic-barrier family, and
   every active one's residual is of a kind the Euler node's kernels evaluate without control
   (``ResidualModelState``, ``ResidualModelFramePlacement``, ``ResidualModelFrameTranslation``,
-  ``ResidualModelFrameRotation``, ``ResidualModelFrameVelocity``, ``ResidualModelCoMPosition``), or a force residual
+  ``ResidualModelFrameRotation``, ``ResidualModelFrameVelocity``, ``ResidualModelCoMPosition``,
+  ``ResidualModelCentroidalMomentum``, all at the state before the impulse), or a force residual
   on an active impulse (``ResidualModelContactForce``, ``ResidualModelContactFrictionCone``,
   ``ResidualModelContactWrenchCone``, ``ResidualModelContactCoPPosition``: rows of the impulses ``Λ``), or the
   centre-of-mass velocity jump ``ResidualModelImpulseCoM`` (their Jacobians follow the impulses' derivatives).
@@ -53,11 +54,11 @@ from .stack_items import compiled_items
 
 IMPULSES = (ImpulseModel3D, ImpulseModel6D)
 """The impulse classes compiled impulse nodes take (exact classes)."""
-KINDS = (table.STATE, table.PLACEMENT, table.TRANSLATION, table.ROTATION, table.VELOCITY, table.COM, table.CONE,
-         table.FORCE, table.IMPULSE_COM)
+KINDS = (table.STATE, table.PLACEMENT, table.TRANSLATION, table.ROTATION, table.VELOCITY, table.COM, table.CENTROIDAL,
+         table.CONE, table.FORCE, table.IMPULSE_COM)
 """The residual kinds of :mod:`.euler_node_kernel` an impulse node evaluates (no control; the force residuals read
 its impulses, their items flagged so that the kernel keeps a contact force's value at this node without control)."""
-CONSTRAINT_KINDS = KINDS[:6]
+CONSTRAINT_KINDS = KINDS[:7]
 """The kinds an impulse node's constraint rows take (not those whose Jacobians follow the impulses' derivatives)."""
 RB_GRAVITY = RigidBodyModel._fields.index("gravity") - 4
 """Entry of the gravity (each impulse node's own zero vector: the RNEA derivatives of the impulse run without it)."""
