@@ -118,6 +118,9 @@ class CostStack:
         self.Ju = np.zeros((nr - self.u_start, nu))
         self.cols = np.zeros(ndx + nu, dtype=np.int64)
         """Scratch of the sums: a Jacobian row's nonzero columns (:func:`.stack_kernel.accumulate`)."""
+        self.grad = np.zeros(ndx + nu)
+        """Scratch of the compiled nodes' rank-one sums: a dense item's ``[Jx Ju]ᵀ r``
+        (:func:`.stack_kernel.rank_one_sums`)."""
         for k, ((_, item, cdata), rows) in enumerate(zip(self.items, self.slices)):
             self._share(item, cdata, rows, k)
         self._seen = ParametersSeen()
@@ -271,7 +274,7 @@ class CostStack:
             w = self.weights[rows.start]
             ArrRx = adata.Arr @ rdata.Rx
             data.Lxx += w * (rdata.Rx.T @ ArrRx)
-            if with_u and u is not None:
+            if with_u:
                 ArrRu = adata.Arr @ rdata.Ru
                 data.Lxu += w * (rdata.Rx.T @ ArrRu)
                 data.Luu += w * (rdata.Ru.T @ ArrRu)

@@ -279,23 +279,11 @@ def _item_activations(r, starts, kinds, params, item_costs, item_weights, Ar, Ar
     return total
 
 
-def _gradient_entry(r, Jx, Ju, u_start, start, ustart, stop, a, ndx):
-    """``Σᵢ rᵢ Jᵢₐ`` over an item's rows ``start <= i < stop`` (column ``a`` of ``[Jx Ju]``; the ``Ju`` rows from
-    ``ustart`` on)."""
-    g = 0.0
-    if a < ndx:
-        for i in range(start, stop):
-            g += r[i] * Jx[i, a]
-    else:
-        for i in range(ustart, stop):
-            g += r[i] * Ju[i - u_start, a - ndx]
-    return g
-
-
-def _rank_one_sums(r, starts, kinds, params, item_weights, Jx, Ju, u_start, with_u, Lxx, Lxu, Luu):
-    """``w c gᵀg`` of every dense item (module docstring; ``g = Σᵢ rᵢ [Jx Ju]ᵢ`` over its rows, the ``Ju`` rows from
-    ``u_start`` on) added to the upper triangles of ``Lxx`` and ``Luu`` and to ``Lxu``, then their mirror (after
-    :func:`accumulate`, which leaves them exactly symmetric); nothing when no item is dense."""
+def _rank_one_sums(r, starts, kinds, params, item_weights, Jx, Ju, u_start, with_u, Lxx, Lxu, Luu, grad):
+    """``w c g gᵀ`` of every dense item (module docstring; ``g = Σᵢ rᵢ [Jx Ju]ᵢ`` over its rows, the ``Ju`` rows from
+    ``u_start`` on, into the scratch ``grad (≥ ndx + nu,)``) added to the upper triangles of ``Lxx`` and ``Luu`` and to
+    ``Lxu``, then their mirror (after :func:`accumulate`, which leaves them exactly symmetric); nothing when no item is
+    dense."""
     nr, n, ndx = r.shape[0], starts.shape[0], Jx.shape[1]
     nu = Ju.shape[1] if with_u else 0
     touched = False
@@ -312,20 +300,27 @@ def _rank_one_sums(r, starts, kinds, params, item_weights, Jx, Ju, u_start, with
         if c == 0.0:
             continue
         touched = True
-        ustart = max(start, u_start) if nu else stop
         for a in range(ndx + nu):
-            ga = gradient_entry(r, Jx, Ju, u_start, start, ustart, stop, a, ndx)
+            grad[a] = 0.0
+        for i in range(start, stop):
+            ri = r[i]
+            for a in range(ndx):
+                grad[a] += ri * Jx[i, a]
+            if i >= u_start:
+                for a in range(nu):
+                    grad[ndx + a] += ri * Ju[i - u_start, a]
+        for a in range(ndx + nu):
+            ga = grad[a]
             if ga == 0.0:
                 continue
             s = c * ga
             for b in range(a, ndx + nu):
-                gb = gradient_entry(r, Jx, Ju, u_start, start, ustart, stop, b, ndx)
                 if b < ndx:
-                    Lxx[a, b] += s * gb
+                    Lxx[a, b] += s * grad[b]
                 elif a < ndx:
-                    Lxu[a, b - ndx] += s * gb
+                    Lxu[a, b - ndx] += s * grad[b]
                 else:
-                    Luu[a - ndx, b - ndx] += s * gb
+                    Luu[a - ndx, b - ndx] += s * grad[b]
     if touched:
         for a in range(ndx):
             for b in range(a):
@@ -352,7 +347,7 @@ def _stack_values(r, lb, ub, act_w, starts, kinds, params, item_costs, item_weig
 
 
 def _stack_derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu,
-                                cols, starts, kinds, params, item_costs, item_weights):
+                                cols, grad, starts, kinds, params, item_costs, item_weights):
     """:func:`derivatives_and_sums` with the items of another kind's ``Ar``, ``Arr`` (and costs) written between the
     barrier pass and the sums."""
     if not any_item(kinds):
@@ -361,11 +356,10 @@ def _stack_derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_st
     activation_derivatives(r, lb, ub, act_w, Ar, Arr)
     item_activations(r, starts, kinds, params, item_costs, item_weights, Ar, Arr, True)
     accumulate(weights, Ar, Arr, Jx, Ju, u_start, with_u, Lx, Lu, Lxx, Lxu, Luu, cols)
-    rank_one_sums(r, starts, kinds, params, item_weights, Jx, Ju, u_start, with_u, Lxx, Lxu, Luu)
+    rank_one_sums(r, starts, kinds, params, item_weights, Jx, Ju, u_start, with_u, Lxx, Lxu, Luu, grad)
 
 
 dense_terms = compiled(_dense_terms)
-gradient_entry = compiled(_gradient_entry)
 rank_one_sums = compiled(_rank_one_sums)
 item_activations = compiled(_item_activations)
 any_item = compiled(_any_item)

@@ -27,6 +27,7 @@ from crocopy.not_compiled import class_reason, decline
 
 from .. import contacts
 from .lowering import declaring
+from .node_table import CONTACT_FIELDS
 
 CONTACTS = declaring(contacts.ContactModelAbstract, "compiled_reference")
 """The contacts compiled nodes take: those that lower their reference themselves (``compiled_reference(R, p)``)."""
@@ -55,9 +56,7 @@ class ContactSet:
         self.ref_R = np.zeros((n, 3, 3))
         self.ref_p = np.zeros((n, 3))
         self.ints = _ints(models)
-        self.rows: dict[int, tuple[int, int]] = {}
-        for k in range(n):
-            self.rows.setdefault(self.ints[4 * k], (self.ints[4 * k + 3], self.ints[4 * k + 1]))
+        self.rows = frame_rows(self.ints)
         self.models = list(models)
         self.refresh()
 
@@ -71,6 +70,15 @@ class ContactSet:
         """Whether ``models`` are this set's contacts (same objects, frames, sizes and reference frames)."""
         return len(models) == len(self.models) and all(a is b for a, b in zip(models, self.models)) and \
             self.ints == _ints(models)
+
+
+def frame_rows(ints: list[int]) -> dict[int, tuple[int, int]]:
+    """Each frame's ``(first row, rows)`` in a flat ``(frame, rows, reference frame, first row)`` list (the first
+    contact or impulse on the frame): where the force residuals find their rows."""
+    rows: dict[int, tuple[int, int]] = {}
+    for frame, nc, _, row in zip(*[iter(ints)] * CONTACT_FIELDS):
+        rows.setdefault(frame, (row, nc))
+    return rows
 
 
 def _ints(models: list) -> list[int]:

@@ -353,7 +353,7 @@ class EulerNode:
             "dLxx": ddata.Lxx, "dLxu": ddata.Lxu, "dLuu": ddata.Luu,
             "r": stack.r, "lb": stack.lb, "ub": stack.ub, "act_weights": stack.act_weights,
             "item_costs": stack.item_costs, "item_weights": stack.item_weights, "weights": stack.weights,
-            "Ar": stack.Ar, "Arr": stack.Arr, "Jx": stack.Jx, "Ju": stack.Ju, "cols": stack.cols,
+            "Ar": stack.Ar, "Arr": stack.Arr, "Jx": stack.Jx, "Ju": stack.Ju, "cols": stack.cols, "grad": stack.grad,
             "act_kinds": stack.act_kinds, "act_params": stack.act_params, "stamp": self.stamp, **self.parameters,
             **self.rows.fields(data, ddata),
         }

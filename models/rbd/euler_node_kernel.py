@@ -70,6 +70,7 @@ from .node_table import (
     E_FX,
     E_GAINS,
     E_GAP,
+    E_GRAD,
     E_ITEM_COSTS,
     E_ITEM_WEIGHTS,
     E_JCS,
@@ -447,7 +448,7 @@ def _sums_and_chain(tbl, ints, par, x, rb, cost, terminal):
     r, lb, ub, act_w = vec(tbl, ints, E_R), vec(tbl, ints, E_LB), vec(tbl, ints, E_UB), vec(tbl, ints, E_ACT_WEIGHTS)
     weights, Ar, Arr = vec(tbl, ints, E_WEIGHTS), vec(tbl, ints, E_AR), vec(tbl, ints, E_ARR)
     Jx, Ju, u_start, cols = mat(tbl, ints, E_JX), mat(tbl, ints, E_JU), ints[U_START], ivec(tbl, ints, E_COLS)
-    items = (ints[ints[STARTS]: ints[STARTS] + ints[N_STACK]], ivec(tbl, ints, E_ACT_KINDS),
+    items = (vec(tbl, ints, E_GRAD), ints[ints[STARTS]: ints[STARTS] + ints[N_STACK]], ivec(tbl, ints, E_ACT_KINDS),
              vec(tbl, ints, E_ACT_PARAMS), vec(tbl, ints, E_ITEM_COSTS), vec(tbl, ints, E_ITEM_WEIGHTS))
     if terminal:
         stack_derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, False, Lx, Lu, Lxx, Lxu, Luu,

@@ -45,6 +45,7 @@ from ..state_multibody import StateMultibody
 from . import impulse_node_kernel as kernel
 from . import node_table as table
 from .constraint_rows import ConstraintRows
+from .contact_lowering import frame_rows
 from .joint_types import NotLowerable
 from .live_parameters import frozen, layout_touched, read_parameters, values_touched
 from .lowered_model import Lowered, lowered, table_entries
@@ -216,6 +217,7 @@ class ImpulseNode:
         """Read the compiled items of the cost stack; returns None, or why the node cannot compile."""
         self._items = None
         items, residuals, offset = [], [], 2
+        impulse_rows = frame_rows(self.impulses)
         for entry in compiled_items(stack, data.costs, self.model.costs):
             if isinstance(entry, str):
                 return entry
@@ -225,7 +227,7 @@ class ImpulseNode:
                 return class_reason(residual, "residual") + " in an impulse node"
             frame, reference, flags = getattr(residual, "id", 0), int(residual.type) if kind == table.VELOCITY else 0, 0
             if kind == table.CONE or kind == table.FORCE:
-                row, nc = self._impulse_rows().get(frame, (0, 0))
+                row, nc = impulse_rows.get(frame, (0, 0))
                 if nc < residual.ncf:
                     return class_reason(residual, "residual") + " without its active impulse"
                 frame, reference, flags = row, residual.ncf, 1
@@ -244,13 +246,6 @@ class ImpulseNode:
         self._items, self._residuals = items, residuals + [r for _, r in self.rows.residuals]
         return None
 
-    def _impulse_rows(self) -> dict[int, tuple[int, int]]:
-        """Each impulse frame's ``(first row, rows)`` (the first impulse on a frame)."""
-        rows: dict[int, tuple[int, int]] = {}
-        for frame, nc, _, row in zip(*[iter(self.impulses)] * table.CONTACT_FIELDS):
-            rows.setdefault(frame, (row, nc))
-        return rows
-
     def _table(self, low: Lowered, data, stack, changed: bool) -> None:
         """The addresses and dimensions of every array the kernels read or write (the Euler node's layout,
         :mod:`.node_table`), and the integer program."""
@@ -261,7 +256,8 @@ class ImpulseNode:
             "Lxu": data.Lxu, "Luu": data.Luu, "r": stack.r, "lb": stack.lb, "ub": stack.ub,
             "act_weights": stack.act_weights, "item_costs": stack.item_costs, "item_weights": stack.item_weights,
             "weights": stack.weights, "Ar": stack.Ar, "Arr": stack.Arr, "Jx": stack.Jx, "Ju": Ju, "cols": stack.cols,
-            "act_kinds": stack.act_kinds, "act_params": stack.act_params, **self.own, **self.rows.fields(data, data),
+            "grad": stack.grad, "act_kinds": stack.act_kinds, "act_params": stack.act_params, **self.own,
+            **self.rows.fields(data, data),
         }
         n = table.NODE + len(table.NODE_ARRAYS) + len(table.SCRATCH_ARRAYS)
         self.rows.allocate(n, table.SHAPES + 3 * n + len(self._items) + len(stack.starts) + len(self.impulses))

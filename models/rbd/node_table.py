@@ -31,7 +31,8 @@ row, its reference field the force components ``ncf``, ``A`` row-major in ``par`
 ``EFFORT``: ``r = u - uref`` (a forward-dynamics node's joint efforts are its controls), ``ACCELERATION``:
 ``r = a - aref`` with the node's acceleration and its derivatives (both 0 at a terminal node); ``CONTROL_GRAV``:
 ``r = S u - g(q)`` (``-g(q)`` at a terminal node); ``FORCE``: ``r = A λ_c - fref`` (a cone's fields and ``A``, then
-``fref``; 0 at a terminal node, which has no force, unless the item's ``FLAGS`` is 1: an impulse node's impulses);
+``fref``; 0 at a terminal node, which has no force); a cone or force item with ``FLAGS`` 1 reads an impulse node's
+impulses (its value kept at that node without control, its Jacobian written after the impulses' derivatives);
 ``CONTACT_CONTROL_GRAV``: ``r = S u - g(q) + Jcᵀ λ`` (a contact node's gravity-and-contact-force compensating
 control; ``-g(q)`` at a terminal node); ``CENTROIDAL``: ``r = h(q, v) - href`` (the centroidal momentum,
 :mod:`.com_kernel`); ``IMPULSE_COM``: ``r = Jcom (v⁺ - v)`` (an impulse node's centre-of-mass velocity jump);
@@ -81,7 +82,8 @@ NODE_ARRAYS = (
     Entry("act_weights", ("nr",), _STACK), Entry("item_costs", ("n_stack",), _STACK),
     Entry("item_weights", ("n_stack",), _STACK), Entry("weights", ("nr",), _STACK), Entry("Ar", ("nr",), _STACK),
     Entry("Arr", ("nr",), _STACK), Entry("Jx", ("nr", "ndx"), _STACK), Entry("Ju", ("nr_u", "nu"), _STACK),
-    Entry("cols", ("n_cols",), _STACK, np.int64), Entry("act_kinds", ("n_stack",), _STACK, np.int64),
+    Entry("cols", ("n_cols",), _STACK, np.int64), Entry("grad", ("n_cols",), _STACK),
+    Entry("act_kinds", ("n_stack",), _STACK, np.int64),
     Entry("act_params", ("n_stack",), _STACK),
     Entry("S", ("nv", "nu"), _NODE), Entry("gains", ("n_contacts", 2), _CONTACTS),
     Entry("ref_R", ("n_contacts", 3, 3), _CONTACTS), Entry("ref_p", ("n_contacts", 3), _CONTACTS),

@@ -243,14 +243,14 @@ def _force_jacobians(tbl, ints, par, nr, row, ncf, o, Jx_rows, start):
 @uncounted
 def late_jacobians(tbl, ints, par, rb, ws, x):
     """The rows of the stacked ``Jx`` (and ``Ju``) of the items that read an impulse node's impulse derivatives (the
-    force items, again, and the centre-of-mass velocity jump), after :func:`residual_jacobians`: the node computes
-    those derivatives after its other residuals' Jacobians, whose kinematics they replace.  Leaves the kinematics of
-    the last centre-of-mass item (at ``(q, v⁺ - v)``) in ``ws``."""
+    flagged force items and the centre-of-mass velocity jump, which :func:`residual_jacobians` leaves), after it: the
+    node computes those derivatives after its other residuals' Jacobians, whose kinematics they replace.  Leaves the
+    kinematics of the last centre-of-mass item (at ``(q, v⁺ - v)``) in ``ws``."""
     Jx = mat(tbl, ints, E_JX)
     for n in range(ints[N_ITEMS]):
         b = ints[ITEMS] + ITEM_FIELDS * n
         kind, start, nr = ints[b], ints[b + 1], ints[b + 2]
-        if kind == CONE or kind == FORCE:
+        if (kind == CONE or kind == FORCE) and ints[b + FLAGS]:
             _force_jacobians(tbl, ints, par, nr, ints[b + 3], ints[b + 4], ints[b + 5], Jx[start: start + nr], start)
         elif kind == IMPULSE_COM:
             _impulse_com_rows(tbl, ints, rb, ws, x, Jx[start: start + nr])
@@ -297,11 +297,17 @@ def _dynamics_rows(tbl, ints, kind, nr, Jx_rows, start):
 
 
 @uncounted
-def _gravity_rows(tbl, ints, rb, ws, nr, Jx_rows, start):
+def _gravity_rows(tbl, ints, rb, ws, nr, Jx_rows, start, forces):
     """The Jacobian rows of a gravity-compensating control item of stack row ``start``: ``Jx = [-∂g/∂q, 0]`` and, at a
-    running node, ``Ju = S`` (its rows of the stacked ``Ju``)."""
+    running node, ``Ju = S`` (its rows of the stacked ``Ju``); with ``forces`` (a contact node's, running) the contact
+    forces' terms too: ``∂(Jcᵀ λ)/∂q`` at a fixed ``λ`` in the ``q`` columns, then ``Jcᵀ ∂λ/∂x`` and ``Jcᵀ ∂λ/∂u``."""
     gravity_derivatives(rb, ws, Jx_rows)
-    nv = ints[NV]
+    if forces:  # ∂g/∂q - ∂(Jcᵀ λ)/∂q, negated below
+        lam, projections = vec(tbl, ints, E_LAM), cube(tbl, ints, E_REF_R)
+        for n in range(ints[N_CONTACTS]):
+            fid, nc, ref, row = contact_fields(ints, n)
+            contact_force_derivatives(rb, ws, fid, nc, ref, projections[n], lam, row, Jx_rows)
+    nv, nu = ints[NV], ints[NU]
     for i in range(nr):
         for c in range(nv):
             Jx_rows[i, c] = -Jx_rows[i, c]
@@ -311,30 +317,12 @@ def _gravity_rows(tbl, ints, rb, ws, nr, Jx_rows, start):
         return
     Sm, Ju, u0 = mat(tbl, ints, E_S), mat(tbl, ints, E_JU), start - ints[U_START]
     for i in range(nr):
-        for c in range(ints[NU]):
+        for c in range(nu):
             Ju[u0 + i, c] = Sm[i, c]
-
-
-@uncounted
-def _contact_gravity_rows(tbl, ints, rb, ws, nr, Jx_rows, start):
-    """The Jacobian rows of a contact node's gravity-and-contact-force compensating control of stack row ``start``
-    (module docstring): :func:`_gravity_rows`, then at a running node the contact forces' terms."""
-    _gravity_rows(tbl, ints, rb, ws, nr, Jx_rows, start)
-    if ints[TERMINAL]:
+    if not forces:
         return
-    nv, nu = ints[NV], ints[NU]
-    for i in range(nr):
-        for c in range(nv):
-            Jx_rows[i, c] = -Jx_rows[i, c]
-    lam, projections = vec(tbl, ints, E_LAM), cube(tbl, ints, E_REF_R)
-    for n in range(ints[N_CONTACTS]):
-        fid, nc, ref, row = contact_fields(ints, n)
-        contact_force_derivatives(rb, ws, fid, nc, ref, projections[n], lam, row, Jx_rows)
     Jcs, df_dx, df_du = mat(tbl, ints, E_JCS), mat(tbl, ints, E_DF_DX), mat(tbl, ints, E_DF_DU)
-    Ju, u0 = mat(tbl, ints, E_JU), start - ints[U_START]
     for i in range(nr):
-        for c in range(nv):
-            Jx_rows[i, c] = -Jx_rows[i, c]
         for c in range(2 * nv):
             acc = 0.0
             for k in range(ints[NC]):
@@ -368,7 +356,8 @@ def residual_jacobians(tbl, ints, par, rb, ws, x, u):
             _velocity_jacobian(rb, ws, fid, ref, J6, K6, m6, v6, rows, nv)
             continue
         if kind == CONE or kind == FORCE:
-            _force_jacobians(tbl, ints, par, nr, fid, ref, o, rows, start)
+            if not ints[b + FLAGS]:  # a flagged one (an impulse node's): late_jacobians
+                _force_jacobians(tbl, ints, par, nr, fid, ref, o, rows, start)
             continue
         if kind == USER:
             user_jacobians(tbl, ints, par, rb, ws, b, x, u, rows)
@@ -376,11 +365,8 @@ def residual_jacobians(tbl, ints, par, rb, ws, x, u):
         if kind == EFFORT or kind == ACCELERATION:
             _dynamics_rows(tbl, ints, kind, nr, rows, start)
             continue
-        if kind == CONTROL_GRAV:
-            _gravity_rows(tbl, ints, rb, ws, nr, rows, start)
-            continue
-        if kind == CONTACT_CONTROL_GRAV:
-            _contact_gravity_rows(tbl, ints, rb, ws, nr, rows, start)
+        if kind == CONTROL_GRAV or kind == CONTACT_CONTROL_GRAV:
+            _gravity_rows(tbl, ints, rb, ws, nr, rows, start, kind == CONTACT_CONTROL_GRAV and not ints[TERMINAL])
             continue
         if kind == CENTROIDAL:
             com, Jcom = vec(tbl, ints, E_COM), mat(tbl, ints, E_JCOM)
