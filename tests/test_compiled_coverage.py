@@ -26,6 +26,10 @@ class UserActuation(crocopy.ActuationModelFull):
     """A user's subclass of a built-in actuation (it may override a step: its node keeps the Python path)."""
 
 
+class UserRK(crocopy.IntegratedActionModelRK):
+    """A user's subclass of the Runge-Kutta integrator (its node keeps the Python path)."""
+
+
 def solver_compiles(problem) -> list[bool]:
     """Per node, whether a solve's compiled nodes give it a compiled evaluator (not the model's own methods)."""
     nodes = compiled_nodes.select(crocopy.SolverFDDP(problem))
@@ -59,12 +63,14 @@ def free_reasons_problem():
     grav.addCost("grav", crocopy.CostModelResidual(state, numdiff, momentum), 1.0)
     models[5] = crocopy.IntegratedActionModelEuler(
         crocopy.DifferentialActionModelFreeFwdDynamics(state, dam.actuation, grav), 0.01)
+    models[6] = UserRK(dam, crocopy.RKType.two, 0.01)
     return crocopy.ShootingProblem(problem.x0, models, problem.terminalModel)
 
 
-FREE_REASONS = [None, "RK4 integrator", "control parametrization ControlParametrizationModelPolyOne",
+FREE_REASONS = [None, None, "control parametrization ControlParametrizationModelPolyOne",
                 "user Python subclass: constraint residual PythonFrameTranslation",
-                "user Python subclass: actuation UserActuation", "activation ActivationModelNumDiff", None, None]
+                "user Python subclass: actuation UserActuation", "activation ActivationModelNumDiff",
+                "user Python subclass: integrator UserRK", None]
 
 
 def contact_reasons_problem():

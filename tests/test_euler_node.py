@@ -151,8 +151,6 @@ def test_nodes_that_do_not_qualify():
         pass
 
     assert Euler(iam.differential, 0.01)._compiled_node(Euler(iam.differential, 0.01).createData(), False, {}) is None
-    rk = crocopy.IntegratedActionModelRK(iam.differential, crocopy.RKType.four, 0.01)
-    assert not hasattr(rk, "_compiled_node") or rk._compiled_node(rk.createData(), False, {}) is None
     costs = iam.differential.costs
     class Smooth1(crocopy.ActivationModelSmooth1Norm):  # a user's override: its item runs in Python
         def calc(self, data, r):

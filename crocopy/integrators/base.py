@@ -26,6 +26,7 @@ import numpy as np
 
 from ..action_base import ActionDataAbstract, ActionModelAbstract
 from ..diff_action_base import DifferentialActionModelAbstract
+from ..not_compiled import class_reason, decline
 from ..state import StateVector
 from ..validation import as_number
 from .control_base import ControlParametrizationDataAbstract, ControlParametrizationModelAbstract
@@ -113,6 +114,19 @@ class IntegratedActionModelAbstract(ActionModelAbstract):
         if diffModel.nu:
             self._set_control_limits(*control.convertBounds(diffModel.u_lb, diffModel.u_ub))
         self._euclidean = type(diffModel.state) is StateVector
+
+    def _offer_compiled(self, exact: type, hook: str, data, terminal: bool, memo: dict) -> object | None:
+        """This node's compiled evaluator for a solve (:mod:`crocopy.solvers.compiled_nodes`), made by the
+        differential model's method ``hook`` when it has one; None (the reason recorded in ``memo``) for a subclass
+        of the integrator class ``exact`` (its overrides run) or another control parametrization."""
+        if type(self) is not exact:
+            return decline(memo, class_reason(self, "integrator"))
+        if not self._identity_control:
+            return decline(memo, f"control parametrization {type(self.control).__name__}")
+        make = getattr(self.differential, hook, None)
+        if make is None:
+            return decline(memo, class_reason(self.differential, "differential model"))
+        return make(self, data, terminal, memo)
 
     @property
     def control(self) -> ControlParametrizationModelAbstract:

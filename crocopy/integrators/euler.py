@@ -19,7 +19,6 @@ import numpy as np
 from .. import kernels
 from ..enums import Jcomponent
 from ..kernels import log_fallback
-from ..not_compiled import class_reason, decline
 from ..state import StateAbstract
 from . import euler_kernel as integrator_kernel
 from .base import ControlChainData, IntegratedActionDataAbstract, IntegratedActionModelAbstract
@@ -45,16 +44,8 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
 
     def _compiled_node(self, data: "IntegratedActionDataEuler", terminal: bool, memo: dict) -> object | None:
         """This node's compiled evaluator for a solve (:mod:`crocopy.solvers.compiled_nodes`), offered by the
-        differential model (``_compiled_euler_node``) when it has one; None for a subclass (its overrides
-        run) or another control parametrization."""
-        if type(self) is not IntegratedActionModelEuler:
-            return decline(memo, class_reason(self, "integrator"))
-        if not self._identity_control:
-            return decline(memo, f"control parametrization {type(self.control).__name__}")
-        make = getattr(self.differential, "_compiled_euler_node", None)
-        if make is None:
-            return decline(memo, class_reason(self.differential, "differential model"))
-        return make(self, data, terminal, memo)
+        differential model (``_compiled_euler_node``) when it has one (:meth:`_offer_compiled`)."""
+        return self._offer_compiled(IntegratedActionModelEuler, "_compiled_euler_node", data, terminal, memo)
 
     def createData(self) -> "IntegratedActionDataEuler":
         return IntegratedActionDataEuler(self)

@@ -50,10 +50,17 @@ class IntegratedActionModelRK(IntegratedActionModelAbstract):
     def _control_data(self, data: "IntegratedActionDataRK"):
         return data.control[0]
 
+    def _compiled_node(self, data: "IntegratedActionDataRK", terminal: bool, memo: dict) -> object | None:
+        """This node's compiled evaluator for a solve (:mod:`crocopy.solvers.compiled_nodes`), offered by the
+        differential model (``_compiled_rk_node``) when it has one (:meth:`_offer_compiled`)."""
+        return self._offer_compiled(IntegratedActionModelRK, "_compiled_rk_node", data, terminal, memo)
+
     def createData(self) -> "IntegratedActionDataRK":
         return IntegratedActionDataRK(self)
 
     def calc(self, data: "IntegratedActionDataRK", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        if data.compiled_stamp is not None:
+            data.compiled_stamp[0] = 0.0
         if u is None:
             self._terminal_calc(data, self._differential_data(data), x)
             return
@@ -83,6 +90,8 @@ class IntegratedActionModelRK(IntegratedActionModelAbstract):
         self._copy_constraints(data, d0, diff=False)
 
     def calcDiff(self, data: "IntegratedActionDataRK", x: np.ndarray, u: np.ndarray | None = None) -> None:
+        if data.compiled_stamp is not None:
+            data.compiled_stamp[0] = 0.0
         if u is None:
             self._terminal_calcDiff(data, self._differential_data(data), x)
             return
@@ -170,3 +179,6 @@ class IntegratedActionDataRK(IntegratedActionDataAbstract):
         self.dkdu = [np.zeros((ndx, nu)) for _ in range(ni)]
         self.dkdx_sum = np.zeros((ndx, ndx))
         self.dkdu_sum = np.zeros((ndx, nu))
+        self.compiled_stamp: np.ndarray | None = None
+        """The stamp of a compiled evaluation of this data's node (:mod:`crocopy.models.rbd.rk_node`), or None:
+        :meth:`IntegratedActionModelRK.calc` and ``calcDiff`` spend it, since they write the stages' datas."""

@@ -33,8 +33,9 @@ evaluators all have them keeps its selection from one solve to the next while it
 
 or ``None`` (models without the method, or nodes it cannot compile).  ``terminal`` tells whether the node is the
 problem's terminal node; ``memo`` is a dictionary shared by the nodes of one solve (for what they
-derive once from shared models).  Today the Euler-integrated free and contact forward dynamics of
-a multibody system with residual costs have one (:mod:`crocopy.models.rbd.euler_node`), which also writes the
+derive once from shared models).  Today the Euler- and Runge-Kutta-integrated free and contact forward dynamics of
+a multibody system with residual costs have one (:mod:`crocopy.models.rbd.euler_node`,
+:mod:`crocopy.models.rbd.rk_node`), which also writes the
 constraint rows ``g, Gx, Gu, h, Hx, Hu`` of its constraint manager (:mod:`crocopy.models.rbd.constraint_rows`), and so
 do their inverse-dynamics twins (:mod:`crocopy.models.rbd.invdyn_node`) and impulse nodes
 (:mod:`crocopy.models.rbd.impulse_node`).

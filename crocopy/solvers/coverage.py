@@ -70,7 +70,4 @@ def offers_none(model) -> str:
     """The reason of a node whose model offers no compiled evaluator: what the model is."""
     if user_class(model):
         return class_reason(model, "action")
-    rk = getattr(model, "rk_type", None)
-    if rk is not None:
-        return f"RK{int(rk)} integrator"
     return f"action {type(model).__name__}"

@@ -260,22 +260,38 @@ def values_current(stamp, x, u):
 
 
 @uncounted
-def node_calc(tbl, ints, par, x, u):
-    """``xnext`` of the node at ``(x, u)``; returns its cost (``dt`` times the stack's for a running node), NaN when
-    the acceleration is not finite (:func:`_singular`: the caller evaluates the node on the Python path).  A finite
-    evaluation is stamped with ``(x, u)`` (:func:`_remember`)."""
+def _evaluate(tbl, ints, par, x, u, step):
+    """The node's values at ``(x, u)`` (with the Euler step if ``step``) and its constraint rows; returns the cost
+    stack's value, NaN when the acceleration is not finite (:func:`_singular`: the caller evaluates the node on the
+    Python path).  A finite evaluation is stamped with ``(x, u)`` (:func:`_remember`)."""
     rb, ws = entry_model(tbl, ints), entry_workspace(tbl, ints)
     stamp = vec(tbl, ints, E_STAMP)
     if stamp.shape[0]:
         stamp[0] = 0.0
     cost = _values(tbl, ints, par, x, u, rb, ws)
-    _step(tbl, ints, par, x, rb)
+    if step:
+        _step(tbl, ints, par, x, rb)
     if _singular(tbl, ints):
         return math.nan
     if has_rows(ints):
         _constraints(tbl, ints, par, rb, ws, x, u, False)
     _remember(stamp, x, u, cost, 1.0)
+    return cost
+
+
+@uncounted
+def node_calc(tbl, ints, par, x, u):
+    """``xnext`` of the node at ``(x, u)``; returns its cost (``dt`` times the stack's for a running node), NaN when
+    the acceleration is not finite (:func:`_evaluate`)."""
+    cost = _evaluate(tbl, ints, par, x, u, True)
     return cost if ints[TERMINAL] else par[0] * cost
+
+
+@uncounted
+def differential_calc(tbl, ints, par, x, u):
+    """The differential model's values at ``(x, u)`` alone (no Euler step: the stages of a Runge-Kutta node,
+    :mod:`.rk_node_kernel`); returns the cost stack's value (:func:`_evaluate`)."""
+    return _evaluate(tbl, ints, par, x, u, False)
 
 
 @uncounted
@@ -404,24 +420,24 @@ def _integrate_chain(tbl, ints, x, rb):
 
 
 @uncounted
-def node_calc_diff(tbl, ints, par, x, u):
-    """Values and derivatives of the node at ``(x, u)``; returns its cost, NaN when the acceleration is not finite (as
-    :func:`node_calc`).  The values are those of the last :func:`node_calc` when its stamp is ``(x, u)`` to the bit
-    (:func:`stamp_current`: the node's own arrays still hold what they left), else evaluated here; the stamp then
-    marks the data's values only (the derivatives overwrite some of the node's own arrays; :func:`values_current`)."""
+def _derivatives(tbl, ints, par, x, u, step):
+    """The values at ``(x, u)`` (with the Euler step if ``step``), unless they are those of the last :func:`node_calc`
+    (its stamp is ``(x, u)`` to the bit, :func:`stamp_current`: the node's own arrays still hold what they left),
+    then the dynamics' and residuals' Jacobians and the constraint rows; returns the cost stack's value, NaN when the
+    acceleration is not finite.  The stamp is spent (the derivatives overwrite some of the node's own arrays)."""
     rb, ws = entry_model(tbl, ints), entry_workspace(tbl, ints)
     stamp = vec(tbl, ints, E_STAMP)
     if stamp_current(stamp, x, u):
         cost = stamp[1]
     else:
         cost = _values(tbl, ints, par, x, u, rb, ws)
-        _step(tbl, ints, par, x, rb)
+        if step:
+            _step(tbl, ints, par, x, rb)
         if _singular(tbl, ints):
             return math.nan
     if stamp.shape[0]:
         stamp[0] = 0.0
-    terminal = ints[TERMINAL] != 0
-    if not terminal:
+    if not ints[TERMINAL]:
         _dynamics_jacobians(tbl, ints, x, rb, ws)
     elif ints[NC]:
         df_dx = mat(tbl, ints, E_DF_DX)
@@ -431,11 +447,54 @@ def node_calc_diff(tbl, ints, par, x, u):
     residual_jacobians(tbl, ints, par, rb, ws, x, u)
     if has_rows(ints):
         _constraints(tbl, ints, par, rb, ws, x, u, True)
-    total = _sums_and_chain(tbl, ints, par, x, rb, cost, terminal)
+    return cost
+
+
+@uncounted
+def node_calc_diff(tbl, ints, par, x, u):
+    """Values and derivatives of the node at ``(x, u)`` (:func:`_derivatives`, then the sums and the chain rule);
+    returns its cost, NaN when the acceleration is not finite (as :func:`node_calc`); the stamp then marks the data's
+    values only (:func:`values_current`)."""
+    cost = _derivatives(tbl, ints, par, x, u, True)
+    if math.isnan(cost):
+        return cost
+    total = _sums_and_chain(tbl, ints, par, x, entry_model(tbl, ints), cost, ints[TERMINAL] != 0)
     if math.isfinite(total):
-        _remember(stamp, x, u, cost, 2.0)
+        _remember(vec(tbl, ints, E_STAMP), x, u, cost, 2.0)
     return total
 
+
+@uncounted
+def differential_calc_diff(tbl, ints, par, x, u):
+    """The differential model's values (unless stamped, as :func:`node_calc_diff`) and derivatives at ``(x, u)`` of a
+    running node's table, without the Euler chain rule: ``a``, ``dFx``, ``dFu`` and the stack's sums into ``dLx`` ...
+    ``dLuu`` (the stages of a Runge-Kutta node, :mod:`.rk_node_kernel`); returns the cost stack's value."""
+    cost = _derivatives(tbl, ints, par, x, u, False)
+    if math.isnan(cost):
+        return cost
+    _stack_sums(tbl, ints, False)
+    if math.isfinite(cost):
+        _remember(vec(tbl, ints, E_STAMP), x, u, cost, 2.0)
+    return cost
+
+
+@uncounted
+def _stack_sums(tbl, ints, terminal):
+    """The cost stack's sums into the node's cost derivatives (``terminal``) or the differential ones (``dLx`` ...,
+    those of a running node, with the controls' rows)."""
+    if terminal:
+        Lx, Lu, Lxx = vec(tbl, ints, E_LX), vec(tbl, ints, E_LU), mat(tbl, ints, E_LXX)
+        Lxu, Luu = mat(tbl, ints, E_LXU), mat(tbl, ints, E_LUU)
+    else:
+        Lx, Lu, Lxx = vec(tbl, ints, E_DLX), vec(tbl, ints, E_DLU), mat(tbl, ints, E_DLXX)
+        Lxu, Luu = mat(tbl, ints, E_DLXU), mat(tbl, ints, E_DLUU)
+    r, lb, ub, act_w = vec(tbl, ints, E_R), vec(tbl, ints, E_LB), vec(tbl, ints, E_UB), vec(tbl, ints, E_ACT_WEIGHTS)
+    weights, Ar, Arr = vec(tbl, ints, E_WEIGHTS), vec(tbl, ints, E_AR), vec(tbl, ints, E_ARR)
+    Jx, Ju, u_start, cols = mat(tbl, ints, E_JX), mat(tbl, ints, E_JU), ints[U_START], ivec(tbl, ints, E_COLS)
+    items = (vec(tbl, ints, E_GRAD), ints[ints[STARTS]: ints[STARTS] + ints[N_STACK]], ivec(tbl, ints, E_ACT_KINDS),
+             vec(tbl, ints, E_ACT_PARAMS), vec(tbl, ints, E_ITEM_COSTS), vec(tbl, ints, E_ITEM_WEIGHTS))
+    stack_derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, not terminal, Lx, Lu, Lxx, Lxu,
+                               Luu, cols, *items)
 
 
 @uncounted
@@ -443,30 +502,20 @@ def _sums_and_chain(tbl, ints, par, x, rb, cost, terminal):
     """The end of a node's ``calcDiff`` once its cost stack holds its residuals and Jacobians: the stack's sums into
     the node's cost derivatives, and for a running node the differential ones through the Euler chain rule (and its
     Lie-group end); returns the node's cost (``cost``, the stack's value, times ``dt`` for a running node)."""
-    Lx, Lu, Lxx = vec(tbl, ints, E_LX), vec(tbl, ints, E_LU), mat(tbl, ints, E_LXX)
-    Lxu, Luu = mat(tbl, ints, E_LXU), mat(tbl, ints, E_LUU)
-    r, lb, ub, act_w = vec(tbl, ints, E_R), vec(tbl, ints, E_LB), vec(tbl, ints, E_UB), vec(tbl, ints, E_ACT_WEIGHTS)
-    weights, Ar, Arr = vec(tbl, ints, E_WEIGHTS), vec(tbl, ints, E_AR), vec(tbl, ints, E_ARR)
-    Jx, Ju, u_start, cols = mat(tbl, ints, E_JX), mat(tbl, ints, E_JU), ints[U_START], ivec(tbl, ints, E_COLS)
-    items = (vec(tbl, ints, E_GRAD), ints[ints[STARTS]: ints[STARTS] + ints[N_STACK]], ivec(tbl, ints, E_ACT_KINDS),
-             vec(tbl, ints, E_ACT_PARAMS), vec(tbl, ints, E_ITEM_COSTS), vec(tbl, ints, E_ITEM_WEIGHTS))
+    _stack_sums(tbl, ints, terminal)
     if terminal:
-        stack_derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, False, Lx, Lu, Lxx, Lxu, Luu,
-                                   cols, *items)
         Fx = mat(tbl, ints, E_FX)
         n = Fx.shape[0]
         for i in range(n):
             for j in range(n):
                 Fx[i, j] = 1.0 if i == j else 0.0
         return cost
-    dLx, dLu, dLxx, dLxu, dLuu = (vec(tbl, ints, E_DLX), vec(tbl, ints, E_DLU), mat(tbl, ints, E_DLXX),
-                                  mat(tbl, ints, E_DLXU), mat(tbl, ints, E_DLUU))
-    stack_derivatives_and_sums(r, lb, ub, act_w, weights, Ar, Arr, Jx, Ju, u_start, True, dLx, dLu, dLxx, dLxu, dLuu,
-                               cols, *items)
     euclidean = ints[EUCLIDEAN] != 0
     euler_chain(
-        mat(tbl, ints, E_DFX), mat(tbl, ints, E_DFU), dLx, dLu, dLxx, dLxu, dLuu, par[0], euclidean,
-        mat(tbl, ints, E_FX), mat(tbl, ints, E_FU), Lx, Lu, Lxx, Lxu, Luu,
+        mat(tbl, ints, E_DFX), mat(tbl, ints, E_DFU), vec(tbl, ints, E_DLX), vec(tbl, ints, E_DLU),
+        mat(tbl, ints, E_DLXX), mat(tbl, ints, E_DLXU), mat(tbl, ints, E_DLUU), par[0], euclidean,
+        mat(tbl, ints, E_FX), mat(tbl, ints, E_FU), vec(tbl, ints, E_LX), vec(tbl, ints, E_LU),
+        mat(tbl, ints, E_LXX), mat(tbl, ints, E_LXU), mat(tbl, ints, E_LUU),
     )
     if not euclidean:
         _integrate_chain(tbl, ints, x, rb)
