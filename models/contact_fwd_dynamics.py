@@ -255,12 +255,13 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         return None if contacts is None else euler_node(iam, data, terminal, memo, contacts)
 
 
-    def _compiled_rk_node(self, iam, data, terminal: bool, memo: dict) -> object | None:
-        """The compiled evaluator of the Runge-Kutta node ``(iam, data)`` over this model: one compiled Euler node per
-        stage (:func:`.rbd.rk_node.rk_node`, which offers them through :meth:`_compiled_euler_node`)."""
-        from .rbd.rk_node import rk_node
+    def _compiled_staged_node(self, iam, data, terminal: bool, memo: dict) -> object | None:
+        """The compiled evaluator of the Runge-Kutta node, or of the Euler node with a control parametrization,
+        ``(iam, data)`` over this model: one compiled Euler node per stage (:func:`.rbd.rk_node.staged_node`, which
+        offers them through :meth:`_compiled_euler_node`)."""
+        from .rbd.rk_node import staged_node
 
-        return rk_node(iam, data, terminal, memo)
+        return staged_node(iam, data, terminal, memo)
     def _kinematics(self, data: "DifferentialActionDataContactFwdDynamics", q: np.ndarray, v: np.ndarray) -> None:
         model, pd = self.pinocchio, data.pinocchio
         pin.computeAllTerms(model, pd, q, v)

@@ -36,7 +36,7 @@ from crocopy.validation import as_vector
 from .data_collectors import DataCollectorJointActMultibody
 from .dynamics_options import ActuationStructure, ArmatureMixin
 from .rbd.euler_node import euler_node
-from .rbd.rk_node import rk_node
+from .rbd.rk_node import staged_node
 from .residuals_frame import check_same_robot
 from .state_multibody import StateMultibody
 
@@ -178,10 +178,11 @@ class DifferentialActionModelFreeFwdDynamics(ArmatureMixin, DifferentialActionMo
         return euler_node(iam, data, terminal, memo)
 
 
-    def _compiled_rk_node(self, iam, data, terminal: bool, memo: dict) -> object | None:
-        """The compiled evaluator of the Runge-Kutta node ``(iam, data)`` over this model: one compiled Euler node per
-        stage (:func:`.rbd.rk_node.rk_node`, which offers them through :meth:`_compiled_euler_node`)."""
-        return rk_node(iam, data, terminal, memo)
+    def _compiled_staged_node(self, iam, data, terminal: bool, memo: dict) -> object | None:
+        """The compiled evaluator of the Runge-Kutta node, or of the Euler node with a control parametrization,
+        ``(iam, data)`` over this model: one compiled Euler node per stage (:func:`.rbd.rk_node.staged_node`, which
+        offers them through :meth:`_compiled_euler_node`)."""
+        return staged_node(iam, data, terminal, memo)
     def quasiStatic(
         self, data: "DifferentialActionDataFreeFwdDynamics", x: np.ndarray, maxiter: int = 100, tol: float = 1e-9
     ) -> np.ndarray:

@@ -45,11 +45,14 @@ def free_reasons_problem():
     dam = models[1].differential
     state, costs, nu = dam.state, dam.costs, dam.nu
     models[1] = crocopy.IntegratedActionModelRK(dam, crocopy.RKType.four, 0.01)
-    poly = crocopy.ControlParametrizationModelPolyOne(nu)
-    models[2] = crocopy.IntegratedActionModelEuler(models[2].differential, poly, 0.01)
     manager = crocopy.ConstraintModelManager(state, nu)
     bounds = crocopy.ConstraintModelResidual(state, crocopy.ResidualModelControl(state, nu), -np.ones(nu), np.ones(nu))
     manager.addConstraint("u", bounds)
+    bounded_only = crocopy.ConstraintModelManager(state, nu)
+    bounded_only.addConstraint("u", bounds)
+    poly = crocopy.ControlParametrizationModelPolyOne(nu)
+    bounded = crocopy.DifferentialActionModelFreeFwdDynamics(state, dam.actuation, costs, bounded_only)
+    models[2] = crocopy.IntegratedActionModelEuler(bounded, poly, 0.01)
     tip = state.pinocchio.nframes - 1
     manager.addConstraint("v", crocopy.ConstraintModelResidual(
         state, python_frame_translation(crocopy)(state, tip, np.zeros(3), nu)))
@@ -67,7 +70,7 @@ def free_reasons_problem():
     return crocopy.ShootingProblem(problem.x0, models, problem.terminalModel)
 
 
-FREE_REASONS = [None, None, "control parametrization ControlParametrizationModelPolyOne",
+FREE_REASONS = [None, None, "constraints with control parametrization ControlParametrizationModelPolyOne",
                 "user Python subclass: constraint residual PythonFrameTranslation",
                 "user Python subclass: actuation UserActuation", "activation ActivationModelNumDiff",
                 "user Python subclass: integrator UserRK", None]

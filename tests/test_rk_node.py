@@ -1,8 +1,10 @@
-"""Compiled Runge-Kutta nodes (RK2, RK3, RK4) equal the Python node, finite differences and the Python solves.
+"""Compiled Runge-Kutta nodes (RK2, RK3, RK4) and nodes with a control parametrization (Euler and Runge-Kutta with
+``PolyOne``, ``PolyTwoRK``) equal the Python node, finite differences and the Python solves.
 
 Factory: the free-dynamics nodes of ``test_euler_node.py`` (five robots, every compiled residual kind, the
 activations it cycles through) and the contact nodes of ``test_contacts_1d2d.py`` (1D to 6D contacts, with and
-without gains), each under every Runge-Kutta order, running and terminal.
+without gains), each under every Runge-Kutta order, running and terminal; three robots under every integrator with
+a polynomial control parametrization.
 """
 
 from __future__ import annotations
@@ -201,10 +203,13 @@ def test_nodes_that_keep_the_python_path():
     user = UserRK(dam, crocopy.RKType.four, 0.01)
     assert user._compiled_node(user.createData(), False, memo) is None
     assert "integrator UserRK" in memo["why not compiled"]
-    poly = crocopy.IntegratedActionModelRK(dam, crocopy.ControlParametrizationModelPolyOne(dam.nu),
-                                           crocopy.RKType.four, 0.01)
+
+    class UserControl(crocopy.ControlParametrizationModelPolyOne):
+        pass
+
+    poly = crocopy.IntegratedActionModelRK(dam, UserControl(dam.nu), crocopy.RKType.four, 0.01)
     assert poly._compiled_node(poly.createData(), False, memo) is None
-    assert "ControlParametrizationModelPolyOne" in memo["why not compiled"]
+    assert memo["why not compiled"] == "control parametrization UserControl"
 
     class PythonResidual(crocopy.ResidualModelAbstract):
         def __init__(self):
@@ -223,3 +228,72 @@ def test_nodes_that_keep_the_python_path():
     assert memo["why not compiled"] == "user Python residual in a Runge-Kutta node"
     euler = crocopy.IntegratedActionModelEuler(model.differential, 0.01)
     assert euler._compiled_node(euler.createData(), False, {}) is not None
+
+
+CONTROLLED = (
+    ("rk2-polyone", lambda dam: crocopy.IntegratedActionModelRK(
+        dam, crocopy.ControlParametrizationModelPolyOne(dam.nu), crocopy.RKType.two, 0.01)),
+    ("rk4-polyone", lambda dam: crocopy.IntegratedActionModelRK(
+        dam, crocopy.ControlParametrizationModelPolyOne(dam.nu), crocopy.RKType.four, 0.01)),
+    ("rk3-polytwo", lambda dam: crocopy.IntegratedActionModelRK(
+        dam, crocopy.ControlParametrizationModelPolyTwoRK(dam.nu, crocopy.RKType.three), crocopy.RKType.three, 0.01)),
+    ("rk4-polytwo", lambda dam: crocopy.IntegratedActionModelRK(
+        dam, crocopy.ControlParametrizationModelPolyTwoRK(dam.nu, crocopy.RKType.four), crocopy.RKType.four, 0.01)),
+    ("euler-polyone", lambda dam: crocopy.IntegratedActionModelEuler(
+        dam, crocopy.ControlParametrizationModelPolyOne(dam.nu), 0.01)),
+    ("euler-polytwo", lambda dam: crocopy.IntegratedActionModelEuler(
+        dam, crocopy.ControlParametrizationModelPolyTwoRK(dam.nu, crocopy.RKType.four), 0.01)),
+)
+"""Integrators with crocopy's polynomial control parametrizations (stage ``i`` reads ``w(cᵢ, u)``)."""
+
+
+@pytest.mark.parametrize("make", [m for _, m in CONTROLLED], ids=[n for n, _ in CONTROLLED])
+@pytest.mark.parametrize("robot", ["kinova", "anymal", "iris"])
+@pytest.mark.parametrize("terminal", [False, True])
+def test_control_parametrizations_match_the_python_node(robot, make, terminal):
+    iam, state = node(robot, KINDS)
+    model = make(iam.differential)
+    assert model.nu > iam.nu
+    assert model._compiled_node(model.createData(), terminal, {}) is not None
+    x, u = point(state, model.nu, 0)
+    compare_with_python_node(model, x, u, terminal, rtol=1e-8, atol=1e-9, cost_rel=1e-10)
+
+
+@pytest.mark.parametrize("make", [m for _, m in CONTROLLED], ids=[n for n, _ in CONTROLLED])
+def test_control_parametrization_derivatives_match_finite_differences(make):
+    iam, state = node("iris", KINDS, seed=5)
+    model = make(iam.differential)
+    x, u = point(state, model.nu, 5)
+    check_finite_differences(model, state, x, u, h=1e-6, atol=1e-5, roundoff=1e-10)
+
+
+@pytest.mark.parametrize("name", ["euler-polyone", "rk4-polytwo"])
+def test_solves_with_control_parametrizations_match_the_python_nodes(name):
+    make = dict(CONTROLLED)[name]
+    outcomes = []
+    for compiled in (True, False):
+        arm, _, _ = registry.build("arm")
+        running = [make(m.differential) for m in arm.runningModels[:12]]
+        problem = crocopy.ShootingProblem(arm.x0, running, make(arm.terminalModel.differential))
+        solver = make_solver("SolverFDDP", problem, compiled)
+        if compiled:
+            assert all(entry.compiled for entry in crocopy.compiled_coverage(problem))
+        solver.solve([], [], 8)
+        outcomes.append((solver.iter, solver.cost))
+    assert outcomes[0][0] == outcomes[1][0] and outcomes[0][0] > 1
+    assert outcomes[0][1] == pytest.approx(outcomes[1][1], rel=1e-9)
+
+
+def test_constraints_with_a_control_parametrization_keep_the_python_path():
+    iam, state = node("kinova", ("state", "control"))
+    dam = iam.differential
+    manager = crocopy.ConstraintModelManager(state, dam.nu)
+    manager.addConstraint("u", crocopy.ConstraintModelResidual(
+        state, crocopy.ResidualModelControl(state, dam.nu), -np.ones(dam.nu), np.ones(dam.nu)))
+    bounded = crocopy.DifferentialActionModelFreeFwdDynamics(state, dam.actuation, dam.costs, manager)
+    memo: dict = {}
+    for _, make in CONTROLLED:
+        model = make(bounded)
+        assert model._compiled_node(model.createData(), False, memo) is None
+        assert memo["why not compiled"].startswith("constraints with control parametrization")
+        assert model._compiled_node(model.createData(), True, {}) is not None

@@ -115,13 +115,15 @@ class IntegratedActionModelAbstract(ActionModelAbstract):
             self._set_control_limits(*control.convertBounds(diffModel.u_lb, diffModel.u_ub))
         self._euclidean = type(diffModel.state) is StateVector
 
-    def _offer_compiled(self, exact: type, hook: str, data, terminal: bool, memo: dict) -> object | None:
+    def _offer_compiled(self, exact: type, hook: str, data, terminal: bool, memo: dict,
+                        controls: tuple = ()) -> object | None:
         """This node's compiled evaluator for a solve (:mod:`crocopy.solvers.compiled_nodes`), made by the
         differential model's method ``hook`` when it has one; None (the reason recorded in ``memo``) for a subclass
-        of the integrator class ``exact`` (its overrides run) or another control parametrization."""
+        of the integrator class ``exact`` (its overrides run) or a control parametrization other than the identity
+        and the classes ``controls`` (exact)."""
         if type(self) is not exact:
             return decline(memo, class_reason(self, "integrator"))
-        if not self._identity_control:
+        if not self._identity_control and type(self.control) not in controls:
             return decline(memo, f"control parametrization {type(self.control).__name__}")
         make = getattr(self.differential, hook, None)
         if make is None:

@@ -22,6 +22,7 @@ from ..kernels import log_fallback
 from ..state import StateAbstract
 from . import euler_kernel as integrator_kernel
 from .base import ControlChainData, IntegratedActionDataAbstract, IntegratedActionModelAbstract
+from .control_poly import ControlParametrizationModelPolyOne, ControlParametrizationModelPolyTwoRK
 
 
 class IntegratedActionModelEuler(IntegratedActionModelAbstract):
@@ -44,8 +45,11 @@ class IntegratedActionModelEuler(IntegratedActionModelAbstract):
 
     def _compiled_node(self, data: "IntegratedActionDataEuler", terminal: bool, memo: dict) -> object | None:
         """This node's compiled evaluator for a solve (:mod:`crocopy.solvers.compiled_nodes`), offered by the
-        differential model (``_compiled_euler_node``) when it has one (:meth:`_offer_compiled`)."""
-        return self._offer_compiled(IntegratedActionModelEuler, "_compiled_euler_node", data, terminal, memo)
+        differential model when it has one (:meth:`_offer_compiled`): ``_compiled_euler_node``, or with crocopy's
+        other polynomial control parametrizations ``_compiled_staged_node``."""
+        hook = "_compiled_euler_node" if self._identity_control else "_compiled_staged_node"
+        return self._offer_compiled(IntegratedActionModelEuler, hook, data, terminal, memo,
+                                    (ControlParametrizationModelPolyOne, ControlParametrizationModelPolyTwoRK))
 
     def createData(self) -> "IntegratedActionDataEuler":
         return IntegratedActionDataEuler(self)

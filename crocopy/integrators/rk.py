@@ -18,6 +18,7 @@ import numpy as np
 from ..diff_action_base import DifferentialActionModelAbstract
 from ..enums import Jcomponent, RKType
 from .base import ControlChainData, IntegratedActionDataAbstract, IntegratedActionModelAbstract, bind_arguments
+from .control_poly import ControlParametrizationModelPolyOne, ControlParametrizationModelPolyTwoRK
 
 _TABLEAUX = {
     RKType.two: ((0.0, 0.5), (0.0, 1.0)),
@@ -52,8 +53,10 @@ class IntegratedActionModelRK(IntegratedActionModelAbstract):
 
     def _compiled_node(self, data: "IntegratedActionDataRK", terminal: bool, memo: dict) -> object | None:
         """This node's compiled evaluator for a solve (:mod:`crocopy.solvers.compiled_nodes`), offered by the
-        differential model (``_compiled_rk_node``) when it has one (:meth:`_offer_compiled`)."""
-        return self._offer_compiled(IntegratedActionModelRK, "_compiled_rk_node", data, terminal, memo)
+        differential model (``_compiled_staged_node``) when it has one (:meth:`_offer_compiled`), with crocopy's
+        polynomial control parametrizations."""
+        return self._offer_compiled(IntegratedActionModelRK, "_compiled_staged_node", data, terminal, memo,
+                                    (ControlParametrizationModelPolyOne, ControlParametrizationModelPolyTwoRK))
 
     def createData(self) -> "IntegratedActionDataRK":
         return IntegratedActionDataRK(self)

@@ -106,18 +106,20 @@ class EulerNode:
         self.terminal = terminal
         self._data = weakref.ref(data)
         self.nv = nv
+        self.nu = iam.differential.nu
+        """The controls the kernels read: the differential model's (a Runge-Kutta stage's ``w``, :mod:`.rk_node`)."""
         self.armature = np.zeros(nv)
         self.contacts = ContactSet(contacts)
-        self.parameters = {"S": np.zeros((nv, iam.nu)), "gains": self.contacts.gains, "ref_R": self.contacts.ref_R,
+        self.parameters = {"S": np.zeros((nv, self.nu)), "gains": self.contacts.gains, "ref_R": self.contacts.ref_R,
                            "ref_p": self.contacts.ref_p, "kin": np.zeros(kinematics_size(nv)),
-                           "user_dims": np.zeros(5, dtype=np.int64), "user_Ru": np.zeros((1, iam.nu))}
+                           "user_dims": np.zeros(5, dtype=np.int64), "user_Ru": np.zeros((1, self.nu))}
         self.no_control = np.zeros(0)
         self._armature_entry = table_entries([self.armature])
         self._data_arrays: list = []
         self._data_entries = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
         self._residuals: list | None = None
         self._items: list = []
-        self.rows = ConstraintRows(iam.nu, iam.state.ndx)
+        self.rows = ConstraintRows(self.nu, iam.state.ndx)
         self.python = PythonResiduals(iam.state.pinocchio, data.differential.pinocchio, [])
         self._lowered: Lowered | None = None
         self.stamp = np.zeros(0)
@@ -281,7 +283,7 @@ class EulerNode:
         self.python = PythonResiduals(self.model.state.pinocchio, ddata.pinocchio, python)
         rows_u = max(rows_u, self.rows.user_rows)
         if self.parameters["user_Ru"].shape[0] < rows_u:
-            self.parameters["user_Ru"] = np.zeros((rows_u, self.model.nu))
+            self.parameters["user_Ru"] = np.zeros((rows_u, self.nu))
         return None
 
     def _reader(self, read: dict) -> Callable:
@@ -342,7 +344,7 @@ class EulerNode:
         if not changed and low is self._lowered and self._data_arrays:
             return
         state = self.model.state
-        n_stamp = state.nx + self.model.nu + 2
+        n_stamp = state.nx + self.nu + 2
         if self.stamp.shape[0] != n_stamp:
             self.stamp = np.zeros(n_stamp)
         data.compiled_stamp = self.stamp
@@ -360,13 +362,13 @@ class EulerNode:
         n = table.NODE + len(table.NODE_ARRAYS) + len(table.SCRATCH_ARRAYS)
         self.rows.allocate(n, table.SHAPES + 3 * n + len(self._items) + len(stack.starts) + len(self.contacts.ints))
         fields.update(self.rows.arrays)
-        scratch, scratch_entries = low.scratch(self.model.nu, self.contacts.nc)
+        scratch, scratch_entries = low.scratch(self.nu, self.contacts.nc)
         self.shared_minv = not hasattr(ddata, "Minv")
         fields["Minv"] = scratch["Minv"] if self.shared_minv else ddata.Minv
         arrays = [fields[e.name] for e in table.NODE_ARRAYS]
         known = self._data_arrays
         if len(known) != len(arrays) or any(a is not b for a, b in zip(arrays, known)):
-            sizes = {"nx": state.nx, "ndx": state.ndx, "nv": state.nv, "nu": self.model.nu, "nr": stack.r.shape[0],
+            sizes = {"nx": state.nx, "ndx": state.ndx, "nv": state.nv, "nu": self.nu, "nr": stack.r.shape[0],
                      "nr_u": stack.r.shape[0] - stack.u_start, "n_stack": stack.item_costs.shape[0],
                      "n_cols": stack.cols.shape[0], "n_contacts": len(self.contacts.models),
                      "n_kin": kinematics_size(state.nv), "nr_user": self.parameters["user_Ru"].shape[0],
@@ -387,7 +389,7 @@ class EulerNode:
         shapes = np.concatenate([p[1] for p in parts])
         n = addresses.shape[0]
         header = np.zeros(table.SHAPES, dtype=np.int64)
-        header[[table.NQ, table.NV, table.NU, table.U_START]] = rb.nq, rb.nv, self.model.nu, stack.u_start
+        header[[table.NQ, table.NV, table.NU, table.U_START]] = rb.nq, rb.nv, self.nu, stack.u_start
         header[[table.N_ITEMS, table.EUCLIDEAN, table.NJOINTS, table.NFRAMES, table.N_STACK]] = (
             len(items) // table.ITEM_FIELDS, self.model._euclidean, rb.njoints, rb.nframes, len(stack.starts))
         header[table.ITEMS] = table.SHAPES + 3 * n
@@ -406,7 +408,7 @@ class EulerNode:
     def _own_addresses(self, low: Lowered, scratch: dict) -> np.ndarray:
         """The addresses of this node's own workspace and scratch arrays (:data:`.node_table.OWN`), shaped as the
         model's shared ones (made again for another lowered model or other sizes)."""
-        key = (self.model.nu, self.contacts.nc)
+        key = (self.nu, self.contacts.nc)
         owner, sizes, addresses, _ = self._own
         if owner is not low or sizes != key:
             arrays = ([np.zeros_like(getattr(low.workspace, name)) for name in table.OWN_WORKSPACE]

@@ -1,20 +1,28 @@
-"""Compiled Runge-Kutta nodes of free or contact forward dynamics: one numba call per node evaluation inside a solve.
+"""Compiled Runge-Kutta nodes of free or contact forward dynamics, and Euler nodes with a control parametrization:
+one numba call per node evaluation inside a solve.
 
 :class:`RKNode` is the evaluator (:mod:`crocopy.solvers.compiled_nodes`) of an ``IntegratedActionModelRK`` node
-(RK2, RK3, RK4, the identity control parametrization; the exact class) over a differential model whose Euler nodes
-compile (:mod:`.euler_node`).  Each stage ``i`` is such an Euler node's table (:class:`.euler_node.EulerNode`) over
-the stage's own differential data ``data.differential[i]``: its dynamics, residuals, constraint rows and the
-differential model's derivatives are the Euler kernels' (:func:`.euler_node_kernel.differential_calc`,
-``differential_calc_diff``, which leave out the Euler step), and :mod:`.rk_node_kernel` chains the stages in one
-call.  A stage's table lists the action-data arrays of a *stage data* (:class:`_StageData`): scratch arrays, except
-the constraint rows of the first stage, which are the node's (its ``g``, ``Gx`` ... are the first stage's), and every
-action array of the terminal node (which evaluates the differential model at ``x`` alone, as an Euler terminal
+(RK2, RK3, RK4; the exact class) over a differential model whose Euler nodes compile (:mod:`.euler_node`), with
+crocopy's polynomial control parametrizations (``PolyZero``, ``PolyOne``, ``PolyTwoRK``: stage ``i`` reads
+``wᵢ = w(cᵢ, u)``, its control derivatives mapped to ``u`` by :mod:`.control_map_kernel`; a node with constraints
+takes the identity parametrization alone).  Each stage ``i`` is such an Euler node's table
+(:class:`.euler_node.EulerNode`) over the stage's own differential data ``data.differential[i]``: its dynamics,
+residuals, constraint rows and the differential model's derivatives are the Euler kernels'
+(:func:`.euler_node_kernel.differential_calc`, ``differential_calc_diff``, which leave out the Euler step), and
+:mod:`.rk_node_kernel` chains the stages in one call.  A stage's table lists the action-data arrays of a *stage
+data* (:class:`_StageData`): scratch arrays, except the constraint rows of the first stage, which are the node's (its
+``g``, ``Gx`` ... are the first stage's), and every action array of the terminal node (which evaluates the
+differential model at ``x`` alone, as an Euler terminal
 node: ``Fx`` the identity).
 
 The stages' Euler nodes read the models' parameters, and keep them current, as Euler nodes do (``refresh``,
 ``refresh_values``, ``refresh_live``); a user's Python residual, which an Euler node of free dynamics evaluates
 around its compiled call, has no place between the stages: such a node declines.  When ``solve`` returns,
 :meth:`RKNode.fill` runs the model's own ``calc`` (the stages' Pinocchio and residual datas, ``y``, ``ki`` ...).
+
+:class:`ControlledEulerNode` is the evaluator of an Euler node with a ``PolyOne`` or ``PolyTwoRK`` parametrization:
+one stage, an Euler node's table over the node's own arrays (scratch for those sized by the controls), at
+``w = w(0, u)``, its ``Fu``, ``Lu``, ``Lxu``, ``Luu`` mapped to ``u``.
 """
 
 from __future__ import annotations
@@ -25,6 +33,7 @@ from functools import partial
 
 import numpy as np
 
+from crocopy.integrators.rk import IntegratedActionModelRK
 from crocopy.not_compiled import decline
 
 from . import euler_node_kernel as euler_kernel
@@ -51,24 +60,47 @@ class _StageData:
             setattr(self, name, array)
 
 
-def _stage_datas(data, terminal: bool) -> list[_StageData]:
-    """One :class:`_StageData` per stage (the terminal node: one, the first stage's, over the node's own arrays)."""
-    if terminal:
-        return [_StageData(data.differential[0], {n: getattr(data, n) for n in ACTION_ARRAYS + ROW_ARRAYS})]
-    stages = []
-    for i, ddata in enumerate(data.differential):
-        arrays = {n: np.zeros_like(getattr(data, n)) for n in ACTION_ARRAYS}
-        arrays.update({n: getattr(data, n) if i == 0 else np.zeros_like(getattr(data, n)) for n in ROW_ARRAYS})
-        stages.append(_StageData(ddata, arrays))
-    return stages
+CONTROL_ARRAYS = ("Fu", "Lu", "Lxu", "Luu", "Gu", "Hu")
+"""The arrays sized by the controls: a stage's are of the differential model's ``w`` (``nw``), the node's of ``u``."""
 
 
-def rk_node(iam, data, terminal: bool, memo: dict) -> RKNode | None:
-    """The refreshed evaluator of the Runge-Kutta node ``(iam, data)``, or None if it does not qualify (the reason
-    recorded in ``memo``, :mod:`crocopy.not_compiled`; the caller has checked the integrator's class and control)."""
+def _stage_datas(data, differentials: list, own: bool, nw: int) -> list[_StageData]:
+    """One :class:`_StageData` per differential data of ``differentials`` (the stages'), its arrays sized by the
+    stage's controls ``nw``: the node's own action arrays where ``own`` (a terminal node, an Euler node), else
+    scratch; the node's constraint rows at the first stage; scratch where the node's, sized by ``u``, differ."""
+    same = data.Fu.shape[1] == nw
+
+    def stage_array(name: str, node_array: bool) -> np.ndarray:
+        array = getattr(data, name)
+        if name in CONTROL_ARRAYS and not same:
+            return np.zeros((*array.shape[:-1], nw) if name != "Luu" else (nw, nw))
+        return array if node_array else np.zeros_like(array)
+
+    return [_StageData(ddata, {**{n: stage_array(n, own) for n in ACTION_ARRAYS},
+                               **{n: stage_array(n, own or i == 0) for n in ROW_ARRAYS}})
+            for i, ddata in enumerate(differentials)]
+
+
+def control_coefficients(control, times) -> np.ndarray:
+    """``cw[i, k] = cₖ(τᵢ)``: the coefficients of ``∂w/∂u`` at each stage time ``τᵢ`` of ``times``
+    (:mod:`.control_map_kernel`), read from the parametrization's own ``calcDiff``."""
+    nw, nu = control.nw, control.nu
+    cdata = control.createData()
+    cw = np.zeros((len(times), nu // nw))
+    for i, t in enumerate(times):
+        control.calcDiff(cdata, t, np.zeros(nu))
+        cw[i] = cdata.dw_du[0, ::nw]
+    return cw
+
+
+def staged_node(iam, data, terminal: bool, memo: dict) -> RKNode | None:
+    """The refreshed evaluator of the Runge-Kutta node, or of the Euler node with a control parametrization,
+    ``(iam, data)``, or None if it does not qualify (the reason recorded in ``memo``, :mod:`crocopy.not_compiled`;
+    the caller has checked the integrator's class and control)."""
     node = _NODES.get(data)
-    if node is None or node.model is not iam or node.terminal != terminal:
-        node = RKNode(iam, data, terminal)
+    kind = RKNode if type(iam) is IntegratedActionModelRK else ControlledEulerNode
+    if node is None or node.model is not iam or node.terminal != terminal or type(node) is not kind:
+        node = kind(iam, data, terminal)
         _NODES[data] = node
     return node if node.refresh(memo) else None
 
@@ -98,12 +130,15 @@ class RKNode:
         """Make or refresh the stages' Euler nodes and bind the node's arrays; False if a stage does not qualify (the
         reason recorded in ``memo``)."""
         iam, data = self.model, self._data()
-        ni = 1 if self.terminal else len(iam.rk_c)
-        if len(self.stage_datas) != ni or any(
-                s.differential is not d for s, d in zip(self.stage_datas, data.differential)) \
-                or any(getattr(self.stage_datas[0], n).shape != getattr(data, n).shape
+        nw, differentials = iam.differential.nu, self._differentials(data)
+        if not self.terminal and iam.nu != nw and data.g.shape[0] + data.h.shape[0]:
+            decline(memo, f"constraints with control parametrization {type(iam.control).__name__}")
+            return False
+        if len(self.stage_datas) != len(differentials) or any(
+                s.differential is not d for s, d in zip(self.stage_datas, differentials)) \
+                or any(getattr(self.stage_datas[0], n).shape[0] != getattr(data, n).shape[0]
                        for n in ACTION_ARRAYS + ROW_ARRAYS):
-            self.stage_datas = _stage_datas(data, self.terminal)
+            self.stage_datas = _stage_datas(data, differentials, self.terminal or self.single, nw)
         stages = []
         for stage_data in self.stage_datas:
             stage = iam.differential._compiled_euler_node(iam, stage_data, self.terminal, memo)
@@ -120,20 +155,35 @@ class RKNode:
             return False
         self.tbls = np.stack([s.tbl for s in stages])
         self.ints, self.par = first.ints, first.par
-        self.coef = np.array([iam.rk_c, iam.rk_b], dtype=float) if not self.terminal else np.zeros((2, 1))
+        self.coef = np.array(self._tableau(), dtype=float)
+        self.cw = control_coefficients(iam.control, self.coef[0])
         self._bind(data)
         self.refreshes += 1
         return True
+
+    single = False
+    """Whether the node has one stage over its own action arrays (an Euler node)."""
+
+    def _differentials(self, data) -> list:
+        """The stages' differential datas (the terminal node: the first)."""
+        return data.differential[:1] if self.terminal else data.differential
+
+    def _tableau(self) -> tuple:
+        """The stages' times and weights ``(c, b)`` (the terminal node: one stage at time 0)."""
+        return ((0.0,), (0.0,)) if self.terminal else (self.model.rk_c, self.model.rk_b)
 
     def _bind(self, data) -> None:
         """The time step, the stamp (spent) and the scratch of the kernels, made again for other sizes."""
         self.dts[0] = float(self.model.dt)
         self.stamp[0] = 0.0
-        data.compiled_stamp = self.stages[0].stamp if self.terminal else self.stamp  # what the Python path spends
-        ni, state, nu = len(self.stages), self.model.state, self.model.nu
+        data.compiled_stamp = self.stages[0].stamp if self.terminal or self.single else self.stamp  # the Python
+        # path spends it
+        ni, state, nu, nw = len(self.stages), self.model.state, self.model.nu, self.model.differential.nu
         nx, ndx, nv = state.nx, state.ndx, state.nv
-        if self._sizes != (ni, nx, ndx, nu):
-            self._sizes = (ni, nx, ndx, nu)
+        if self._sizes != (ni, nx, ndx, nu, nw):
+            self._sizes = (ni, nx, ndx, nu, nw)
+            self.w = np.zeros((ni, nw))
+            self._mapped = (np.zeros((nv, nu)), np.zeros(nu), np.zeros((ndx, nu)), np.zeros((nu, nu)))
             y, dy, k = np.zeros((ni, nx)), np.zeros((ni, ndx)), np.zeros((ni, ndx))
             self._work = (y, dy, k, np.zeros((nv, nv)), np.zeros((nv, nv)), np.zeros((ndx, ndx)), np.zeros((ndx, nu)))
             self._jac = tuple(np.zeros((ni, ndx, n)) for n in (ndx, nu, ndx, nu))
@@ -149,10 +199,11 @@ class RKNode:
         iam = self.model
         if not all(getattr(s, method)(memo) for s in self.stages):
             return False
-        if not self.terminal:
-            if len(iam.rk_c) != len(self.stages):
-                return False
-            self.coef[0], self.coef[1] = iam.rk_c, iam.rk_b
+        c, b = self._tableau()
+        if len(c) != len(self.stages):
+            return False
+        self.coef[0], self.coef[1] = c, b
+        self.cw[:] = control_coefficients(iam.control, self.coef[0])
         self.dts[0] = float(iam.dt)
         self.stamp[0] = 0.0
         return True
@@ -172,7 +223,7 @@ class RKNode:
             cost = euler_kernel.node_calc(self.tbls[0], self.ints, self.par, x, self.no_control)
         else:
             cost = kernel.rk_calc(self.tbls, self.ints, self.par, self.coef[0], self.coef[1], self.dts, self.stamp,
-                                  x, u, *self._values)
+                                  self.cw, self.w, x, u, *self._values)
         if math.isfinite(cost):
             self._data().cost = cost
         else:
@@ -183,7 +234,8 @@ class RKNode:
             cost = euler_kernel.node_calc_diff(self.tbls[0], self.ints, self.par, x, self.no_control)
         else:
             cost = kernel.rk_calc_diff(self.tbls, self.ints, self.par, self.coef[0], self.coef[1], self.dts,
-                                       self.stamp, x, u, self._work, self._jac, self._out)
+                                       self.stamp, self.cw, self.w, x, u, self._work, self._jac, self._mapped,
+                                       self._out)
         if math.isfinite(cost):
             self._data().cost = cost
         else:
@@ -207,4 +259,45 @@ class RKNode:
         """One node of the DDP family's rollout (:func:`.rk_node_kernel.rk_rollout_step` on this node's arrays):
         ``rollout_step(x_ref, x, u_ref, k, K, alpha, lb, ub, u, dx, x_next, f, gap) -> cost``."""
         return partial(kernel.rk_rollout_step, self.tbls, self.ints, self.par, self.coef[0], self.coef[1], self.dts,
-                       self.stamp, (*self._values, self._step))
+                       self.stamp, self.cw, self.w, (*self._values, self._step))
+
+
+class ControlledEulerNode(RKNode):
+    """The compiled ``calc``/``calcDiff`` of an Euler node with a polynomial control parametrization: its Euler table
+    (sized by ``w``) over the node's own action arrays at ``w = w(0, u)``, the control derivatives mapped to ``u``
+    (:mod:`.control_map_kernel`)."""
+
+    single = True
+
+    def _differentials(self, data) -> list:
+        return [data.differential]
+
+    def _tableau(self) -> tuple:
+        return (0.0,), (1.0,)
+
+    def calc(self, x: np.ndarray, u: np.ndarray | None) -> None:
+        if self.terminal:
+            super().calc(x, u)
+            return
+        cost = kernel.controlled_euler_calc(self.tbls[0], self.ints, self.par, self.cw, self.w, x, u)
+        if math.isfinite(cost):
+            self._data().cost = cost
+        else:
+            self.python_path(x, u, False)
+
+    def calcDiff(self, x: np.ndarray, u: np.ndarray | None, synced: bool) -> None:
+        if self.terminal:
+            super().calcDiff(x, u, synced)
+            return
+        data = self._data()
+        cost = kernel.controlled_euler_calc_diff(self.tbls[0], self.ints, self.par, self.cw, self.w, x, u, data.Fu,
+                                                 data.Lu, data.Lxu, data.Luu)
+        if math.isfinite(cost):
+            data.cost = cost
+        else:
+            self.python_path(x, u, True)
+
+    @property
+    def rollout_step(self):
+        """One node of the DDP family's rollout (:func:`.rk_node_kernel.controlled_euler_rollout_step`)."""
+        return partial(kernel.controlled_euler_rollout_step, self.tbls[0], self.ints, self.par, self.cw, self.w)

@@ -26,7 +26,15 @@ import math
 from crocopy.kernels import uncounted
 
 from .configuration_kernel import dintegrate_blocks, state_integrate
-from .euler_node_kernel import differential_calc, differential_calc_diff, step_control
+from .control_map_kernel import map_controls, stage_control
+from .euler_node_kernel import (
+    differential_calc,
+    differential_calc_diff,
+    node_calc,
+    node_calc_diff,
+    step_control,
+    step_next,
+)
 from .node_table import (
     E_A,
     E_DFU,
@@ -36,9 +44,12 @@ from .node_table import (
     E_DLX,
     E_DLXU,
     E_DLXX,
+    E_FU,
+    E_LU,
+    E_LUU,
+    E_LXU,
     E_STAMP,
     NQ,
-    NU,
     NV,
     entry_model,
     mat,
@@ -81,9 +92,10 @@ def _spend(tbls, ints):
 
 
 @uncounted
-def rk_calc(tbls, ints, par, c, b, dts, stamp, x, u, y, dy, k, dx, xnext):
+def rk_calc(tbls, ints, par, c, b, dts, stamp, cw, w, x, u, y, dy, k, dx, xnext):
     """``dx``, ``xnext`` of the node at ``(x, u)``; returns its cost, NaN where a stage's acceleration is not finite
-    (the caller evaluates the node on the Python path).  ``dts = [dt]``."""
+    (the caller evaluates the node on the Python path).  ``dts = [dt]``; stage ``i`` reads the control
+    ``wᵢ = Σₖ cw[i, k] uₖ`` (:func:`.control_map_kernel.stage_control`, into ``w[i]``)."""
     dt = dts[0]
     stamp[0] = 0.0
     n = 2 * ints[NV]
@@ -93,14 +105,15 @@ def rk_calc(tbls, ints, par, c, b, dts, stamp, x, u, y, dy, k, dx, xnext):
     for i in range(tbls.shape[0]):
         tbl = tbls[i]
         _stage_state(tbl, ints, x, dt, c, i, k, dy, y)
-        value = differential_calc(tbl, ints, par, y[i], u)
+        stage_control(cw, i, u, w)
+        value = differential_calc(tbl, ints, par, y[i], w[i])
         if math.isnan(value):
             return value
         _rate(tbl, ints, y, k, i)
         if b[i] != 0.0:
-            w = b[i] * dt
+            h = b[i] * dt
             for j in range(n):
-                dx[j] += w * k[i, j]
+                dx[j] += h * k[i, j]
             cost += b[i] * value
     rb = entry_model(tbls[0], ints)
     state_integrate(rb.jtype, rb.idx_q, rb.idx_v, ints[NQ], ints[NV], x, dx, xnext)
@@ -147,11 +160,12 @@ def _blocks(tbl, ints, step, Jq, Jv):
 
 
 @uncounted
-def _rate_jacobians(tbl, ints, i, dydx, dydu, dkdx, dkdu):
-    """``∂kᵢ/∂x = (∂yᵢ/∂x[nv:], ∂aᵢ/∂y ∂yᵢ/∂x)``, ``∂kᵢ/∂u = (∂yᵢ/∂u[nv:], ∂aᵢ/∂y ∂yᵢ/∂u + ∂aᵢ/∂u)``."""
-    nv, nu = ints[NV], ints[NU]
+def _rate_jacobians(tbl, ints, i, dydx, dydu, dkdx, dkdu, dFu):
+    """``∂kᵢ/∂x = (∂yᵢ/∂x[nv:], ∂aᵢ/∂y ∂yᵢ/∂x)``, ``∂kᵢ/∂u = (∂yᵢ/∂u[nv:], ∂aᵢ/∂y ∂yᵢ/∂u + ∂aᵢ/∂u)`` (``dFu``:
+    ``∂aᵢ/∂u``, the stage's ``∂aᵢ/∂wᵢ`` mapped to ``u``)."""
+    nv, nu = ints[NV], dFu.shape[1]
     n = 2 * nv
-    dFx, dFu = mat(tbl, ints, E_DFX), mat(tbl, ints, E_DFU)
+    dFx = mat(tbl, ints, E_DFX)
     for r in range(nv):
         for col in range(n):
             dkdx[i, r, col] = dydx[i, nv + r, col]
@@ -168,11 +182,13 @@ def _rate_jacobians(tbl, ints, i, dydx, dydu, dkdx, dkdu):
 
 
 @uncounted
-def _first_stage(tbl, ints, w, dkdx, dkdu, sums):
-    """Stage 0 (``∂y₀/∂x = I``, ``∂y₀/∂u = 0``): its ``∂k₀`` and the sums started from its terms times ``w``."""
-    nv, nu = ints[NV], ints[NU]
+def _first_stage(tbl, ints, w, dkdx, dkdu, mapped, sums):
+    """Stage 0 (``∂y₀/∂x = I``, ``∂y₀/∂u = 0``): its ``∂k₀`` and the sums started from its terms times ``w``
+    (``mapped``: the stage's control derivatives mapped to ``u``)."""
+    dFu, dLu, dLxu, dLuu = mapped
+    nv, nu = ints[NV], dFu.shape[1]
     n = 2 * nv
-    dFx, dFu = mat(tbl, ints, E_DFX), mat(tbl, ints, E_DFU)
+    dFx = mat(tbl, ints, E_DFX)
     for r in range(nv):
         for col in range(n):
             dkdx[0, r, col] = 1.0 if col == nv + r else 0.0
@@ -181,8 +197,7 @@ def _first_stage(tbl, ints, w, dkdx, dkdu, sums):
             dkdu[0, r, col] = 0.0
             dkdu[0, nv + r, col] = dFu[r, col]
     kx_sum, ku_sum, Lx, Lu, Lxx, Lxu, Luu = sums
-    dLx, dLu, dLxx = vec(tbl, ints, E_DLX), vec(tbl, ints, E_DLU), mat(tbl, ints, E_DLXX)
-    dLxu, dLuu = mat(tbl, ints, E_DLXU), mat(tbl, ints, E_DLUU)
+    dLx, dLxx = vec(tbl, ints, E_DLX), mat(tbl, ints, E_DLXX)
     for r in range(n):
         Lx[r] = w * dLx[r]
         for col in range(n):
@@ -198,13 +213,13 @@ def _first_stage(tbl, ints, w, dkdx, dkdu, sums):
 
 
 @uncounted
-def _add_stage(tbl, ints, i, w, dydx, dydu, dkdx, dkdu, LxxJ, T, sums):
+def _add_stage(tbl, ints, i, w, dydx, dydu, dkdx, dkdu, LxxJ, T, mapped, sums):
     """Add stage ``i``'s terms times ``w = bᵢ dt`` to the sums (scratch: ``LxxJ`` ``ndx × nu``, ``T`` ``ndx × ndx``):
     ``T = lyy ∂y/∂x``, ``LxxJ = lyy ∂y/∂u``, then each sum row by row, adding whole rows (contiguous loops)."""
-    n, nu = 2 * ints[NV], ints[NU]
+    _, dLu, dLxu, dLuu = mapped
+    n, nu = 2 * ints[NV], dLu.shape[0]
     kx_sum, ku_sum, Lx, Lu, Lxx, Lxu, Luu = sums
-    dLx, dLu, dLxx = vec(tbl, ints, E_DLX), vec(tbl, ints, E_DLU), mat(tbl, ints, E_DLXX)
-    dLxu, dLuu = mat(tbl, ints, E_DLXU), mat(tbl, ints, E_DLUU)
+    dLx, dLxx = vec(tbl, ints, E_DLX), mat(tbl, ints, E_DLXX)
     for r in range(n):
         for col in range(n):
             kx_sum[r, col] += w * dkdx[i, r, col]
@@ -243,10 +258,12 @@ def _add_stage(tbl, ints, i, w, dydx, dydu, dkdx, dkdu, LxxJ, T, sums):
 
 
 @uncounted
-def rk_calc_diff(tbls, ints, par, c, b, dts, stamp, x, u, work, jac, out):
+def rk_calc_diff(tbls, ints, par, c, b, dts, stamp, cw, w, x, u, work, jac, mapped, out):
     """Values and derivatives of the node at ``(x, u)`` (module docstring); returns its cost, NaN where a stage's
     acceleration is not finite.  ``work = (y, dy, k, Jq, Jv, T, LxxJ)``, ``jac = (dydx, dydu, dkdx, dkdu)``
-    (per stage), ``out = (dx, xnext, Fx, Fu, kx_sum, ku_sum, Lx, Lu, Lxx, Lxu, Luu)``."""
+    (per stage), ``mapped = (Fu, Lu, Lxu, Luu)`` (scratch: a stage's control derivatives mapped to ``u``,
+    :func:`.control_map_kernel.map_controls`), ``out = (dx, xnext, Fx, Fu, kx_sum, ku_sum, Lx, Lu, Lxx, Lxu,
+    Luu)``; ``cw``, ``w`` as for :func:`rk_calc`."""
     dt = dts[0]
     y, dy, k, Jq, Jv, T, LxxJ = work
     dydx, dydu, dkdx, dkdu = jac
@@ -268,20 +285,23 @@ def rk_calc_diff(tbls, ints, par, c, b, dts, stamp, x, u, work, jac, out):
             _blocks(tbl, ints, dy[i], Jq, Jv)
             _integrate_jacobian(tbl, ints, Jq, Jv, h, dkdx[i - 1], True, dydx[i])
             _integrate_jacobian(tbl, ints, Jq, Jv, h, dkdu[i - 1], False, dydu[i])
-        value = differential_calc_diff(tbl, ints, par, y[i], u)
+        stage_control(cw, i, u, w)
+        value = differential_calc_diff(tbl, ints, par, y[i], w[i])
         if math.isnan(value):
             return value
         _rate(tbl, ints, y, k, i)
-        w = b[i] * dt
+        map_controls(mat(tbl, ints, E_DFU), vec(tbl, ints, E_DLU), mat(tbl, ints, E_DLXU), mat(tbl, ints, E_DLUU),
+                     cw[i], *mapped)
+        weight = b[i] * dt
         if i == 0:
-            _first_stage(tbl, ints, w, dkdx, dkdu, sums)
+            _first_stage(tbl, ints, weight, dkdx, dkdu, mapped, sums)
         else:
-            _rate_jacobians(tbl, ints, i, dydx, dydu, dkdx, dkdu)
+            _rate_jacobians(tbl, ints, i, dydx, dydu, dkdx, dkdu, mapped[0])
             if b[i] != 0.0:
-                _add_stage(tbl, ints, i, w, dydx, dydu, dkdx, dkdu, LxxJ, T, sums)
+                _add_stage(tbl, ints, i, weight, dydx, dydu, dkdx, dkdu, LxxJ, T, mapped, sums)
         if b[i] != 0.0:
             for j in range(n):
-                dx[j] += w * k[i, j]
+                dx[j] += weight * k[i, j]
             cost += b[i] * value
     tbl = tbls[0]
     rb = entry_model(tbl, ints)
@@ -294,15 +314,15 @@ def rk_calc_diff(tbls, ints, par, c, b, dts, stamp, x, u, work, jac, out):
 
 
 @uncounted
-def rk_rollout_step(tbls, ints, par, c, b, dts, stamp, values, x_ref, x, u_ref, kff, K, alpha, lb, ub, u, dxs, x_next,
-                    f, gap):
+def rk_rollout_step(tbls, ints, par, c, b, dts, stamp, cw, w, values, x_ref, x, u_ref, kff, K, alpha, lb, ub, u, dxs,
+                    x_next, f, gap):
     """One node of the DDP family's rollout (as :func:`.euler_node_kernel.node_rollout_step`): ``dxs = x ⊖ x_ref``,
     ``u = clamp(u_ref - α kff - K dxs, lb, ub)``, the node at ``(x, u)`` (``values = (y, dy, k, dx, xnext)``), and
     ``x_next = xnext``, or ``xnext ⊕ ((α - 1) f)`` if ``gap`` (``step``: scratch); returns the node's cost."""
     y, dy, k, dx, xnext, step = values
     tbl = tbls[0]
     step_control(tbl, ints, x_ref, x, u_ref, kff, K, alpha, lb, ub, u, dxs)
-    cost = rk_calc(tbls, ints, par, c, b, dts, stamp, x, u, y, dy, k, dx, xnext)
+    cost = rk_calc(tbls, ints, par, c, b, dts, stamp, cw, w, x, u, y, dy, k, dx, xnext)
     nq, nv = ints[NQ], ints[NV]
     if gap:
         for i in range(2 * nv):
@@ -314,3 +334,34 @@ def rk_rollout_step(tbls, ints, par, c, b, dts, stamp, values, x_ref, x, u_ref, 
             x_next[i] = xnext[i]
     return cost
 
+
+
+@uncounted
+def controlled_euler_calc(tbl, ints, par, cw, w, x, u):
+    """An Euler node with a control parametrization at ``(x, u)``: its table (sized by ``w``) at ``w = w(0, u)``
+    (:func:`.euler_node_kernel.node_calc`, into ``w[0]``); returns its cost."""
+    stage_control(cw, 0, u, w)
+    return node_calc(tbl, ints, par, x, w[0])
+
+
+@uncounted
+def controlled_euler_calc_diff(tbl, ints, par, cw, w, x, u, Fu, Lu, Lxu, Luu):
+    """:func:`controlled_euler_calc` with the derivatives (:func:`.euler_node_kernel.node_calc_diff`), the table's
+    control derivatives mapped to the node's ``Fu``, ``Lu``, ``Lxu``, ``Luu``; returns its cost."""
+    stage_control(cw, 0, u, w)
+    cost = node_calc_diff(tbl, ints, par, x, w[0])
+    if not math.isnan(cost):
+        map_controls(mat(tbl, ints, E_FU), vec(tbl, ints, E_LU), mat(tbl, ints, E_LXU), mat(tbl, ints, E_LUU), cw[0],
+                     Fu, Lu, Lxu, Luu)
+    return cost
+
+
+@uncounted
+def controlled_euler_rollout_step(tbl, ints, par, cw, w, x_ref, x, u_ref, kff, K, alpha, lb, ub, u, dxs, x_next, f,
+                                  gap):
+    """One node of the rollout (as :func:`.euler_node_kernel.node_rollout_step`) of an Euler node with a control
+    parametrization: ``u`` from the feedback, the node at ``w = w(0, u)``."""
+    step_control(tbl, ints, x_ref, x, u_ref, kff, K, alpha, lb, ub, u, dxs)
+    cost = controlled_euler_calc(tbl, ints, par, cw, w, x, u)
+    step_next(tbl, ints, alpha, x_next, f, gap)
+    return cost
