@@ -48,12 +48,12 @@ def free_reasons_problem():
     manager = crocopy.ConstraintModelManager(state, nu)
     bounds = crocopy.ConstraintModelResidual(state, crocopy.ResidualModelControl(state, nu), -np.ones(nu), np.ones(nu))
     manager.addConstraint("u", bounds)
-    bounded_only = crocopy.ConstraintModelManager(state, nu)
-    bounded_only.addConstraint("u", bounds)
-    poly = crocopy.ControlParametrizationModelPolyOne(nu)
-    bounded = crocopy.DifferentialActionModelFreeFwdDynamics(state, dam.actuation, costs, bounded_only)
-    models[2] = crocopy.IntegratedActionModelEuler(bounded, poly, 0.01)
     tip = state.pinocchio.nframes - 1
+    user_costs = crocopy.CostModelSum(state, nu)
+    user_costs.addCost("user", crocopy.CostModelResidual(
+        state, python_frame_translation(crocopy)(state, tip, np.zeros(3), nu)), 1.0)
+    models[2] = crocopy.IntegratedActionModelRK(
+        crocopy.DifferentialActionModelFreeFwdDynamics(state, dam.actuation, user_costs), crocopy.RKType.four, 0.01)
     manager.addConstraint("v", crocopy.ConstraintModelResidual(
         state, python_frame_translation(crocopy)(state, tip, np.zeros(3), nu)))
     constrained = crocopy.DifferentialActionModelFreeFwdDynamics(state, dam.actuation, costs, manager)
@@ -70,7 +70,7 @@ def free_reasons_problem():
     return crocopy.ShootingProblem(problem.x0, models, problem.terminalModel)
 
 
-FREE_REASONS = [None, None, "constraints with control parametrization ControlParametrizationModelPolyOne",
+FREE_REASONS = [None, None, "user Python residual in a Runge-Kutta node",
                 "user Python subclass: constraint residual PythonFrameTranslation",
                 "user Python subclass: actuation UserActuation", "activation ActivationModelNumDiff",
                 "user Python subclass: integrator UserRK", None]

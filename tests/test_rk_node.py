@@ -284,16 +284,28 @@ def test_solves_with_control_parametrizations_match_the_python_nodes(name):
     assert outcomes[0][1] == pytest.approx(outcomes[1][1], rel=1e-9)
 
 
-def test_constraints_with_a_control_parametrization_keep_the_python_path():
+@pytest.mark.parametrize("make", [m for _, m in CONTROLLED], ids=[n for n, _ in CONTROLLED])
+def test_constraint_rows_with_a_control_parametrization_match_the_python_node(make):
+    """Control bounds, an equality and a frame box as constraints: the node's ``g, Gx, Gu, h, Hx, Hu`` are the Python
+    node's (the first stage's, ``Gu``, ``Hu`` mapped to ``u``)."""
     iam, state = node("kinova", ("state", "control"))
     dam = iam.differential
-    manager = crocopy.ConstraintModelManager(state, dam.nu)
+    nu = dam.nu
+    manager = crocopy.ConstraintModelManager(state, nu)
     manager.addConstraint("u", crocopy.ConstraintModelResidual(
-        state, crocopy.ResidualModelControl(state, dam.nu), -np.ones(dam.nu), np.ones(dam.nu)))
-    bounded = crocopy.DifferentialActionModelFreeFwdDynamics(state, dam.actuation, dam.costs, manager)
-    memo: dict = {}
-    for _, make in CONTROLLED:
-        model = make(bounded)
-        assert model._compiled_node(model.createData(), False, memo) is None
-        assert memo["why not compiled"].startswith("constraints with control parametrization")
-        assert model._compiled_node(model.createData(), True, {}) is not None
+        state, crocopy.ResidualModelControl(state, nu), -np.ones(nu), np.ones(nu)))
+    tip = state.pinocchio.nframes - 1
+    manager.addConstraint("p", crocopy.ConstraintModelResidual(
+        state, crocopy.ResidualModelFrameTranslation(state, tip, np.array([0.1, 0.2, 0.3]), nu),
+        -np.ones(3), np.ones(3)))
+    manager.addConstraint("eq", crocopy.ConstraintModelResidual(
+        state, crocopy.ResidualModelControl(state, 0.1 * np.ones(nu)), False))
+    model = make(crocopy.DifferentialActionModelFreeFwdDynamics(state, dam.actuation, dam.costs, manager))
+    assert model.nh > 0 and model.ng > 0
+    x, u = point(state, model.nu, 2)
+    fast, slow = model.createData(), model.createData()
+    model._compiled_node(fast, False, {}).calcDiff(x, u, False)
+    model.calc(slow, x, u)
+    model.calcDiff(slow, x, u)
+    for name in ("g", "Gx", "Gu", "h", "Hx", "Hu", "Fu", "Luu"):
+        np.testing.assert_allclose(getattr(fast, name), getattr(slow, name), rtol=1e-9, atol=1e-12, err_msg=name)

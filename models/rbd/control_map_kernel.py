@@ -5,7 +5,8 @@ time ``τ`` (:mod:`crocopy.integrators.control_poly`)
     w = Σₖ cₖ(τ) uₖ,   ∂w/∂u = [c₀ I, …, c_{K-1} I],
 
 so that a stage's derivatives map as ``Fu = Fw ∂w/∂u``, ``Lu = ∂w/∂uᵀ Lw``, ``Lxu = Lxw ∂w/∂u``,
-``Luu = ∂w/∂uᵀ Lww ∂w/∂u``: blocks of ``Fw``, ``Lw``, ``Lxw`` scaled by ``cₖ``, of ``Lww`` by ``cₖ cₗ``.  The
+``Luu = ∂w/∂uᵀ Lww ∂w/∂u``, ``Gu = Gw ∂w/∂u``, ``Hu = Hw ∂w/∂u``: blocks of ``Fw``, ``Lw``, ``Lxw``, ``Gw``, ``Hw``
+scaled by ``cₖ``, of ``Lww`` by ``cₖ cₗ``.  The
 identity parametrization is ``K = 1``, ``c₀ = 1``.
 """
 
@@ -47,3 +48,14 @@ def map_controls(Fw, Lw, Lxw, Lww, c, Fu, Lu, Lxu, Luu):
             for r in range(nw):
                 for j in range(nw):
                     Luu[first + r, second + j] = s * (t * Lww[r, j])
+
+
+@uncounted
+def map_rows(Gw, c, Gu):
+    """``Gu = Gw ∂w/∂u``: a constraint Jacobian's blocks ``cₖ Gw`` (nothing for zero rows)."""
+    nw = Gw.shape[1]
+    for blk in range(c.shape[0]):
+        s = c[blk]
+        for r in range(Gw.shape[0]):
+            for j in range(nw):
+                Gu[r, blk * nw + j] = s * Gw[r, j]

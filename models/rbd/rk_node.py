@@ -4,8 +4,8 @@ one numba call per node evaluation inside a solve.
 :class:`RKNode` is the evaluator (:mod:`crocopy.solvers.compiled_nodes`) of an ``IntegratedActionModelRK`` node
 (RK2, RK3, RK4; the exact class) over a differential model whose Euler nodes compile (:mod:`.euler_node`), with
 crocopy's polynomial control parametrizations (``PolyZero``, ``PolyOne``, ``PolyTwoRK``: stage ``i`` reads
-``wᵢ = w(cᵢ, u)``, its control derivatives mapped to ``u`` by :mod:`.control_map_kernel`; a node with constraints
-takes the identity parametrization alone).  Each stage ``i`` is such an Euler node's table
+``wᵢ = w(cᵢ, u)``, its control derivatives and the node's constraint Jacobians ``Gu``, ``Hu`` mapped to ``u`` by
+:mod:`.control_map_kernel`).  Each stage ``i`` is such an Euler node's table
 (:class:`.euler_node.EulerNode`) over the stage's own differential data ``data.differential[i]``: its dynamics,
 residuals, constraint rows and the differential model's derivatives are the Euler kernels'
 (:func:`.euler_node_kernel.differential_calc`, ``differential_calc_diff``, which leave out the Euler step), and
@@ -22,7 +22,7 @@ around its compiled call, has no place between the stages: such a node declines.
 
 :class:`ControlledEulerNode` is the evaluator of an Euler node with a ``PolyOne`` or ``PolyTwoRK`` parametrization:
 one stage, an Euler node's table over the node's own arrays (scratch for those sized by the controls), at
-``w = w(0, u)``, its ``Fu``, ``Lu``, ``Lxu``, ``Luu`` mapped to ``u``.
+``w = w(0, u)``, its ``Fu``, ``Lu``, ``Lxu``, ``Luu``, ``Gu``, ``Hu`` mapped to ``u``.
 """
 
 from __future__ import annotations
@@ -131,9 +131,6 @@ class RKNode:
         reason recorded in ``memo``)."""
         iam, data = self.model, self._data()
         nw, differentials = iam.differential.nu, self._differentials(data)
-        if not self.terminal and iam.nu != nw and data.g.shape[0] + data.h.shape[0]:
-            decline(memo, f"constraints with control parametrization {type(iam.control).__name__}")
-            return False
         if len(self.stage_datas) != len(differentials) or any(
                 s.differential is not d for s, d in zip(self.stage_datas, differentials)) \
                 or any(getattr(self.stage_datas[0], n).shape[0] != getattr(data, n).shape[0]
@@ -235,7 +232,7 @@ class RKNode:
         else:
             cost = kernel.rk_calc_diff(self.tbls, self.ints, self.par, self.coef[0], self.coef[1], self.dts,
                                        self.stamp, self.cw, self.w, x, u, self._work, self._jac, self._mapped,
-                                       self._out)
+                                       (self._data().Gu, self._data().Hu), self._out)
         if math.isfinite(cost):
             self._data().cost = cost
         else:
@@ -291,7 +288,7 @@ class ControlledEulerNode(RKNode):
             return
         data = self._data()
         cost = kernel.controlled_euler_calc_diff(self.tbls[0], self.ints, self.par, self.cw, self.w, x, u, data.Fu,
-                                                 data.Lu, data.Lxu, data.Luu)
+                                                 data.Lu, data.Lxu, data.Luu, (data.Gu, data.Hu))
         if math.isfinite(cost):
             data.cost = cost
         else:

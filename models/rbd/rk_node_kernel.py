@@ -26,7 +26,7 @@ import math
 from crocopy.kernels import uncounted
 
 from .configuration_kernel import dintegrate_blocks, state_integrate
-from .control_map_kernel import map_controls, stage_control
+from .control_map_kernel import map_controls, map_rows, stage_control
 from .euler_node_kernel import (
     differential_calc,
     differential_calc_diff,
@@ -45,6 +45,8 @@ from .node_table import (
     E_DLXU,
     E_DLXX,
     E_FU,
+    E_GU,
+    E_HU,
     E_LU,
     E_LUU,
     E_LXU,
@@ -258,12 +260,12 @@ def _add_stage(tbl, ints, i, w, dydx, dydu, dkdx, dkdu, LxxJ, T, mapped, sums):
 
 
 @uncounted
-def rk_calc_diff(tbls, ints, par, c, b, dts, stamp, cw, w, x, u, work, jac, mapped, out):
+def rk_calc_diff(tbls, ints, par, c, b, dts, stamp, cw, w, x, u, work, jac, mapped, rows, out):
     """Values and derivatives of the node at ``(x, u)`` (module docstring); returns its cost, NaN where a stage's
     acceleration is not finite.  ``work = (y, dy, k, Jq, Jv, T, LxxJ)``, ``jac = (dydx, dydu, dkdx, dkdu)``
     (per stage), ``mapped = (Fu, Lu, Lxu, Luu)`` (scratch: a stage's control derivatives mapped to ``u``,
-    :func:`.control_map_kernel.map_controls`), ``out = (dx, xnext, Fx, Fu, kx_sum, ku_sum, Lx, Lu, Lxx, Lxu,
-    Luu)``; ``cw``, ``w`` as for :func:`rk_calc`."""
+    :func:`.control_map_kernel.map_controls`), ``rows = (Gu, Hu)`` (the node's, from the first stage's),
+    ``out = (dx, xnext, Fx, Fu, kx_sum, ku_sum, Lx, Lu, Lxx, Lxu, Luu)``; ``cw``, ``w`` as for :func:`rk_calc`."""
     dt = dts[0]
     y, dy, k, Jq, Jv, T, LxxJ = work
     dydx, dydu, dkdx, dkdu = jac
@@ -294,6 +296,7 @@ def rk_calc_diff(tbls, ints, par, c, b, dts, stamp, cw, w, x, u, work, jac, mapp
                      cw[i], *mapped)
         weight = b[i] * dt
         if i == 0:
+            _map_rows(tbl, ints, cw[0], rows)
             _first_stage(tbl, ints, weight, dkdx, dkdu, mapped, sums)
         else:
             _rate_jacobians(tbl, ints, i, dydx, dydu, dkdx, dkdu, mapped[0])
@@ -311,6 +314,17 @@ def rk_calc_diff(tbls, ints, par, c, b, dts, stamp, cw, w, x, u, work, jac, mapp
     _integrate_jacobian(tbl, ints, Jq, Jv, 1.0, sums[1], False, Fu)
     stamp[0] = 1.0
     return dt * cost
+
+
+@uncounted
+def _map_rows(tbl, ints, c, rows):
+    """The node's ``Gu``, ``Hu`` (``rows``) from the constraint rows of a table sized by ``w``
+    (:func:`.control_map_kernel.map_rows`)."""
+    Gu, Hu = rows
+    if Gu.shape[0]:
+        map_rows(mat(tbl, ints, E_GU), c, Gu)
+    if Hu.shape[0]:
+        map_rows(mat(tbl, ints, E_HU), c, Hu)
 
 
 @uncounted
@@ -345,14 +359,16 @@ def controlled_euler_calc(tbl, ints, par, cw, w, x, u):
 
 
 @uncounted
-def controlled_euler_calc_diff(tbl, ints, par, cw, w, x, u, Fu, Lu, Lxu, Luu):
+def controlled_euler_calc_diff(tbl, ints, par, cw, w, x, u, Fu, Lu, Lxu, Luu, rows):
     """:func:`controlled_euler_calc` with the derivatives (:func:`.euler_node_kernel.node_calc_diff`), the table's
-    control derivatives mapped to the node's ``Fu``, ``Lu``, ``Lxu``, ``Luu``; returns its cost."""
+    control derivatives mapped to the node's ``Fu``, ``Lu``, ``Lxu``, ``Luu`` and ``rows = (Gu, Hu)``; returns its
+    cost."""
     stage_control(cw, 0, u, w)
     cost = node_calc_diff(tbl, ints, par, x, w[0])
     if not math.isnan(cost):
         map_controls(mat(tbl, ints, E_FU), vec(tbl, ints, E_LU), mat(tbl, ints, E_LXU), mat(tbl, ints, E_LUU), cw[0],
                      Fu, Lu, Lxu, Luu)
+        _map_rows(tbl, ints, cw[0], rows)
     return cost
 
 
