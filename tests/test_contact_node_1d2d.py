@@ -66,12 +66,56 @@ def test_solves_with_projected_contacts_match_the_python_nodes(case):
     assert outcomes[0][1] == pytest.approx(outcomes[1][1], rel=1e-9)
 
 
-def test_a_force_residual_on_a_1d_contact_keeps_the_python_path():
-    dam = make_dam("1L1A1W1L", (0.0, 0.0), lambda state, fid, nu: crocopy.ResidualModelContactForce(
-        state, fid, pin.Force.Zero(), 1, nu))
+def force(state, fid, nu):
+    return crocopy.ResidualModelContactForce(state, fid, pin.Force(np.array([0.3, -0.2, 5.0, 0.1, 0.2, 0.3])), 1, nu)
+
+
+def cone(state, fid, nu):
+    return crocopy.ResidualModelContactFrictionCone(
+        state, fid, crocopy.FrictionCone(pin.rpy.rpyToMatrix(0.1, -0.2, 0.3), 0.7, 4, False), nu)
+
+
+FORCE_CASES = [(CASES[0], force), (CASES[1], force), (CASES[4], force), (CASES[2], cone), (CASES[3], cone)]
+FORCE_IDS = ["1D-local-force", "1D-gains-force", "1D-lwa-force", "2D-cone", "2D-gains-cone"]
+
+
+@pytest.mark.parametrize("case, residual", FORCE_CASES, ids=FORCE_IDS)
+def test_force_residuals_on_1d_and_2d_contacts_compile_and_match_the_python_node(case, residual):
+    """A contact-force residual on a 1D contact (``nc = 1``: the force along its axis) and a friction cone on a 2D
+    contact read the contact's own rows (``A E``, :func:`crocopy.models.rbd.contact_lowering.force_parameters`)."""
+    dam = make_dam(*case, residual, seed=4)
     iam = crocopy.IntegratedActionModelEuler(dam, 0.01)
     problem = crocopy.ShootingProblem(dam.state.zero(), [iam], iam)
-    assert "1D or 2D contact" in crocopy.compiled_coverage(problem)[0].reason
+    assert all(entry.compiled for entry in crocopy.compiled_coverage(problem))
+    x, u = point(dam.state, iam.nu, 4)
+    compare_with_python_node(iam, x, u, False, rtol=1e-7, atol=1e-7, cost_rel=1e-9)
+    check_finite_differences(iam, dam.state, x, u, h=1e-6, atol=1e-5, roundoff=1e-10)
+
+
+@pytest.mark.parametrize("case, residual", [(CASES[0], force), (CASES[2], cone), (CASES[3], cone)],
+                         ids=["1D-force", "2D-cone", "2D-gains-cone"])
+def test_force_constraints_on_1d_and_2d_contacts_match_the_python_node(case, residual):
+    """The force of a 1D contact as an equality, a friction cone on a 2D contact as an inequality: the node's rows."""
+    dam = make_dam(*case, seed=5)
+    state, nu = dam.state, dam.nu
+    constraint = residual(state, state.pinocchio.getFrameId("LF_FOOT"), nu)
+    bounds = np.full(constraint.nr, np.inf)
+    manager = crocopy.ConstraintModelManager(state, nu)
+    manager.addConstraint("c", crocopy.ConstraintModelResidual(state, constraint, False) if residual is force
+                          else crocopy.ConstraintModelResidual(state, constraint, -bounds, np.zeros(constraint.nr)))
+    constrained = crocopy.DifferentialActionModelContactFwdDynamics(state, dam.actuation, dam.contacts, dam.costs,
+                                                                    manager, 0.0, True)
+    constrained.use_pinocchio_constraints = False
+    iam = crocopy.IntegratedActionModelEuler(constrained, 0.01)
+    x, u = point(state, nu, 5)
+    fast, slow = iam.createData(), iam.createData()
+    iam._compiled_node(fast, False, {}).calcDiff(x, u, False)
+    iam.calc(slow, x, u)
+    iam.calcDiff(slow, x, u)
+    assert iam.ng + iam.nh == constraint.nr
+    for name in ("g", "Gx", "Gu", "h", "Hx", "Hu"):
+        a, b = getattr(fast, name), getattr(slow, name)
+        np.testing.assert_allclose(a, b, rtol=1e-8, atol=1e-8 * max(1.0, np.abs(b).max(initial=0.0)), err_msg=name)
 
 
 def test_projected_contact_parameters_are_read_again():

@@ -64,11 +64,13 @@ class ConstraintRows:
         self.user_rows = 0
         """The rows of the largest user residual (``ResidualModelNumba``): the node's ``user_Ru`` holds as many."""
 
-    def read(self, manager, terminal: bool, kind_of, offset: int, parameters, contact_rows: dict) -> str | None:
+    def read(self, manager, terminal: bool, kind_of, offset: int, parameters, contact_rows: dict,
+             impulses: bool = False) -> str | None:
         """Read ``manager`` (or None) of a node (``terminal`` or not): items, parameters from ``offset`` on in ``par``
         (``parameters(kind, residual)`` their values, ``kind_of(residual)`` the kernel's kind or None; a cone's
-        contact by its frame in ``contact_rows``: ``frame -> (first row, rows)`` of the active contacts); returns
-        None, or why the node cannot compile (:mod:`crocopy.not_compiled`)."""
+        contact by its frame in ``contact_rows``: ``frame -> (first row, rows)`` of the active contacts, or of the
+        impulses, ``impulses``: their force items flagged, as an impulse node's cost items); returns None, or why the
+        node cannot compile (:mod:`crocopy.not_compiled`)."""
         items, residuals, program, row, control_rows, self.user_rows = [], [], [], 0, [], 0
         for item in ([] if manager is None else manager.constraints.values()):
             constraint = item.constraint
@@ -91,11 +93,10 @@ class ConstraintRows:
                 self.user_rows = max(self.user_rows, nr)
             if kind == table.CONE or kind == table.FORCE:
                 first, nc = contact_rows.get(frame, (0, 0))
-                if nc in (1, 2):
-                    return "force constraint on a 1D or 2D contact"
-                if nc < residual.ncf:
+                if nc < residual.min_nc or (nc > 2 and nc < residual.ncf):
                     return "cone constraint without its active contact"
-                frame, reference = first, residual.ncf
+                frame, reference = first, nc if nc in (1, 2) else residual.ncf
+                user[0] = int(impulses)
             items += [kind, row, nr, frame, reference, offset, *user]
             residuals.append((kind, residual))
             program += [int(constraint.nh > 0), row, nr]

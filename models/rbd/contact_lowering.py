@@ -14,7 +14,9 @@ become, in the order of the contact model (by name):
   point contact, :mod:`.contact_kernel`), rewritten in place at each solve.
 
 The force residuals (``ResidualModelContactFrictionCone``, ``ResidualModelContactWrenchCone``,
-``ResidualModelContactForce``) find their contact's first row here (not on a 1D or 2D contact: they decline it).
+``ResidualModelContactForce``) find their contact's first row here.  They read the contact's force ``f`` (``ncf``
+components); a 1D contact's is ``(0, 0, λ, …)``, a 2D contact's ``(λ₀, 0, λ₁, …)``: ``f = E λ``, so their matrix
+``A (nr, ncf)`` becomes ``A E (nr, nc)`` over the contact's own rows (:func:`force_parameters`).
 Inverse-dynamics nodes take the same contacts (their model takes no 2D contact).
 """
 
@@ -89,3 +91,15 @@ def _ints(models: list) -> list[int]:
         ints += [int(m.id), int(m.nc), reference, row]
         row += m.nc
     return ints
+
+
+def force_parameters(values, nr: int, ncf: int, nc: int) -> list[float]:
+    """A force residual's parameters (``A (nr, ncf)`` row-major, then the rest: ``fref``) for a contact of ``nc``
+    rows: ``A`` becomes ``A E (nr, nc)``, ``E`` the embedding of the contact's ``λ`` in its force components (a 1D
+    contact's ``λ`` is the third, a 2D contact's the first and the third; the module docstring)."""
+    values = np.asarray(values, dtype=float)
+    if nc not in (1, 2):
+        return list(values)
+    A = values[: nr * ncf].reshape(nr, ncf)
+    columns = (2,) if nc == 1 else (0, 2)
+    return [*A[:, columns].reshape(-1), *values[nr * ncf:]]

@@ -48,7 +48,7 @@ from ..state_multibody import StateMultibody
 from . import euler_node_kernel as kernel
 from . import node_table as table
 from .constraint_rows import ConstraintRows
-from .contact_lowering import ContactSet
+from .contact_lowering import ContactSet, force_parameters
 from .euler_horizon import EulerHorizon
 from .joint_types import NotLowerable
 from .live_parameters import (
@@ -155,7 +155,7 @@ class EulerNode:
         self._seen = ParametersVersion.value
         self.contacts.refresh()
         par = [float(iam.dt), self._damping(dam)]
-        live = read_parameters(self._residuals, par, self._parameters, read)
+        live = read_parameters(self._residuals, par, self._node_parameters, read)
         if len(par) != self._n_parameters:  # a user residual's parameters() changed length: read the items again
             self._residuals = None
             return self.refresh(low, memo)
@@ -293,7 +293,7 @@ class EulerNode:
         def parameters(kind: int, residual) -> Sequence[float]:
             key = id(residual)
             if key not in read:
-                read[key] = self._parameters(kind, residual)
+                read[key] = self._node_parameters(kind, residual)
             return read[key]
 
         return parameters
@@ -309,12 +309,20 @@ class EulerNode:
             user = [residual.flags, *residual.callbacks(), len(parameters(kind, residual))]
         if kind == table.CONE or kind == table.FORCE:
             row, nc = self.contacts.rows.get(frame, (0, 0))
-            if nc in (1, 2):
-                return "force residual on a 1D or 2D contact"
-            if nc < residual.ncf:
+            if nc < residual.min_nc or (nc > 2 and nc < residual.ncf):
                 return "cone without its active contact"
-            frame, reference = row, residual.ncf
+            frame, reference = row, nc if nc in (1, 2) else residual.ncf
         return [kind, rows.start, rows.stop - rows.start, frame, reference, offset, *user]
+
+    def _node_parameters(self, kind: int, residual) -> Sequence[float]:
+        """:meth:`_parameters`, a force residual's on a 1D or 2D contact over that contact's rows
+        (:func:`.contact_lowering.force_parameters`)."""
+        values = self._parameters(kind, residual)
+        if kind == table.CONE or kind == table.FORCE:
+            nc = self.contacts.rows.get(residual.id, (0, 0))[1]
+            if nc in (1, 2):
+                return force_parameters(values, residual.nr, residual.ncf, nc)
+        return values
 
     @staticmethod
     def _parameters(kind: int, residual) -> Sequence[float]:
