@@ -173,15 +173,45 @@ def test_the_nodes_it_declines_say_why():
     manager = crocopy.ConstraintModelManager(state, 0)
     constrained = crocopy.ActionModelImpulseFwdDynamics(state, model.impulses, model.costs, manager, inv_damping=1e-3)
     assert constrained._compiled_node(constrained.createData(), False, {}) is not None  # no rows: compiles
-    manager.addConstraint("com", crocopy.ConstraintModelResidual(state, crocopy.ResidualModelImpulseCoM(state)))
+    manager.addConstraint("user", crocopy.ConstraintModelResidual(state, user_residuals(state, foot, 0)["com height"]))
     constrained = crocopy.ActionModelImpulseFwdDynamics(state, model.impulses, model.costs, manager, inv_damping=1e-3)
-    assert _declined(constrained) == "constraint residual ResidualModelImpulseCoM in an impulse node"
+    assert _declined(constrained) == "user Python subclass: constraint residual CoMHeight in an impulse node"
 
     class UserImpulse(crocopy.ActionModelImpulseFwdDynamics):
         pass
 
     user = UserImpulse(state, model.impulses, model.costs)
     assert _declined(user) == "user Python subclass: action UserImpulse"
+
+
+@pytest.mark.parametrize("case", ["anymal-lwa", "anymal-local-restitution", "talos-6d-lwa-restitution"])
+def test_force_and_com_jump_constraints_match_the_python_node(case):
+    """The centre-of-mass velocity jump as an equality, the first foot's impulse and its friction or wrench cone as
+    inequalities: their Jacobians follow the impulses' derivatives (the constraint table's late Jacobians)."""
+    model = impulse_model(case)
+    state = model.state
+    foot = state.pinocchio.getFrameId(FEET[CASES[case][0]][0])
+    six = CASES[case][1][0] == "6"
+    manager = crocopy.ConstraintModelManager(state, 0)
+    manager.addConstraint("jump", crocopy.ConstraintModelResidual(state, crocopy.ResidualModelImpulseCoM(state)))
+    force = crocopy.ResidualModelContactForce(state, foot, pin.Force(np.arange(6.0)), 6 if six else 3, 0)
+    manager.addConstraint("f", crocopy.ConstraintModelResidual(state, force, -np.ones(force.nr), np.ones(force.nr)))
+    cone = (crocopy.ResidualModelContactWrenchCone(state, foot, crocopy.WrenchCone(np.eye(3), 0.7,
+                                                                                  np.array([0.1, 0.05])), 0)
+            if six else crocopy.ResidualModelContactFrictionCone(state, foot, crocopy.FrictionCone(np.eye(3), 0.7), 0))
+    manager.addConstraint("cone", crocopy.ConstraintModelResidual(state, cone, np.full(cone.nr, -np.inf),
+                                                                  np.zeros(cone.nr)))
+    constrained = crocopy.ActionModelImpulseFwdDynamics(state, model.impulses, model.costs, manager,
+                                                        model.r_coeff, model.JMinvJt_damping, True)
+    x = random_x(constrained)
+    fast, slow = constrained.createData(), constrained.createData()
+    constrained._compiled_node(fast, False, {}).calcDiff(x, None, False)
+    constrained.calc(slow, x)
+    constrained.calcDiff(slow, x)
+    assert constrained.ng > 0 and constrained.nh == 3
+    for name in ("g", "Gx", "h", "Hx", "Fx", "Lx"):
+        a, b = getattr(fast, name), getattr(slow, name)
+        np.testing.assert_allclose(a, b, rtol=1e-8, atol=1e-8 * max(1.0, np.abs(b).max(initial=0.0)), err_msg=name)
 
 
 def test_impulse_nodes_stay_out_of_the_euler_horizon():

@@ -18,7 +18,8 @@ classes (a subclass may override a step):
   ``ResidualModelCentroidalMomentum``, all at the state before the impulse), or a force residual
   on an active impulse (``ResidualModelContactForce``, ``ResidualModelContactFrictionCone``,
   ``ResidualModelContactWrenchCone``, ``ResidualModelContactCoPPosition``: rows of the impulses ``Λ``), or the
-  centre-of-mass velocity jump ``ResidualModelImpulseCoM`` (their Jacobians follow the impulses' derivatives).
+  centre-of-mass velocity jump ``ResidualModelImpulseCoM`` (their Jacobians follow the impulses' derivatives, as
+  cost items and as constraint rows).
 
 The costs are those of a node without control when the costs were built with ``nu > 0`` (as the Python model
 evaluates them) or at the terminal node.  The node has no rollout step: the rollout calls its ``calc``, and it
@@ -59,8 +60,6 @@ KINDS = (table.STATE, table.PLACEMENT, table.TRANSLATION, table.ROTATION, table.
          table.CONE, table.FORCE, table.IMPULSE_COM)
 """The residual kinds of :mod:`.euler_node_kernel` an impulse node evaluates (no control; the force residuals read
 its impulses, their items flagged so that the kernel keeps a contact force's value at this node without control)."""
-CONSTRAINT_KINDS = KINDS[:7]
-"""The kinds an impulse node's constraint rows take (not those whose Jacobians follow the impulses' derivatives)."""
 RB_GRAVITY = RigidBodyModel._fields.index("gravity") - 4
 """Entry of the gravity (each impulse node's own zero vector: the RNEA derivatives of the impulse run without it)."""
 
@@ -237,10 +236,10 @@ class ImpulseNode:
         manager = self.model.constraints
         why = ConstraintRows.sized(manager, data, data) or self.rows.read(
             manager, manager is not None and manager.nu != 0, residual_kind, offset,
-            lambda kind, residual: residual.compiled_parameters() if kind in KINDS else [], {})
+            lambda kind, residual: residual.compiled_parameters() if kind in KINDS else [], impulse_rows, True)
         if why is not None:
             return why
-        other = next((r for kind, r in self.rows.residuals if kind not in CONSTRAINT_KINDS), None)
+        other = next((r for kind, r in self.rows.residuals if kind not in KINDS), None)
         if other is not None:
             return class_reason(other, "constraint residual") + " in an impulse node"
         self._items, self._residuals = items, residuals + [r for _, r in self.rows.residuals]

@@ -27,10 +27,10 @@ it).
 from __future__ import annotations
 
 from crocopy.costs.stack_kernel import activation_values, derivatives_and_sums
-from crocopy.kernels import uncounted
+from crocopy.kernels import compiled, uncounted
 from crocopy.solvers.riccati_kernel import cholesky_solve
 
-from .constraint_rows_kernel import has_rows
+from .constraint_rows_kernel import constraint_table, has_rows, stack_rows
 from .contact_kernel import contact_dynamics_derivatives, contact_force_derivatives, schur_factor
 from .dynamics_kernel import (
     dynamics_derivatives,
@@ -220,6 +220,16 @@ def _impulse_derivatives(tbl, ints, par, x, rb, ws):
                                  mat(tbl, ints, E_DF_DX), mat(tbl, ints, E_DF_DU))
 
 
+@compiled
+def _late_constraint_rows(tbl, ints, par, rb, ws, x):
+    """The constraint rows' Jacobians that follow the impulses' derivatives (:func:`.residual_kernel.late_jacobians`
+    on the constraint table), stacked into the rows again."""
+    ctbl, cints = constraint_table(tbl, ints)
+    if cints.shape[0]:
+        late_jacobians(ctbl, cints, par, rb, ws, x)
+    stack_rows(tbl, ints, True)
+
+
 @uncounted
 def impulse_calc_diff(tbl, ints, par, x, u):
     """Values and derivatives of the impulse node at ``x`` (self-contained); returns its cost."""
@@ -230,6 +240,8 @@ def impulse_calc_diff(tbl, ints, par, x, u):
         constraint_values(tbl, ints, par, rb, ws, x, u, True)
     _impulse_derivatives(tbl, ints, par, x, rb, ws)
     late_jacobians(tbl, ints, par, rb, ws, x)  # from the impulses' derivatives just computed
+    if has_rows(ints):
+        _late_constraint_rows(tbl, ints, par, rb, ws, x)
     r, lb, ub, act_w = vec(tbl, ints, E_R), vec(tbl, ints, E_LB), vec(tbl, ints, E_UB), vec(tbl, ints, E_ACT_WEIGHTS)
     derivatives_and_sums(
         r, lb, ub, act_w, vec(tbl, ints, E_WEIGHTS), vec(tbl, ints, E_AR), vec(tbl, ints, E_ARR),
