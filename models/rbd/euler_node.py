@@ -106,8 +106,7 @@ class EulerNode:
         self.terminal = terminal
         self._data = weakref.ref(data)
         self.nv = nv
-        self.nu = iam.differential.nu
-        """The controls the kernels read: the differential model's (a Runge-Kutta stage's ``w``, :mod:`.rk_node`)."""
+        self.nu = iam.differential.nu  # the differential model's controls (a stage's w, .rk_node)
         self.armature = np.zeros(nv)
         self.contacts = ContactSet(contacts)
         self.parameters = {"S": np.zeros((nv, self.nu)), "gains": self.contacts.gains, "ref_R": self.contacts.ref_R,
