@@ -309,3 +309,16 @@ def test_constraint_rows_with_a_control_parametrization_match_the_python_node(ma
     model.calcDiff(slow, x, u)
     for name in ("g", "Gx", "Gu", "h", "Hx", "Hu", "Fu", "Luu"):
         np.testing.assert_allclose(getattr(fast, name), getattr(slow, name), rtol=1e-9, atol=1e-12, err_msg=name)
+
+
+@pytest.mark.parametrize("make", [m for _, m in CONTROLLED], ids=[n for n, _ in CONTROLLED])
+def test_a_second_offer_refreshes_the_same_stage_nodes(make):
+    """A node offered again (a new selection) keeps its stage datas and their Euler nodes, controls sized by ``w``."""
+    iam, _ = node("kinova", ("state", "control"))
+    model = make(iam.differential)
+    data = model.createData()
+    first = model._compiled_node(data, False, {})
+    stages = list(first.stages)
+    again = model._compiled_node(data, False, {})
+    assert again is first and again.refreshes == 2
+    assert all(a is b for a, b in zip(stages, again.stages))

@@ -134,7 +134,7 @@ class RKNode:
         if len(self.stage_datas) != len(differentials) or any(
                 s.differential is not d for s, d in zip(self.stage_datas, differentials)) \
                 or any(getattr(self.stage_datas[0], n).shape[0] != getattr(data, n).shape[0]
-                       for n in ACTION_ARRAYS + ROW_ARRAYS):
+                       for n in ACTION_ARRAYS + ROW_ARRAYS if n not in ("Lu", "Luu")):  # sized by w at a stage
             self.stage_datas = _stage_datas(data, differentials, self.terminal or self.single, nw)
         stages = []
         for stage_data in self.stage_datas:
