@@ -13,7 +13,8 @@ from crocopy.models.rbd import node_table as table
 from crocopy.models.rbd.contact_kernel import ContactWorkspace
 
 KERNELS = sorted(Path(table.__file__).parent.glob("*.py"))
-ACCESSOR = re.compile(r"\b(vec|mat|cube|ivec)\(\s*tbl\s*,\s*ints\s*,\s*(E_[A-Z0-9_]+)\s*\)")
+ACCESSOR = re.compile(r"\b(vec|mat|cube|ivec)\(\s*tbl\s*,\s*ints\s*,\s*(?:table\.)?(E_[A-Z0-9_]+)\s*\)")
+"""An accessor applied to an entry, ``mat(tbl, ints, E_FX)`` (or ``table.mat(tbl, ints, table.E_FX)``)."""
 DIMENSION = {"vec": (1, np.float64), "mat": (2, np.float64), "cube": (3, np.float64), "ivec": (1, np.int64)}
 SIZES = {"nq": 7, "nv": 6, "nx": 13, "ndx": 12, "nu": 4, "nr": 9, "nr_u": 4, "n_stack": 3, "nc": 6, "n_contacts": 2,
          "n_kin": 40, "nr_user": 1, "n_stamp": 19, "ng": 5, "nh": 3, "nrc": 8, "n_tbl": 120, "n_c_ints": 500,
@@ -38,6 +39,7 @@ def test_every_accessor_a_kernel_applies_has_the_entry_dimension_and_dtype():
             uses.append((path.name, accessor, name))
             assert (len(entry.shape), entry.dtype) == DIMENSION[accessor], (path.name, accessor, name)
     assert len(uses) > 40
+    assert any(path == "rk_node_kernel.py" for path, _, _ in uses)
 
 
 def test_the_scratch_is_made_from_the_declaration():

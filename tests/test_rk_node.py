@@ -73,9 +73,9 @@ def test_contact_derivatives_match_finite_differences():
                              roundoff=1e-10)
 
 
-def test_the_first_stage_gives_the_constraint_rows():
-    """A node with control bounds and a frame translation as constraints: ``g``, ``Gx``, ``Gu`` of the compiled
-    node are the Python node's (those of its first stage)."""
+def constrained_kinova(equality: bool):
+    """``(state, nu, dam)``: a kinova free-dynamics model with control bounds and a frame box as constraints (and a
+    control equality)."""
     iam, state = node("kinova", ("state", "control"))
     dam = iam.differential
     nu = dam.nu
@@ -86,7 +86,17 @@ def test_the_first_stage_gives_the_constraint_rows():
     manager.addConstraint("p", crocopy.ConstraintModelResidual(
         state, crocopy.ResidualModelFrameTranslation(state, tip, np.array([0.1, 0.2, 0.3]), nu),
         -np.ones(3), np.ones(3)))
-    model = rk(crocopy.DifferentialActionModelFreeFwdDynamics(state, dam.actuation, dam.costs, manager))
+    if equality:
+        manager.addConstraint("eq", crocopy.ConstraintModelResidual(
+            state, crocopy.ResidualModelControl(state, 0.1 * np.ones(nu)), False))
+    return state, nu, crocopy.DifferentialActionModelFreeFwdDynamics(state, dam.actuation, dam.costs, manager)
+
+
+def test_the_first_stage_gives_the_constraint_rows():
+    """A node with control bounds and a frame translation as constraints: ``g``, ``Gx``, ``Gu`` of the compiled
+    node are the Python node's (those of its first stage)."""
+    state, nu, dam = constrained_kinova(equality=False)
+    model = rk(dam)
     x, u = point(state, nu, 2)
     fast, slow = model.createData(), model.createData()
     model._compiled_node(fast, False, {}).calcDiff(x, u, False)
@@ -288,19 +298,8 @@ def test_solves_with_control_parametrizations_match_the_python_nodes(name):
 def test_constraint_rows_with_a_control_parametrization_match_the_python_node(make):
     """Control bounds, an equality and a frame box as constraints: the node's ``g, Gx, Gu, h, Hx, Hu`` are the Python
     node's (the first stage's, ``Gu``, ``Hu`` mapped to ``u``)."""
-    iam, state = node("kinova", ("state", "control"))
-    dam = iam.differential
-    nu = dam.nu
-    manager = crocopy.ConstraintModelManager(state, nu)
-    manager.addConstraint("u", crocopy.ConstraintModelResidual(
-        state, crocopy.ResidualModelControl(state, nu), -np.ones(nu), np.ones(nu)))
-    tip = state.pinocchio.nframes - 1
-    manager.addConstraint("p", crocopy.ConstraintModelResidual(
-        state, crocopy.ResidualModelFrameTranslation(state, tip, np.array([0.1, 0.2, 0.3]), nu),
-        -np.ones(3), np.ones(3)))
-    manager.addConstraint("eq", crocopy.ConstraintModelResidual(
-        state, crocopy.ResidualModelControl(state, 0.1 * np.ones(nu)), False))
-    model = make(crocopy.DifferentialActionModelFreeFwdDynamics(state, dam.actuation, dam.costs, manager))
+    state, nu, dam = constrained_kinova(equality=True)
+    model = make(dam)
     assert model.nh > 0 and model.ng > 0
     x, u = point(state, model.nu, 2)
     fast, slow = model.createData(), model.createData()

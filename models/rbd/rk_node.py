@@ -221,10 +221,7 @@ class RKNode:
         else:
             cost = kernel.rk_calc(self.tbls, self.ints, self.par, self.coef[0], self.coef[1], self.dts, self.stamp,
                                   self.cw, self.w, x, u, *self._values)
-        if math.isfinite(cost):
-            self._data().cost = cost
-        else:
-            self.python_path(x, u, False)
+        self._store(cost, x, u, False)
 
     def calcDiff(self, x: np.ndarray, u: np.ndarray | None, synced: bool) -> None:
         if self.terminal:
@@ -233,10 +230,14 @@ class RKNode:
             cost = kernel.rk_calc_diff(self.tbls, self.ints, self.par, self.coef[0], self.coef[1], self.dts,
                                        self.stamp, self.cw, self.w, x, u, self._work, self._jac, self._mapped,
                                        (self._data().Gu, self._data().Hu), self._out)
+        self._store(cost, x, u, True)
+
+    def _store(self, cost: float, x: np.ndarray, u: np.ndarray | None, derivatives: bool) -> None:
+        """The node's cost into its data, or, where a stage's acceleration is not finite (NaN), its Python path."""
         if math.isfinite(cost):
             self._data().cost = cost
         else:
-            self.python_path(x, u, True)
+            self.python_path(x, u, derivatives)
 
     def python_path(self, x: np.ndarray, u: np.ndarray | None, derivatives: bool) -> float:
         """Evaluate the node on its Python path (a stage's acceleration is not finite); returns its cost."""
@@ -276,11 +277,8 @@ class ControlledEulerNode(RKNode):
         if self.terminal:
             super().calc(x, u)
             return
-        cost = kernel.controlled_euler_calc(self.tbls[0], self.ints, self.par, self.cw, self.w, x, u)
-        if math.isfinite(cost):
-            self._data().cost = cost
-        else:
-            self.python_path(x, u, False)
+        self._store(kernel.controlled_euler_calc(self.tbls[0], self.ints, self.par, self.cw, self.w, x, u), x, u,
+                    False)
 
     def calcDiff(self, x: np.ndarray, u: np.ndarray | None, synced: bool) -> None:
         if self.terminal:
@@ -289,10 +287,7 @@ class ControlledEulerNode(RKNode):
         data = self._data()
         cost = kernel.controlled_euler_calc_diff(self.tbls[0], self.ints, self.par, self.cw, self.w, x, u, data.Fu,
                                                  data.Lu, data.Lxu, data.Luu, (data.Gu, data.Hu))
-        if math.isfinite(cost):
-            data.cost = cost
-        else:
-            self.python_path(x, u, True)
+        self._store(cost, x, u, True)
 
     @property
     def rollout_step(self):

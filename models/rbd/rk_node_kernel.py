@@ -25,6 +25,7 @@ import math
 
 from crocopy.kernels import uncounted
 
+from . import node_table as table
 from .configuration_kernel import dintegrate_blocks, state_integrate
 from .control_map_kernel import map_controls, map_rows, stage_control
 from .euler_node_kernel import (
@@ -35,34 +36,12 @@ from .euler_node_kernel import (
     step_control,
     step_next,
 )
-from .node_table import (
-    E_A,
-    E_DFU,
-    E_DFX,
-    E_DLU,
-    E_DLUU,
-    E_DLX,
-    E_DLXU,
-    E_DLXX,
-    E_FU,
-    E_GU,
-    E_HU,
-    E_LU,
-    E_LUU,
-    E_LXU,
-    E_STAMP,
-    NQ,
-    NV,
-    entry_model,
-    mat,
-    vec,
-)
 
 
 @uncounted
 def _stage_state(tbl, ints, x, dt, c, i, k, dy, y):
     """``yᵢ = x ⊕ (cᵢ dt kᵢ₋₁)`` into ``y[i]`` (``dy[i]`` the step; ``y₀ = x``)."""
-    nq, nv = ints[NQ], ints[NV]
+    nq, nv = ints[table.NQ], ints[table.NV]
     if i == 0:
         for j in range(nq + nv):
             y[0, j] = x[j]
@@ -70,15 +49,32 @@ def _stage_state(tbl, ints, x, dt, c, i, k, dy, y):
     h = c[i] * dt
     for j in range(2 * nv):
         dy[i, j] = k[i - 1, j] * h
-    rb = entry_model(tbl, ints)
+    rb = table.entry_model(tbl, ints)
     state_integrate(rb.jtype, rb.idx_q, rb.idx_v, nq, nv, x, dy[i], y[i])
+
+
+@uncounted
+def _stage_point(tbl, ints, x, u, dt, c, cw, i, k, dy, y, w):
+    """Stage ``i``'s state ``yᵢ`` (:func:`_stage_state`) and control ``wᵢ`` (into ``w[i]``)."""
+    _stage_state(tbl, ints, x, dt, c, i, k, dy, y)
+    stage_control(cw, i, u, w)
+
+
+@uncounted
+def _begin(ints, stamp, dx):
+    """The start of a pass: the stamp spent, ``dx`` zero; returns ``ndx``."""
+    stamp[0] = 0.0
+    n = 2 * ints[table.NV]
+    for j in range(n):
+        dx[j] = 0.0
+    return n
 
 
 @uncounted
 def _rate(tbl, ints, y, k, i):
     """``kᵢ = (vᵢ, aᵢ)`` from the stage's state and its table's acceleration."""
-    nq, nv = ints[NQ], ints[NV]
-    a = vec(tbl, ints, E_A)
+    nq, nv = ints[table.NQ], ints[table.NV]
+    a = table.vec(tbl, ints, table.E_A)
     for j in range(nv):
         k[i, j] = y[i, nq + j]
         k[i, nv + j] = a[j]
@@ -88,7 +84,7 @@ def _rate(tbl, ints, y, k, i):
 def _spend(tbls, ints):
     """Spend every stage's stamp (their tables' values are evaluated again)."""
     for i in range(tbls.shape[0]):
-        stamp = vec(tbls[i], ints, E_STAMP)
+        stamp = table.vec(tbls[i], ints, table.E_STAMP)
         if stamp.shape[0]:
             stamp[0] = 0.0
 
@@ -99,15 +95,11 @@ def rk_calc(tbls, ints, par, c, b, dts, stamp, cw, w, x, u, y, dy, k, dx, xnext)
     (the caller evaluates the node on the Python path).  ``dts = [dt]``; stage ``i`` reads the control
     ``wᵢ = Σₖ cw[i, k] uₖ`` (:func:`.control_map_kernel.stage_control`, into ``w[i]``)."""
     dt = dts[0]
-    stamp[0] = 0.0
-    n = 2 * ints[NV]
-    for j in range(n):
-        dx[j] = 0.0
+    n = _begin(ints, stamp, dx)
     cost = 0.0
     for i in range(tbls.shape[0]):
         tbl = tbls[i]
-        _stage_state(tbl, ints, x, dt, c, i, k, dy, y)
-        stage_control(cw, i, u, w)
+        _stage_point(tbl, ints, x, u, dt, c, cw, i, k, dy, y, w)
         value = differential_calc(tbl, ints, par, y[i], w[i])
         if math.isnan(value):
             return value
@@ -117,8 +109,8 @@ def rk_calc(tbls, ints, par, c, b, dts, stamp, cw, w, x, u, y, dy, k, dx, xnext)
             for j in range(n):
                 dx[j] += h * k[i, j]
             cost += b[i] * value
-    rb = entry_model(tbls[0], ints)
-    state_integrate(rb.jtype, rb.idx_q, rb.idx_v, ints[NQ], ints[NV], x, dx, xnext)
+    rb = table.entry_model(tbls[0], ints)
+    state_integrate(rb.jtype, rb.idx_q, rb.idx_v, ints[table.NQ], ints[table.NV], x, dx, xnext)
     stamp[0] = 1.0
     return dt * cost
 
@@ -128,8 +120,8 @@ def _integrate_jacobian(tbl, ints, Jq, Jv, h, M, with_x, out):
     """``out = Jx + h Jd M`` (``with_x``) or ``h Jd M`` (a control Jacobian), ``Jx``, ``Jd`` of ``x ⊕ step`` (the
     joints' blocks of ``Jq``, ``Jv``, :func:`_blocks`, then the identity).  Only the blocks are read, one joint's
     rows at a time, the rows of ``M`` added whole."""
-    nv = ints[NV]
-    rb = entry_model(tbl, ints)
+    nv = ints[table.NV]
+    rb = table.entry_model(tbl, ints)
     n = 2 * nv
     cols = M.shape[1]
     for r in range(n):
@@ -155,8 +147,8 @@ def _integrate_jacobian(tbl, ints, Jq, Jv, h, M, with_x, out):
 @uncounted
 def _blocks(tbl, ints, step, Jq, Jv):
     """The joints' blocks of ``∂(q ⊕ step_q)/∂q`` and ``/∂step_q`` into ``Jq``, ``Jv``."""
-    rb = entry_model(tbl, ints)
-    nv = ints[NV]
+    rb = table.entry_model(tbl, ints)
+    nv = ints[table.NV]
     dintegrate_blocks(rb.jtype, rb.idx_q, rb.idx_v, step[:nv], 0, Jq)
     dintegrate_blocks(rb.jtype, rb.idx_q, rb.idx_v, step[:nv], 1, Jv)
 
@@ -165,9 +157,9 @@ def _blocks(tbl, ints, step, Jq, Jv):
 def _rate_jacobians(tbl, ints, i, dydx, dydu, dkdx, dkdu, dFu):
     """``∂kᵢ/∂x = (∂yᵢ/∂x[nv:], ∂aᵢ/∂y ∂yᵢ/∂x)``, ``∂kᵢ/∂u = (∂yᵢ/∂u[nv:], ∂aᵢ/∂y ∂yᵢ/∂u + ∂aᵢ/∂u)`` (``dFu``:
     ``∂aᵢ/∂u``, the stage's ``∂aᵢ/∂wᵢ`` mapped to ``u``)."""
-    nv, nu = ints[NV], dFu.shape[1]
+    nv, nu = ints[table.NV], dFu.shape[1]
     n = 2 * nv
-    dFx = mat(tbl, ints, E_DFX)
+    dFx = table.mat(tbl, ints, table.E_DFX)
     for r in range(nv):
         for col in range(n):
             dkdx[i, r, col] = dydx[i, nv + r, col]
@@ -188,9 +180,9 @@ def _first_stage(tbl, ints, w, dkdx, dkdu, mapped, sums):
     """Stage 0 (``∂y₀/∂x = I``, ``∂y₀/∂u = 0``): its ``∂k₀`` and the sums started from its terms times ``w``
     (``mapped``: the stage's control derivatives mapped to ``u``)."""
     dFu, dLu, dLxu, dLuu = mapped
-    nv, nu = ints[NV], dFu.shape[1]
+    nv, nu = ints[table.NV], dFu.shape[1]
     n = 2 * nv
-    dFx = mat(tbl, ints, E_DFX)
+    dFx = table.mat(tbl, ints, table.E_DFX)
     for r in range(nv):
         for col in range(n):
             dkdx[0, r, col] = 1.0 if col == nv + r else 0.0
@@ -199,7 +191,7 @@ def _first_stage(tbl, ints, w, dkdx, dkdu, mapped, sums):
             dkdu[0, r, col] = 0.0
             dkdu[0, nv + r, col] = dFu[r, col]
     kx_sum, ku_sum, Lx, Lu, Lxx, Lxu, Luu = sums
-    dLx, dLxx = vec(tbl, ints, E_DLX), mat(tbl, ints, E_DLXX)
+    dLx, dLxx = table.vec(tbl, ints, table.E_DLX), table.mat(tbl, ints, table.E_DLXX)
     for r in range(n):
         Lx[r] = w * dLx[r]
         for col in range(n):
@@ -219,9 +211,9 @@ def _add_stage(tbl, ints, i, w, dydx, dydu, dkdx, dkdu, LxxJ, T, mapped, sums):
     """Add stage ``i``'s terms times ``w = bᵢ dt`` to the sums (scratch: ``LxxJ`` ``ndx × nu``, ``T`` ``ndx × ndx``):
     ``T = lyy ∂y/∂x``, ``LxxJ = lyy ∂y/∂u``, then each sum row by row, adding whole rows (contiguous loops)."""
     _, dLu, dLxu, dLuu = mapped
-    n, nu = 2 * ints[NV], dLu.shape[0]
+    n, nu = 2 * ints[table.NV], dLu.shape[0]
     kx_sum, ku_sum, Lx, Lu, Lxx, Lxu, Luu = sums
-    dLx, dLxx = vec(tbl, ints, E_DLX), mat(tbl, ints, E_DLXX)
+    dLx, dLxx = table.vec(tbl, ints, table.E_DLX), table.mat(tbl, ints, table.E_DLXX)
     for r in range(n):
         for col in range(n):
             kx_sum[r, col] += w * dkdx[i, r, col]
@@ -273,27 +265,22 @@ def rk_calc_diff(tbls, ints, par, c, b, dts, stamp, cw, w, x, u, work, jac, mapp
     sums = out[4:]
     if stamp[0] != 1.0:
         _spend(tbls, ints)
-    stamp[0] = 0.0
-    nv = ints[NV]
-    n = 2 * nv
-    for j in range(n):
-        dx[j] = 0.0
+    nv = ints[table.NV]
+    n = _begin(ints, stamp, dx)
     cost = 0.0
     for i in range(tbls.shape[0]):
         tbl = tbls[i]
-        _stage_state(tbl, ints, x, dt, c, i, k, dy, y)
+        _stage_point(tbl, ints, x, u, dt, c, cw, i, k, dy, y, w)
         if i:
             h = c[i] * dt
             _blocks(tbl, ints, dy[i], Jq, Jv)
             _integrate_jacobian(tbl, ints, Jq, Jv, h, dkdx[i - 1], True, dydx[i])
             _integrate_jacobian(tbl, ints, Jq, Jv, h, dkdu[i - 1], False, dydu[i])
-        stage_control(cw, i, u, w)
         value = differential_calc_diff(tbl, ints, par, y[i], w[i])
         if math.isnan(value):
             return value
         _rate(tbl, ints, y, k, i)
-        map_controls(mat(tbl, ints, E_DFU), vec(tbl, ints, E_DLU), mat(tbl, ints, E_DLXU), mat(tbl, ints, E_DLUU),
-                     cw[i], *mapped)
+        _map_stage(tbl, ints, table.E_DFU, table.E_DLU, table.E_DLXU, table.E_DLUU, cw[i], mapped)
         weight = b[i] * dt
         if i == 0:
             _map_rows(tbl, ints, cw[0], rows)
@@ -307,8 +294,8 @@ def rk_calc_diff(tbls, ints, par, c, b, dts, stamp, cw, w, x, u, work, jac, mapp
                 dx[j] += weight * k[i, j]
             cost += b[i] * value
     tbl = tbls[0]
-    rb = entry_model(tbl, ints)
-    state_integrate(rb.jtype, rb.idx_q, rb.idx_v, ints[NQ], nv, x, dx, xnext)
+    rb = table.entry_model(tbl, ints)
+    state_integrate(rb.jtype, rb.idx_q, rb.idx_v, ints[table.NQ], nv, x, dx, xnext)
     _blocks(tbl, ints, dx, Jq, Jv)
     _integrate_jacobian(tbl, ints, Jq, Jv, 1.0, sums[0], True, Fx)
     _integrate_jacobian(tbl, ints, Jq, Jv, 1.0, sums[1], False, Fu)
@@ -317,14 +304,23 @@ def rk_calc_diff(tbls, ints, par, c, b, dts, stamp, cw, w, x, u, work, jac, mapp
 
 
 @uncounted
+def _map_stage(tbl, ints, eFu, eLu, eLxu, eLuu, c, mapped):
+    """The control derivatives of a table sized by ``w`` (its entries ``eFu`` … ``eLuu``) mapped to ``u`` into
+    ``mapped = (Fu, Lu, Lxu, Luu)`` (:func:`.control_map_kernel.map_controls`, coefficients ``c``)."""
+    Fu, Lu, Lxu, Luu = mapped
+    map_controls(table.mat(tbl, ints, eFu), table.vec(tbl, ints, eLu), table.mat(tbl, ints, eLxu),
+                 table.mat(tbl, ints, eLuu), c, Fu, Lu, Lxu, Luu)
+
+
+@uncounted
 def _map_rows(tbl, ints, c, rows):
     """The node's ``Gu``, ``Hu`` (``rows``) from the constraint rows of a table sized by ``w``
     (:func:`.control_map_kernel.map_rows`)."""
     Gu, Hu = rows
     if Gu.shape[0]:
-        map_rows(mat(tbl, ints, E_GU), c, Gu)
+        map_rows(table.mat(tbl, ints, table.E_GU), c, Gu)
     if Hu.shape[0]:
-        map_rows(mat(tbl, ints, E_HU), c, Hu)
+        map_rows(table.mat(tbl, ints, table.E_HU), c, Hu)
 
 
 @uncounted
@@ -337,11 +333,11 @@ def rk_rollout_step(tbls, ints, par, c, b, dts, stamp, cw, w, values, x_ref, x, 
     tbl = tbls[0]
     step_control(tbl, ints, x_ref, x, u_ref, kff, K, alpha, lb, ub, u, dxs)
     cost = rk_calc(tbls, ints, par, c, b, dts, stamp, cw, w, x, u, y, dy, k, dx, xnext)
-    nq, nv = ints[NQ], ints[NV]
+    nq, nv = ints[table.NQ], ints[table.NV]
     if gap:
         for i in range(2 * nv):
             step[i] = (alpha - 1.0) * f[i]
-        rb = entry_model(tbl, ints)
+        rb = table.entry_model(tbl, ints)
         state_integrate(rb.jtype, rb.idx_q, rb.idx_v, nq, nv, xnext, step, x_next)
     else:
         for i in range(nq + nv):
@@ -366,8 +362,7 @@ def controlled_euler_calc_diff(tbl, ints, par, cw, w, x, u, Fu, Lu, Lxu, Luu, ro
     stage_control(cw, 0, u, w)
     cost = node_calc_diff(tbl, ints, par, x, w[0])
     if not math.isnan(cost):
-        map_controls(mat(tbl, ints, E_FU), vec(tbl, ints, E_LU), mat(tbl, ints, E_LXU), mat(tbl, ints, E_LUU), cw[0],
-                     Fu, Lu, Lxu, Luu)
+        _map_stage(tbl, ints, table.E_FU, table.E_LU, table.E_LXU, table.E_LUU, cw[0], (Fu, Lu, Lxu, Luu))
         _map_rows(tbl, ints, cw[0], rows)
     return cost
 
