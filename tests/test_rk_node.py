@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from node_checks import check_finite_differences, compare_with_python_node, make_solver
+from node_checks import check_finite_differences, compare_with_python_node, failed_solve, make_solver
 from test_contacts_1d2d import CASES, IDS, make_dam
 from test_euler_node import KINDS, ROBOTS, node, point
 
@@ -321,3 +321,14 @@ def test_a_second_offer_refreshes_the_same_stage_nodes(make):
     again = model._compiled_node(data, False, {})
     assert again is first and again.refreshes == 2
     assert all(a is b for a, b in zip(stages, again.stages))
+
+
+@pytest.mark.parametrize("compiled", [True, False], ids=["compiled", "python"])
+def test_a_diverging_rk_solve_returns_false_with_finite_iterates(compiled):
+    """Huge initial velocities and a long step: the solve fails, says why, and keeps a finite iterate (compiled or
+    not; where states overflow, the two paths may fail at different iterations)."""
+    problem = problem_of(crocopy.RKType.four, 0.5)
+    nq = problem.runningModels[0].state.nq
+    problem.x0 = np.concatenate([problem.x0[:nq], 50.0 * np.ones(problem.x0.shape[0] - nq)])
+    solved, iters, reason = failed_solve(problem, [], [], compiled, 20)
+    assert not solved and reason and iters >= 1
