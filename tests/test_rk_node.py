@@ -332,3 +332,20 @@ def test_a_diverging_rk_solve_returns_false_with_finite_iterates(compiled):
     problem.x0 = np.concatenate([problem.x0[:nq], 50.0 * np.ones(problem.x0.shape[0] - nq)])
     solved, iters, reason = failed_solve(problem, [], [], compiled, 20)
     assert not solved and reason and iters >= 1
+
+
+def test_euler_running_nodes_with_a_runge_kutta_terminal_node():
+    """The arm's Euler horizon ends on an RK4 terminal node (not of the horizon's class: its own calls): the same
+    iterations and cost as the Python nodes."""
+    outcomes = []
+    for compiled in (True, False):
+        arm, _, _ = registry.build("arm")
+        problem = crocopy.ShootingProblem(arm.x0, list(arm.runningModels), rk(arm.terminalModel.differential, dt=0.0))
+        solver = make_solver("SolverFDDP", problem, compiled)
+        if compiled:
+            nodes = compiled_nodes.select(solver)
+            assert nodes.horizon is not None and type(nodes.terminal) is RKNode
+        solver.solve([], [], 30)
+        outcomes.append((solver.iter, solver.cost))
+    assert outcomes[0][0] == outcomes[1][0] and outcomes[0][0] > 1
+    assert outcomes[0][1] == pytest.approx(outcomes[1][1], rel=1e-9)
