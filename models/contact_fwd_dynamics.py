@@ -254,7 +254,6 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         contacts = active_contacts(self, memo)
         return None if contacts is None else euler_node(iam, data, terminal, memo, contacts)
 
-
     def _compiled_staged_node(self, iam, data, terminal: bool, memo: dict) -> object | None:
         """The compiled evaluator of the Runge-Kutta node, or of the Euler node with a control parametrization,
         ``(iam, data)`` over this model: one compiled Euler node per stage (:func:`.rbd.rk_node.staged_node`, which
@@ -262,6 +261,7 @@ class DifferentialActionModelContactFwdDynamics(ArmatureMixin, KKTDampingMixin, 
         from .rbd.rk_node import staged_node
 
         return staged_node(iam, data, terminal, memo)
+
     def _kinematics(self, data: "DifferentialActionDataContactFwdDynamics", q: np.ndarray, v: np.ndarray) -> None:
         model, pd = self.pinocchio, data.pinocchio
         pin.computeAllTerms(model, pd, q, v)

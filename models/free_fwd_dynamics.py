@@ -177,12 +177,12 @@ class DifferentialActionModelFreeFwdDynamics(ArmatureMixin, DifferentialActionMo
             return decline(memo, class_reason(self, "differential model"))
         return euler_node(iam, data, terminal, memo)
 
-
     def _compiled_staged_node(self, iam, data, terminal: bool, memo: dict) -> object | None:
         """The compiled evaluator of the Runge-Kutta node, or of the Euler node with a control parametrization,
         ``(iam, data)`` over this model: one compiled Euler node per stage (:func:`.rbd.rk_node.staged_node`, which
         offers them through :meth:`_compiled_euler_node`)."""
         return staged_node(iam, data, terminal, memo)
+
     def quasiStatic(
         self, data: "DifferentialActionDataFreeFwdDynamics", x: np.ndarray, maxiter: int = 100, tol: float = 1e-9
     ) -> np.ndarray:

@@ -24,6 +24,7 @@ from crocopy.constraints.base import ConstraintModelResidual
 from crocopy.not_compiled import class_reason
 
 from . import node_table as table
+from .contact_lowering import force_item
 
 TERMINAL_KINDS = (table.STATE, table.PLACEMENT, table.TRANSLATION, table.ROTATION, table.VELOCITY, table.COM,
                   table.USER)
@@ -92,10 +93,10 @@ class ConstraintRows:
                 user = [residual.flags, *residual.callbacks(), len(parameters(kind, residual))]
                 self.user_rows = max(self.user_rows, nr)
             if kind == table.CONE or kind == table.FORCE:
-                first, nc = contact_rows.get(frame, (0, 0))
-                if nc < residual.min_nc or (nc > 2 and nc < residual.ncf):
+                found = force_item(residual, contact_rows)
+                if found is None:
                     return "cone constraint without its active contact"
-                frame, reference = first, nc if nc in (1, 2) else residual.ncf
+                frame, reference = found
                 user[0] = int(impulses)
             items += [kind, row, nr, frame, reference, offset, *user]
             residuals.append((kind, residual))

@@ -83,6 +83,16 @@ def frame_rows(ints: list[int]) -> dict[int, tuple[int, int]]:
     return rows
 
 
+def force_item(residual, rows: dict[int, tuple[int, int]]) -> tuple[int, int] | None:
+    """The ``(first row, force components)`` a force residual's or cone's item reads on its contact or impulse
+    (``rows``: :func:`frame_rows`; a 1D or 2D contact's own rows, :func:`force_parameters`), or None when that contact
+    is not active or has fewer force components than the residual reads."""
+    first, nc = rows.get(residual.id, (0, 0))
+    if nc < residual.min_nc or (nc > 2 and nc < residual.ncf):
+        return None
+    return first, nc if nc in (1, 2) else residual.ncf
+
+
 def _ints(models: list) -> list[int]:
     """``(frame, rows, reference frame, first row)`` of each contact, flat."""
     ints, row = [], 0

@@ -48,7 +48,7 @@ from ..state_multibody import StateMultibody
 from . import euler_node_kernel as kernel
 from . import node_table as table
 from .constraint_rows import ConstraintRows
-from .contact_lowering import ContactSet, force_parameters
+from .contact_lowering import ContactSet, force_item, force_parameters
 from .euler_horizon import EulerHorizon
 from .joint_types import NotLowerable
 from .live_parameters import (
@@ -307,10 +307,10 @@ class EulerNode:
             frame, reference = residual.frame, int(residual.frame_reference)
             user = [residual.flags, *residual.callbacks(), len(parameters(kind, residual))]
         if kind == table.CONE or kind == table.FORCE:
-            row, nc = self.contacts.rows.get(frame, (0, 0))
-            if nc < residual.min_nc or (nc > 2 and nc < residual.ncf):
+            found = force_item(residual, self.contacts.rows)
+            if found is None:
                 return "cone without its active contact"
-            frame, reference = row, nc if nc in (1, 2) else residual.ncf
+            frame, reference = found
         return [kind, rows.start, rows.stop - rows.start, frame, reference, offset, *user]
 
     def _node_parameters(self, kind: int, residual) -> Sequence[float]:

@@ -149,15 +149,17 @@ def _values(tbl, ints, par, x, u, rb, ws):
 
 
 @compiled
-def _constraints(tbl, ints, par, rb, ws, x, u, derivatives):
+def _constraints(tbl, ints, par, rb, ws, x, u, derivatives, stack):
     """The constraint manager's rows (:mod:`.constraint_rows_kernel`): its residuals by the cost items' kernels on the
-    node's constraint table, stacked into ``g``, ``h`` (and their Jacobians, if ``derivatives``)."""
+    node's constraint table (and their Jacobians, if ``derivatives``), stacked into ``g``, ``h`` if ``stack`` (an
+    impulse node stacks them after its impulses' derivatives)."""
     ctbl, cints = constraint_table(tbl, ints)
     if cints.shape[0]:
         residual_rows(ctbl, cints, par, rb, ws, x, u)
         if derivatives:
             residual_jacobians(ctbl, cints, par, rb, ws, x, u)
-    stack_rows(tbl, ints, derivatives)
+    if stack:
+        stack_rows(tbl, ints, derivatives)
 
 
 @uncounted
@@ -274,7 +276,7 @@ def _evaluate(tbl, ints, par, x, u, step):
     if _singular(tbl, ints):
         return math.nan
     if has_rows(ints):
-        _constraints(tbl, ints, par, rb, ws, x, u, False)
+        _constraints(tbl, ints, par, rb, ws, x, u, False, True)
     _remember(stamp, x, u, cost, 1.0)
     return cost
 
@@ -446,7 +448,7 @@ def _derivatives(tbl, ints, par, x, u, step):
                 df_dx[i, j] = 0.0
     residual_jacobians(tbl, ints, par, rb, ws, x, u)
     if has_rows(ints):
-        _constraints(tbl, ints, par, rb, ws, x, u, True)
+        _constraints(tbl, ints, par, rb, ws, x, u, True, True)
     return cost
 
 

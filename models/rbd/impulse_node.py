@@ -46,7 +46,7 @@ from ..state_multibody import StateMultibody
 from . import impulse_node_kernel as kernel
 from . import node_table as table
 from .constraint_rows import ConstraintRows
-from .contact_lowering import frame_rows
+from .contact_lowering import force_item, frame_rows
 from .joint_types import NotLowerable
 from .live_parameters import frozen, layout_touched, read_parameters, values_touched
 from .lowered_model import Lowered, lowered, table_entries
@@ -226,10 +226,10 @@ class ImpulseNode:
                 return class_reason(residual, "residual") + " in an impulse node"
             frame, reference, flags = getattr(residual, "id", 0), int(residual.type) if kind == table.VELOCITY else 0, 0
             if kind == table.CONE or kind == table.FORCE:
-                row, nc = impulse_rows.get(frame, (0, 0))
-                if nc < residual.ncf:
+                found = force_item(residual, impulse_rows)
+                if found is None:
                     return class_reason(residual, "residual") + " without its active impulse"
-                frame, reference, flags = row, residual.ncf, 1
+                (frame, reference), flags = found, 1
             items += [kind, rows.start, rows.stop - rows.start, frame, reference, offset, flags, 0, 0, 0]
             residuals.append(residual)
             offset += len(residual.compiled_parameters())

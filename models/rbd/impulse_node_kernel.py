@@ -161,7 +161,7 @@ def impulse_calc(tbl, ints, par, x, u):
     rb, ws = entry_model(tbl, ints), entry_workspace(tbl, ints)
     cost = _values(tbl, ints, par, x, u, rb, ws)
     if has_rows(ints):
-        constraint_values(tbl, ints, par, rb, ws, x, u, False)
+        constraint_values(tbl, ints, par, rb, ws, x, u, False, True)
     return cost
 
 
@@ -223,7 +223,7 @@ def _impulse_derivatives(tbl, ints, par, x, rb, ws):
 @compiled
 def _late_constraint_rows(tbl, ints, par, rb, ws, x):
     """The constraint rows' Jacobians that follow the impulses' derivatives (:func:`.residual_kernel.late_jacobians`
-    on the constraint table), stacked into the rows again."""
+    on the constraint table), then every row stacked into ``g``, ``h`` and their Jacobians."""
     ctbl, cints = constraint_table(tbl, ints)
     if cints.shape[0]:
         late_jacobians(ctbl, cints, par, rb, ws, x)
@@ -236,8 +236,8 @@ def impulse_calc_diff(tbl, ints, par, x, u):
     rb, ws = entry_model(tbl, ints), entry_workspace(tbl, ints)
     cost = _values(tbl, ints, par, x, u, rb, ws)
     residual_jacobians(tbl, ints, par, rb, ws, x, u)
-    if has_rows(ints):
-        constraint_values(tbl, ints, par, rb, ws, x, u, True)
+    if has_rows(ints):  # stacked after the impulses' derivatives
+        constraint_values(tbl, ints, par, rb, ws, x, u, True, False)
     _impulse_derivatives(tbl, ints, par, x, rb, ws)
     late_jacobians(tbl, ints, par, rb, ws, x)  # from the impulses' derivatives just computed
     if has_rows(ints):

@@ -55,7 +55,6 @@ class _StageData:
     def __init__(self, differential, arrays: dict[str, np.ndarray]) -> None:
         self.differential = differential
         self.compiled_stamp: np.ndarray | None = None
-        self.cost = 0.0
         for name, array in arrays.items():
             setattr(self, name, array)
 
@@ -173,8 +172,7 @@ class RKNode:
         """The time step, the stamp (spent) and the scratch of the kernels, made again for other sizes."""
         self.dts[0] = float(self.model.dt)
         self.stamp[0] = 0.0
-        data.compiled_stamp = self.stages[0].stamp if self.terminal or self.single else self.stamp  # the Python
-        # path spends it
+        data.compiled_stamp = self.stages[0].stamp if self.terminal or self.single else self.stamp  # Python spends it
         ni, state, nu, nw = len(self.stages), self.model.state, self.model.nu, self.model.differential.nu
         nx, ndx, nv = state.nx, state.ndx, state.nv
         if self._sizes != (ni, nx, ndx, nu, nw):
@@ -188,6 +186,8 @@ class RKNode:
             self._step = np.zeros(ndx)
         y, dy, k = self._work[:3]
         self._values = (y, dy, k, data.dx, data.xnext)
+        none = np.zeros((0, nu))  # the identity: the first stage's rows are the node's own arrays
+        self._rows = (data.Gu, data.Hu) if nu != nw else (none, none)
         self._out = (data.dx, data.xnext, data.Fx, data.Fu, *self._sums, data.Lx, data.Lu, data.Lxx, data.Lxu,
                      data.Luu)
 
@@ -199,8 +199,10 @@ class RKNode:
         c, b = self._tableau()
         if len(c) != len(self.stages):
             return False
-        self.coef[0], self.coef[1] = c, b
-        self.cw[:] = control_coefficients(iam.control, self.coef[0])
+        if not np.array_equal(self.coef[0], c):  # the stage times moved: their control coefficients too
+            self.coef[0] = c
+            self.cw[:] = control_coefficients(iam.control, self.coef[0])
+        self.coef[1] = b
         self.dts[0] = float(iam.dt)
         self.stamp[0] = 0.0
         return True
@@ -229,7 +231,7 @@ class RKNode:
         else:
             cost = kernel.rk_calc_diff(self.tbls, self.ints, self.par, self.coef[0], self.coef[1], self.dts,
                                        self.stamp, self.cw, self.w, x, u, self._work, self._jac, self._mapped,
-                                       (self._data().Gu, self._data().Hu), self._out)
+                                       self._rows, self._out)
         self._store(cost, x, u, True)
 
     def _store(self, cost: float, x: np.ndarray, u: np.ndarray | None, derivatives: bool) -> None:
@@ -286,7 +288,7 @@ class ControlledEulerNode(RKNode):
             return
         data = self._data()
         cost = kernel.controlled_euler_calc_diff(self.tbls[0], self.ints, self.par, self.cw, self.w, x, u, data.Fu,
-                                                 data.Lu, data.Lxu, data.Luu, (data.Gu, data.Hu))
+                                                 data.Lu, data.Lxu, data.Luu, self._rows)
         self._store(cost, x, u, True)
 
     @property
